@@ -1,0 +1,243 @@
+//! Dynamic equilibrium at constant drive speed (Kim & Yoo 2007, eq. 13).
+//!
+//! With the driven coordinates turning at constant speed and the free ones at rest,
+//!
+//! ```text
+//! F(q_R, λ) = [ r_R(q, q̇ = [Ω; 0], q̈ = 0) + Φ_{q_R}ᵀ λ ;  Φ(q) ] = 0
+//! ```
+//!
+//! is solved by Newton's method with a backtracking line search and the exact Jacobian of `F`
+//! (one dual-number pass per unknown). The driven coordinates are held at their initial values;
+//! if `F` depends on them (gravity not along the spin axis, say), the motion is not steady and
+//! the solve says so. The drive force on each driven coordinate is `r_D + Φ_{q_D}ᵀ λ`.
+//!
+//! # Reference
+//! Kim, Yoo (2007), *Analytical tolerance analysis of the modal characteristics of multibody
+//! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
+
+use crate::mechanics::System;
+use crate::mechanics::dynamics::{Lifted, evaluate};
+use crate::real::{D1, Real, cst, lift1};
+use nalgebra::{DMatrix, DVector};
+use num_dual::Dual64;
+
+/// Why an equilibrium was not found.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EquilibriumError {
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e})")]
+    NewtonDiverged { iterations: usize, residual: f64 },
+    #[error("singular Jacobian after {iterations} iterations (a bifurcation point or a locked mechanism)")]
+    SingularJacobian { iterations: usize },
+    #[error("non-finite residual after {iterations} iterations")]
+    NotFinite { iterations: usize },
+    #[error("no steady state: the equations depend on the driven coordinate '{coordinate}' (|∂F/∂q| = {sensitivity:.3e}); is gravity along the drive axis?")]
+    NoSteadyState { coordinate: String, sensitivity: f64 },
+}
+
+/// A converged dynamic equilibrium.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Equilibrium {
+    /// Operating speed (rad/s).
+    pub speed: f64,
+    /// All coordinates (rad or m).
+    pub q: Vec<f64>,
+    /// Coordinate speeds: drive speeds on driven coordinates, zero elsewhere.
+    pub qd: Vec<f64>,
+    /// Lagrange multipliers of the constraint equations.
+    pub lambda: Vec<f64>,
+    /// Generalised drive force on each coordinate (N·m or N; zero on free coordinates).
+    pub drive_force: Vec<f64>,
+    /// Newton iterations used.
+    pub iterations: usize,
+    /// Final residual ‖F‖∞.
+    pub residual: f64,
+    /// Largest constraint violation |Φ| at the solution.
+    pub constraint_violation: f64,
+}
+
+/// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
+pub fn equations<T: Real>(l: &Lifted<T>, free: &[usize], q: &[T], qd: &[T], lambda: &[T]) -> Vec<T> {
+    let zero = vec![cst::<T>(0.0); q.len()];
+    let d = evaluate(l, q, qd, &zero);
+    let g = d.with_multipliers(lambda);
+    free.iter().map(|&i| g[i]).chain(d.phi.iter().copied()).collect()
+}
+
+/// Newton settings.
+#[derive(Debug, Clone, Copy)]
+pub struct Settings {
+    pub max_iterations: usize,
+    /// Relative step size at which the solve has converged.
+    pub step_tolerance: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            max_iterations: 60,
+            step_tolerance: 1e-12,
+        }
+    }
+}
+
+/// Everything needed to solve for the equilibrium of one instantiated system.
+pub struct Problem {
+    pub free: Vec<usize>,
+    pub driven: Vec<usize>,
+    pub names: Vec<String>,
+    pub value: Lifted<f64>,
+    pub dual: Lifted<Dual64>,
+    pub qd: Vec<f64>,
+}
+
+impl Problem {
+    /// Prepares the solve for `sys`; `free`/`driven` partition the coordinates.
+    pub fn new(sys: &System<f64>, free: Vec<usize>, driven: Vec<usize>, names: Vec<String>) -> Self {
+        Problem {
+            free,
+            driven,
+            names,
+            qd: sys.steady_speeds(),
+            value: Lifted::new(sys.clone()),
+            dual: Lifted::new(sys.map(lift1)),
+        }
+    }
+
+    fn n_unknowns(&self) -> usize {
+        self.free.len() + self.value.base.m
+    }
+
+    /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
+    pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        let nf = self.free.len();
+        let mut x: Vec<f64> = self.free.iter().map(|&i| q[i]).collect();
+        x.extend_from_slice(lambda);
+        let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
+        crate::linalg::jacobian(&x, |xd| {
+            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+            for (k, &i) in self.free.iter().enumerate() {
+                qq[i] = xd[k];
+            }
+            equations(&self.dual, &self.free, &qq, &qd, &xd[nf..])
+        })
+    }
+
+    /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
+    pub fn solve(&self, speed: f64, q0: &[f64], settings: Settings) -> Result<Equilibrium, EquilibriumError> {
+        let nf = self.free.len();
+        let m = self.value.base.m;
+        let mut q = q0.to_vec();
+        let mut lambda = vec![0.0; m];
+        // Least-squares start for λ at the guess: Φ_Rᵀ λ ≈ −r_R.
+        if m > 0 {
+            let zero = vec![0.0; q.len()];
+            let d = evaluate(&self.value, &q, &self.qd, &zero);
+            let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
+            let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
+            if let Ok(l) = a.svd(true, true).solve(&b, 1e-12) {
+                if l.iter().all(|v| v.is_finite()) {
+                    lambda = l.iter().copied().collect();
+                }
+            }
+        }
+        let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let mut converged = false;
+        let mut iterations = 0;
+        let (mut f, mut jac) = self.residual_and_jacobian(&q, &lambda);
+        while iterations < settings.max_iterations {
+            if f.iter().any(|v| !v.is_finite()) {
+                return Err(EquilibriumError::NotFinite { iterations });
+            }
+            iterations += 1;
+            let Some(step) = jac.clone().lu().solve(&DVector::from_column_slice(&f)) else {
+                return Err(EquilibriumError::SingularJacobian { iterations });
+            };
+            if step.iter().any(|v| !v.is_finite()) {
+                return Err(EquilibriumError::SingularJacobian { iterations });
+            }
+            let q_scale = 1.0 + self.free.iter().fold(0.0f64, |s, &i| s.max(q[i].abs()));
+            let l_scale = 1.0 + norm(&lambda);
+            let dq = (0..nf).fold(0.0f64, |s, k| s.max(step[k].abs()));
+            let dl = (0..m).fold(0.0f64, |s, k| s.max(step[nf + k].abs()));
+            // A Newton step this small lands on the solution to rounding: take it and stop.
+            let last = dq <= settings.step_tolerance * q_scale && dl <= 1e3 * settings.step_tolerance * l_scale;
+            // Otherwise backtrack on ‖F‖₂.
+            let f0 = f.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let mut alpha = 1.0;
+            let (mut q_new, mut l_new, mut f_new, mut j_new);
+            loop {
+                q_new = q.clone();
+                for (k, &i) in self.free.iter().enumerate() {
+                    q_new[i] -= alpha * step[k];
+                }
+                l_new = (0..m).map(|k| lambda[k] - alpha * step[nf + k]).collect::<Vec<_>>();
+                (f_new, j_new) = self.residual_and_jacobian(&q_new, &l_new);
+                let f1 = f_new.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if last || (f1.is_finite() && f1 <= (1.0 - 1e-4 * alpha) * f0) || alpha < 1e-4 {
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            q = q_new;
+            lambda = l_new;
+            f = f_new;
+            jac = j_new;
+            if last {
+                converged = true;
+                break;
+            }
+        }
+        if f.iter().any(|v| !v.is_finite()) {
+            return Err(EquilibriumError::NotFinite { iterations });
+        }
+        if !converged {
+            return Err(EquilibriumError::NewtonDiverged {
+                iterations,
+                residual: norm(&f),
+            });
+        }
+        self.check_steady(&q, &lambda, &jac)?;
+        let zero = vec![0.0; q.len()];
+        let d = evaluate(&self.value, &q, &self.qd, &zero);
+        let g = d.with_multipliers(&lambda);
+        let drive_force = (0..q.len())
+            .map(|i| if self.driven.contains(&i) { g[i] } else { 0.0 })
+            .collect();
+        Ok(Equilibrium {
+            speed,
+            constraint_violation: norm(&d.phi),
+            residual: norm(&f),
+            q,
+            qd: self.qd.clone(),
+            lambda,
+            drive_force,
+            iterations,
+        })
+    }
+
+    /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
+    /// equilibrium drift and there is no steady state.
+    fn check_steady(&self, q: &[f64], lambda: &[f64], jac: &DMatrix<f64>) -> Result<(), EquilibriumError> {
+        let scale = jac.amax().max(1e-300);
+        let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
+        let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
+        for &c in &self.driven {
+            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+            qq[c] = Dual64::new(q[c], 1.0);
+            let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
+            let s = f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()));
+            if s > 1e-8 * scale.max(1.0) {
+                return Err(EquilibriumError::NoSteadyState {
+                    coordinate: self.names[c].clone(),
+                    sensitivity: s,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Newton unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.n_unknowns()
+    }
+}

@@ -1,0 +1,18 @@
+//! modaltol: analytical tolerance analysis of the modal characteristics of multibody systems in
+//! dynamic equilibrium.
+//!
+//! Data flows one way: [`model`] (file format, validation) → [`mechanics`] (kinematics,
+//! equations of motion, constraints) → [`equilibrium`] → [`linearize`] → [`modal`] → [`sweep`]
+//! → [`report`]. The mechanics is generic over the scalar type ([`real::Real`]) so automatic
+//! differentiation gives exact derivatives everywhere.
+#![deny(clippy::float_cmp)]
+
+pub mod model;
+pub mod real;
+pub mod mechanics;
+pub mod equilibrium;
+pub mod linalg;
+pub mod linearize;
+pub mod modal;
+pub mod sweep;
+pub mod report;

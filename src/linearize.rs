@@ -1,0 +1,136 @@
+//! Linearisation about the dynamic equilibrium in minimal coordinates (Kim & Yoo 2007,
+//! eqs. 15–22).
+//!
+//! With `R` a basis of the null space of `Φ_{q_R}` (coordinate partitioning,
+//! `R = [−Φ_u⁻¹ Φ_v; I]` in dependent/independent order):
+//!
+//! ```text
+//! M̂ = Rᵀ (∂r_R/∂q̈_R) R,   Ĉ = Rᵀ (∂r_R/∂q̇_R) R,   K̂ = Rᵀ ∂(r_R + Φ_{q_R}ᵀ λ)/∂q_R R
+//! ```
+//!
+//! with `λ` held fixed in `K̂`: that term is the stiffness of the constraint forces, and leaving it
+//! out gives wrong eigenvalues for any mechanism with loaded cut joints. `Ĉ` holds damping and
+//! gyroscopic terms; `Ĉ` and `K̂` need not be symmetric. Written over any [`Real`] so the same
+//! code gives the matrices' derivatives with respect to design variables.
+
+use crate::linalg::{jacobian, pivot_columns, solve};
+use crate::mechanics::dynamics::{Lifted, evaluate};
+use crate::real::{D1, Real, cst, lift1};
+use nalgebra::DMatrix;
+
+/// Why the linearisation failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LinearizeError {
+    #[error("the constraint Jacobian is rank deficient at the equilibrium (redundant or locked cut joints)")]
+    RankDeficient,
+    #[error("the chosen independent coordinates do not parametrise the constraints here (Φ_u is singular)")]
+    BadIndependent,
+}
+
+/// Linearised equations of motion at an equilibrium.
+#[derive(Debug, Clone)]
+pub struct Linearization<T: Real> {
+    /// Coordinate indices of `q_R` (free coordinates).
+    pub free: Vec<usize>,
+    /// Coordinate indices of the independent coordinates (one per degree of freedom).
+    pub independent: Vec<usize>,
+    /// `R`: `q_R` perturbation = `R z`, `n_R × n_dof`.
+    pub basis: DMatrix<T>,
+    /// `∂r_R/∂q̈_R`, `∂r_R/∂q̇_R`, `∂(r_R + Φ_Rᵀλ)/∂q_R` in all free coordinates.
+    pub m_full: DMatrix<T>,
+    pub c_full: DMatrix<T>,
+    pub k_full: DMatrix<T>,
+    /// Reduced `M̂`, `Ĉ`, `K̂` (`n_dof × n_dof`).
+    pub m: DMatrix<T>,
+    pub c: DMatrix<T>,
+    pub k: DMatrix<T>,
+}
+
+/// Chooses independent coordinates: the user's, or by complete pivoting on `Φ_{q_R}` (the
+/// best-conditioned dependent set). Returns coordinate indices.
+pub fn choose_independent(
+    phi_r: &DMatrix<f64>,
+    free: &[usize],
+    user: Option<&[usize]>,
+) -> Result<Vec<usize>, LinearizeError> {
+    if let Some(u) = user {
+        return Ok(u.to_vec());
+    }
+    let dependent = pivot_columns(phi_r).ok_or(LinearizeError::RankDeficient)?;
+    Ok((0..free.len())
+        .filter(|k| !dependent.contains(k))
+        .map(|k| free[k])
+        .collect())
+}
+
+/// Linearises at `(q, q̇ = qd, q̈ = 0, λ)`. `l` is the system lifted to `Dual<T>`;
+/// `independent` are coordinate indices from [`choose_independent`].
+pub fn linearize<T: Real>(
+    l: &Lifted<D1<T>>,
+    free: &[usize],
+    q: &[T],
+    qd: &[T],
+    lambda: &[T],
+    independent: &[usize],
+) -> Result<Linearization<T>, LinearizeError> {
+    let n = q.len();
+    let nf = free.len();
+    let lam: Vec<D1<T>> = lambda.iter().map(|&v| lift1(v)).collect();
+    let lift = |v: &[T]| -> Vec<D1<T>> { v.iter().map(|&x| lift1(x)).collect() };
+    let (q1, qd1, qdd1) = (lift(q), lift(qd), vec![lift1(cst::<T>(0.0)); n]);
+    let xr: Vec<T> = free.iter().map(|&i| q[i]).collect();
+    let rows = |qq: &[D1<T>], vv: &[D1<T>], aa: &[D1<T>]| -> Vec<D1<T>> {
+        let g = evaluate(l, qq, vv, aa).with_multipliers(&lam);
+        free.iter().map(|&i| g[i]).collect()
+    };
+    let put = |base: &[D1<T>], x: &[D1<T>]| {
+        let mut out = base.to_vec();
+        for (k, &i) in free.iter().enumerate() {
+            out[i] = x[k];
+        }
+        out
+    };
+    let (_, k_full) = jacobian(&xr, |x| rows(&put(&q1, x), &qd1, &qdd1));
+    let vr: Vec<T> = free.iter().map(|&i| qd[i]).collect();
+    let (_, c_full) = jacobian(&vr, |x| rows(&q1, &put(&qd1, x), &qdd1));
+    let ar = vec![cst::<T>(0.0); nf];
+    let (_, m_full) = jacobian(&ar, |x| rows(&q1, &qd1, &put(&qdd1, x)));
+
+    // Basis of the null space of Φ_R.
+    let basis = if l.base.m == 0 {
+        DMatrix::identity(nf, nf)
+    } else {
+        let d = evaluate(l, &q1, &qd1, &qdd1);
+        let phi_r = DMatrix::from_fn(l.base.m, nf, |k, j| d.phi_q[(k, free[j])].re);
+        let ind: Vec<usize> = independent
+            .iter()
+            .map(|c| free.iter().position(|f| f == c).expect("independent ⊂ free"))
+            .collect();
+        let dep: Vec<usize> = (0..nf).filter(|k| !ind.contains(k)).collect();
+        let phi_u = DMatrix::from_fn(dep.len(), dep.len(), |r, c| phi_r[(r, dep[c])]);
+        let phi_v = DMatrix::from_fn(dep.len(), ind.len(), |r, c| phi_r[(r, ind[c])]);
+        let x = solve(&phi_u, &phi_v).ok_or(LinearizeError::BadIndependent)?;
+        let mut r = DMatrix::from_element(nf, ind.len(), cst::<T>(0.0));
+        for (c, &k) in ind.iter().enumerate() {
+            r[(k, c)] = cst(1.0);
+        }
+        for (row, &k) in dep.iter().enumerate() {
+            for c in 0..ind.len() {
+                r[(k, c)] = -x[(row, c)];
+            }
+        }
+        r
+    };
+    let reduce = |a: &DMatrix<T>| basis.transpose() * a * &basis;
+    Ok(Linearization {
+        free: free.to_vec(),
+        independent: independent.to_vec(),
+        m: reduce(&m_full),
+        c: reduce(&c_full),
+        k: reduce(&k_full),
+        basis,
+        m_full,
+        c_full,
+        k_full,
+    })
+}

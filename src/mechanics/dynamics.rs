@@ -1,0 +1,156 @@
+//! Equations of motion in relative coordinates (Kane / d'Alembert form) and the cut-joint
+//! constraints.
+//!
+//! ```text
+//! r(q, q̇, q̈) = Σ_bodies [ J_vᵀ (m a − m g) + J_ωᵀ (I_w α + ω × I_w ω) ] − Q_elements(q, q̇)
+//! ```
+//!
+//! equal to the velocity-transformation form `M* = B_Rᵀ M B_R`, `Q* = B_Rᵀ Q − B_Rᵀ M Ḃ q̇`
+//! (Kim & Yoo 2007, eqs. 9–12). One pass over `Dual2` numbers along `q(t) = q + q̇ t + q̈ t²/2`
+//! gives every body's velocity and acceleration (`ω̃ = Ȧ Aᵀ`, `α̃ = skew(Ä Aᵀ)`); one pass over
+//! `Dual` numbers per coordinate gives the partial velocities `J_v = ∂r_cm/∂q_i` and
+//! `J_ω = axial(∂A/∂q_i Aᵀ)`, and in the same pass the constraint Jacobian `Φ_q`.
+//! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
+
+use super::kinematics::{Pose, point, poses};
+use super::{ConstraintData, NormDual, System};
+use crate::real::{D1, D2, Real, V3, axial, cst, lift1, lift2};
+use nalgebra::DMatrix;
+use num_dual::{Dual, Dual2};
+
+/// A system lifted once into the scalars of the time pass and of the partial passes.
+#[derive(Debug, Clone)]
+pub struct Lifted<T: Real> {
+    pub base: System<T>,
+    pub time: System<D2<T>>,
+    pub partial: System<D1<T>>,
+}
+
+impl<T: Real> Lifted<T> {
+    pub fn new(base: System<T>) -> Self {
+        Lifted {
+            time: base.map(lift2),
+            partial: base.map(lift1),
+            base,
+        }
+    }
+}
+
+/// Equations of motion and constraints at one state.
+#[derive(Debug, Clone)]
+pub struct Dynamics<T: Real> {
+    /// `r(q, q̇, q̈)`, one entry per coordinate.
+    pub r: Vec<T>,
+    /// `Φ(q)`, one entry per constraint equation.
+    pub phi: Vec<T>,
+    /// `Φ_q`, constraint equations × coordinates.
+    pub phi_q: DMatrix<T>,
+    /// Tension of each spring-damper (N).
+    pub spring_force: Vec<T>,
+}
+
+impl<T: Real> Dynamics<T> {
+    /// `r + Φ_qᵀ λ`: the generalised forces the drives must supply (zero on free coordinates
+    /// at a solution).
+    pub fn with_multipliers(&self, lambda: &[T]) -> Vec<T> {
+        let mut out = self.r.clone();
+        for (i, o) in out.iter_mut().enumerate() {
+            for (k, l) in lambda.iter().enumerate() {
+                *o += self.phi_q[(k, i)] * *l;
+            }
+        }
+        out
+    }
+}
+
+/// Constraint values `Φ` at the given body poses.
+pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
+    sys.constraints
+        .iter()
+        .map(|c| match c {
+            ConstraintData::Distance {
+                body1,
+                point1,
+                body2,
+                point2,
+                length,
+            } => {
+                let d = point(p, *body2, point2) - point(p, *body1, point1);
+                (d.dot(&d) - *length * *length) * cst::<U>(0.5)
+            }
+        })
+        .collect()
+}
+
+/// `Φ(q)` alone (positions only).
+pub fn constraints_at<U: Real>(sys: &System<U>, q: &[U]) -> Vec<U> {
+    constraint_values(sys, &poses(sys, q))
+}
+
+/// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
+pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamics<T> {
+    let sys = &l.base;
+    let n = sys.n;
+    // Time pass: velocities and accelerations of every body.
+    let qt: Vec<D2<T>> = (0..n).map(|i| Dual2::new(q[i], qd[i], qdd[i])).collect();
+    let pt = poses(&l.time, &qt);
+    let mut force = Vec::with_capacity(sys.bodies.len());
+    let mut moment = Vec::with_capacity(sys.bodies.len());
+    for (b, body) in sys.bodies.iter().enumerate() {
+        let x = pt[b].apply(&l.time.bodies[b].cm);
+        let acc = x.map(|c| c.v2);
+        let a = pt[b].rot.map(|c| c.re);
+        let ad = pt[b].rot.map(|c| c.v1);
+        let add = pt[b].rot.map(|c| c.v2);
+        let at = a.transpose();
+        let omega = axial(&(ad * at));
+        let alpha = axial(&(add * at));
+        let iw = a * body.inertia * at;
+        force.push((acc - sys.gravity) * body.mass);
+        let h = iw * omega;
+        moment.push(iw * alpha + omega.cross(&h));
+    }
+    let mut spring_force = Vec::with_capacity(sys.springs.len());
+    for (s, st) in sys.springs.iter().zip(&l.time.springs) {
+        let d = point(&pt, s.body2, &st.point2) - point(&pt, s.body1, &st.point1);
+        let len = d.norm_dual();
+        spring_force.push(s.stiffness * (len.re - s.free_length) + s.damping * len.v1 + s.preload);
+    }
+    let phi: Vec<T> = constraint_values(&l.time, &pt).iter().map(|c| c.re).collect();
+
+    // Partial passes: J_v, J_ω, ∂ℓ/∂q_i and Φ_q, one coordinate at a time.
+    let mut r = vec![cst::<T>(0.0); n];
+    let mut phi_q = DMatrix::from_element(sys.m, n, cst::<T>(0.0));
+    let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
+    for i in 0..n {
+        let mut qi = base.clone();
+        qi[i] = Dual::new(q[i], cst(1.0));
+        let pp = poses(&l.partial, &qi);
+        let mut ri = cst::<T>(0.0);
+        for b in 0..sys.bodies.len() {
+            let x = pp[b].apply(&l.partial.bodies[b].cm);
+            let jv: V3<T> = x.map(|c| c.eps);
+            let a = pp[b].rot.map(|c| c.re);
+            let ae = pp[b].rot.map(|c| c.eps);
+            let jw = axial(&(ae * a.transpose()));
+            ri += jv.dot(&force[b]) + jw.dot(&moment[b]);
+        }
+        for (k, s) in l.partial.springs.iter().enumerate() {
+            let d = point(&pp, s.body2, &s.point2) - point(&pp, s.body1, &s.point1);
+            ri += spring_force[k] * d.norm_dual().eps;
+        }
+        for (k, c) in constraint_values(&l.partial, &pp).iter().enumerate() {
+            phi_q[(k, i)] = c.eps;
+        }
+        r[i] = ri;
+    }
+    for e in &sys.joint_elements {
+        r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
+    }
+    Dynamics {
+        r,
+        phi,
+        phi_q,
+        spring_force,
+    }
+}

@@ -1,0 +1,300 @@
+//! The parametric multibody system: a [`Model`] instantiated at parameter values and a speed,
+//! over any scalar [`Real`].
+//!
+//! [`System::new`] evaluates every expression once; [`kinematics`] maps coordinates to body
+//! poses; [`dynamics`] gives the equations of motion `r(q, q̇, q̈)` and the cut-joint
+//! constraints `Φ(q)`. All of it is written once over `T` and differentiated by dual numbers.
+
+pub mod dynamics;
+pub mod kinematics;
+
+use crate::model::{ConstraintKind, Field, FieldError, JointKind, Model};
+use crate::real::{Real, V3, M3, cst};
+
+/// Mass properties of one body, in the reference configuration.
+#[derive(Debug, Clone)]
+pub struct BodyData<T> {
+    pub mass: T,
+    /// About the centre of mass, global axes of the reference configuration.
+    pub inertia: M3<T>,
+    /// Centre of mass in the reference configuration.
+    pub cm: V3<T>,
+}
+
+/// A tree joint with its geometry in the reference configuration.
+#[derive(Debug, Clone)]
+pub struct JointData<T> {
+    pub kind: JointKind,
+    pub parent: Option<usize>,
+    pub child: usize,
+    pub at: V3<T>,
+    /// Unit axis.
+    pub axis: V3<T>,
+    pub coord: Option<usize>,
+}
+
+/// Spring and damper acting on one joint coordinate.
+#[derive(Debug, Clone)]
+pub struct JointElement<T> {
+    pub coord: usize,
+    pub stiffness: T,
+    pub free: T,
+    pub damping: T,
+}
+
+/// Translational spring-damper between two body points (reference-configuration coordinates).
+#[derive(Debug, Clone)]
+pub struct SpringData<T> {
+    pub body1: Option<usize>,
+    pub point1: V3<T>,
+    pub body2: Option<usize>,
+    pub point2: V3<T>,
+    pub stiffness: T,
+    pub damping: T,
+    pub free_length: T,
+    pub preload: T,
+}
+
+/// A cut-joint constraint with its numbers.
+#[derive(Debug, Clone)]
+pub enum ConstraintData<T> {
+    /// `Φ = ½ (dᵀd − L²)`, `d = x2 − x1`.
+    Distance {
+        body1: Option<usize>,
+        point1: V3<T>,
+        body2: Option<usize>,
+        point2: V3<T>,
+        length: T,
+    },
+}
+
+/// A model instantiated at one set of parameter values and one speed, over scalar `T`.
+#[derive(Debug, Clone)]
+pub struct System<T> {
+    pub gravity: V3<T>,
+    pub bodies: Vec<BodyData<T>>,
+    /// Tree joints, parents before children.
+    pub joints: Vec<JointData<T>>,
+    pub joint_elements: Vec<JointElement<T>>,
+    pub springs: Vec<SpringData<T>>,
+    pub constraints: Vec<ConstraintData<T>>,
+    /// Constant speed of each driven coordinate (`None` for free ones).
+    pub drive: Vec<Option<T>>,
+    /// Number of coordinates.
+    pub n: usize,
+    /// Number of constraint equations.
+    pub m: usize,
+}
+
+fn v3<T: Real>(f: &[Field; 3], p: &[T], w: T) -> Result<V3<T>, FieldError> {
+    Ok(V3::new(f[0].eval(p, w)?, f[1].eval(p, w)?, f[2].eval(p, w)?))
+}
+
+impl<T: Real> System<T> {
+    /// Evaluates every field of `model` at parameter values `p` and operating speed `speed`
+    /// (rad/s).
+    pub fn new(model: &Model, p: &[T], speed: T) -> Result<System<T>, FieldError> {
+        let w = speed;
+        let mut bodies = Vec::with_capacity(model.bodies.len());
+        for b in &model.bodies {
+            let mut inertia = M3::zeros();
+            for i in 0..3 {
+                for j in 0..3 {
+                    inertia[(i, j)] = b.inertia[i][j].eval(p, w)?;
+                }
+            }
+            bodies.push(BodyData {
+                mass: b.mass.eval(p, w)?,
+                inertia,
+                cm: v3(&b.cm, p, w)?,
+            });
+        }
+        let mut joints = Vec::with_capacity(model.joints.len());
+        let mut joint_elements = Vec::new();
+        let mut drive = vec![None; model.coordinates.len()];
+        for &ji in &model.order {
+            let j = &model.joints[ji];
+            let mut axis = v3(&j.axis, p, w)?;
+            if j.kind != JointKind::Fixed {
+                let n = axis.dot(&axis).sqrt();
+                if n.re() < 1e-12 {
+                    return Err(FieldError {
+                        site: j.axis[0].site.clone(),
+                        error: crate::model::EvalError::DivisionByZero,
+                    });
+                }
+                axis /= n;
+            }
+            joints.push(JointData {
+                kind: j.kind,
+                parent: j.parent,
+                child: j.child,
+                at: v3(&j.at, p, w)?,
+                axis,
+                coord: j.coord,
+            });
+            if let Some(c) = j.coord {
+                if let Some(d) = &j.drive {
+                    drive[c] = Some(d.eval(p, w)?);
+                }
+                if j.stiffness.is_some() || j.damping.is_some() {
+                    let opt = |f: &Option<Field>| f.as_ref().map_or(Ok(cst(0.0)), |f| f.eval(p, w));
+                    joint_elements.push(JointElement {
+                        coord: c,
+                        stiffness: opt(&j.stiffness)?,
+                        free: j.free.eval(p, w)?,
+                        damping: opt(&j.damping)?,
+                    });
+                }
+            }
+        }
+        let opt = |f: &Option<Field>| f.as_ref().map_or(Ok(cst(0.0)), |f| f.eval(p, w));
+        let mut springs = Vec::new();
+        for s in &model.forces {
+            let point1 = v3(&s.point1, p, w)?;
+            let point2 = v3(&s.point2, p, w)?;
+            let free_length = match &s.free_length {
+                Some(f) => f.eval(p, w)?,
+                None => (point2 - point1).norm_dual(),
+            };
+            springs.push(SpringData {
+                body1: s.body1,
+                point1,
+                body2: s.body2,
+                point2,
+                stiffness: opt(&s.stiffness)?,
+                damping: opt(&s.damping)?,
+                free_length,
+                preload: opt(&s.preload)?,
+            });
+        }
+        let mut constraints = Vec::new();
+        for c in &model.constraints {
+            match &c.kind {
+                ConstraintKind::Distance {
+                    body1,
+                    point1,
+                    body2,
+                    point2,
+                    length,
+                } => {
+                    let point1 = v3(point1, p, w)?;
+                    let point2 = v3(point2, p, w)?;
+                    let length = match length {
+                        Some(f) => f.eval(p, w)?,
+                        None => (point2 - point1).norm_dual(),
+                    };
+                    constraints.push(ConstraintData::Distance {
+                        body1: *body1,
+                        point1,
+                        body2: *body2,
+                        point2,
+                        length,
+                    });
+                }
+            }
+        }
+        Ok(System {
+            gravity: v3(&model.gravity, p, w)?,
+            bodies,
+            joints,
+            joint_elements,
+            springs,
+            constraints,
+            drive,
+            n: model.coordinates.len(),
+            m: model.n_constraints(),
+        })
+    }
+
+    /// The same system over another scalar (`f` lifts each number).
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> System<U> {
+        let v = |x: &V3<T>| x.map(f);
+        System {
+            gravity: v(&self.gravity),
+            bodies: self
+                .bodies
+                .iter()
+                .map(|b| BodyData {
+                    mass: f(b.mass),
+                    inertia: b.inertia.map(f),
+                    cm: v(&b.cm),
+                })
+                .collect(),
+            joints: self
+                .joints
+                .iter()
+                .map(|j| JointData {
+                    kind: j.kind,
+                    parent: j.parent,
+                    child: j.child,
+                    at: v(&j.at),
+                    axis: v(&j.axis),
+                    coord: j.coord,
+                })
+                .collect(),
+            joint_elements: self
+                .joint_elements
+                .iter()
+                .map(|e| JointElement {
+                    coord: e.coord,
+                    stiffness: f(e.stiffness),
+                    free: f(e.free),
+                    damping: f(e.damping),
+                })
+                .collect(),
+            springs: self
+                .springs
+                .iter()
+                .map(|s| SpringData {
+                    body1: s.body1,
+                    point1: v(&s.point1),
+                    body2: s.body2,
+                    point2: v(&s.point2),
+                    stiffness: f(s.stiffness),
+                    damping: f(s.damping),
+                    free_length: f(s.free_length),
+                    preload: f(s.preload),
+                })
+                .collect(),
+            constraints: self
+                .constraints
+                .iter()
+                .map(|c| match c {
+                    ConstraintData::Distance {
+                        body1,
+                        point1,
+                        body2,
+                        point2,
+                        length,
+                    } => ConstraintData::Distance {
+                        body1: *body1,
+                        point1: v(point1),
+                        body2: *body2,
+                        point2: v(point2),
+                        length: f(*length),
+                    },
+                })
+                .collect(),
+            drive: self.drive.iter().map(|d| d.map(f)).collect(),
+            n: self.n,
+            m: self.m,
+        }
+    }
+
+    /// Coordinate speeds at steady state: drive speeds on driven coordinates, zero elsewhere.
+    pub fn steady_speeds(&self) -> Vec<T> {
+        self.drive.iter().map(|d| d.unwrap_or(cst(0.0))).collect()
+    }
+}
+
+/// Euclidean norm over any [`Real`] (nalgebra's `norm` needs a `RealField`).
+pub trait NormDual<T> {
+    fn norm_dual(&self) -> T;
+}
+
+impl<T: Real> NormDual<T> for V3<T> {
+    fn norm_dual(&self) -> T {
+        self.dot(self).sqrt()
+    }
+}

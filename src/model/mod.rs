@@ -1,0 +1,408 @@
+//! Model files: the TOML format, expressions, and validation into an immutable [`Model`].
+//!
+//! Raw text → [`schema`] (serde mirror, with spans) → [`validate`] → [`Model`]. Nothing
+//! downstream sees a raw string reference: bodies, joints and parameters are indices, numeric
+//! fields are parsed [`Expr`]essions with the [`Site`] they came from, so a failure at run time
+//! (say a division by zero at one speed) can still name the file, line and field.
+
+pub mod expr;
+pub mod schema;
+mod validate;
+
+pub use expr::{EvalError, Expr};
+
+use std::fmt;
+use std::path::Path;
+
+/// Where a model item comes from: file, 1-based line and column, and a description.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Site {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+    pub what: String,
+}
+
+impl fmt::Display for Site {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{} ({}:{}:{})", self.what, self.file, self.line, self.column)
+    }
+}
+
+/// An error in a model file, pointing at a line and column when it can.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct ModelError {
+    pub file: String,
+    /// 1-based line and column, when the error has a place in the file.
+    pub line: Option<usize>,
+    pub column: Option<usize>,
+    pub message: String,
+    /// The source line, for display under the message.
+    pub snippet: Option<String>,
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match (self.line, self.column) {
+            (Some(l), Some(c)) => write!(f, "{}:{}:{}: {}", self.file, l, c, self.message)?,
+            _ => write!(f, "{}: {}", self.file, self.message)?,
+        }
+        if let (Some(s), Some(c)) = (&self.snippet, self.column) {
+            let shown: String = s.chars().take(160).collect();
+            write!(f, "\n    | {shown}\n    | {}^", " ".repeat(c.saturating_sub(1)))?;
+        }
+        Ok(())
+    }
+}
+
+/// A field of the model: an expression and where it was written.
+#[derive(Debug, Clone)]
+pub struct Field {
+    pub expr: Expr,
+    pub site: Site,
+}
+
+/// A field evaluation failed (at some parameter values and speed).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{site}: {error}")]
+pub struct FieldError {
+    pub site: Site,
+    pub error: EvalError,
+}
+
+impl Field {
+    /// Evaluates the field over `T`; errors name the field and its place in the file.
+    pub fn eval<T: crate::real::Real>(&self, p: &[T], speed: T) -> Result<T, FieldError> {
+        self.expr.eval(p, speed).map_err(|error| FieldError {
+            site: self.site.clone(),
+            error,
+        })
+    }
+}
+
+/// A tolerance on a design variable, as written (`"3%"` or an absolute value in the
+/// parameter's unit). By default it is read as ±3σ of a normal distribution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance {
+    /// Fraction of the nominal value (0.03 for "3%").
+    Relative(f64),
+    /// Absolute value in the parameter's unit.
+    Absolute(f64),
+}
+
+impl Tolerance {
+    /// The tolerance as an absolute half-width around `nominal`.
+    pub fn absolute(&self, nominal: f64) -> f64 {
+        match *self {
+            Tolerance::Relative(f) => f * nominal.abs(),
+            Tolerance::Absolute(a) => a,
+        }
+    }
+}
+
+/// Distribution of a toleranced variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Distribution {
+    /// Normal, tolerance = ±3σ.
+    Normal,
+    /// Uniform on ±tolerance.
+    Uniform,
+}
+
+/// A named model parameter (a candidate design variable).
+#[derive(Debug, Clone)]
+pub struct Parameter {
+    pub name: String,
+    pub value: f64,
+    pub tolerance: Option<Tolerance>,
+    pub distribution: Distribution,
+    pub site: Site,
+}
+
+/// A rigid body. Inertia is about the centre of mass, in global axes of the reference
+/// configuration; `cm` is the centre of mass there.
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub name: String,
+    pub mass: Field,
+    pub inertia: [[Field; 3]; 3],
+    pub cm: [Field; 3],
+}
+
+/// Tree joint types.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointKind {
+    /// Rotation about `axis` through `at`; coordinate in rad.
+    Revolute,
+    /// Translation along `axis`; coordinate in m.
+    Prismatic,
+    /// No relative motion; no coordinate.
+    Fixed,
+}
+
+/// A tree joint: `child` moves relative to `parent` (`None` = ground).
+#[derive(Debug, Clone)]
+pub struct Joint {
+    pub name: String,
+    pub kind: JointKind,
+    pub parent: Option<usize>,
+    pub child: usize,
+    pub at: [Field; 3],
+    pub axis: [Field; 3],
+    pub initial: Field,
+    /// Constant coordinate speed (rad/s or m/s) when driven.
+    pub drive: Option<Field>,
+    /// Joint spring rate (N·m/rad or N/m) and its free coordinate value.
+    pub stiffness: Option<Field>,
+    pub free: Field,
+    /// Joint damping (N·m·s/rad or N·s/m).
+    pub damping: Option<Field>,
+    /// Index of this joint's coordinate, if it has one.
+    pub coord: Option<usize>,
+}
+
+/// A generalised coordinate: the relative coordinate of one joint.
+#[derive(Debug, Clone)]
+pub struct Coordinate {
+    pub joint: usize,
+    pub name: String,
+    pub kind: JointKind,
+    pub driven: bool,
+}
+
+/// Translational spring-damper between a point on one body and a point on another:
+/// `F = k (ℓ − ℓ0) + c ℓ̇ + preload` (tension positive).
+#[derive(Debug, Clone)]
+pub struct SpringDamper {
+    pub name: String,
+    pub body1: Option<usize>,
+    pub point1: [Field; 3],
+    pub body2: Option<usize>,
+    pub point2: [Field; 3],
+    pub stiffness: Option<Field>,
+    pub damping: Option<Field>,
+    /// `None`: the distance of the two points in the reference configuration.
+    pub free_length: Option<Field>,
+    pub preload: Option<Field>,
+}
+
+/// Cut-joint constraint types. Adding one means a variant here, its equation in
+/// `mechanics::constraints`, and its parsing in `validate`.
+#[derive(Debug, Clone)]
+pub enum ConstraintKind {
+    /// `|x2 − x1| = length` between a point on `body1` and a point on `body2`.
+    Distance {
+        body1: Option<usize>,
+        point1: [Field; 3],
+        body2: Option<usize>,
+        point2: [Field; 3],
+        /// `None`: the distance in the reference configuration.
+        length: Option<Field>,
+    },
+}
+
+impl ConstraintKind {
+    /// Number of scalar equations this constraint adds.
+    pub fn equations(&self) -> usize {
+        match self {
+            ConstraintKind::Distance { .. } => 1,
+        }
+    }
+}
+
+/// A cut joint closing a kinematic loop.
+#[derive(Debug, Clone)]
+pub struct Constraint {
+    pub name: String,
+    pub kind: ConstraintKind,
+}
+
+/// Inclusive range of speeds `from:to:step` (rad/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpeedRange {
+    pub from: f64,
+    pub to: f64,
+    pub step: f64,
+}
+
+impl SpeedRange {
+    /// Parses `FROM:TO:STEP` (rad/s); `TO` is included when it lies on the grid.
+    pub fn parse(s: &str) -> Result<SpeedRange, String> {
+        let parts: Vec<&str> = s.split(':').collect();
+        if parts.len() != 3 {
+            return Err(format!("'{s}' is not FROM:TO:STEP"));
+        }
+        let num = |x: &str, what: &str| -> Result<f64, String> {
+            let v: f64 = x
+                .trim()
+                .parse()
+                .map_err(|_| format!("{what} '{x}' in '{s}' is not a number"))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(format!("{what} in '{s}' is not finite"))
+            }
+        };
+        let r = SpeedRange {
+            from: num(parts[0], "FROM")?,
+            to: num(parts[1], "TO")?,
+            step: num(parts[2], "STEP")?,
+        };
+        if r.step <= 0.0 {
+            return Err(format!("STEP in '{s}' must be positive"));
+        }
+        if r.to < r.from {
+            return Err(format!("TO is below FROM in '{s}'"));
+        }
+        if (r.to - r.from) / r.step > 1e9 {
+            return Err(format!("'{s}' has more than 10^9 points"));
+        }
+        Ok(r)
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        ((self.to - self.from) / self.step + 1e-9).floor() as usize + 1
+    }
+
+    /// Always false: a range has at least its first point.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The `i`-th speed (computed as `from + i·step`, no accumulated rounding).
+    pub fn at(&self, i: usize) -> f64 {
+        self.from + i as f64 * self.step
+    }
+
+    /// All speeds.
+    pub fn speeds(&self) -> impl Iterator<Item = f64> + '_ {
+        (0..self.len()).map(|i| self.at(i))
+    }
+}
+
+/// Monte Carlo sampling schemes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampling {
+    Random,
+    Lhs,
+    Sobol,
+}
+
+/// A transfer function: generalised force on `input` → response of `output` (coordinate
+/// indices), excited at `order × speed`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transfer {
+    pub input: usize,
+    pub output: usize,
+    pub order: f64,
+}
+
+/// A named tolerance case: per-parameter tolerances.
+#[derive(Debug, Clone)]
+pub struct Case {
+    pub name: String,
+    pub tolerances: Vec<(usize, Tolerance)>,
+}
+
+/// The `[analysis]` table: what the model's author wants analysed by default.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    pub speed: Option<SpeedRange>,
+    pub transfer: Option<Transfer>,
+    pub samples: usize,
+    pub seed: u64,
+    pub sampling: Sampling,
+    pub cases: Vec<Case>,
+}
+
+/// A validated mechanism. Immutable; numbers are expressions of the parameters and speed.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub name: String,
+    pub file: String,
+    pub parameters: Vec<Parameter>,
+    pub gravity: [Field; 3],
+    pub bodies: Vec<Body>,
+    pub joints: Vec<Joint>,
+    /// Joint indices with every parent before its children.
+    pub order: Vec<usize>,
+    pub coordinates: Vec<Coordinate>,
+    pub forces: Vec<SpringDamper>,
+    pub constraints: Vec<Constraint>,
+    /// User's choice of independent coordinates (coordinate indices), if any.
+    pub independent: Option<Vec<usize>>,
+    pub analysis: Analysis,
+}
+
+impl Model {
+    /// Reads and validates a model file.
+    pub fn from_file(path: &Path) -> Result<Model, ModelError> {
+        let file = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|e| ModelError {
+            file: file.clone(),
+            line: None,
+            column: None,
+            message: format!("cannot read the model file: {e}"),
+            snippet: None,
+        })?;
+        Model::from_bytes(&bytes, &file)
+    }
+
+    /// Validates a model given as bytes; `file` names it in messages.
+    pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Model, ModelError> {
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            let off = e.valid_up_to();
+            let prefix = String::from_utf8_lossy(&bytes[..off]).into_owned();
+            validate::error_at(file, &prefix, off, "the file is not valid UTF-8 text")
+        })?;
+        validate::validate(text, file)
+    }
+
+    /// Validates a model given as text; `file` names it in messages.
+    pub fn from_str(text: &str, file: &str) -> Result<Model, ModelError> {
+        validate::validate(text, file)
+    }
+
+    /// Nominal parameter values.
+    pub fn nominal(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.value).collect()
+    }
+
+    /// Index of a parameter by name.
+    pub fn parameter(&self, name: &str) -> Option<usize> {
+        self.parameters.iter().position(|p| p.name == name)
+    }
+
+    /// Index of the coordinate of the joint named `name`.
+    pub fn coordinate(&self, name: &str) -> Option<usize> {
+        self.coordinates.iter().position(|c| c.name == name)
+    }
+
+    /// Indices of driven coordinates.
+    pub fn driven(&self) -> Vec<usize> {
+        (0..self.coordinates.len())
+            .filter(|&i| self.coordinates[i].driven)
+            .collect()
+    }
+
+    /// Indices of free (not driven) coordinates, `q_R`.
+    pub fn free(&self) -> Vec<usize> {
+        (0..self.coordinates.len())
+            .filter(|&i| !self.coordinates[i].driven)
+            .collect()
+    }
+
+    /// Number of scalar constraint equations.
+    pub fn n_constraints(&self) -> usize {
+        self.constraints.iter().map(|c| c.kind.equations()).sum()
+    }
+
+    /// Degrees of freedom: free coordinates minus constraint equations.
+    pub fn dof(&self) -> usize {
+        self.free().len().saturating_sub(self.n_constraints())
+    }
+}

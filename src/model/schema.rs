@@ -1,0 +1,150 @@
+//! Serde structures that mirror the TOML model file one to one, with source spans.
+//!
+//! Nothing here is checked beyond TOML types; [`super::validate`] turns these into a
+//! [`super::Model`]. Spans are byte ranges into the file, turned into line and column there.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A numeric field: a number, or an expression string over the parameters.
+#[derive(Debug, Clone)]
+pub enum Num {
+    Value(f64),
+    Expr(String),
+}
+
+impl<'de> Deserialize<'de> for Num {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Num;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an expression string such as \"m*L^2/12\"")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<Num, E> {
+                Ok(Num::Value(v))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Num, E> {
+                Ok(Num::Expr(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A spanned number-or-expression.
+pub type SNum = Spanned<Num>;
+/// A spanned list of numbers (a vector, checked to have three entries later).
+pub type SVec = Spanned<Vec<SNum>>;
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FileSchema {
+    pub name: Option<String>,
+    pub description: Option<String>,
+    pub gravity: Option<SVec>,
+    pub independent: Option<Spanned<Vec<Spanned<String>>>>,
+    #[serde(default)]
+    pub parameters: BTreeMap<Spanned<String>, Spanned<toml::Value>>,
+    #[serde(default)]
+    pub bodies: Vec<Spanned<BodySchema>>,
+    #[serde(default)]
+    pub joints: Vec<Spanned<JointSchema>>,
+    #[serde(default)]
+    pub forces: Vec<Spanned<ForceSchema>>,
+    #[serde(default)]
+    pub constraints: Vec<Spanned<ConstraintSchema>>,
+    pub analysis: Option<Spanned<AnalysisSchema>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySchema {
+    pub name: Spanned<String>,
+    pub mass: SNum,
+    /// Principal values `[Ixx, Iyy, Izz]` or a full symmetric 3×3 matrix (numbers or
+    /// expressions); interpreted in `validate`.
+    pub inertia: Option<Spanned<toml::Value>>,
+    pub cm: SVec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSchema {
+    pub name: Spanned<String>,
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    pub parent: Spanned<String>,
+    pub child: Spanned<String>,
+    pub at: Option<SVec>,
+    pub axis: Option<SVec>,
+    pub initial: Option<SNum>,
+    pub drive: Option<SNum>,
+    pub stiffness: Option<SNum>,
+    pub free: Option<SNum>,
+    pub damping: Option<SNum>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSchema {
+    pub name: Spanned<String>,
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    pub body1: Spanned<String>,
+    pub point1: SVec,
+    pub body2: Spanned<String>,
+    pub point2: SVec,
+    pub stiffness: Option<SNum>,
+    pub damping: Option<SNum>,
+    pub free_length: Option<SNum>,
+    pub preload: Option<SNum>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintSchema {
+    pub name: Spanned<String>,
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    pub body1: Spanned<String>,
+    pub point1: SVec,
+    pub body2: Spanned<String>,
+    pub point2: SVec,
+    pub length: Option<SNum>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransferSchema {
+    pub input: Spanned<String>,
+    pub output: Spanned<String>,
+    pub order: Option<Spanned<f64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseSchema {
+    pub name: Spanned<String>,
+    pub tolerances: BTreeMap<Spanned<String>, Spanned<toml::Value>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisSchema {
+    pub speed: Option<Spanned<String>>,
+    pub transfer: Option<Spanned<TransferSchema>>,
+    pub samples: Option<Spanned<i64>>,
+    pub seed: Option<u64>,
+    pub sampling: Option<Spanned<String>>,
+    #[serde(default)]
+    pub cases: Vec<Spanned<CaseSchema>>,
+}

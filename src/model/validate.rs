@@ -1,0 +1,791 @@
+//! Turns the serde mirror of a model file into a checked [`Model`].
+//!
+//! Every check reports the first problem found, with the file, line, column and item:
+//! unknown or duplicate names, bad expressions, unknown parameters, bodies not connected to
+//! ground, cycles in the joint tree, zero axes, more constraints than coordinates, non-finite
+//! values, negative mass and inertia that is not positive semi-definite. Expressions that do not
+//! mention `speed` are evaluated at the nominal parameters here, so such errors surface at load
+//! time; the rest are checked at each speed when the system is built.
+
+use super::schema::{self, FileSchema, Num, SNum, SVec};
+use super::*;
+use std::collections::HashMap;
+use std::ops::Range;
+use toml::Spanned;
+
+/// Builds a [`ModelError`] at byte `offset` of `text`.
+pub(super) fn error_at(file: &str, text: &str, offset: usize, msg: &str) -> ModelError {
+    let (line, column, snippet) = locate(text, offset);
+    ModelError {
+        file: file.to_string(),
+        line: Some(line),
+        column: Some(column),
+        message: msg.to_string(),
+        snippet: Some(snippet),
+    }
+}
+
+/// 1-based line and column (in characters) of byte `offset`, and that line's text.
+fn locate(text: &str, offset: usize) -> (usize, usize, String) {
+    let mut off = offset.min(text.len());
+    while !text.is_char_boundary(off) {
+        off -= 1;
+    }
+    let before = &text[..off];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = text[start..off].chars().count() + 1;
+    let end = text[off..].find('\n').map_or(text.len(), |i| off + i);
+    (line, column, text[start..end].trim_end_matches('\r').to_string())
+}
+
+struct Ctx<'a> {
+    text: &'a str,
+    file: &'a str,
+    params: Vec<String>,
+}
+
+type R<T> = Result<T, ModelError>;
+
+impl Ctx<'_> {
+    fn err(&self, span: Range<usize>, msg: impl AsRef<str>) -> ModelError {
+        error_at(self.file, self.text, span.start, msg.as_ref())
+    }
+
+    fn site(&self, span: &Range<usize>, what: String) -> Site {
+        let (line, column, _) = locate(self.text, span.start);
+        Site {
+            file: self.file.to_string(),
+            line,
+            column,
+            what,
+        }
+    }
+
+    /// Parses a number-or-expression field; `what` names it in messages.
+    fn field(&self, n: &SNum, what: String) -> R<Field> {
+        let span = n.span();
+        let expr = match n.get_ref() {
+            Num::Value(v) => {
+                if !v.is_finite() {
+                    return Err(self.err(span, format!("{what}: value {v} is not finite")));
+                }
+                Expr::Num(*v)
+            }
+            Num::Expr(s) => {
+                let lookup = |name: &str| self.params.iter().position(|p| p == name);
+                Expr::parse(s, &lookup).map_err(|e| {
+                    // The string starts one byte after its opening quote.
+                    let off = span.start + 1 + e.offset;
+                    error_at(
+                        self.file,
+                        self.text,
+                        off,
+                        &format!("{what}: bad expression \"{s}\": {}", e.message),
+                    )
+                })?
+            }
+        };
+        let field = Field {
+            expr,
+            site: self.site(&span, what.clone()),
+        };
+        Ok(field)
+    }
+
+    fn opt_field(&self, n: &Option<SNum>, what: String) -> R<Option<Field>> {
+        n.as_ref().map(|n| self.field(n, what)).transpose()
+    }
+
+    fn vec3(&self, v: &SVec, what: String) -> R<[Field; 3]> {
+        let items = v.get_ref();
+        if items.len() != 3 {
+            return Err(self.err(
+                v.span(),
+                format!("{what}: expected 3 components [x, y, z], got {}", items.len()),
+            ));
+        }
+        Ok([
+            self.field(&items[0], format!("{what}[0]"))?,
+            self.field(&items[1], format!("{what}[1]"))?,
+            self.field(&items[2], format!("{what}[2]"))?,
+        ])
+    }
+
+    fn zero(&self, span: &Range<usize>, what: String) -> Field {
+        Field {
+            expr: Expr::Num(0.0),
+            site: self.site(span, what),
+        }
+    }
+
+    /// Evaluates a field at the nominal parameters (if it does not use `speed`).
+    fn nominal(&self, f: &Field, p: &[f64]) -> R<Option<f64>> {
+        if f.expr.uses_speed() {
+            return Ok(None);
+        }
+        f.expr.eval(p, 0.0).map(Some).map_err(|e| ModelError {
+            file: self.file.to_string(),
+            line: Some(f.site.line),
+            column: Some(f.site.column),
+            message: format!("{}: {e}", f.site.what),
+            snippet: Some(locate_line(self.text, f.site.line)),
+        })
+    }
+}
+
+fn locate_line(text: &str, line: usize) -> String {
+    text.lines().nth(line - 1).unwrap_or("").to_string()
+}
+
+/// Names must be non-empty and not clash with reserved words.
+fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()> {
+    let n = name.get_ref();
+    if n.is_empty() || !n.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '-') {
+        return Err(ctx.err(
+            name.span(),
+            format!("{kind} name '{n}' must be non-empty and use letters, digits, '_' or '-'"),
+        ));
+    }
+    Ok(())
+}
+
+fn tolerance(ctx: &Ctx, v: &toml::Value, span: Range<usize>, what: &str) -> R<Tolerance> {
+    let bad = |m: &str| ctx.err(span.clone(), format!("{what}: {m}"));
+    let t = match v {
+        toml::Value::String(s) => {
+            let s = s.trim();
+            if let Some(p) = s.strip_suffix('%') {
+                let f: f64 = p
+                    .trim()
+                    .parse()
+                    .map_err(|_| bad(&format!("'{s}' is not a percentage such as \"3%\"")))?;
+                Tolerance::Relative(f / 100.0)
+            } else {
+                let f: f64 = s.parse().map_err(|_| {
+                    bad(&format!(
+                        "'{s}' is neither a percentage (\"3%\") nor an absolute value"
+                    ))
+                })?;
+                Tolerance::Absolute(f)
+            }
+        }
+        toml::Value::Float(f) => Tolerance::Absolute(*f),
+        toml::Value::Integer(i) => Tolerance::Absolute(*i as f64),
+        _ => return Err(bad("a tolerance is \"3%\" (relative) or a number (absolute)")),
+    };
+    let x = match t {
+        Tolerance::Relative(x) | Tolerance::Absolute(x) => x,
+    };
+    if !x.is_finite() || x < 0.0 {
+        return Err(bad("a tolerance must be finite and not negative"));
+    }
+    Ok(t)
+}
+
+fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<Parameter> {
+    let n = name.get_ref().clone();
+    let what = format!("parameter '{n}'");
+    let span = v.span();
+    let num = |x: &toml::Value| -> Option<f64> {
+        match x {
+            toml::Value::Float(f) => Some(*f),
+            toml::Value::Integer(i) => Some(*i as f64),
+            _ => None,
+        }
+    };
+    let (value, tol, dist) = match v.get_ref() {
+        toml::Value::Table(t) => {
+            for k in t.keys() {
+                if !["value", "tolerance", "distribution"].contains(&k.as_str()) {
+                    return Err(ctx.err(
+                        span,
+                        format!(
+                            "{what}: unknown key '{k}' (expected value, tolerance, distribution)"
+                        ),
+                    ));
+                }
+            }
+            let value = t
+                .get("value")
+                .ok_or_else(|| ctx.err(span.clone(), format!("{what}: missing 'value'")))?;
+            let value = num(value).ok_or_else(|| {
+                ctx.err(span.clone(), format!("{what}: 'value' must be a number"))
+            })?;
+            let tol = t
+                .get("tolerance")
+                .map(|x| tolerance(ctx, x, span.clone(), &what))
+                .transpose()?;
+            let dist = match t.get("distribution") {
+                None => Distribution::Normal,
+                Some(toml::Value::String(s)) if s == "normal" => Distribution::Normal,
+                Some(toml::Value::String(s)) if s == "uniform" => Distribution::Uniform,
+                Some(_) => {
+                    return Err(ctx.err(
+                        span,
+                        format!("{what}: distribution must be \"normal\" or \"uniform\""),
+                    ));
+                }
+            };
+            (value, tol, dist)
+        }
+        other => {
+            let value = num(other).ok_or_else(|| {
+                ctx.err(
+                    span.clone(),
+                    format!("{what}: expected a number or {{ value = …, tolerance = \"3%\" }}"),
+                )
+            })?;
+            (value, None, Distribution::Normal)
+        }
+    };
+    if !value.is_finite() {
+        return Err(ctx.err(span, format!("{what}: value {value} is not finite")));
+    }
+    Ok(Parameter {
+        name: n,
+        value,
+        tolerance: tol,
+        distribution: dist,
+        site: ctx.site(&name.span(), what),
+    })
+}
+
+/// Resolves a body name (`ground` → `None`).
+fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R<Option<usize>> {
+    if s.get_ref() == "ground" {
+        return Ok(None);
+    }
+    names.get(s.get_ref()).map(|&i| Some(i)).ok_or_else(|| {
+        ctx.err(
+            s.span(),
+            format!("unknown body '{}' (bodies are declared in [[bodies]]; 'ground' is the fixed frame)", s.get_ref()),
+        )
+    })
+}
+
+pub(super) fn validate(text: &str, file: &str) -> R<Model> {
+    let raw: FileSchema = toml::from_str(text).map_err(|e| {
+        let off = e.span().map_or(0, |s| s.start);
+        let msg = e.message().trim().to_string();
+        if e.span().is_some() {
+            error_at(file, text, off, &msg)
+        } else {
+            ModelError {
+                file: file.to_string(),
+                line: None,
+                column: None,
+                message: msg,
+                snippet: None,
+            }
+        }
+    })?;
+    let whole = 0..text.len().min(1);
+
+    // Parameters, in file order.
+    let mut praw: Vec<_> = raw.parameters.iter().collect();
+    praw.sort_by_key(|(k, _)| k.span().start);
+    let mut ctx = Ctx {
+        text,
+        file,
+        params: Vec::new(),
+    };
+    let mut parameters = Vec::new();
+    for (k, v) in praw {
+        check_name(&ctx, k, "parameter")?;
+        if ["speed", "pi"].contains(&k.get_ref().as_str()) {
+            return Err(ctx.err(k.span(), format!("'{}' is reserved and cannot be a parameter name", k.get_ref())));
+        }
+        parameters.push(parameter(&ctx, k, v)?);
+    }
+    ctx.params = parameters.iter().map(|p| p.name.clone()).collect();
+    let nominal: Vec<f64> = parameters.iter().map(|p| p.value).collect();
+
+    let gravity = match &raw.gravity {
+        Some(g) => ctx.vec3(g, "gravity".into())?,
+        None => [0, 1, 2].map(|i| ctx.zero(&whole, format!("gravity[{i}]"))),
+    };
+
+    // Bodies.
+    let mut body_names: HashMap<String, usize> = HashMap::new();
+    let mut bodies = Vec::new();
+    for b in &raw.bodies {
+        let s = b.get_ref();
+        check_name(&ctx, &s.name, "body")?;
+        let name = s.name.get_ref().clone();
+        if name == "ground" {
+            return Err(ctx.err(s.name.span(), "'ground' is the fixed frame and cannot be declared as a body"));
+        }
+        if body_names.insert(name.clone(), bodies.len()).is_some() {
+            return Err(ctx.err(s.name.span(), format!("duplicate body name '{name}'")));
+        }
+        let what = |f: &str| format!("body '{name}' {f}");
+        let mass = ctx.field(&s.mass, what("mass"))?;
+        let inertia = match &s.inertia {
+            None => std::array::from_fn(|i| {
+                std::array::from_fn(|j| ctx.zero(&b.span(), what(&format!("inertia[{i}][{j}]"))))
+            }),
+            Some(sp) => inertia(&ctx, sp, &what(""))?,
+        };
+        let cm = ctx.vec3(&s.cm, what("cm"))?;
+        // Nominal checks: mass ≥ 0, inertia symmetric positive semi-definite.
+        if let Some(m) = ctx.nominal(&mass, &nominal)? {
+            if m < 0.0 {
+                return Err(ctx.err(s.mass.span(), format!("body '{name}': negative mass {m} kg")));
+            }
+        }
+        let mut inom = [[0.0; 3]; 3];
+        let mut all_known = true;
+        for i in 0..3 {
+            for j in 0..3 {
+                match ctx.nominal(&inertia[i][j], &nominal)? {
+                    Some(v) => inom[i][j] = v,
+                    None => all_known = false,
+                }
+            }
+        }
+        for f in &cm {
+            ctx.nominal(f, &nominal)?;
+        }
+        if all_known {
+            let span = s.inertia.as_ref().map_or(b.span(), |x| x.span());
+            check_inertia(&ctx, &inom, span, &name)?;
+        }
+        bodies.push(Body {
+            name,
+            mass,
+            inertia,
+            cm,
+        });
+    }
+    if bodies.is_empty() {
+        return Err(ModelError {
+            file: file.to_string(),
+            line: None,
+            column: None,
+            message: "the model declares no bodies ([[bodies]])".into(),
+            snippet: None,
+        });
+    }
+
+    // Joints.
+    let mut joint_names: HashMap<String, usize> = HashMap::new();
+    let mut joints: Vec<Joint> = Vec::new();
+    let mut coordinates = Vec::new();
+    let mut child_of: Vec<Option<usize>> = vec![None; bodies.len()];
+    for j in &raw.joints {
+        let s = j.get_ref();
+        check_name(&ctx, &s.name, "joint")?;
+        let name = s.name.get_ref().clone();
+        if joint_names.insert(name.clone(), joints.len()).is_some() {
+            return Err(ctx.err(s.name.span(), format!("duplicate joint name '{name}'")));
+        }
+        let what = |f: &str| format!("joint '{name}' {f}");
+        let kind = match s.kind.get_ref().as_str() {
+            "revolute" => JointKind::Revolute,
+            "prismatic" => JointKind::Prismatic,
+            "fixed" => JointKind::Fixed,
+            k => {
+                return Err(ctx.err(
+                    s.kind.span(),
+                    format!("joint '{name}': unknown type '{k}' (expected revolute, prismatic or fixed)"),
+                ));
+            }
+        };
+        let parent = body_ref(&ctx, &body_names, &s.parent)?;
+        let child = body_ref(&ctx, &body_names, &s.child)?.ok_or_else(|| {
+            ctx.err(s.child.span(), format!("joint '{name}': ground cannot be a child"))
+        })?;
+        if parent == Some(child) {
+            return Err(ctx.err(
+                s.child.span(),
+                format!("joint '{name}' connects body '{}' to itself", bodies[child].name),
+            ));
+        }
+        if let Some(prev) = child_of[child] {
+            return Err(ctx.err(
+                s.child.span(),
+                format!(
+                    "body '{}' is the child of two joints ('{}' and '{name}'); a body has one parent joint, close loops with [[constraints]]",
+                    bodies[child].name, joints[prev].name
+                ),
+            ));
+        }
+        child_of[child] = Some(joints.len());
+        let at = match &s.at {
+            Some(v) => ctx.vec3(v, what("at"))?,
+            None if kind == JointKind::Revolute => {
+                return Err(ctx.err(j.span(), format!("joint '{name}': a revolute joint needs 'at' (a point on its axis)")));
+            }
+            None => [0, 1, 2].map(|i| ctx.zero(&j.span(), what(&format!("at[{i}]")))),
+        };
+        let axis = match &s.axis {
+            Some(v) => ctx.vec3(v, what("axis"))?,
+            None if kind == JointKind::Fixed => {
+                [0, 1, 2].map(|i| ctx.zero(&j.span(), what(&format!("axis[{i}]"))))
+            }
+            None => {
+                return Err(ctx.err(j.span(), format!("joint '{name}': missing 'axis'")));
+            }
+        };
+        for f in at.iter() {
+            ctx.nominal(f, &nominal)?;
+        }
+        if kind != JointKind::Fixed {
+            let mut n2 = 0.0;
+            let mut known = true;
+            for f in axis.iter() {
+                match ctx.nominal(f, &nominal)? {
+                    Some(v) => n2 += v * v,
+                    None => known = false,
+                }
+            }
+            if known && n2.sqrt() < 1e-12 {
+                let span = s.axis.as_ref().map_or(j.span(), |a| a.span());
+                return Err(ctx.err(span, format!("joint '{name}': axis is zero")));
+            }
+        }
+        let initial = match &s.initial {
+            Some(n) => ctx.field(n, what("initial"))?,
+            None => ctx.zero(&j.span(), what("initial")),
+        };
+        let free = match &s.free {
+            Some(n) => ctx.field(n, what("free"))?,
+            None => ctx.zero(&j.span(), what("free")),
+        };
+        let drive = ctx.opt_field(&s.drive, what("drive"))?;
+        let stiffness = ctx.opt_field(&s.stiffness, what("stiffness"))?;
+        let damping = ctx.opt_field(&s.damping, what("damping"))?;
+        if kind == JointKind::Fixed {
+            for (f, n) in [(&s.drive, "drive"), (&s.stiffness, "stiffness"), (&s.damping, "damping"), (&s.initial, "initial")] {
+                if let Some(x) = f {
+                    return Err(ctx.err(x.span(), format!("joint '{name}': a fixed joint has no coordinate, so no '{n}'")));
+                }
+            }
+        }
+        for f in [&initial, &free].into_iter().chain(drive.iter()).chain(stiffness.iter()).chain(damping.iter()) {
+            ctx.nominal(f, &nominal)?;
+        }
+        let coord = if kind == JointKind::Fixed {
+            None
+        } else {
+            coordinates.push(Coordinate {
+                joint: joints.len(),
+                name: name.clone(),
+                kind,
+                driven: drive.is_some(),
+            });
+            Some(coordinates.len() - 1)
+        };
+        joints.push(Joint {
+            name,
+            kind,
+            parent,
+            child,
+            at,
+            axis,
+            initial,
+            drive,
+            stiffness,
+            free,
+            damping,
+            coord,
+        });
+    }
+
+    // Tree: every body is reached from ground; no cycles.
+    for (b, c) in child_of.iter().enumerate() {
+        if c.is_none() {
+            let span = raw.bodies[b].get_ref().name.span();
+            return Err(ctx.err(span, format!("body '{}' is not connected to ground: no joint has it as child", bodies[b].name)));
+        }
+    }
+    let mut order = Vec::new();
+    let mut placed = vec![false; joints.len()];
+    let mut frontier: Vec<Option<usize>> = vec![None];
+    while let Some(parent) = frontier.pop() {
+        for (ji, j) in joints.iter().enumerate() {
+            if j.parent == parent && !placed[ji] {
+                placed[ji] = true;
+                order.push(ji);
+                frontier.push(Some(j.child));
+            }
+        }
+    }
+    if let Some(ji) = placed.iter().position(|p| !p) {
+        // Walk up from this joint until a joint repeats: that is the cycle.
+        let mut path = vec![ji];
+        let mut cur = ji;
+        loop {
+            let parent_body = joints[cur].parent.expect("unplaced joints have a body parent");
+            let up = child_of[parent_body].expect("every body has a parent joint");
+            if let Some(pos) = path.iter().position(|&x| x == up) {
+                let names: Vec<&str> = path[pos..].iter().rev().map(|&k| joints[k].name.as_str()).collect();
+                let span = raw.joints[up].get_ref().name.span();
+                return Err(ctx.err(
+                    span,
+                    format!("the joints form a cycle not connected to ground: {} → {}", names.join(" → "), names[0]),
+                ));
+            }
+            path.push(up);
+            cur = up;
+        }
+    }
+
+    // Force elements.
+    let mut forces = Vec::new();
+    let mut element_names: HashMap<String, usize> = HashMap::new();
+    for f in &raw.forces {
+        let s = f.get_ref();
+        check_name(&ctx, &s.name, "force")?;
+        let name = s.name.get_ref().clone();
+        if element_names.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
+            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
+        }
+        if s.kind.get_ref() != "spring_damper" {
+            return Err(ctx.err(s.kind.span(), format!("force '{name}': unknown type '{}' (expected spring_damper)", s.kind.get_ref())));
+        }
+        let what = |x: &str| format!("force '{name}' {x}");
+        let e = SpringDamper {
+            body1: body_ref(&ctx, &body_names, &s.body1)?,
+            point1: ctx.vec3(&s.point1, what("point1"))?,
+            body2: body_ref(&ctx, &body_names, &s.body2)?,
+            point2: ctx.vec3(&s.point2, what("point2"))?,
+            stiffness: ctx.opt_field(&s.stiffness, what("stiffness"))?,
+            damping: ctx.opt_field(&s.damping, what("damping"))?,
+            free_length: ctx.opt_field(&s.free_length, what("free_length"))?,
+            preload: ctx.opt_field(&s.preload, what("preload"))?,
+            name,
+        };
+        for x in e.point1.iter().chain(e.point2.iter()).chain(e.stiffness.iter()).chain(e.damping.iter()).chain(e.free_length.iter()).chain(e.preload.iter()) {
+            ctx.nominal(x, &nominal)?;
+        }
+        forces.push(e);
+    }
+
+    // Cut joints.
+    let mut constraints = Vec::new();
+    for c in &raw.constraints {
+        let s = c.get_ref();
+        check_name(&ctx, &s.name, "constraint")?;
+        let name = s.name.get_ref().clone();
+        if element_names.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
+            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
+        }
+        let what = |x: &str| format!("constraint '{name}' {x}");
+        let kind = match s.kind.get_ref().as_str() {
+            "distance" => {
+                let body1 = body_ref(&ctx, &body_names, &s.body1)?;
+                let body2 = body_ref(&ctx, &body_names, &s.body2)?;
+                if body1 == body2 {
+                    return Err(ctx.err(s.body2.span(), format!("constraint '{name}': both points are on the same body")));
+                }
+                ConstraintKind::Distance {
+                    body1,
+                    point1: ctx.vec3(&s.point1, what("point1"))?,
+                    body2,
+                    point2: ctx.vec3(&s.point2, what("point2"))?,
+                    length: ctx.opt_field(&s.length, what("length"))?,
+                }
+            }
+            k => {
+                return Err(ctx.err(s.kind.span(), format!("constraint '{name}': unknown type '{k}' (expected distance)")));
+            }
+        };
+        let ConstraintKind::Distance { point1, point2, length, .. } = &kind;
+        for x in point1.iter().chain(point2.iter()).chain(length.iter()) {
+            ctx.nominal(x, &nominal)?;
+        }
+        constraints.push(Constraint { name, kind });
+    }
+    let n_free = coordinates.iter().filter(|c| !c.driven).count();
+    let n_con: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {
+        let span = raw.constraints.last().map_or(whole.clone(), |c| c.span());
+        return Err(ctx.err(
+            span,
+            format!("{n_con} constraint equation(s) for {n_free} free coordinate(s): the mechanism would have no degree of freedom"),
+        ));
+    }
+    if n_free == 0 {
+        let span = raw.joints.first().map_or(whole.clone(), |c| c.span());
+        return Err(ctx.err(span, "the mechanism has no free coordinate (every joint is fixed or driven)"));
+    }
+
+    // Independent coordinates.
+    let independent = match &raw.independent {
+        None => None,
+        Some(list) => {
+            let mut out = Vec::new();
+            for n in list.get_ref() {
+                let Some(ci) = coordinates.iter().position(|c| &c.name == n.get_ref()) else {
+                    return Err(ctx.err(n.span(), format!("independent: '{}' is not a joint with a coordinate", n.get_ref())));
+                };
+                if coordinates[ci].driven {
+                    return Err(ctx.err(n.span(), format!("independent: joint '{}' is driven", n.get_ref())));
+                }
+                if out.contains(&ci) {
+                    return Err(ctx.err(n.span(), format!("independent: '{}' is listed twice", n.get_ref())));
+                }
+                out.push(ci);
+            }
+            if out.len() != n_free - n_con {
+                return Err(ctx.err(
+                    list.span(),
+                    format!("independent lists {} coordinate(s) but the mechanism has {} degree(s) of freedom", out.len(), n_free - n_con),
+                ));
+            }
+            Some(out)
+        }
+    };
+
+    let analysis = analysis(&ctx, raw.analysis.as_ref(), &coordinates, &parameters)?;
+
+    Ok(Model {
+        name: raw.name.clone().unwrap_or_else(|| {
+            std::path::Path::new(file).file_stem().map_or("model".into(), |s| s.to_string_lossy().into_owned())
+        }),
+        file: file.to_string(),
+        parameters,
+        gravity,
+        bodies,
+        joints,
+        order,
+        coordinates,
+        forces,
+        constraints,
+        independent,
+        analysis,
+    })
+}
+
+/// Reads an inertia given as three principal values or a 3×3 matrix of numbers or expressions.
+fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]> {
+    let span = v.span();
+    let bad = || ctx.err(span.clone(), format!("{what}inertia: expected 3 principal values [Ixx, Iyy, Izz] or a 3×3 matrix of numbers or expressions"));
+    let num = |x: &toml::Value, i: usize, j: usize| -> R<Field> {
+        let n = match x {
+            toml::Value::Float(f) => Num::Value(*f),
+            toml::Value::Integer(k) => Num::Value(*k as f64),
+            toml::Value::String(s) => Num::Expr(s.clone()),
+            _ => return Err(bad()),
+        };
+        // Entries carry the span of the whole array: errors point at its start.
+        ctx.field(&Spanned::new(span.clone(), n), format!("{what}inertia[{i}][{j}]"))
+    };
+    let toml::Value::Array(rows) = v.get_ref() else { return Err(bad()) };
+    if rows.len() != 3 {
+        return Err(bad());
+    }
+    if rows.iter().all(|r| !r.is_array()) {
+        let d = [num(&rows[0], 0, 0)?, num(&rows[1], 1, 1)?, num(&rows[2], 2, 2)?];
+        return Ok(std::array::from_fn(|i| {
+            std::array::from_fn(|j| if i == j { d[i].clone() } else { ctx.zero(&span, format!("{what}inertia[{i}][{j}]")) })
+        }));
+    }
+    let mut out: Vec<Vec<Field>> = Vec::new();
+    for (i, r) in rows.iter().enumerate() {
+        let toml::Value::Array(r) = r else { return Err(bad()) };
+        if r.len() != 3 {
+            return Err(bad());
+        }
+        out.push(r.iter().enumerate().map(|(j, x)| num(x, i, j)).collect::<R<Vec<_>>>()?);
+    }
+    Ok(std::array::from_fn(|i| std::array::from_fn(|j| out[i][j].clone())))
+}
+
+/// Symmetric and positive semi-definite (eigenvalues ≥ −1e-12·scale).
+fn check_inertia(ctx: &Ctx, i: &[[f64; 3]; 3], span: Range<usize>, name: &str) -> R<()> {
+    let m = nalgebra::Matrix3::from_fn(|r, c| i[r][c]);
+    let scale = m.abs().max().max(1e-300);
+    if (m - m.transpose()).abs().max() > 1e-12 * scale {
+        return Err(ctx.err(span, format!("body '{name}': inertia matrix is not symmetric")));
+    }
+    let ev = m.symmetric_eigenvalues();
+    if ev.min() < -1e-12 * scale {
+        return Err(ctx.err(
+            span,
+            format!(
+                "body '{name}': inertia is not positive semi-definite (eigenvalues {:.6e}, {:.6e}, {:.6e} kg·m²)",
+                ev[0], ev[1], ev[2]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn analysis(
+    ctx: &Ctx,
+    raw: Option<&Spanned<schema::AnalysisSchema>>,
+    coords: &[Coordinate],
+    params: &[Parameter],
+) -> R<Analysis> {
+    let mut a = Analysis {
+        speed: None,
+        transfer: None,
+        samples: 3000,
+        seed: 1,
+        sampling: Sampling::Random,
+        cases: Vec::new(),
+    };
+    let Some(raw) = raw else { return Ok(a) };
+    let s = raw.get_ref();
+    if let Some(sp) = &s.speed {
+        a.speed = Some(SpeedRange::parse(sp.get_ref()).map_err(|e| ctx.err(sp.span(), format!("analysis speed: {e}")))?);
+    }
+    if let Some(t) = &s.transfer {
+        let t = t.get_ref();
+        let coord = |n: &Spanned<String>| {
+            coords.iter().position(|c| &c.name == n.get_ref() && !c.driven).ok_or_else(|| {
+                ctx.err(n.span(), format!("analysis transfer: '{}' is not a free joint coordinate", n.get_ref()))
+            })
+        };
+        let order = t.order.as_ref().map_or(1.0, |o| *o.get_ref());
+        if !order.is_finite() || order < 0.0 {
+            return Err(ctx.err(t.order.as_ref().map_or(raw.span(), |o| o.span()), "analysis transfer: order must be finite and ≥ 0"));
+        }
+        a.transfer = Some(Transfer {
+            input: coord(&t.input)?,
+            output: coord(&t.output)?,
+            order,
+        });
+    }
+    if let Some(n) = &s.samples {
+        if *n.get_ref() < 2 {
+            return Err(ctx.err(n.span(), "analysis samples must be at least 2"));
+        }
+        a.samples = *n.get_ref() as usize;
+    }
+    if let Some(seed) = s.seed {
+        a.seed = seed;
+    }
+    if let Some(m) = &s.sampling {
+        a.sampling = match m.get_ref().as_str() {
+            "random" => Sampling::Random,
+            "lhs" => Sampling::Lhs,
+            "sobol" => Sampling::Sobol,
+            x => return Err(ctx.err(m.span(), format!("analysis sampling '{x}': expected random, lhs or sobol"))),
+        };
+    }
+    for c in &s.cases {
+        let c = c.get_ref();
+        check_name(ctx, &c.name, "case")?;
+        if a.cases.iter().any(|x: &Case| &x.name == c.name.get_ref()) {
+            return Err(ctx.err(c.name.span(), format!("duplicate case name '{}'", c.name.get_ref())));
+        }
+        let mut tl: Vec<_> = c.tolerances.iter().collect();
+        tl.sort_by_key(|(k, _)| k.span().start);
+        let mut tolerances = Vec::new();
+        for (k, v) in tl {
+            let Some(pi) = params.iter().position(|p| &p.name == k.get_ref()) else {
+                return Err(ctx.err(k.span(), format!("case '{}': unknown parameter '{}'", c.name.get_ref(), k.get_ref())));
+            };
+            tolerances.push((pi, tolerance(ctx, v.get_ref(), v.span(), &format!("case '{}'", c.name.get_ref()))?));
+        }
+        a.cases.push(Case {
+            name: c.name.get_ref().clone(),
+            tolerances,
+        });
+    }
+    Ok(a)
+}

@@ -1,0 +1,53 @@
+//! The one scalar trait the mechanics is written against.
+//!
+//! Every kinematic and dynamic quantity is a function of the coordinates written once, generic
+//! over [`Real`]. With `f64` it gives values; with `num_dual::Dual<T>` exact first derivatives;
+//! with `num_dual::Dual2<T>` time derivatives along `q(t) = q + q̇ t + q̈ t²/2`; nesting them gives
+//! Jacobians of those, and so on. No derivative in the library is written by hand.
+
+use nalgebra::{Matrix3, Vector3};
+use num_dual::{Dual, Dual2, DualNum};
+
+/// Scalar usable everywhere in the mechanics: `f64` or any (nested) dual number over `f64`.
+pub trait Real: DualNum<Primitive = f64> + Copy + Send + Sync + nalgebra::Scalar {}
+impl<T: DualNum<Primitive = f64> + Copy + Send + Sync + nalgebra::Scalar> Real for T {}
+
+/// 3-vector over a [`Real`].
+pub type V3<T> = Vector3<T>;
+/// 3×3 matrix over a [`Real`].
+pub type M3<T> = Matrix3<T>;
+
+/// Scalar carrying one directional derivative over `T`.
+pub type D1<T> = Dual<T>;
+/// Scalar carrying first and second time derivatives over `T`.
+pub type D2<T> = Dual2<T>;
+
+/// Real part (`f64`) of any [`Real`].
+pub fn re<T: Real>(x: T) -> f64 {
+    x.re()
+}
+
+/// The constant `c` as a `T`.
+pub fn cst<T: Real>(c: f64) -> T {
+    T::from(c)
+}
+
+/// Lifts a `T` into the dual number `Dual<T>` with zero derivative.
+pub fn lift1<T: Real>(x: T) -> D1<T> {
+    Dual::from_re(x)
+}
+
+/// Lifts a `T` into `Dual2<T>` with zero time derivatives.
+pub fn lift2<T: Real>(x: T) -> D2<T> {
+    Dual2::from_re(x)
+}
+
+/// Axial vector of the skew-symmetric part of `m`: `w` with `w̃ ≈ (m − mᵀ)/2`.
+pub fn axial<T: Real>(m: &M3<T>) -> V3<T> {
+    let h = cst::<T>(0.5);
+    V3::new(
+        (m[(2, 1)] - m[(1, 2)]) * h,
+        (m[(0, 2)] - m[(2, 0)]) * h,
+        (m[(1, 0)] - m[(0, 1)]) * h,
+    )
+}

@@ -1,0 +1,244 @@
+//! One operating point (equilibrium → linearisation → modes) and sweeps over speed.
+//!
+//! At each speed the equilibrium is found by Newton from the previous speed's solution
+//! (continuation). If the equilibrium found is unstable through a real root (a static
+//! divergence, as the hanging pendulum past `√(3g/2L)`), the branch has bifurcated: the solver
+//! steps off along the diverging mode's shape, both ways and at growing amplitudes, and takes the
+//! nearest stable equilibrium, noting the switch. Modes keep their identity across speeds by
+//! the similarity of their shapes in the free coordinates, not by sorting.
+
+use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings};
+use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize};
+use crate::mechanics::System;
+use crate::mechanics::dynamics::evaluate;
+use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
+use crate::model::{FieldError, Model};
+use nalgebra::{DMatrix, DVector};
+
+/// Why a speed produced no result.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PointError {
+    #[error("{0}")]
+    Field(#[from] FieldError),
+    #[error("equilibrium: {0}")]
+    Equilibrium(#[from] EquilibriumError),
+    #[error("linearisation: {0}")]
+    Linearize(#[from] LinearizeError),
+    #[error("modes: {0}")]
+    Modal(#[from] ModalError),
+}
+
+/// Everything computed at one speed.
+#[derive(Debug, Clone)]
+pub struct Point {
+    pub speed: f64,
+    pub equilibrium: Equilibrium,
+    pub linear: Linearization<f64>,
+    pub modes: Vec<Mode>,
+    /// Shape of each mode in the free coordinates (`R x`), for tracking.
+    pub shapes: Vec<DVector<C64>>,
+    /// Remarks, e.g. a switch to the stable branch.
+    pub note: Option<String>,
+}
+
+impl Point {
+    /// Is every mode stable?
+    pub fn stable(&self) -> bool {
+        self.modes.iter().all(|m| m.class != ModeClass::Unstable)
+    }
+}
+
+/// Options of a point solve.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    /// Independent coordinates (coordinate indices), overriding the model's choice.
+    pub independent: Option<Vec<usize>>,
+    /// Newton settings.
+    pub newton: Settings,
+    /// Do not look for a stable branch when the equilibrium found is unstable.
+    pub no_branch_switch: bool,
+}
+
+/// The model's initial guesses at parameters `p` and `speed`.
+pub fn initial_guess(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
+    let mut q = vec![0.0; model.coordinates.len()];
+    for (i, c) in model.coordinates.iter().enumerate() {
+        q[i] = model.joints[c.joint].initial.eval(p, speed)?;
+    }
+    Ok(q)
+}
+
+/// Solves one operating point from the guess `q0`.
+pub fn point(model: &Model, p: &[f64], speed: f64, q0: &[f64], opt: &Options) -> Result<Point, PointError> {
+    let sys = System::new(model, p, speed)?;
+    let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
+    let problem = Problem::new(&sys, model.free(), model.driven(), names);
+    let eq = problem.solve(speed, q0, opt.newton)?;
+    let first = analyse(model, &problem, eq, opt)?;
+    if first.stable() || opt.no_branch_switch {
+        return Ok(first);
+    }
+    // A real root with positive real part: look for the stable branch along its shape.
+    let Some(idx) = first
+        .modes
+        .iter()
+        .position(|m| m.class == ModeClass::Unstable && m.root.lambda.im == 0.0)
+    else {
+        return Ok(first);
+    };
+    let shape: Vec<f64> = first.shapes[idx].iter().map(|z| z.re).collect();
+    let smax = shape.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    if smax == 0.0 {
+        return Ok(first);
+    }
+    let dir: Vec<f64> = shape.iter().map(|v| v / smax).collect();
+    let free = &first.linear.free;
+    // Prefer the side the user's guess lies on.
+    let lean: f64 = free.iter().enumerate().map(|(k, &i)| dir[k] * (q0[i] - first.equilibrium.q[i])).sum();
+    let signs = if lean < 0.0 { [-1.0, 1.0] } else { [1.0, -1.0] };
+    for amp in [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0] {
+        for s in signs {
+            let mut q = first.equilibrium.q.clone();
+            for (k, &i) in free.iter().enumerate() {
+                q[i] += s * amp * dir[k];
+            }
+            let Ok(eq) = problem.solve(speed, &q, opt.newton) else { continue };
+            let moved = free.iter().fold(0.0f64, |m, &i| m.max((eq.q[i] - first.equilibrium.q[i]).abs()));
+            if moved < 1e-7 {
+                continue;
+            }
+            if let Ok(pt) = analyse(model, &problem, eq, opt) {
+                if pt.stable() {
+                    return Ok(Point {
+                        note: Some("the equilibrium continued from the previous speed is unstable (static divergence); switched to the stable branch".into()),
+                        ..pt
+                    });
+                }
+            }
+        }
+    }
+    Ok(first)
+}
+
+/// Linearises and solves the modes at a converged equilibrium.
+fn analyse(model: &Model, problem: &Problem, eq: Equilibrium, opt: &Options) -> Result<Point, PointError> {
+    let free = model.free();
+    let zero = vec![0.0; eq.q.len()];
+    let d = evaluate(&problem.value, &eq.q, &eq.qd, &zero);
+    let phi_r = DMatrix::from_fn(d.phi.len(), free.len(), |k, j| d.phi_q[(k, free[j])]);
+    let user = opt.independent.as_deref().or(model.independent.as_deref());
+    let independent = if d.phi.is_empty() {
+        free.clone()
+    } else {
+        choose_independent(&phi_r, &free, user)?
+    };
+    let linear = linearize(&problem.dual, &free, &eq.q, &eq.qd, &eq.lambda, &independent)?;
+    let modes = modes(&linear.m, &linear.c, &linear.k)?;
+    let basis = linear.basis.map(|v| C64::new(v, 0.0));
+    let shapes = modes.iter().map(|m| &basis * &m.root.right).collect();
+    Ok(Point {
+        speed: eq.speed,
+        equilibrium: eq,
+        linear,
+        modes,
+        shapes,
+        note: None,
+    })
+}
+
+/// A sweep over speeds with continuation of the equilibrium and tracking of the modes.
+pub struct Sweep<'a> {
+    model: &'a Model,
+    params: Vec<f64>,
+    options: Options,
+    last_q: Option<Vec<f64>>,
+    /// The solution before `last_q` and the speeds of both, for the secant predictor.
+    before_q: Option<(f64, Vec<f64>)>,
+    last_speed: f64,
+    last_shapes: Option<Vec<DVector<C64>>>,
+    last_stable: Option<bool>,
+}
+
+impl<'a> Sweep<'a> {
+    pub fn new(model: &'a Model, params: Vec<f64>, options: Options) -> Self {
+        Sweep {
+            model,
+            params,
+            options,
+            last_q: None,
+            before_q: None,
+            last_speed: 0.0,
+            last_shapes: None,
+            last_stable: None,
+        }
+    }
+
+    /// Solves the next speed. Failures leave the continuation state as it was.
+    ///
+    /// The Newton start is the secant extrapolation of the last two solutions (so a branch that
+    /// has just bent away from a bifurcation is followed, not jumped over), then the last
+    /// solution, then the model's initial guess.
+    pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
+        let guess = initial_guess(self.model, &self.params, speed)?;
+        let mut starts = Vec::new();
+        if let (Some(q1), Some((w0, q0))) = (&self.last_q, &self.before_q) {
+            let dw = self.last_speed - w0;
+            if dw.abs() > 0.0 {
+                let t = (speed - self.last_speed) / dw;
+                if t.abs() <= 2.0 {
+                    starts.push(q1.iter().zip(q0).map(|(a, b)| a + t * (a - b)).collect::<Vec<_>>());
+                }
+            }
+        }
+        starts.extend(self.last_q.clone());
+        starts.push(guess);
+        let mut result = point(self.model, &self.params, speed, &starts[0], &self.options);
+        for q0 in &starts[1..] {
+            if result.is_ok() {
+                break;
+            }
+            result = point(self.model, &self.params, speed, q0, &self.options);
+        }
+        let mut pt = result?;
+        if let Some(prev) = &self.last_shapes {
+            if prev.len() == pt.modes.len() {
+                let order = track(prev, &pt.shapes);
+                pt.modes = order.iter().map(|&i| pt.modes[i].clone()).collect();
+                pt.shapes = order.iter().map(|&i| pt.shapes[i].clone()).collect();
+            }
+        }
+        if let Some(was) = self.last_stable {
+            if was != pt.stable() && pt.note.is_none() {
+                pt.note = Some(if was { "stability lost since the previous speed".into() } else { "stability regained since the previous speed".into() });
+            }
+        }
+        self.before_q = self.last_q.take().map(|q| (self.last_speed, q));
+        self.last_q = Some(pt.equilibrium.q.clone());
+        self.last_speed = speed;
+        self.last_shapes = Some(pt.shapes.clone());
+        self.last_stable = Some(pt.stable());
+        Ok(pt)
+    }
+}
+
+/// For each previous mode, the index of the most similar current mode (greedy on the largest
+/// similarity first).
+fn track(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
+    let n = prev.len();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * n);
+    for (i, p) in prev.iter().enumerate() {
+        for (j, c) in cur.iter().enumerate() {
+            pairs.push((similarity(p, c), i, j));
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut out = vec![usize::MAX; n];
+    let mut used = vec![false; n];
+    for (_, i, j) in pairs {
+        if out[i] == usize::MAX && !used[j] {
+            out[i] = j;
+            used[j] = true;
+        }
+    }
+    out
+}
