@@ -26,12 +26,19 @@ use num_dual::Dual64;
 pub enum EquilibriumError {
     #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e})")]
     NewtonDiverged { iterations: usize, residual: f64 },
-    #[error("singular Jacobian after {iterations} iterations (a bifurcation point or a locked mechanism)")]
+    #[error(
+        "singular Jacobian after {iterations} iterations (a bifurcation point or a locked mechanism)"
+    )]
     SingularJacobian { iterations: usize },
     #[error("non-finite residual after {iterations} iterations")]
     NotFinite { iterations: usize },
-    #[error("no steady state: the equations depend on the driven coordinate '{coordinate}' (|∂F/∂q| = {sensitivity:.3e}); is gravity along the drive axis?")]
-    NoSteadyState { coordinate: String, sensitivity: f64 },
+    #[error(
+        "no steady state: the equations depend on the driven coordinate '{coordinate}' (|∂F/∂q| = {sensitivity:.3e}); is gravity along the drive axis?"
+    )]
+    NoSteadyState {
+        coordinate: String,
+        sensitivity: f64,
+    },
 }
 
 /// A converged dynamic equilibrium.
@@ -56,11 +63,20 @@ pub struct Equilibrium {
 }
 
 /// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
-pub fn equations<T: Real>(l: &Lifted<T>, free: &[usize], q: &[T], qd: &[T], lambda: &[T]) -> Vec<T> {
+pub fn equations<T: Real>(
+    l: &Lifted<T>,
+    free: &[usize],
+    q: &[T],
+    qd: &[T],
+    lambda: &[T],
+) -> Vec<T> {
     let zero = vec![cst::<T>(0.0); q.len()];
     let d = evaluate(l, q, qd, &zero);
     let g = d.with_multipliers(lambda);
-    free.iter().map(|&i| g[i]).chain(d.phi.iter().copied()).collect()
+    free.iter()
+        .map(|&i| g[i])
+        .chain(d.phi.iter().copied())
+        .collect()
 }
 
 /// Newton settings.
@@ -92,7 +108,12 @@ pub struct Problem {
 
 impl Problem {
     /// Prepares the solve for `sys`; `free`/`driven` partition the coordinates.
-    pub fn new(sys: &System<f64>, free: Vec<usize>, driven: Vec<usize>, names: Vec<String>) -> Self {
+    pub fn new(
+        sys: &System<f64>,
+        free: Vec<usize>,
+        driven: Vec<usize>,
+        names: Vec<String>,
+    ) -> Self {
         Problem {
             free,
             driven,
@@ -123,7 +144,12 @@ impl Problem {
     }
 
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
-    pub fn solve(&self, speed: f64, q0: &[f64], settings: Settings) -> Result<Equilibrium, EquilibriumError> {
+    pub fn solve(
+        &self,
+        speed: f64,
+        q0: &[f64],
+        settings: Settings,
+    ) -> Result<Equilibrium, EquilibriumError> {
         let nf = self.free.len();
         let m = self.value.base.m;
         let mut q = q0.to_vec();
@@ -134,10 +160,10 @@ impl Problem {
             let d = evaluate(&self.value, &q, &self.qd, &zero);
             let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
             let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
-            if let Ok(l) = a.svd(true, true).solve(&b, 1e-12) {
-                if l.iter().all(|v| v.is_finite()) {
-                    lambda = l.iter().copied().collect();
-                }
+            if let Ok(l) = a.svd(true, true).solve(&b, 1e-12)
+                && l.iter().all(|v| v.is_finite())
+            {
+                lambda = l.iter().copied().collect();
             }
         }
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
@@ -160,7 +186,8 @@ impl Problem {
             let dq = (0..nf).fold(0.0f64, |s, k| s.max(step[k].abs()));
             let dl = (0..m).fold(0.0f64, |s, k| s.max(step[nf + k].abs()));
             // A Newton step this small lands on the solution to rounding: take it and stop.
-            let last = dq <= settings.step_tolerance * q_scale && dl <= 1e3 * settings.step_tolerance * l_scale;
+            let last = dq <= settings.step_tolerance * q_scale
+                && dl <= 1e3 * settings.step_tolerance * l_scale;
             // Otherwise backtrack on ‖F‖₂.
             let f0 = f.iter().map(|v| v * v).sum::<f64>().sqrt();
             let mut alpha = 1.0;
@@ -170,7 +197,9 @@ impl Problem {
                 for (k, &i) in self.free.iter().enumerate() {
                     q_new[i] -= alpha * step[k];
                 }
-                l_new = (0..m).map(|k| lambda[k] - alpha * step[nf + k]).collect::<Vec<_>>();
+                l_new = (0..m)
+                    .map(|k| lambda[k] - alpha * step[nf + k])
+                    .collect::<Vec<_>>();
                 (f_new, j_new) = self.residual_and_jacobian(&q_new, &l_new);
                 let f1 = f_new.iter().map(|v| v * v).sum::<f64>().sqrt();
                 if last || (f1.is_finite() && f1 <= (1.0 - 1e-4 * alpha) * f0) || alpha < 1e-4 {
@@ -217,7 +246,12 @@ impl Problem {
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
     /// equilibrium drift and there is no steady state.
-    fn check_steady(&self, q: &[f64], lambda: &[f64], jac: &DMatrix<f64>) -> Result<(), EquilibriumError> {
+    fn check_steady(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        jac: &DMatrix<f64>,
+    ) -> Result<(), EquilibriumError> {
         let scale = jac.amax().max(1e-300);
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();

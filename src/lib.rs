@@ -7,12 +7,12 @@
 //! differentiation gives exact derivatives everywhere.
 #![deny(clippy::float_cmp)]
 
-pub mod model;
-pub mod real;
-pub mod mechanics;
 pub mod equilibrium;
 pub mod linalg;
 pub mod linearize;
+pub mod mechanics;
 pub mod modal;
-pub mod sweep;
+pub mod model;
+pub mod real;
 pub mod report;
+pub mod sweep;

@@ -124,7 +124,11 @@ mod tests {
         let b = DMatrix::from_row_slice(2, 1, &[one, one * 2.0]);
         let x = solve(&a, &b).unwrap();
         let a0 = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 3.0]);
-        let x0 = a0.clone().lu().solve(&DMatrix::from_row_slice(2, 1, &[1.0, 2.0])).unwrap();
+        let x0 = a0
+            .clone()
+            .lu()
+            .solve(&DMatrix::from_row_slice(2, 1, &[1.0, 2.0]))
+            .unwrap();
         let da = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
         let dx = -a0.lu().solve(&(da * &x0)).unwrap();
         for i in 0..2 {

@@ -21,9 +21,13 @@ use nalgebra::DMatrix;
 /// Why the linearisation failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LinearizeError {
-    #[error("the constraint Jacobian is rank deficient at the equilibrium (redundant or locked cut joints)")]
+    #[error(
+        "the constraint Jacobian is rank deficient at the equilibrium (redundant or locked cut joints)"
+    )]
     RankDeficient,
-    #[error("the chosen independent coordinates do not parametrise the constraints here (Φ_u is singular)")]
+    #[error(
+        "the chosen independent coordinates do not parametrise the constraints here (Φ_u is singular)"
+    )]
     BadIndependent,
 }
 
@@ -104,7 +108,11 @@ pub fn linearize<T: Real>(
         let phi_r = DMatrix::from_fn(l.base.m, nf, |k, j| d.phi_q[(k, free[j])].re);
         let ind: Vec<usize> = independent
             .iter()
-            .map(|c| free.iter().position(|f| f == c).expect("independent ⊂ free"))
+            .map(|c| {
+                free.iter()
+                    .position(|f| f == c)
+                    .expect("independent ⊂ free")
+            })
             .collect();
         let dep: Vec<usize> = (0..nf).filter(|k| !ind.contains(k)).collect();
         let phi_u = DMatrix::from_fn(dep.len(), dep.len(), |r, c| phi_r[(r, dep[c])]);

@@ -83,7 +83,7 @@ enum Command {
 #[error("{0}")]
 struct InputError(String);
 
-fn load(path: &PathBuf) -> Result<Model> {
+fn load(path: &std::path::Path) -> Result<Model> {
     Model::from_file(path).map_err(|e| InputError(e.to_string()).into())
 }
 
@@ -94,11 +94,20 @@ fn independent(model: &Model, names: &Option<Vec<String>>) -> Result<Option<Vec<
         let i = model
             .coordinate(n)
             .filter(|&i| !model.coordinates[i].driven)
-            .ok_or_else(|| InputError(format!("--independent: '{n}' is not a free joint coordinate of the model")))?;
+            .ok_or_else(|| {
+                InputError(format!(
+                    "--independent: '{n}' is not a free joint coordinate of the model"
+                ))
+            })?;
         out.push(i);
     }
     if out.len() != model.dof() {
-        return Err(InputError(format!("--independent names {} coordinate(s) but the model has {} degree(s) of freedom", out.len(), model.dof())).into());
+        return Err(InputError(format!(
+            "--independent names {} coordinate(s) but the model has {} degree(s) of freedom",
+            out.len(),
+            model.dof()
+        ))
+        .into());
     }
     Ok(Some(out))
 }
@@ -118,18 +127,31 @@ fn run(cli: Cli) -> Result<()> {
             let m = load(&model)?;
             print!("{}", report::check_summary(&m));
         }
-        Command::Modal { model, speed, format, independent: ind, output } => {
+        Command::Modal {
+            model,
+            speed,
+            format,
+            independent: ind,
+            output,
+        } => {
             let m = load(&model)?;
             if !speed.is_finite() {
                 return Err(InputError("--speed must be finite".into()).into());
             }
-            let opt = Options { independent: independent(&m, &ind)?, ..Default::default() };
+            let opt = Options {
+                independent: independent(&m, &ind)?,
+                ..Default::default()
+            };
             let p = m.nominal();
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let result = point(&m, &p, speed, &q0, &opt);
             let mut w = writer(&output)?;
             match format {
-                Format::Json => writeln!(w, "{}", serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?)?,
+                Format::Json => writeln!(
+                    w,
+                    "{}",
+                    serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?
+                )?,
                 Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
             }
             w.flush()?;
@@ -137,13 +159,23 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("modaltol: speed {speed} rad/s failed: {e}");
             }
         }
-        Command::Sweep { model, speed, independent: ind, output } => {
+        Command::Sweep {
+            model,
+            speed,
+            independent: ind,
+            output,
+        } => {
             let m = load(&model)?;
             let range = match &speed {
                 Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-                None => m.analysis.speed.ok_or_else(|| InputError("no --speed given and the model has no [analysis] speed".into()))?,
+                None => m.analysis.speed.ok_or_else(|| {
+                    InputError("no --speed given and the model has no [analysis] speed".into())
+                })?,
             };
-            let opt = Options { independent: independent(&m, &ind)?, ..Default::default() };
+            let opt = Options {
+                independent: independent(&m, &ind)?,
+                ..Default::default()
+            };
             let mut sweep = Sweep::new(&m, m.nominal(), opt);
             let mut csv = csv::Writer::from_writer(writer(&output)?);
             csv.write_record(report::sweep_header(&m))?;
@@ -167,7 +199,9 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("\rsweep: {n}/{n} speeds");
             }
             if failed > 0 {
-                eprintln!("modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)");
+                eprintln!(
+                    "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
+                );
             }
         }
     }
@@ -178,7 +212,11 @@ fn main() {
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("modaltol: error: {e:#}");
-        let code = if e.downcast_ref::<InputError>().is_some() { 2 } else { 1 };
+        let code = if e.downcast_ref::<InputError>().is_some() {
+            2
+        } else {
+            1
+        };
         std::process::exit(code);
     }
 }

@@ -65,7 +65,9 @@ pub struct Mode {
 /// Why the modal solve failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModalError {
-    #[error("the reduced mass matrix M̂ is singular (condition {condition:.3e}): a coordinate moves no mass or inertia, e.g. a massless body or a rod spinning about its own axis")]
+    #[error(
+        "the reduced mass matrix M̂ is singular (condition {condition:.3e}): a coordinate moves no mass or inertia, e.g. a massless body or a rod spinning about its own axis"
+    )]
     SingularMass { condition: f64 },
     #[error("non-finite entries in M̂, Ĉ or K̂")]
     NotFinite,
@@ -77,9 +79,17 @@ const IM_TOL: f64 = 1e-9;
 const RE_TOL: f64 = 1e-10;
 
 /// Solves the damped eigenproblem and groups the roots into modes, sorted by ω_n.
-pub fn modes(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>) -> Result<Vec<Mode>, ModalError> {
+pub fn modes(
+    m: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+) -> Result<Vec<Mode>, ModalError> {
     let n = m.nrows();
-    if m.iter().chain(c.iter()).chain(k.iter()).any(|v| !v.is_finite()) {
+    if m.iter()
+        .chain(c.iter())
+        .chain(k.iter())
+        .any(|v| !v.is_finite())
+    {
         return Err(ModalError::NotFinite);
     }
     let sv = m.clone().svd(false, false).singular_values;
@@ -99,11 +109,18 @@ pub fn modes(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>) -> Result<Vec
         }
     }
     let eig = a.complex_eigenvalues();
-    let scale = eig.iter().fold(0.0f64, |s, l| s.max(l.norm())).max(f64::MIN_POSITIVE);
+    let scale = eig
+        .iter()
+        .fold(0.0f64, |s, l| s.max(l.norm()))
+        .max(f64::MIN_POSITIVE);
     let roots: Vec<Root> = eig
         .iter()
         .map(|&l| {
-            let l = if l.im.abs() <= IM_TOL * scale.max(l.norm()) { C64::new(l.re, 0.0) } else { l };
+            let l = if l.im.abs() <= IM_TOL * scale.max(l.norm()) {
+                C64::new(l.re, 0.0)
+            } else {
+                l
+            };
             root(m, c, k, l)
         })
         .collect();
@@ -134,7 +151,11 @@ pub fn modes(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>) -> Result<Vec
         }
         let b = real.remove(bj);
         let a = real.remove(bi);
-        let (hi, lo) = if a.lambda.re >= b.lambda.re { (a, b) } else { (b, a) };
+        let (hi, lo) = if a.lambda.re >= b.lambda.re {
+            (a, b)
+        } else {
+            (b, a)
+        };
         out.push(make_mode(hi, lo, scale));
     }
     out.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
@@ -152,7 +173,11 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
     let p = (l1 * l2).re;
     let s = (l1 + l2).re;
     let wn = p.abs().sqrt();
-    let zeta = if wn > 0.0 { -s / (2.0 * wn) } else { f64::INFINITY.copysign(-s) };
+    let zeta = if wn > 0.0 {
+        -s / (2.0 * wn)
+    } else {
+        f64::INFINITY.copysign(-s)
+    };
     let unstable = l1.re.max(l2.re) > RE_TOL * scale.max(1e-300);
     let class = if unstable {
         ModeClass::Unstable
@@ -174,7 +199,9 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
 /// Right and left null vectors of `P(λ) = λ²M + λC + K` (unit norm).
 fn root(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>, lambda: C64) -> Root {
     let n = m.nrows();
-    let p = DMatrix::from_fn(n, n, |i, j| lambda * lambda * m[(i, j)] + lambda * c[(i, j)] + k[(i, j)]);
+    let p = DMatrix::from_fn(n, n, |i, j| {
+        lambda * lambda * m[(i, j)] + lambda * c[(i, j)] + k[(i, j)]
+    });
     if n == 1 {
         let one = DVector::from_element(1, C64::new(1.0, 0.0));
         return Root {
@@ -184,11 +211,14 @@ fn root(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>, lambda: C64) -> Ro
         };
     }
     let svd = p.svd(true, true);
-    let (imin, _) = svd
-        .singular_values
-        .iter()
-        .enumerate()
-        .fold((0, f64::INFINITY), |acc, (i, &s)| if s < acc.1 { (i, s) } else { acc });
+    let (imin, _) =
+        svd.singular_values
+            .iter()
+            .enumerate()
+            .fold(
+                (0, f64::INFINITY),
+                |acc, (i, &s)| if s < acc.1 { (i, s) } else { acc },
+            );
     let u = svd.u.expect("requested");
     let vt = svd.v_t.expect("requested");
     // P v = σ u  →  right = v = conj(row of Vᴴ); uᴴ P = σ vᴴ  →  left y = conj(u).
@@ -203,9 +233,15 @@ fn root(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>, lambda: C64) -> Ro
 
 /// Scales to unit norm with the largest entry real and positive (a fixed phase).
 fn normalize(v: DVector<C64>) -> DVector<C64> {
-    let (imax, _) = v.iter().enumerate().fold((0, -1.0), |acc, (i, z)| if z.norm() > acc.1 { (i, z.norm()) } else { acc });
+    let (imax, _) = v.iter().enumerate().fold((0, -1.0), |acc, (i, z)| {
+        if z.norm() > acc.1 { (i, z.norm()) } else { acc }
+    });
     let z = v[imax];
-    let phase = if z.norm() > 0.0 { z.conj() / z.norm() } else { C64::new(1.0, 0.0) };
+    let phase = if z.norm() > 0.0 {
+        z.conj() / z.norm()
+    } else {
+        C64::new(1.0, 0.0)
+    };
     let w = v * phase;
     let n = w.norm();
     if n > 0.0 { w / C64::new(n, 0.0) } else { w }

@@ -44,7 +44,12 @@ pub fn sweep_header(model: &Model) -> Vec<String> {
     .map(|s| s.to_string())
     .collect();
     h.extend(model.coordinates.iter().map(|c| format!("q:{}", c.name)));
-    h.extend(model.driven().iter().map(|&i| format!("drive:{}", model.coordinates[i].name)));
+    h.extend(
+        model
+            .driven()
+            .iter()
+            .map(|&i| format!("drive:{}", model.coordinates[i].name)),
+    );
     h.push("iterations".into());
     h.push("message".into());
     h
@@ -52,7 +57,11 @@ pub fn sweep_header(model: &Model) -> Vec<String> {
 
 /// Rows of the sweep CSV for one speed: one per mode (a failed speed gets one `failed` row per
 /// degree of freedom, with the reason).
-pub fn sweep_rows(model: &Model, speed: f64, result: &Result<Point, PointError>) -> Vec<Vec<String>> {
+pub fn sweep_rows(
+    model: &Model,
+    speed: f64,
+    result: &Result<Point, PointError>,
+) -> Vec<Vec<String>> {
     let ncols = sweep_header(model).len();
     match result {
         Ok(p) => p
@@ -73,7 +82,12 @@ pub fn sweep_rows(model: &Model, speed: f64, result: &Result<Point, PointError>)
                     m.partner.lambda.im.to_string(),
                 ];
                 r.extend(p.equilibrium.q.iter().map(|v| v.to_string()));
-                r.extend(model.driven().iter().map(|&d| p.equilibrium.drive_force[d].to_string()));
+                r.extend(
+                    model
+                        .driven()
+                        .iter()
+                        .map(|&d| p.equilibrium.drive_force[d].to_string()),
+                );
                 r.push(p.equilibrium.iterations.to_string());
                 r.push(p.note.clone().unwrap_or_default());
                 r
@@ -93,7 +107,11 @@ pub fn sweep_rows(model: &Model, speed: f64, result: &Result<Point, PointError>)
 }
 
 fn matrix(m: &DMatrix<f64>) -> Value {
-    Value::Array((0..m.nrows()).map(|i| json!((0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<_>>())).collect())
+    Value::Array(
+        (0..m.nrows())
+            .map(|i| json!((0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<_>>()))
+            .collect(),
+    )
 }
 
 /// The `modal` result as JSON.
@@ -135,7 +153,11 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
                    "shape": p.shapes[i].iter().map(|z| json!({"re": z.re, "im": z.im})).collect::<Vec<_>>()})
         })
         .collect();
-    let names = |v: &[usize]| v.iter().map(|&i| model.coordinates[i].name.clone()).collect::<Vec<_>>();
+    let names = |v: &[usize]| {
+        v.iter()
+            .map(|&i| model.coordinates[i].name.clone())
+            .collect::<Vec<_>>()
+    };
     json!({
         "model": model.name,
         "speed": speed,
@@ -158,7 +180,9 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
 fn write_matrix(out: &mut String, name: &str, m: &DMatrix<f64>) {
     let _ = writeln!(out, "{name} =");
     for i in 0..m.nrows() {
-        let row: Vec<String> = (0..m.ncols()).map(|j| format!("{:>14.6e}", m[(i, j)])).collect();
+        let row: Vec<String> = (0..m.ncols())
+            .map(|j| format!("{:>14.6e}", m[(i, j)]))
+            .collect();
         let _ = writeln!(out, "  [{}]", row.join(" "));
     }
 }
@@ -175,22 +199,55 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
         Ok(p) => p,
     };
     let eq = &p.equilibrium;
-    let _ = writeln!(s, "\nequilibrium ({} Newton iterations, residual {:.2e}, |Φ| {:.2e}):", eq.iterations, eq.residual, eq.constraint_violation);
+    let _ = writeln!(
+        s,
+        "\nequilibrium ({} Newton iterations, residual {:.2e}, |Φ| {:.2e}):",
+        eq.iterations, eq.residual, eq.constraint_violation
+    );
     for (i, c) in model.coordinates.iter().enumerate() {
-        let tag = if c.driven { format!("  driven at {} {}/s", eq.qd[i], coordinate_unit(c.kind)) } else { String::new() };
-        let _ = writeln!(s, "  {:<16} {:>16.10} {}{tag}", c.name, eq.q[i], coordinate_unit(c.kind));
+        let tag = if c.driven {
+            format!("  driven at {} {}/s", eq.qd[i], coordinate_unit(c.kind))
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "  {:<16} {:>16.10} {}{tag}",
+            c.name,
+            eq.q[i],
+            coordinate_unit(c.kind)
+        );
     }
     for &i in &model.driven() {
         let c = &model.coordinates[i];
-        let _ = writeln!(s, "  drive force on {:<8} {:>14.8e} {}", c.name, eq.drive_force[i], force_unit(c.kind));
+        let _ = writeln!(
+            s,
+            "  drive force on {:<8} {:>14.8e} {}",
+            c.name,
+            eq.drive_force[i],
+            force_unit(c.kind)
+        );
     }
-    let ind: Vec<&str> = p.linear.independent.iter().map(|&i| model.coordinates[i].name.as_str()).collect();
-    let _ = writeln!(s, "\nlinearised in the independent coordinates [{}]:", ind.join(", "));
+    let ind: Vec<&str> = p
+        .linear
+        .independent
+        .iter()
+        .map(|&i| model.coordinates[i].name.as_str())
+        .collect();
+    let _ = writeln!(
+        s,
+        "\nlinearised in the independent coordinates [{}]:",
+        ind.join(", ")
+    );
     write_matrix(&mut s, "M̂", &p.linear.m);
     write_matrix(&mut s, "Ĉ", &p.linear.c);
     write_matrix(&mut s, "K̂", &p.linear.k);
     let _ = writeln!(s, "\nmodes (rad/s):");
-    let _ = writeln!(s, "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}", "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue");
+    let _ = writeln!(
+        s,
+        "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}",
+        "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue"
+    );
     for (i, m) in p.modes.iter().enumerate() {
         let _ = writeln!(
             s,
@@ -223,11 +280,29 @@ pub fn check_summary(model: &Model) -> String {
     for j in &model.joints {
         let kind = format!("{:?}", j.kind).to_lowercase();
         let drive = if j.drive.is_some() { ", driven" } else { "" };
-        let _ = writeln!(s, "    {:<12} {:<10} {} → {}{drive}", j.name, kind, body(j.parent), body(Some(j.child)));
+        let _ = writeln!(
+            s,
+            "    {:<12} {:<10} {} → {}{drive}",
+            j.name,
+            kind,
+            body(j.parent),
+            body(Some(j.child))
+        );
     }
-    let _ = writeln!(s, "  coordinates: {} ({} driven, {} free)", model.coordinates.len(), model.driven().len(), model.free().len());
+    let _ = writeln!(
+        s,
+        "  coordinates: {} ({} driven, {} free)",
+        model.coordinates.len(),
+        model.driven().len(),
+        model.free().len()
+    );
     let _ = writeln!(s, "  force elements: {}", model.forces.len());
-    let _ = writeln!(s, "  constraints: {} ({} equations)", model.constraints.len(), model.n_constraints());
+    let _ = writeln!(
+        s,
+        "  constraints: {} ({} equations)",
+        model.constraints.len(),
+        model.n_constraints()
+    );
     for c in &model.constraints {
         let _ = writeln!(s, "    {}", c.name);
     }
@@ -242,7 +317,12 @@ pub fn check_summary(model: &Model) -> String {
         let _ = writeln!(s, "    {:<14} {}{tol}", p.name, p.value);
     }
     if !model.analysis.cases.is_empty() {
-        let names: Vec<&str> = model.analysis.cases.iter().map(|c| c.name.as_str()).collect();
+        let names: Vec<&str> = model
+            .analysis
+            .cases
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
         let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
     }
     s

@@ -69,7 +69,13 @@ pub fn initial_guess(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, F
 }
 
 /// Solves one operating point from the guess `q0`.
-pub fn point(model: &Model, p: &[f64], speed: f64, q0: &[f64], opt: &Options) -> Result<Point, PointError> {
+pub fn point(
+    model: &Model,
+    p: &[f64],
+    speed: f64,
+    q0: &[f64],
+    opt: &Options,
+) -> Result<Point, PointError> {
     let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
     let problem = Problem::new(&sys, model.free(), model.driven(), names);
@@ -94,7 +100,11 @@ pub fn point(model: &Model, p: &[f64], speed: f64, q0: &[f64], opt: &Options) ->
     let dir: Vec<f64> = shape.iter().map(|v| v / smax).collect();
     let free = &first.linear.free;
     // Prefer the side the user's guess lies on.
-    let lean: f64 = free.iter().enumerate().map(|(k, &i)| dir[k] * (q0[i] - first.equilibrium.q[i])).sum();
+    let lean: f64 = free
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| dir[k] * (q0[i] - first.equilibrium.q[i]))
+        .sum();
     let signs = if lean < 0.0 { [-1.0, 1.0] } else { [1.0, -1.0] };
     for amp in [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0] {
         for s in signs {
@@ -102,18 +112,22 @@ pub fn point(model: &Model, p: &[f64], speed: f64, q0: &[f64], opt: &Options) ->
             for (k, &i) in free.iter().enumerate() {
                 q[i] += s * amp * dir[k];
             }
-            let Ok(eq) = problem.solve(speed, &q, opt.newton) else { continue };
-            let moved = free.iter().fold(0.0f64, |m, &i| m.max((eq.q[i] - first.equilibrium.q[i]).abs()));
+            let Ok(eq) = problem.solve(speed, &q, opt.newton) else {
+                continue;
+            };
+            let moved = free.iter().fold(0.0f64, |m, &i| {
+                m.max((eq.q[i] - first.equilibrium.q[i]).abs())
+            });
             if moved < 1e-7 {
                 continue;
             }
-            if let Ok(pt) = analyse(model, &problem, eq, opt) {
-                if pt.stable() {
-                    return Ok(Point {
+            if let Ok(pt) = analyse(model, &problem, eq, opt)
+                && pt.stable()
+            {
+                return Ok(Point {
                         note: Some("the equilibrium continued from the previous speed is unstable (static divergence); switched to the stable branch".into()),
                         ..pt
                     });
-                }
             }
         }
     }
@@ -121,7 +135,12 @@ pub fn point(model: &Model, p: &[f64], speed: f64, q0: &[f64], opt: &Options) ->
 }
 
 /// Linearises and solves the modes at a converged equilibrium.
-fn analyse(model: &Model, problem: &Problem, eq: Equilibrium, opt: &Options) -> Result<Point, PointError> {
+fn analyse(
+    model: &Model,
+    problem: &Problem,
+    eq: Equilibrium,
+    opt: &Options,
+) -> Result<Point, PointError> {
     let free = model.free();
     let zero = vec![0.0; eq.q.len()];
     let d = evaluate(&problem.value, &eq.q, &eq.qd, &zero);
@@ -132,7 +151,14 @@ fn analyse(model: &Model, problem: &Problem, eq: Equilibrium, opt: &Options) -> 
     } else {
         choose_independent(&phi_r, &free, user)?
     };
-    let linear = linearize(&problem.dual, &free, &eq.q, &eq.qd, &eq.lambda, &independent)?;
+    let linear = linearize(
+        &problem.dual,
+        &free,
+        &eq.q,
+        &eq.qd,
+        &eq.lambda,
+        &independent,
+    )?;
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
     let shapes = modes.iter().map(|m| &basis * &m.root.right).collect();
@@ -186,7 +212,12 @@ impl<'a> Sweep<'a> {
             if dw.abs() > 0.0 {
                 let t = (speed - self.last_speed) / dw;
                 if t.abs() <= 2.0 {
-                    starts.push(q1.iter().zip(q0).map(|(a, b)| a + t * (a - b)).collect::<Vec<_>>());
+                    starts.push(
+                        q1.iter()
+                            .zip(q0)
+                            .map(|(a, b)| a + t * (a - b))
+                            .collect::<Vec<_>>(),
+                    );
                 }
             }
         }
@@ -200,17 +231,22 @@ impl<'a> Sweep<'a> {
             result = point(self.model, &self.params, speed, q0, &self.options);
         }
         let mut pt = result?;
-        if let Some(prev) = &self.last_shapes {
-            if prev.len() == pt.modes.len() {
-                let order = track(prev, &pt.shapes);
-                pt.modes = order.iter().map(|&i| pt.modes[i].clone()).collect();
-                pt.shapes = order.iter().map(|&i| pt.shapes[i].clone()).collect();
-            }
+        if let Some(prev) = &self.last_shapes
+            && prev.len() == pt.modes.len()
+        {
+            let order = track(prev, &pt.shapes);
+            pt.modes = order.iter().map(|&i| pt.modes[i].clone()).collect();
+            pt.shapes = order.iter().map(|&i| pt.shapes[i].clone()).collect();
         }
-        if let Some(was) = self.last_stable {
-            if was != pt.stable() && pt.note.is_none() {
-                pt.note = Some(if was { "stability lost since the previous speed".into() } else { "stability regained since the previous speed".into() });
-            }
+        if let Some(was) = self.last_stable
+            && was != pt.stable()
+            && pt.note.is_none()
+        {
+            pt.note = Some(if was {
+                "stability lost since the previous speed".into()
+            } else {
+                "stability regained since the previous speed".into()
+            });
         }
         self.before_q = self.last_q.take().map(|q| (self.last_speed, q));
         self.last_q = Some(pt.equilibrium.q.clone());

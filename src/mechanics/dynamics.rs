@@ -116,7 +116,10 @@ pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamic
         let len = d.norm_dual();
         spring_force.push(s.stiffness * (len.re - s.free_length) + s.damping * len.v1 + s.preload);
     }
-    let phi: Vec<T> = constraint_values(&l.time, &pt).iter().map(|c| c.re).collect();
+    let phi: Vec<T> = constraint_values(&l.time, &pt)
+        .iter()
+        .map(|c| c.re)
+        .collect();
 
     // Partial passes: J_v, J_ω, ∂ℓ/∂q_i and Φ_q, one coordinate at a time.
     let mut r = vec![cst::<T>(0.0); n];

@@ -9,7 +9,7 @@ pub mod dynamics;
 pub mod kinematics;
 
 use crate::model::{ConstraintKind, Field, FieldError, JointKind, Model};
-use crate::real::{Real, V3, M3, cst};
+use crate::real::{M3, Real, V3, cst};
 
 /// Mass properties of one body, in the reference configuration.
 #[derive(Debug, Clone)]
@@ -87,7 +87,11 @@ pub struct System<T> {
 }
 
 fn v3<T: Real>(f: &[Field; 3], p: &[T], w: T) -> Result<V3<T>, FieldError> {
-    Ok(V3::new(f[0].eval(p, w)?, f[1].eval(p, w)?, f[2].eval(p, w)?))
+    Ok(V3::new(
+        f[0].eval(p, w)?,
+        f[1].eval(p, w)?,
+        f[2].eval(p, w)?,
+    ))
 }
 
 impl<T: Real> System<T> {

@@ -118,10 +118,7 @@ pub enum EvalError {
 
 impl Expr {
     /// Parses `src`; `lookup` maps a name to a parameter index.
-    pub fn parse(
-        src: &str,
-        lookup: &dyn Fn(&str) -> Option<usize>,
-    ) -> Result<Expr, ParseError> {
+    pub fn parse(src: &str, lookup: &dyn Fn(&str) -> Option<usize>) -> Result<Expr, ParseError> {
         if src.len() > MAX_LEN {
             return Err(ParseError {
                 offset: 0,
@@ -484,7 +481,10 @@ mod tests {
         ["L", "m"].iter().position(|n| *n == s)
     }
     fn ev(s: &str) -> f64 {
-        Expr::parse(s, &lookup).unwrap().eval(&[2.0, 3.0], 5.0).unwrap()
+        Expr::parse(s, &lookup)
+            .unwrap()
+            .eval(&[2.0, 3.0], 5.0)
+            .unwrap()
     }
 
     #[test]
@@ -504,7 +504,9 @@ mod tests {
     fn derivative_through_expression_is_exact() {
         let e = Expr::parse("sin(L) * L^2 + ln(L)", &lookup).unwrap();
         let l = Dual64::from_re(2.0).derivative();
-        let v = e.eval(&[l, Dual64::from_re(3.0)], Dual64::from_re(0.0)).unwrap();
+        let v = e
+            .eval(&[l, Dual64::from_re(3.0)], Dual64::from_re(0.0))
+            .unwrap();
         let exact = 2.0f64.cos() * 4.0 + 2.0f64.sin() * 4.0 + 0.5;
         assert!((v.eps - exact).abs() < 1e-14);
     }
@@ -521,7 +523,12 @@ mod tests {
         let e = Expr::parse("1 $ 2", &lookup).unwrap_err();
         assert_eq!(e.offset, 2);
         let deep = format!("{}1{}", "(".repeat(200), ")".repeat(200));
-        assert!(Expr::parse(&deep, &lookup).unwrap_err().message.contains("nested"));
+        assert!(
+            Expr::parse(&deep, &lookup)
+                .unwrap_err()
+                .message
+                .contains("nested")
+        );
     }
 
     #[test]

@@ -25,7 +25,11 @@ pub struct Site {
 
 impl fmt::Display for Site {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "{} ({}:{}:{})", self.what, self.file, self.line, self.column)
+        write!(
+            f,
+            "{} ({}:{}:{})",
+            self.what, self.file, self.line, self.column
+        )
     }
 }
 
@@ -49,7 +53,11 @@ impl fmt::Display for ModelError {
         }
         if let (Some(s), Some(c)) = (&self.snippet, self.column) {
             let shown: String = s.chars().take(160).collect();
-            write!(f, "\n    | {shown}\n    | {}^", " ".repeat(c.saturating_sub(1)))?;
+            write!(
+                f,
+                "\n    | {shown}\n    | {}^",
+                " ".repeat(c.saturating_sub(1))
+            )?;
         }
         Ok(())
     }

@@ -36,7 +36,11 @@ fn locate(text: &str, offset: usize) -> (usize, usize, String) {
     let start = before.rfind('\n').map_or(0, |i| i + 1);
     let column = text[start..off].chars().count() + 1;
     let end = text[off..].find('\n').map_or(text.len(), |i| off + i);
-    (line, column, text[start..end].trim_end_matches('\r').to_string())
+    (
+        line,
+        column,
+        text[start..end].trim_end_matches('\r').to_string(),
+    )
 }
 
 struct Ctx<'a> {
@@ -102,7 +106,10 @@ impl Ctx<'_> {
         if items.len() != 3 {
             return Err(self.err(
                 v.span(),
-                format!("{what}: expected 3 components [x, y, z], got {}", items.len()),
+                format!(
+                    "{what}: expected 3 components [x, y, z], got {}",
+                    items.len()
+                ),
             ));
         }
         Ok([
@@ -141,7 +148,11 @@ fn locate_line(text: &str, line: usize) -> String {
 /// Names must be non-empty and not clash with reserved words.
 fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()> {
     let n = name.get_ref();
-    if n.is_empty() || !n.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '-') {
+    if n.is_empty()
+        || !n
+            .chars()
+            .all(|c| c.is_alphanumeric() || c == '_' || c == '-')
+    {
         return Err(ctx.err(
             name.span(),
             format!("{kind} name '{n}' must be non-empty and use letters, digits, '_' or '-'"),
@@ -172,7 +183,11 @@ fn tolerance(ctx: &Ctx, v: &toml::Value, span: Range<usize>, what: &str) -> R<To
         }
         toml::Value::Float(f) => Tolerance::Absolute(*f),
         toml::Value::Integer(i) => Tolerance::Absolute(*i as f64),
-        _ => return Err(bad("a tolerance is \"3%\" (relative) or a number (absolute)")),
+        _ => {
+            return Err(bad(
+                "a tolerance is \"3%\" (relative) or a number (absolute)",
+            ));
+        }
     };
     let x = match t {
         Tolerance::Relative(x) | Tolerance::Absolute(x) => x,
@@ -294,7 +309,13 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     for (k, v) in praw {
         check_name(&ctx, k, "parameter")?;
         if ["speed", "pi"].contains(&k.get_ref().as_str()) {
-            return Err(ctx.err(k.span(), format!("'{}' is reserved and cannot be a parameter name", k.get_ref())));
+            return Err(ctx.err(
+                k.span(),
+                format!(
+                    "'{}' is reserved and cannot be a parameter name",
+                    k.get_ref()
+                ),
+            ));
         }
         parameters.push(parameter(&ctx, k, v)?);
     }
@@ -314,7 +335,10 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         check_name(&ctx, &s.name, "body")?;
         let name = s.name.get_ref().clone();
         if name == "ground" {
-            return Err(ctx.err(s.name.span(), "'ground' is the fixed frame and cannot be declared as a body"));
+            return Err(ctx.err(
+                s.name.span(),
+                "'ground' is the fixed frame and cannot be declared as a body",
+            ));
         }
         if body_names.insert(name.clone(), bodies.len()).is_some() {
             return Err(ctx.err(s.name.span(), format!("duplicate body name '{name}'")));
@@ -329,10 +353,13 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         };
         let cm = ctx.vec3(&s.cm, what("cm"))?;
         // Nominal checks: mass ≥ 0, inertia symmetric positive semi-definite.
-        if let Some(m) = ctx.nominal(&mass, &nominal)? {
-            if m < 0.0 {
-                return Err(ctx.err(s.mass.span(), format!("body '{name}': negative mass {m} kg")));
-            }
+        if let Some(m) = ctx.nominal(&mass, &nominal)?
+            && m < 0.0
+        {
+            return Err(ctx.err(
+                s.mass.span(),
+                format!("body '{name}': negative mass {m} kg"),
+            ));
         }
         let mut inom = [[0.0; 3]; 3];
         let mut all_known = true;
@@ -388,18 +415,26 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             k => {
                 return Err(ctx.err(
                     s.kind.span(),
-                    format!("joint '{name}': unknown type '{k}' (expected revolute, prismatic or fixed)"),
+                    format!(
+                        "joint '{name}': unknown type '{k}' (expected revolute, prismatic or fixed)"
+                    ),
                 ));
             }
         };
         let parent = body_ref(&ctx, &body_names, &s.parent)?;
         let child = body_ref(&ctx, &body_names, &s.child)?.ok_or_else(|| {
-            ctx.err(s.child.span(), format!("joint '{name}': ground cannot be a child"))
+            ctx.err(
+                s.child.span(),
+                format!("joint '{name}': ground cannot be a child"),
+            )
         })?;
         if parent == Some(child) {
             return Err(ctx.err(
                 s.child.span(),
-                format!("joint '{name}' connects body '{}' to itself", bodies[child].name),
+                format!(
+                    "joint '{name}' connects body '{}' to itself",
+                    bodies[child].name
+                ),
             ));
         }
         if let Some(prev) = child_of[child] {
@@ -415,7 +450,10 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         let at = match &s.at {
             Some(v) => ctx.vec3(v, what("at"))?,
             None if kind == JointKind::Revolute => {
-                return Err(ctx.err(j.span(), format!("joint '{name}': a revolute joint needs 'at' (a point on its axis)")));
+                return Err(ctx.err(
+                    j.span(),
+                    format!("joint '{name}': a revolute joint needs 'at' (a point on its axis)"),
+                ));
             }
             None => [0, 1, 2].map(|i| ctx.zero(&j.span(), what(&format!("at[{i}]")))),
         };
@@ -457,13 +495,26 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         let stiffness = ctx.opt_field(&s.stiffness, what("stiffness"))?;
         let damping = ctx.opt_field(&s.damping, what("damping"))?;
         if kind == JointKind::Fixed {
-            for (f, n) in [(&s.drive, "drive"), (&s.stiffness, "stiffness"), (&s.damping, "damping"), (&s.initial, "initial")] {
+            for (f, n) in [
+                (&s.drive, "drive"),
+                (&s.stiffness, "stiffness"),
+                (&s.damping, "damping"),
+                (&s.initial, "initial"),
+            ] {
                 if let Some(x) = f {
-                    return Err(ctx.err(x.span(), format!("joint '{name}': a fixed joint has no coordinate, so no '{n}'")));
+                    return Err(ctx.err(
+                        x.span(),
+                        format!("joint '{name}': a fixed joint has no coordinate, so no '{n}'"),
+                    ));
                 }
             }
         }
-        for f in [&initial, &free].into_iter().chain(drive.iter()).chain(stiffness.iter()).chain(damping.iter()) {
+        for f in [&initial, &free]
+            .into_iter()
+            .chain(drive.iter())
+            .chain(stiffness.iter())
+            .chain(damping.iter())
+        {
             ctx.nominal(f, &nominal)?;
         }
         let coord = if kind == JointKind::Fixed {
@@ -497,7 +548,13 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     for (b, c) in child_of.iter().enumerate() {
         if c.is_none() {
             let span = raw.bodies[b].get_ref().name.span();
-            return Err(ctx.err(span, format!("body '{}' is not connected to ground: no joint has it as child", bodies[b].name)));
+            return Err(ctx.err(
+                span,
+                format!(
+                    "body '{}' is not connected to ground: no joint has it as child",
+                    bodies[b].name
+                ),
+            ));
         }
     }
     let mut order = Vec::new();
@@ -517,14 +574,24 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         let mut path = vec![ji];
         let mut cur = ji;
         loop {
-            let parent_body = joints[cur].parent.expect("unplaced joints have a body parent");
+            let parent_body = joints[cur]
+                .parent
+                .expect("unplaced joints have a body parent");
             let up = child_of[parent_body].expect("every body has a parent joint");
             if let Some(pos) = path.iter().position(|&x| x == up) {
-                let names: Vec<&str> = path[pos..].iter().rev().map(|&k| joints[k].name.as_str()).collect();
+                let names: Vec<&str> = path[pos..]
+                    .iter()
+                    .rev()
+                    .map(|&k| joints[k].name.as_str())
+                    .collect();
                 let span = raw.joints[up].get_ref().name.span();
                 return Err(ctx.err(
                     span,
-                    format!("the joints form a cycle not connected to ground: {} → {}", names.join(" → "), names[0]),
+                    format!(
+                        "the joints form a cycle not connected to ground: {} → {}",
+                        names.join(" → "),
+                        names[0]
+                    ),
                 ));
             }
             path.push(up);
@@ -543,7 +610,13 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
         }
         if s.kind.get_ref() != "spring_damper" {
-            return Err(ctx.err(s.kind.span(), format!("force '{name}': unknown type '{}' (expected spring_damper)", s.kind.get_ref())));
+            return Err(ctx.err(
+                s.kind.span(),
+                format!(
+                    "force '{name}': unknown type '{}' (expected spring_damper)",
+                    s.kind.get_ref()
+                ),
+            ));
         }
         let what = |x: &str| format!("force '{name}' {x}");
         let e = SpringDamper {
@@ -557,7 +630,15 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             preload: ctx.opt_field(&s.preload, what("preload"))?,
             name,
         };
-        for x in e.point1.iter().chain(e.point2.iter()).chain(e.stiffness.iter()).chain(e.damping.iter()).chain(e.free_length.iter()).chain(e.preload.iter()) {
+        for x in e
+            .point1
+            .iter()
+            .chain(e.point2.iter())
+            .chain(e.stiffness.iter())
+            .chain(e.damping.iter())
+            .chain(e.free_length.iter())
+            .chain(e.preload.iter())
+        {
             ctx.nominal(x, &nominal)?;
         }
         forces.push(e);
@@ -578,7 +659,10 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
                 let body1 = body_ref(&ctx, &body_names, &s.body1)?;
                 let body2 = body_ref(&ctx, &body_names, &s.body2)?;
                 if body1 == body2 {
-                    return Err(ctx.err(s.body2.span(), format!("constraint '{name}': both points are on the same body")));
+                    return Err(ctx.err(
+                        s.body2.span(),
+                        format!("constraint '{name}': both points are on the same body"),
+                    ));
                 }
                 ConstraintKind::Distance {
                     body1,
@@ -589,10 +673,18 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
                 }
             }
             k => {
-                return Err(ctx.err(s.kind.span(), format!("constraint '{name}': unknown type '{k}' (expected distance)")));
+                return Err(ctx.err(
+                    s.kind.span(),
+                    format!("constraint '{name}': unknown type '{k}' (expected distance)"),
+                ));
             }
         };
-        let ConstraintKind::Distance { point1, point2, length, .. } = &kind;
+        let ConstraintKind::Distance {
+            point1,
+            point2,
+            length,
+            ..
+        } = &kind;
         for x in point1.iter().chain(point2.iter()).chain(length.iter()) {
             ctx.nominal(x, &nominal)?;
         }
@@ -609,7 +701,10 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     }
     if n_free == 0 {
         let span = raw.joints.first().map_or(whole.clone(), |c| c.span());
-        return Err(ctx.err(span, "the mechanism has no free coordinate (every joint is fixed or driven)"));
+        return Err(ctx.err(
+            span,
+            "the mechanism has no free coordinate (every joint is fixed or driven)",
+        ));
     }
 
     // Independent coordinates.
@@ -619,13 +714,25 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             let mut out = Vec::new();
             for n in list.get_ref() {
                 let Some(ci) = coordinates.iter().position(|c| &c.name == n.get_ref()) else {
-                    return Err(ctx.err(n.span(), format!("independent: '{}' is not a joint with a coordinate", n.get_ref())));
+                    return Err(ctx.err(
+                        n.span(),
+                        format!(
+                            "independent: '{}' is not a joint with a coordinate",
+                            n.get_ref()
+                        ),
+                    ));
                 };
                 if coordinates[ci].driven {
-                    return Err(ctx.err(n.span(), format!("independent: joint '{}' is driven", n.get_ref())));
+                    return Err(ctx.err(
+                        n.span(),
+                        format!("independent: joint '{}' is driven", n.get_ref()),
+                    ));
                 }
                 if out.contains(&ci) {
-                    return Err(ctx.err(n.span(), format!("independent: '{}' is listed twice", n.get_ref())));
+                    return Err(ctx.err(
+                        n.span(),
+                        format!("independent: '{}' is listed twice", n.get_ref()),
+                    ));
                 }
                 out.push(ci);
             }
@@ -643,7 +750,9 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
 
     Ok(Model {
         name: raw.name.clone().unwrap_or_else(|| {
-            std::path::Path::new(file).file_stem().map_or("model".into(), |s| s.to_string_lossy().into_owned())
+            std::path::Path::new(file)
+                .file_stem()
+                .map_or("model".into(), |s| s.to_string_lossy().into_owned())
         }),
         file: file.to_string(),
         parameters,
@@ -662,7 +771,9 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
 /// Reads an inertia given as three principal values or a 3×3 matrix of numbers or expressions.
 fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]> {
     let span = v.span();
-    let bad = || ctx.err(span.clone(), format!("{what}inertia: expected 3 principal values [Ixx, Iyy, Izz] or a 3×3 matrix of numbers or expressions"));
+    let bad = || {
+        ctx.err(span.clone(), format!("{what}inertia: expected 3 principal values [Ixx, Iyy, Izz] or a 3×3 matrix of numbers or expressions"))
+    };
     let num = |x: &toml::Value, i: usize, j: usize| -> R<Field> {
         let n = match x {
             toml::Value::Float(f) => Num::Value(*f),
@@ -671,27 +782,51 @@ fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]
             _ => return Err(bad()),
         };
         // Entries carry the span of the whole array: errors point at its start.
-        ctx.field(&Spanned::new(span.clone(), n), format!("{what}inertia[{i}][{j}]"))
+        ctx.field(
+            &Spanned::new(span.clone(), n),
+            format!("{what}inertia[{i}][{j}]"),
+        )
     };
-    let toml::Value::Array(rows) = v.get_ref() else { return Err(bad()) };
+    let toml::Value::Array(rows) = v.get_ref() else {
+        return Err(bad());
+    };
     if rows.len() != 3 {
         return Err(bad());
     }
     if rows.iter().all(|r| !r.is_array()) {
-        let d = [num(&rows[0], 0, 0)?, num(&rows[1], 1, 1)?, num(&rows[2], 2, 2)?];
+        let d = [
+            num(&rows[0], 0, 0)?,
+            num(&rows[1], 1, 1)?,
+            num(&rows[2], 2, 2)?,
+        ];
         return Ok(std::array::from_fn(|i| {
-            std::array::from_fn(|j| if i == j { d[i].clone() } else { ctx.zero(&span, format!("{what}inertia[{i}][{j}]")) })
+            std::array::from_fn(|j| {
+                if i == j {
+                    d[i].clone()
+                } else {
+                    ctx.zero(&span, format!("{what}inertia[{i}][{j}]"))
+                }
+            })
         }));
     }
     let mut out: Vec<Vec<Field>> = Vec::new();
     for (i, r) in rows.iter().enumerate() {
-        let toml::Value::Array(r) = r else { return Err(bad()) };
+        let toml::Value::Array(r) = r else {
+            return Err(bad());
+        };
         if r.len() != 3 {
             return Err(bad());
         }
-        out.push(r.iter().enumerate().map(|(j, x)| num(x, i, j)).collect::<R<Vec<_>>>()?);
+        out.push(
+            r.iter()
+                .enumerate()
+                .map(|(j, x)| num(x, i, j))
+                .collect::<R<Vec<_>>>()?,
+        );
     }
-    Ok(std::array::from_fn(|i| std::array::from_fn(|j| out[i][j].clone())))
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| out[i][j].clone())
+    }))
 }
 
 /// Symmetric and positive semi-definite (eigenvalues ≥ −1e-12·scale).
@@ -699,7 +834,10 @@ fn check_inertia(ctx: &Ctx, i: &[[f64; 3]; 3], span: Range<usize>, name: &str) -
     let m = nalgebra::Matrix3::from_fn(|r, c| i[r][c]);
     let scale = m.abs().max().max(1e-300);
     if (m - m.transpose()).abs().max() > 1e-12 * scale {
-        return Err(ctx.err(span, format!("body '{name}': inertia matrix is not symmetric")));
+        return Err(ctx.err(
+            span,
+            format!("body '{name}': inertia matrix is not symmetric"),
+        ));
     }
     let ev = m.symmetric_eigenvalues();
     if ev.min() < -1e-12 * scale {
@@ -731,18 +869,33 @@ fn analysis(
     let Some(raw) = raw else { return Ok(a) };
     let s = raw.get_ref();
     if let Some(sp) = &s.speed {
-        a.speed = Some(SpeedRange::parse(sp.get_ref()).map_err(|e| ctx.err(sp.span(), format!("analysis speed: {e}")))?);
+        a.speed = Some(
+            SpeedRange::parse(sp.get_ref())
+                .map_err(|e| ctx.err(sp.span(), format!("analysis speed: {e}")))?,
+        );
     }
     if let Some(t) = &s.transfer {
         let t = t.get_ref();
         let coord = |n: &Spanned<String>| {
-            coords.iter().position(|c| &c.name == n.get_ref() && !c.driven).ok_or_else(|| {
-                ctx.err(n.span(), format!("analysis transfer: '{}' is not a free joint coordinate", n.get_ref()))
-            })
+            coords
+                .iter()
+                .position(|c| &c.name == n.get_ref() && !c.driven)
+                .ok_or_else(|| {
+                    ctx.err(
+                        n.span(),
+                        format!(
+                            "analysis transfer: '{}' is not a free joint coordinate",
+                            n.get_ref()
+                        ),
+                    )
+                })
         };
         let order = t.order.as_ref().map_or(1.0, |o| *o.get_ref());
         if !order.is_finite() || order < 0.0 {
-            return Err(ctx.err(t.order.as_ref().map_or(raw.span(), |o| o.span()), "analysis transfer: order must be finite and ≥ 0"));
+            return Err(ctx.err(
+                t.order.as_ref().map_or(raw.span(), |o| o.span()),
+                "analysis transfer: order must be finite and ≥ 0",
+            ));
         }
         a.transfer = Some(Transfer {
             input: coord(&t.input)?,
@@ -764,23 +917,46 @@ fn analysis(
             "random" => Sampling::Random,
             "lhs" => Sampling::Lhs,
             "sobol" => Sampling::Sobol,
-            x => return Err(ctx.err(m.span(), format!("analysis sampling '{x}': expected random, lhs or sobol"))),
+            x => {
+                return Err(ctx.err(
+                    m.span(),
+                    format!("analysis sampling '{x}': expected random, lhs or sobol"),
+                ));
+            }
         };
     }
     for c in &s.cases {
         let c = c.get_ref();
         check_name(ctx, &c.name, "case")?;
         if a.cases.iter().any(|x: &Case| &x.name == c.name.get_ref()) {
-            return Err(ctx.err(c.name.span(), format!("duplicate case name '{}'", c.name.get_ref())));
+            return Err(ctx.err(
+                c.name.span(),
+                format!("duplicate case name '{}'", c.name.get_ref()),
+            ));
         }
         let mut tl: Vec<_> = c.tolerances.iter().collect();
         tl.sort_by_key(|(k, _)| k.span().start);
         let mut tolerances = Vec::new();
         for (k, v) in tl {
             let Some(pi) = params.iter().position(|p| &p.name == k.get_ref()) else {
-                return Err(ctx.err(k.span(), format!("case '{}': unknown parameter '{}'", c.name.get_ref(), k.get_ref())));
+                return Err(ctx.err(
+                    k.span(),
+                    format!(
+                        "case '{}': unknown parameter '{}'",
+                        c.name.get_ref(),
+                        k.get_ref()
+                    ),
+                ));
             };
-            tolerances.push((pi, tolerance(ctx, v.get_ref(), v.span(), &format!("case '{}'", c.name.get_ref()))?));
+            tolerances.push((
+                pi,
+                tolerance(
+                    ctx,
+                    v.get_ref(),
+                    v.span(),
+                    &format!("case '{}'", c.name.get_ref()),
+                )?,
+            ));
         }
         a.cases.push(Case {
             name: c.name.get_ref().clone(),
