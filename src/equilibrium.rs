@@ -245,26 +245,33 @@ impl Problem {
     }
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
-    /// equilibrium drift and there is no steady state.
+    /// equilibrium drift and there is no steady state. Checked by the derivative at the solution
+    /// and by `F` itself at two other values of each driven coordinate (the derivative alone
+    /// vanishes where the dependence is stationary, e.g. `cos q_D` at `q_D = 0`).
     fn check_steady(
         &self,
         q: &[f64],
         lambda: &[f64],
         jac: &DMatrix<f64>,
     ) -> Result<(), EquilibriumError> {
-        let scale = jac.amax().max(1e-300);
+        let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
+        let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
         for &c in &self.driven {
-            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-            qq[c] = Dual64::new(q[c], 1.0);
-            let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
-            let s = f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()));
-            if s > 1e-8 * scale.max(1.0) {
-                return Err(EquilibriumError::NoSteadyState {
-                    coordinate: self.names[c].clone(),
-                    sensitivity: s,
+            for (offset, seed) in [(0.0, 1.0), (1.0, 0.0), (2.5, 0.0)] {
+                let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+                qq[c] = Dual64::new(q[c] + offset, seed);
+                let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
+                let s = f.iter().fold(0.0f64, |a, v| {
+                    a.max(if seed > 0.0 { v.eps.abs() } else { v.re.abs() })
                 });
+                if s > tol {
+                    return Err(EquilibriumError::NoSteadyState {
+                        coordinate: self.names[c].clone(),
+                        sensitivity: s,
+                    });
+                }
             }
         }
         Ok(())

@@ -2,8 +2,8 @@
 //!
 //! Eigenvalues of `(λ² M̂ + λ Ĉ + K̂) x = 0` come from the 2n×2n first-order form
 //! `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` (real Schur); for each, the right vector `x` and the left vector `y`
-//! (`yᵀ(λ²M̂ + λĈ + K̂) = 0`) are the singular vectors of the smallest singular value of the
-//! pencil at `λ`. The 2n roots form n modes: a complex-conjugate pair, or two real roots whose
+//! (`yᵀ(λ²M̂ + λĈ + K̂) = 0`) are the right singular vectors of the smallest singular value of
+//! the pencil at `λ` and of its transpose. The 2n roots form n modes: a complex-conjugate pair, or two real roots whose
 //! vectors are most alike. Per mode, with roots `λ₁, λ₂`:
 //!
 //! ```text
@@ -210,25 +210,31 @@ fn root(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>, lambda: C64) -> Ro
             left: one,
         };
     }
-    let svd = p.svd(true, true);
-    let (imin, _) =
-        svd.singular_values
-            .iter()
-            .enumerate()
-            .fold(
-                (0, f64::INFINITY),
-                |acc, (i, &s)| if s < acc.1 { (i, s) } else { acc },
-            );
-    let u = svd.u.expect("requested");
-    let vt = svd.v_t.expect("requested");
-    // P v = σ u  →  right = v = conj(row of Vᴴ); uᴴ P = σ vᴴ  →  left y = conj(u).
-    let right = DVector::from_fn(n, |i, _| vt[(imin, i)].conj());
-    let left = DVector::from_fn(n, |i, _| u[(i, imin)].conj());
+    let right = null_vector(p.clone());
+    let left = null_vector(p.transpose());
     Root {
         lambda,
         right: normalize(right),
         left: normalize(left),
     }
+}
+
+/// Right singular vector of the smallest singular value: `a v ≈ 0`.
+fn null_vector(a: DMatrix<C64>) -> DVector<C64> {
+    let n = a.ncols();
+    let svd = a.svd(false, true);
+    let imin = svd
+        .singular_values
+        .iter()
+        .enumerate()
+        .fold(
+            (0, f64::INFINITY),
+            |acc, (i, &s)| if s < acc.1 { (i, s) } else { acc },
+        )
+        .0;
+    let vt = svd.v_t.expect("requested");
+    // a = U Σ Vᴴ: the right singular vectors are the conjugated rows of Vᴴ.
+    DVector::from_fn(n, |i, _| vt[(imin, i)].conj())
 }
 
 /// Scales to unit norm with the largest entry real and positive (a fixed phase).

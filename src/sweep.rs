@@ -99,13 +99,18 @@ pub fn point(
     }
     let dir: Vec<f64> = shape.iter().map(|v| v / smax).collect();
     let free = &first.linear.free;
-    // Prefer the side the user's guess lies on.
+    // Prefer the side the model's initial guess lies on (then the positive side).
+    let guess = initial_guess(model, p, speed)?;
     let lean: f64 = free
         .iter()
         .enumerate()
-        .map(|(k, &i)| dir[k] * (q0[i] - first.equilibrium.q[i]))
+        .map(|(k, &i)| dir[k] * (guess[i] - first.equilibrium.q[i]))
         .sum();
-    let signs = if lean < 0.0 { [-1.0, 1.0] } else { [1.0, -1.0] };
+    let signs = if lean < -1e-9 {
+        [-1.0, 1.0]
+    } else {
+        [1.0, -1.0]
+    };
     for amp in [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0] {
         for s in signs {
             let mut q = first.equilibrium.q.clone();

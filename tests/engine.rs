@@ -1,0 +1,496 @@
+//! Claims about the engine, each checked against an independent route: closed forms derived by
+//! hand for the rotating pendulum and the governor, finite differences of the nonlinear reduced
+//! equations, a second choice of independent coordinates, and time-domain integration.
+
+use approx::assert_relative_eq;
+use modaltol::mechanics::System;
+use modaltol::mechanics::dynamics::{Lifted, constraints_at, evaluate};
+use modaltol::modal::ModeClass;
+use modaltol::model::Model;
+use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use nalgebra::DMatrix;
+use num_dual::{Dual2, Dual64};
+
+const G: f64 = 9.80665;
+
+fn example(name: &str) -> Model {
+    Model::from_file(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn at(model: &Model, speed: f64, opt: &Options) -> Point {
+    let p = model.nominal();
+    let q0 = initial_guess(model, &p, speed).unwrap();
+    point(model, &p, speed, &q0, opt).unwrap()
+}
+
+/// Pendulum closed form: I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0, I = mL²/3.
+/// Returns (θ*, linearised stiffness K) on the stable branch.
+fn pendulum_closed_form(w: f64) -> (f64, f64) {
+    let (m, l) = (3.0, 1.0);
+    let i = m * l * l / 3.0;
+    let theta = if w * w <= 3.0 * G / (2.0 * l) {
+        0.0
+    } else {
+        (3.0 * G / (2.0 * l * w * w)).acos()
+    };
+    let k = m * G * l / 2.0 * theta.cos() - i * w * w * (2.0 * theta).cos();
+    (theta, k)
+}
+
+#[test]
+fn pendulum_damped_frequency_matches_closed_form_on_both_branches() {
+    let model = example("rotating_pendulum.toml");
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let (i, c) = (1.0, 3.0);
+    let mut overdamped = Vec::new();
+    for s in 0..=600 {
+        let w = s as f64 * 0.01;
+        let p = sweep.step(w).unwrap();
+        let (theta, k) = pendulum_closed_form(w);
+        assert!(
+            (p.equilibrium.q[1] - theta).abs() < 1e-10,
+            "Ω = {w}: θ = {} vs {theta}",
+            p.equilibrium.q[1]
+        );
+        let disc = 4.0 * i * k - c * c;
+        let wd = disc.max(0.0).sqrt() / (2.0 * i);
+        let mode = &p.modes[0];
+        assert!(
+            (mode.damped_frequency - wd).abs() <= 1e-9 * wd.max(1e-3),
+            "Ω = {w}: ω_d = {} vs {wd}",
+            mode.damped_frequency
+        );
+        assert_relative_eq!(mode.natural_frequency, (k / i).sqrt(), max_relative = 1e-9);
+        assert_ne!(
+            mode.class,
+            ModeClass::Unstable,
+            "Ω = {w}: the stable branch must be followed"
+        );
+        assert_eq!(mode.class == ModeClass::Overdamped, disc < 0.0, "Ω = {w}");
+        if mode.class == ModeClass::Overdamped {
+            overdamped.push(w);
+        }
+    }
+    // The paper's band 3.530 < Ω < 3.984 on this 0.01 grid.
+    assert_relative_eq!(overdamped[0], 3.53, epsilon = 1e-12);
+    assert_relative_eq!(*overdamped.last().unwrap(), 3.98, epsilon = 1e-12);
+    assert_eq!(overdamped.len(), 46);
+}
+
+#[test]
+fn pendulum_hanging_position_loses_stability_at_sqrt_3g_over_2l() {
+    let model = example("rotating_pendulum.toml");
+    let hanging = Options {
+        no_branch_switch: true,
+        ..Default::default()
+    };
+    let p = model.nominal();
+    let unstable = |w: f64| {
+        let pt = point(&model, &p, w, &[0.0, 0.0], &hanging).unwrap();
+        assert!(pt.equilibrium.q[1].abs() < 1e-12);
+        pt.modes[0].class == ModeClass::Unstable
+    };
+    let (mut lo, mut hi) = (3.0, 4.5);
+    assert!(!unstable(lo) && unstable(hi));
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if unstable(mid) { hi = mid } else { lo = mid }
+    }
+    let critical = (3.0 * G / 2.0).sqrt();
+    assert!(
+        (lo - critical).abs() < 1e-6,
+        "stability lost at {lo}, expected {critical}"
+    );
+    assert_relative_eq!(critical, 3.835, epsilon = 1e-3);
+    // Past it, the sweep swings out and says so.
+    let mut sweep = Sweep::new(&model, p.clone(), Options::default());
+    sweep.step(3.83).unwrap();
+    let out = sweep.step(3.84).unwrap();
+    assert!(out.equilibrium.q[1] > 0.05 && out.stable());
+    assert!(out.note.unwrap().contains("stable branch"));
+}
+
+/// Governor by hand: arm angle φ from the downward spindle axis, the planar effective potential
+/// V(φ) = V_gravity + V_spring − ½ Ω² J_y(φ) is stationary at the steady state.
+fn governor_collar_height(w: f64) -> f64 {
+    let (mb, k, a, arm, hy, link, l0) = (1.0, 1000.0, 0.08, 0.16, 0.2, 0.10922, 0.15);
+    let g = 9.8;
+    let collar = |phi: f64| hy - a * phi.cos() - (link * link - (a * phi.sin()).powi(2)).sqrt();
+    let v = |phi: f64| {
+        let h = collar(phi);
+        let ball_y = hy - arm * phi.cos();
+        let ball_x = arm * phi.sin();
+        let gravity = 2.0 * mb * g * ball_y + 1.0 * g * h;
+        let spring = 0.5 * k * ((hy - h) - l0).powi(2);
+        let spin = 0.5 * w * w * 2.0 * mb * ball_x * ball_x; // constant inertia terms dropped
+        gravity + spring - spin
+    };
+    let dv = |phi: f64| (v(phi + 1e-6) - v(phi - 1e-6)) / 2e-6;
+    // The stable equilibrium: the minimum of V between hanging nearly straight and 85°.
+    let (mut lo, mut hi) = (0.05, 85f64.to_radians());
+    assert!(dv(lo) < 0.0 && dv(hi) > 0.0, "bracket at Ω = {w}");
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if dv(mid) < 0.0 { lo = mid } else { hi = mid }
+    }
+    collar(0.5 * (lo + hi))
+}
+
+#[test]
+fn governor_collar_height_matches_planar_energy_balance() {
+    let model = example("governor.toml");
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let slide = model.coordinate("slide").unwrap();
+    for s in 0..=24 {
+        let w = 0.5 * s as f64;
+        let p = sweep.step(w).unwrap();
+        let h = 0.05 + p.equilibrium.q[slide];
+        let expected = governor_collar_height(w);
+        assert!(
+            (h - expected).abs() < 1e-7,
+            "Ω = {w}: collar at {h} m, energy balance {expected} m"
+        );
+        assert!(
+            p.equilibrium.constraint_violation <= 1e-12,
+            "Ω = {w}: |Φ| = {}",
+            p.equilibrium.constraint_violation
+        );
+    }
+    // Haug's operating point: Ω = 11.0174 rad/s holds the arms at 45° (spring at free length).
+    let p = at(&model, 11.0174, &Options::default());
+    assert!(p.equilibrium.q[model.coordinate("arm1").unwrap()].abs() < 1e-4);
+}
+
+#[test]
+fn governor_eigenvalues_independent_of_coordinate_choice() {
+    let model = example("governor.toml");
+    for w in [0.5, 1.595, 4.0, 11.0174] {
+        let mut roots = Vec::new();
+        for name in ["slide", "arm1", "arm2"] {
+            let opt = Options {
+                independent: Some(vec![model.coordinate(name).unwrap()]),
+                ..Default::default()
+            };
+            let p = at(&model, w, &opt);
+            assert_eq!(p.linear.independent, vec![model.coordinate(name).unwrap()]);
+            roots.push((p.modes[0].root.lambda, p.modes[0].partner.lambda));
+        }
+        for r in &roots[1..] {
+            for (a, b) in [(r.0, roots[0].0), (r.1, roots[0].1)] {
+                assert!((a - b).norm() <= 1e-10 * b.norm(), "Ω = {w}: {a} vs {b}");
+            }
+        }
+    }
+}
+
+/// The nonlinear reduced equations f(z, ż, z̈) = R(q)ᵀ r_R(q, q̇, q̈) on the constraint manifold,
+/// built without the library's linearisation: dependent coordinates by Newton on Φ, their time
+/// derivatives exact through Dual2 arithmetic, R from Φ_q at the perturbed state. No λ anywhere.
+struct Reduced<'a> {
+    model: &'a Model,
+    sys: System<f64>,
+    lifted: Lifted<f64>,
+    q: Vec<f64>,
+    qd_drive: Vec<f64>,
+    free: Vec<usize>,
+    ind: Vec<usize>,
+    dep: Vec<usize>,
+}
+
+impl Reduced<'_> {
+    fn phi_q(&self, q: &[f64], cols: &[usize]) -> DMatrix<f64> {
+        let mut out = DMatrix::zeros(self.sys.m, cols.len());
+        for (j, &c) in cols.iter().enumerate() {
+            let mut qq: Vec<Dual64> = q.iter().map(|&v| Dual64::from_re(v)).collect();
+            qq[c] = Dual64::new(q[c], 1.0);
+            let phi = constraints_at(&self.sys.map(Dual64::from_re), &qq);
+            for k in 0..self.sys.m {
+                out[(k, j)] = phi[k].eps;
+            }
+        }
+        out
+    }
+
+    fn f(&self, z: &[f64], zd: &[f64], zdd: &[f64]) -> Vec<f64> {
+        let n = self.q.len();
+        let mut qt: Vec<Dual2<f64>> = (0..n)
+            .map(|i| Dual2::new(self.q[i], self.qd_drive[i], 0.0))
+            .collect();
+        for (k, &i) in self.ind.iter().enumerate() {
+            qt[i] = Dual2::new(self.q[i] + z[k], zd[k], zdd[k]);
+        }
+        let sys2 = self.sys.map(Dual2::from_re);
+        for _ in 0..if self.dep.is_empty() { 0 } else { 60 } {
+            let re: Vec<f64> = qt.iter().map(|x| x.re).collect();
+            let pu = self.phi_q(&re, &self.dep);
+            let phi = constraints_at(&sys2, &qt);
+            let lu = pu.lu();
+            let rhs =
+                |f: fn(&Dual2<f64>) -> f64| DMatrix::from_iterator(phi.len(), 1, phi.iter().map(f));
+            let d0 = lu.solve(&rhs(|x| x.re)).unwrap();
+            let d1 = lu.solve(&rhs(|x| x.v1)).unwrap();
+            let d2 = lu.solve(&rhs(|x| x.v2)).unwrap();
+            for (k, &i) in self.dep.iter().enumerate() {
+                qt[i] = qt[i] - Dual2::new(d0[k], d1[k], d2[k]);
+            }
+        }
+        let q: Vec<f64> = qt.iter().map(|x| x.re).collect();
+        let qd: Vec<f64> = qt.iter().map(|x| x.v1).collect();
+        let qdd: Vec<f64> = qt.iter().map(|x| x.v2).collect();
+        let r = evaluate(&self.lifted, &q, &qd, &qdd).r;
+        // R = [−Φ_u⁻¹ Φ_v; I] at the perturbed configuration.
+        let nd = self.ind.len();
+        let mut basis = DMatrix::zeros(self.free.len(), nd);
+        let x = if self.dep.is_empty() {
+            DMatrix::zeros(0, nd)
+        } else {
+            self.phi_q(&q, &self.dep)
+                .lu()
+                .solve(&self.phi_q(&q, &self.ind))
+                .unwrap()
+        };
+        for (row, &f) in self.free.iter().enumerate() {
+            if let Some(k) = self.ind.iter().position(|&i| i == f) {
+                basis[(row, k)] = 1.0;
+            } else {
+                let k = self.dep.iter().position(|&i| i == f).unwrap();
+                for c in 0..nd {
+                    basis[(row, c)] = -x[(k, c)];
+                }
+            }
+        }
+        let rr = DMatrix::from_iterator(self.free.len(), 1, self.free.iter().map(|&i| r[i]));
+        (basis.transpose() * rr).iter().copied().collect()
+    }
+}
+
+#[test]
+fn linearisation_matches_finite_differences_of_reduced_equations() {
+    for (file, speeds) in [
+        ("rotating_pendulum.toml", vec![1.0, 3.0, 5.0]),
+        ("governor.toml", vec![0.8, 1.595, 6.0, 11.0174]),
+        ("spinning_universal_pendulum.toml", vec![0.0, 2.5, 6.0]),
+    ] {
+        let model = example(file);
+        for w in speeds {
+            let pt = at(&model, w, &Options::default());
+            let sys = System::new(&model, &model.nominal(), w).unwrap();
+            let free = model.free();
+            let ind = pt.linear.independent.clone();
+            let red = Reduced {
+                model: &model,
+                lifted: Lifted::new(sys.clone()),
+                qd_drive: sys.steady_speeds(),
+                sys,
+                q: pt.equilibrium.q.clone(),
+                dep: free.iter().copied().filter(|i| !ind.contains(i)).collect(),
+                free,
+                ind,
+            };
+            let _ = red.model;
+            let nd = red.ind.len();
+            let zero = vec![0.0; nd];
+            let h = 1e-5;
+            for (which, lib) in [(0, &pt.linear.k), (1, &pt.linear.c), (2, &pt.linear.m)] {
+                let scale = lib.amax().max(1e-300);
+                for j in 0..nd {
+                    let mut plus = [zero.clone(), zero.clone(), zero.clone()];
+                    let mut minus = plus.clone();
+                    plus[which][j] = h;
+                    minus[which][j] = -h;
+                    let fp = red.f(&plus[0], &plus[1], &plus[2]);
+                    let fm = red.f(&minus[0], &minus[1], &minus[2]);
+                    for i in 0..nd {
+                        let fd = (fp[i] - fm[i]) / (2.0 * h);
+                        assert!(
+                            (fd - lib[(i, j)]).abs() <= 1e-6 * scale,
+                            "{file} Ω = {w}: {}[{i},{j}] = {} but finite differences give {fd}",
+                            ["K̂", "Ĉ", "M̂"][which],
+                            lib[(i, j)]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Integrates the full nonlinear pendulum (RK4) from a small perturbation and measures ω_d
+/// (zero crossings) and ζ (decay of successive extrema).
+fn pendulum_time_response(model: &Model, w: f64, theta0: f64) -> (f64, f64) {
+    let sys = System::new(model, &model.nominal(), w).unwrap();
+    let lifted = Lifted::new(sys);
+    let accel = |t: f64, th: f64, thd: f64| {
+        let q = [w * t, th];
+        let qd = [w, thd];
+        let r0 = evaluate(&lifted, &q, &qd, &[0.0, 0.0]).r[1];
+        let m = evaluate(&lifted, &q, &qd, &[0.0, 1.0]).r[1] - r0;
+        -r0 / m
+    };
+    let dt = 1e-3;
+    let (mut t, mut x, mut v) = (0.0, theta0 + 1e-5, 0.0);
+    let mut samples = vec![(t, x - theta0)];
+    while t < 12.0 {
+        let k1 = (v, accel(t, x, v));
+        let k2 = (
+            v + 0.5 * dt * k1.1,
+            accel(t + 0.5 * dt, x + 0.5 * dt * k1.0, v + 0.5 * dt * k1.1),
+        );
+        let k3 = (
+            v + 0.5 * dt * k2.1,
+            accel(t + 0.5 * dt, x + 0.5 * dt * k2.0, v + 0.5 * dt * k2.1),
+        );
+        let k4 = (v + dt * k3.1, accel(t + dt, x + dt * k3.0, v + dt * k3.1));
+        x += dt / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+        v += dt / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        t += dt;
+        samples.push((t, x - theta0));
+    }
+    let mut crossings = Vec::new();
+    let mut extrema = Vec::new();
+    for k in 1..samples.len() - 1 {
+        let (t0, a) = samples[k - 1];
+        let (t1, b) = samples[k];
+        if a * b < 0.0 {
+            crossings.push(t0 + (t1 - t0) * a / (a - b));
+        }
+        let c = samples[k + 1].1;
+        if (b - a) * (c - b) < 0.0 {
+            // Parabola through three samples: peak value.
+            let denom = a - 2.0 * b + c;
+            let s = 0.5 * (a - c) / denom;
+            extrema.push(b - 0.25 * (a - c) * s);
+        }
+    }
+    assert!(
+        crossings.len() >= 4 && extrema.len() >= 4,
+        "too few oscillations"
+    );
+    let half = (crossings[3] - crossings[0]) / 3.0;
+    let wd = std::f64::consts::PI / half;
+    let ratio = (extrema[3] / extrema[1]).abs().sqrt(); // per half period
+    let sigma = -ratio.ln() / half;
+    (wd, sigma / (sigma * sigma + wd * wd).sqrt())
+}
+
+#[test]
+fn time_integration_reproduces_damped_frequency_and_damping_ratio() {
+    let model = example("rotating_pendulum.toml");
+    for w in [1.0, 2.0, 5.0] {
+        let pt = at(&model, w, &Options::default());
+        let (wd, zeta) = pendulum_time_response(&model, w, pt.equilibrium.q[1]);
+        let mode = &pt.modes[0];
+        assert_relative_eq!(wd, mode.damped_frequency, max_relative = 0.01);
+        assert_relative_eq!(zeta, mode.damping_ratio, max_relative = 0.01);
+    }
+}
+
+#[test]
+fn gyroscopic_example_has_skew_coupling_and_valid_left_vectors() {
+    let model = example("spinning_universal_pendulum.toml");
+    let slow = at(&model, 0.0, &Options::default());
+    let fast = at(&model, 4.0, &Options::default());
+    let skew = |c: &DMatrix<f64>| (c - c.transpose()).amax();
+    assert!(
+        skew(&slow.linear.c) < 1e-12,
+        "no gyroscopic coupling at rest"
+    );
+    assert!(
+        skew(&fast.linear.c) > 0.1,
+        "Coriolis coupling at speed: {}",
+        fast.linear.c
+    );
+    let (m, c, k) = (&fast.linear.m, &fast.linear.c, &fast.linear.k);
+    assert!((k - k.transpose()).amax() > 1e-3 || skew(c) > 0.0);
+    for mode in &fast.modes {
+        for r in [&mode.root, &mode.partner] {
+            let l = r.lambda;
+            let p =
+                m.map(|v| l * l * v) + c.map(|v| l * v) + k.map(|v| nalgebra::Complex::new(v, 0.0));
+            assert!((&p * &r.right).norm() < 1e-9 * p.norm());
+            let res = (r.left.transpose() * &p).norm();
+            assert!(
+                res < 1e-9 * p.norm(),
+                "left residual {res} for λ = {l}; P = {p}, y = {}",
+                r.left
+            );
+        }
+    }
+    // Two distinct underdamped whirl modes.
+    assert_eq!(fast.modes.len(), 2);
+    assert!(fast.modes.iter().all(|m| m.class == ModeClass::Underdamped));
+    assert!((fast.modes[0].damped_frequency - fast.modes[1].damped_frequency).abs() > 0.1);
+}
+
+#[test]
+fn drive_torque_balances_joint_damping_on_the_drive() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
+    )
+    .unwrap();
+    let text = text.replace("drive = \"speed\"", "drive = \"speed\"\ndamping = 0.7");
+    let model = Model::from_str(&text, "damped_spin.toml").unwrap();
+    let p = at(&model, 2.5, &Options::default());
+    assert_relative_eq!(
+        p.equilibrium.drive_force[0],
+        0.7 * 2.5,
+        max_relative = 1e-12
+    );
+}
+
+#[test]
+fn gravity_off_the_spin_axis_has_no_steady_state() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
+    )
+    .unwrap();
+    let text = text.replace("gravity = [0, -9.80665, 0]", "gravity = [-3, -9, 0]");
+    let model = Model::from_str(&text, "tilted.toml").unwrap();
+    let p = model.nominal();
+    let err =
+        point(&model, &p, 2.0, &[0.0, 0.5], &Options::default()).expect_err("no steady state");
+    assert!(err.to_string().contains("no steady state"), "{err}");
+    // A sweep reports it per speed and goes on.
+    let mut sweep = Sweep::new(&model, p, Options::default());
+    assert!(sweep.step(1.0).is_err() && sweep.step(2.0).is_err());
+}
+
+#[test]
+fn massless_coordinate_is_reported_as_singular_mass() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
+    )
+    .unwrap();
+    let text = text
+        .replace("mass = \"m\"", "mass = 0")
+        .replace(
+            "inertia = [\"m*L^2/12\", 0, \"m*L^2/12\"]",
+            "inertia = [0, 0, 0]",
+        )
+        .replace("damping = \"c\"", "damping = \"c\"\nstiffness = 10");
+    let model = Model::from_str(&text, "massless.toml").unwrap();
+    let err = point(
+        &model,
+        &model.nominal(),
+        1.0,
+        &[0.0, 0.3],
+        &Options::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("mass matrix"), "{err}");
+}
+
+#[test]
+fn partial_velocities_are_exact_derivatives() {
+    // ∂r/∂q̈ is the mass matrix: symmetric positive definite for the gyroscopic example.
+    let model = example("spinning_universal_pendulum.toml");
+    let p = at(&model, 3.0, &Options::default());
+    let m = &p.linear.m_full;
+    assert!((m - m.transpose()).amax() < 1e-12 * m.amax());
+    assert!(m.clone().symmetric_eigenvalues().min() > 0.0);
+}
