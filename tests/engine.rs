@@ -236,7 +236,7 @@ impl Reduced<'_> {
             let d1 = lu.solve(&rhs(|x| x.v1)).unwrap();
             let d2 = lu.solve(&rhs(|x| x.v2)).unwrap();
             for (k, &i) in self.dep.iter().enumerate() {
-                qt[i] = qt[i] - Dual2::new(d0[k], d1[k], d2[k]);
+                qt[i] -= Dual2::new(d0[k], d1[k], d2[k]);
             }
         }
         let q: Vec<f64> = qt.iter().map(|x| x.re).collect();

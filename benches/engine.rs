@@ -1,0 +1,56 @@
+//! One modal point (equilibrium + linearisation + modes) and a 501-point sweep of each example.
+//! Run with `cargo bench --bench engine`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use modaltol::model::Model;
+use modaltol::sweep::{Options, Sweep, initial_guess, point};
+use std::hint::black_box;
+
+fn example(name: &str) -> Model {
+    Model::from_file(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    for (file, speed, to) in [
+        ("rotating_pendulum.toml", 5.0, 6.0),
+        ("governor.toml", 1.595, 5.0),
+        ("spinning_universal_pendulum.toml", 3.0, 6.0),
+    ] {
+        let model = example(file);
+        let p = model.nominal();
+        let name = file.trim_end_matches(".toml");
+        // A point started from the previous speed's solution, as in a sweep.
+        let q0 = point(
+            &model,
+            &p,
+            speed,
+            &initial_guess(&model, &p, speed).unwrap(),
+            &Options::default(),
+        )
+        .unwrap()
+        .equilibrium
+        .q;
+        c.bench_function(&format!("{name}/modal_point"), |b| {
+            b.iter(|| point(&model, &p, black_box(speed), &q0, &Options::default()).unwrap())
+        });
+        let mut g = c.benchmark_group(format!("{name}/sweep_501"));
+        g.sample_size(10);
+        g.bench_function("sweep", |b| {
+            b.iter(|| {
+                let mut s = Sweep::new(&model, p.clone(), Options::default());
+                for i in 0..501 {
+                    let _ = black_box(s.step(to * i as f64 / 500.0));
+                }
+            })
+        });
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

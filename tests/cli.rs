@@ -1,0 +1,205 @@
+//! The real binary on real files: exit codes, CSV columns, JSON shape, failed rows.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_modaltol"))
+}
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn check_summarises_the_governor() {
+    let o = run(&["check", example("governor.toml").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    assert!(s.contains("degrees of freedom: 1"), "{s}");
+    assert!(s.contains("constraints: 2 (2 equations)"), "{s}");
+    for name in [
+        "spindle",
+        "ball1",
+        "ball2",
+        "collar",
+        "link1",
+        "link2",
+        "spring_k",
+        "attach",
+        "ball_mass",
+    ] {
+        assert!(s.contains(name), "{name} missing from\n{s}");
+    }
+}
+
+#[test]
+fn sweep_writes_one_row_per_speed_and_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.csv");
+    let o = run(&[
+        "sweep",
+        example("spinning_universal_pendulum.toml")
+            .to_str()
+            .unwrap(),
+        "--speed",
+        "0:2:0.5",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = csv::Reader::from_path(&out).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    for c in [
+        "speed",
+        "mode",
+        "status",
+        "damped_frequency",
+        "natural_frequency",
+        "damping_ratio",
+        "eigen_re",
+        "eigen_im",
+        "q:spin",
+        "q:tilt_x",
+        "q:tilt_z",
+        "drive:spin",
+    ] {
+        assert!(
+            header.contains(&c.to_string()),
+            "{c} missing from {header:?}"
+        );
+    }
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    assert_eq!(rows.len(), 5 * 2);
+    for row in &rows {
+        let wd: f64 = row[3].parse().unwrap();
+        assert!(wd.is_finite() && wd > 0.0);
+        assert_eq!(&row[2], "underdamped");
+    }
+}
+
+#[test]
+fn sweep_to_stdout_and_from_the_model_range() {
+    let o = run(&[
+        "sweep",
+        example("rotating_pendulum.toml").to_str().unwrap(),
+        "--speed",
+        "0:1:0.5",
+    ]);
+    assert!(o.status.success());
+    let s = stdout(&o);
+    assert!(s.starts_with("speed,mode,status,"));
+    assert_eq!(s.lines().count(), 4);
+}
+
+#[test]
+fn modal_json_has_matrices_and_modes() {
+    let o = run(&[
+        "modal",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "1.595",
+        "--format",
+        "json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["speed"], 1.595);
+    assert_eq!(v["modes"].as_array().unwrap().len(), 1);
+    assert!(v["M"][0][0].as_f64().unwrap() > 0.0);
+    assert_eq!(v["equilibrium"]["coordinates"].as_array().unwrap().len(), 4);
+    assert_eq!(v["units"]["frequency"], "rad/s");
+}
+
+#[test]
+fn modal_table_with_chosen_independent_coordinate() {
+    let o = run(&[
+        "modal",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "2",
+        "--independent",
+        "slide",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("independent coordinates [slide]"));
+    let o = run(&[
+        "modal",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "2",
+        "--independent",
+        "spin",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("not a free joint coordinate"));
+}
+
+#[test]
+fn bad_model_exits_2_with_location() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("m.toml");
+    let text = std::fs::read_to_string(example("rotating_pendulum.toml"))
+        .unwrap()
+        .replace("mass = \"m\"", "mass = \"m +\"");
+    std::fs::write(&f, text).unwrap();
+    let o = run(&["check", f.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(e.contains("m.toml:23:"), "{e}");
+    assert!(e.contains("bad expression"), "{e}");
+    assert!(!e.contains("panicked"));
+}
+
+#[test]
+fn missing_file_and_bad_speed_range_are_input_errors() {
+    let o = run(&["check", "/nonexistent/model.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("cannot read the model file"));
+    let o = run(&[
+        "sweep",
+        example("rotating_pendulum.toml").to_str().unwrap(),
+        "--speed",
+        "3:1:0.1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("TO is below FROM"));
+}
+
+#[test]
+fn failed_speeds_are_rows_and_the_sweep_goes_on() {
+    // Division by zero at speed 0 only: that row fails, the others are solved.
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("m.toml");
+    let text = std::fs::read_to_string(example("rotating_pendulum.toml"))
+        .unwrap()
+        .replace("damping = \"c\"", "damping = \"c * speed / speed\"");
+    std::fs::write(&f, text).unwrap();
+    let o = run(&["sweep", f.to_str().unwrap(), "--speed", "0:1:0.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    let lines: Vec<&str> = s.lines().collect();
+    assert_eq!(lines.len(), 4);
+    assert!(lines[1].starts_with("0,1,failed,"), "{}", lines[1]);
+    assert!(
+        lines[1].contains("division by zero") && lines[1].contains("joint 'hinge' damping"),
+        "{}",
+        lines[1]
+    );
+    assert!(lines[2].contains("underdamped") && lines[3].contains("underdamped"));
+    assert!(stderr(&o).contains("1 of 3 speeds failed"));
+}

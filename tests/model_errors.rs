@@ -1,0 +1,272 @@
+//! Every validation error names the file, the line and column, and the offending item.
+
+use modaltol::model::{Model, ModelError};
+
+const BASE: &str = r#"gravity = [0, -9.81, 0]
+
+[parameters]
+m = 3.0
+L = { value = 1.0, tolerance = "3%" }
+
+[[bodies]]
+name = "shaft"
+mass = 0
+cm = [0, 0, 0]
+
+[[bodies]]
+name = "rod"
+mass = "m"
+inertia = ["m*L^2/12", 0, "m*L^2/12"]
+cm = [0, "-L/2", 0]
+
+[[joints]]
+name = "spin"
+type = "revolute"
+parent = "ground"
+child = "shaft"
+at = [0, 0, 0]
+axis = [0, 1, 0]
+drive = "speed"
+
+[[joints]]
+name = "hinge"
+type = "revolute"
+parent = "shaft"
+child = "rod"
+at = [0, 0, 0]
+axis = [0, 0, 1]
+damping = 3
+"#;
+
+/// Applies `from → to` to the base model and returns the error.
+fn err(from: &str, to: &str) -> ModelError {
+    assert!(
+        BASE.contains(from),
+        "test setup: '{from}' not in the base model"
+    );
+    let text = BASE.replacen(from, to, 1);
+    Model::from_str(&text, "bad.toml").expect_err("the model should be rejected")
+}
+
+/// Line (1-based) of the first occurrence of `needle` in `text`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+fn check(e: &ModelError, line: usize, column: Option<usize>, msg: &str) {
+    assert_eq!(e.file, "bad.toml");
+    assert_eq!(e.line, Some(line), "{e}");
+    if let Some(c) = column {
+        assert_eq!(e.column, Some(c), "{e}");
+    }
+    assert!(
+        e.message.contains(msg),
+        "message '{}' lacks '{msg}'",
+        e.message
+    );
+    let shown = e.to_string();
+    assert!(shown.starts_with(&format!("bad.toml:{line}:")), "{shown}");
+}
+
+#[test]
+fn base_model_is_valid() {
+    let m = Model::from_str(BASE, "ok.toml").unwrap();
+    assert_eq!(m.dof(), 1);
+}
+
+#[test]
+fn unknown_body_reference() {
+    let e = err("child = \"rod\"", "child = \"rdo\"");
+    check(
+        &e,
+        line_of(BASE, "child = \"rod\""),
+        Some(9),
+        "unknown body 'rdo'",
+    );
+}
+
+#[test]
+fn duplicate_names() {
+    let e = err("name = \"hinge\"", "name = \"spin\"");
+    check(
+        &e,
+        line_of(BASE, "name = \"hinge\""),
+        Some(8),
+        "duplicate joint name 'spin'",
+    );
+    let e = err("name = \"rod\"", "name = \"shaft\"");
+    check(
+        &e,
+        line_of(BASE, "name = \"rod\""),
+        Some(8),
+        "duplicate body name 'shaft'",
+    );
+}
+
+#[test]
+fn missing_field() {
+    let e = err("cm = [0, \"-L/2\", 0]\n", "");
+    assert!(e.message.contains("missing field `cm`"), "{e}");
+    assert!(e.line.is_some());
+}
+
+#[test]
+fn unknown_field_is_a_typo_not_ignored() {
+    let e = err("damping = 3", "dampign = 3");
+    check(
+        &e,
+        line_of(BASE, "damping = 3"),
+        Some(1),
+        "unknown field `dampign`",
+    );
+}
+
+#[test]
+fn bad_expression_points_into_the_string() {
+    let e = err("cm = [0, \"-L/2\", 0]", "cm = [0, \"-L/*2\", 0]");
+    // The '*' after '/' is at column 14 of `cm = [0, "-L/*2", 0]`.
+    check(
+        &e,
+        line_of(BASE, "cm = [0, \"-L/2\""),
+        Some(14),
+        "bad expression",
+    );
+    assert!(e.message.contains("body 'rod' cm[1]"), "{e}");
+}
+
+#[test]
+fn unknown_parameter() {
+    let e = err("mass = \"m\"", "mass = \"mass_rod\"");
+    check(
+        &e,
+        line_of(BASE, "mass = \"m\""),
+        Some(9),
+        "unknown parameter 'mass_rod'",
+    );
+}
+
+#[test]
+fn body_not_connected_to_ground() {
+    let e = err(
+        "[[joints]]\nname = \"hinge\"",
+        "[[bodies]]\nname = \"loose\"\nmass = 1\ncm = [0, 0, 0]\n\n[[joints]]\nname = \"hinge\"",
+    );
+    check(
+        &e,
+        line_of(BASE, "name = \"hinge\""),
+        None,
+        "body 'loose' is not connected to ground",
+    );
+}
+
+#[test]
+fn cycle_in_the_joint_tree() {
+    // spin: shaft's parent becomes rod, hinge: rod's parent is shaft → a cycle without ground.
+    let e = err("parent = \"ground\"", "parent = \"rod\"");
+    assert!(e.message.contains("cycle"), "{e}");
+    assert!(
+        e.message.contains("spin") && e.message.contains("hinge"),
+        "{e}"
+    );
+    assert!(e.line.is_some() && e.column.is_some());
+}
+
+#[test]
+fn zero_axis() {
+    let e = err("axis = [0, 0, 1]", "axis = [0, 0, \"L - 1\"]");
+    check(
+        &e,
+        line_of(BASE, "axis = [0, 0, 1]"),
+        Some(8),
+        "axis is zero",
+    );
+}
+
+#[test]
+fn more_constraints_than_coordinates() {
+    let extra = "\n[[constraints]]\nname = \"c1\"\ntype = \"distance\"\nbody1 = \"ground\"\npoint1 = [0, 0, 0]\nbody2 = \"rod\"\npoint2 = [0, -1, 0]\n\n[[constraints]]\nname = \"c2\"\ntype = \"distance\"\nbody1 = \"ground\"\npoint1 = [1, 0, 0]\nbody2 = \"rod\"\npoint2 = [0, -1, 0]\n";
+    let text = format!("{BASE}{extra}");
+    let e = Model::from_str(&text, "bad.toml").unwrap_err();
+    assert!(e.message.contains("no degree of freedom"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "name = \"c2\"") - 1));
+}
+
+#[test]
+fn non_finite_values() {
+    let e = err("damping = 3", "damping = nan");
+    check(&e, line_of(BASE, "damping = 3"), Some(11), "not finite");
+    let e = err("m = 3.0", "m = inf");
+    check(&e, line_of(BASE, "m = 3.0"), Some(5), "not finite");
+    let e = err("mass = \"m\"", "mass = \"exp(1000)\"");
+    check(&e, line_of(BASE, "mass = \"m\""), Some(8), "not finite");
+}
+
+#[test]
+fn division_by_zero_in_an_expression() {
+    let e = err("mass = \"m\"", "mass = \"m / (L - 1)\"");
+    check(
+        &e,
+        line_of(BASE, "mass = \"m\""),
+        Some(8),
+        "division by zero",
+    );
+}
+
+#[test]
+fn negative_mass() {
+    let e = err("mass = \"m\"", "mass = \"-m\"");
+    check(&e, line_of(BASE, "mass = \"m\""), Some(8), "negative mass");
+}
+
+#[test]
+fn inertia_not_positive_semidefinite() {
+    let e = err(
+        "inertia = [\"m*L^2/12\", 0, \"m*L^2/12\"]",
+        "inertia = [[1, 2, 0], [2, 1, 0], [0, 0, 1]]",
+    );
+    check(
+        &e,
+        line_of(BASE, "inertia = "),
+        Some(11),
+        "not positive semi-definite",
+    );
+    let e = err(
+        "inertia = [\"m*L^2/12\", 0, \"m*L^2/12\"]",
+        "inertia = [[1, 2, 0], [0, 1, 0], [0, 0, 1]]",
+    );
+    check(&e, line_of(BASE, "inertia = "), Some(11), "not symmetric");
+}
+
+#[test]
+fn syntax_errors_and_wrong_types() {
+    let e = err("m = 3.0", "m = 3.0.0");
+    assert_eq!(e.line, Some(line_of(BASE, "m = 3.0")));
+    let e = err("axis = [0, 0, 1]", "axis = [0, 0]");
+    check(
+        &e,
+        line_of(BASE, "axis = [0, 0, 1]"),
+        Some(8),
+        "expected 3 components",
+    );
+    let e = err(
+        "type = \"revolute\"\nparent = \"shaft\"",
+        "type = \"ball\"\nparent = \"shaft\"",
+    );
+    check(
+        &e,
+        line_of(BASE, "type = \"revolute\"\nparent = \"shaft\""),
+        Some(8),
+        "unknown type 'ball'",
+    );
+    let e = err("mass = 0", "mass = true");
+    assert!(e.message.contains("a number or an expression"), "{e}");
+}
+
+#[test]
+fn non_utf8_bytes() {
+    let mut bytes = BASE.as_bytes().to_vec();
+    let at = BASE.find("shaft").unwrap();
+    bytes[at] = 0xff;
+    let e = Model::from_bytes(&bytes, "bad.toml").unwrap_err();
+    check(&e, line_of(BASE, "shaft"), Some(9), "not valid UTF-8");
+}
