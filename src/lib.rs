@@ -8,6 +8,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod equilibrium;
+pub mod frf;
 pub mod linalg;
 pub mod linearize;
 pub mod mechanics;
@@ -15,4 +16,5 @@ pub mod modal;
 pub mod model;
 pub mod real;
 pub mod report;
+pub mod sensitivity;
 pub mod sweep;

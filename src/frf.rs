@@ -1,0 +1,71 @@
+//! Transfer functions of the linearised system.
+//!
+//! ```text
+//! H(jω) = R (K̂ − ω² M̂ + jω Ĉ)⁻¹ Rᵀ
+//! ```
+//!
+//! maps a generalised force on one free coordinate to the response of another (independent of
+//! the choice of basis `R`). For one degree of freedom this is Kim & Yoo (2007) eq. 25. The
+//! complex solve is done as the real block system `[A −B; B A]`, `A = K̂ − ω²M̂`, `B = ωĈ`, over
+//! any [`Real`], so the same function gives `H` and its exact derivatives (including the move of
+//! the equilibrium and of the basis `R`).
+
+use crate::linalg::solve;
+use crate::linearize::Linearization;
+use crate::real::{Real, cst};
+use nalgebra::DMatrix;
+
+/// A complex value over `T`.
+#[derive(Debug, Clone, Copy)]
+pub struct Complex<T> {
+    pub re: T,
+    pub im: T,
+}
+
+impl<T: Real> Complex<T> {
+    /// |H|.
+    pub fn magnitude(&self) -> T {
+        (self.re * self.re + self.im * self.im).sqrt()
+    }
+    /// arg H (rad).
+    pub fn phase(&self) -> T {
+        self.im.atan2(self.re)
+    }
+}
+
+/// `H(jω)` from a generalised force on coordinate `input` to the response of coordinate
+/// `output` (coordinate indices, both free). `None` when `input`/`output` is not free or the
+/// dynamic stiffness is singular (undamped resonance).
+pub fn transfer<T: Real>(
+    lin: &Linearization<T>,
+    input: usize,
+    output: usize,
+    omega: f64,
+) -> Option<Complex<T>> {
+    let i = lin.free.iter().position(|&c| c == input)?;
+    let o = lin.free.iter().position(|&c| c == output)?;
+    let n = lin.m.nrows();
+    let w = cst::<T>(omega);
+    let mut z = DMatrix::from_element(2 * n, 2 * n, cst::<T>(0.0));
+    for r in 0..n {
+        for c in 0..n {
+            let a = lin.k[(r, c)] - w * w * lin.m[(r, c)];
+            let b = w * lin.c[(r, c)];
+            z[(r, c)] = a;
+            z[(r + n, c + n)] = a;
+            z[(r, c + n)] = -b;
+            z[(r + n, c)] = b;
+        }
+    }
+    let mut rhs = DMatrix::from_element(2 * n, 1, cst::<T>(0.0));
+    for k in 0..n {
+        rhs[(k, 0)] = lin.basis[(i, k)];
+    }
+    let x = solve(&z, &rhs)?;
+    let (mut re, mut im) = (cst::<T>(0.0), cst::<T>(0.0));
+    for k in 0..n {
+        re += lin.basis[(o, k)] * x[(k, 0)];
+        im += lin.basis[(o, k)] * x[(k + n, 0)];
+    }
+    Some(Complex { re, im })
+}

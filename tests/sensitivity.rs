@@ -1,0 +1,291 @@
+//! Sensitivities: closed forms for the pendulum, AD against finite differences of the whole
+//! pipeline for every example, the governor's transfer peak, and why the left eigenvector matters.
+
+use modaltol::model::Model;
+use modaltol::sensitivity::{
+    Status, TransferAt, analytic, eigenvalue_derivative, finite_difference, nominal_transfer,
+};
+use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use num_dual::{Dual64, DualNum};
+
+const G: f64 = 9.80665;
+
+fn example(name: &str) -> Model {
+    Model::from_file(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn at(model: &Model, speed: f64) -> Point {
+    let p = model.nominal();
+    let q0 = initial_guess(model, &p, speed).unwrap();
+    point(model, &p, speed, &q0, &Options::default()).unwrap()
+}
+
+fn toleranced(model: &Model) -> Vec<usize> {
+    (0..model.parameters.len())
+        .filter(|&i| model.parameters[i].tolerance.is_some())
+        .collect()
+}
+
+/// Linearised closed form of the pendulum, I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0,
+/// differentiated in L with dual numbers: (ω_d, |H(jΩ)|, discriminant 4IK − c²).
+fn pendulum_closed_form(l: Dual64, w: f64) -> (Dual64, Dual64, f64) {
+    let (m, c) = (3.0, 3.0);
+    let i = l * l * (m / 3.0);
+    let k = if w * w <= 3.0 * G / (2.0 * l.re) {
+        l * (m * G / 2.0) - i * w * w
+    } else {
+        let cos = (l * w * w * 2.0).recip() * (3.0 * G);
+        i * w * w * (-cos * cos + 1.0)
+    };
+    let disc = i * k * 4.0 - c * c;
+    let wd = if disc.re > 0.0 {
+        disc.sqrt() / (i * 2.0)
+    } else {
+        Dual64::from_re(0.0)
+    };
+    let real = k - i * w * w;
+    let h = (real * real + (w * c) * (w * c)).sqrt().recip();
+    (wd, h, disc.re)
+}
+
+#[test]
+fn pendulum_sensitivities_match_closed_form() {
+    let model = example("rotating_pendulum.toml");
+    let tf = model.analysis.transfer.unwrap();
+    let l = model.parameter("L").unwrap();
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let critical = (1.5 * G).sqrt();
+    let resonance = (0.75 * G).sqrt();
+    let mut checked = 0;
+    for s in 0..=600 {
+        let w = s as f64 * 0.01;
+        let pt = sweep.step(w).unwrap();
+        let sens = analytic(
+            &model,
+            &model.nominal(),
+            &pt,
+            &[l],
+            Some(TransferAt::at_speed(&tf, w)),
+        )
+        .unwrap();
+        let (wd, h, disc) = pendulum_closed_form(Dual64::new(1.0, 1.0), w);
+        let v = &sens.variables[0];
+        let mode = &v.modes[0];
+        let mag = sens.transfer_magnitude.unwrap();
+        assert!(
+            (mag - h.re).abs() <= 1e-10 * h.re,
+            "Ω = {w}: |H| = {mag} vs {}",
+            h.re
+        );
+        let dh = v.d_transfer_magnitude.unwrap();
+        // d|H|/dL: relative 1e-8, with a floor at the rounding level of the terms it cancels.
+        assert!(
+            (dh - h.eps).abs() <= 1e-8 * h.eps.abs() + 1e-12 * h.re,
+            "Ω = {w}: d|H|/dL = {dh} vs {}",
+            h.eps
+        );
+        if disc.abs() < 0.05 || (w - critical).abs() < 0.01 {
+            continue; // class change: ω_d = √max(0, D) is not differentiable there
+        }
+        assert_eq!(mode.status, Status::Ok, "Ω = {w}");
+        assert!(
+            (mode.d_damped_frequency - wd.eps).abs() <= 1e-8 * wd.eps.abs() + 1e-12,
+            "Ω = {w}: dω_d/dL = {} vs {}",
+            mode.d_damped_frequency,
+            wd.eps
+        );
+        checked += 1;
+    }
+    assert!(checked > 500);
+    // The paper's observation: the length tolerance does not move |H| at the undamped
+    // synchronous resonance √(3g/4L), nor anywhere on the swung-out branch.
+    for w in [resonance, 4.2, 5.0, 6.0] {
+        let pt = at(&model, w);
+        let sens = analytic(
+            &model,
+            &model.nominal(),
+            &pt,
+            &[l],
+            Some(TransferAt::at_speed(&tf, w)),
+        )
+        .unwrap();
+        let dh = sens.variables[0].d_transfer_magnitude.unwrap();
+        assert!(dh.abs() < 1e-12, "Ω = {w}: d|H|/dL = {dh}");
+    }
+}
+
+#[test]
+fn overdamped_roots_coalescing_are_flagged_not_differentiated() {
+    let model = example("rotating_pendulum.toml");
+    let l = model.parameter("L").unwrap();
+    // Critical damping on the hanging branch: Ω² = 3g/2L − c²/(4I²).
+    let w = (1.5 * G - 2.25f64).sqrt();
+    let pt = at(&model, w);
+    let sens = analytic(&model, &model.nominal(), &pt, &[l], None).unwrap();
+    assert_eq!(sens.variables[0].modes[0].status, Status::NotDifferentiable);
+}
+
+/// |a − b| within 1e-6 relative, with an absolute floor for quantities that vanish.
+fn agree(a: f64, b: f64, floor: f64) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + floor
+}
+
+#[test]
+fn automatic_and_finite_differences_agree_for_every_example() {
+    for (file, from, to) in [
+        ("rotating_pendulum.toml", 0.1, 6.0),
+        ("governor.toml", 0.2, 12.0),
+        ("spinning_universal_pendulum.toml", 0.0, 6.0),
+    ] {
+        let model = example(file);
+        let tf = model.analysis.transfer.unwrap();
+        let wrt = toleranced(&model);
+        let p = model.nominal();
+        let mut sweep = Sweep::new(&model, p.clone(), Options::default());
+        let mut compared = 0;
+        for s in 0..20 {
+            let w = from + (to - from) * s as f64 / 19.0;
+            let pt = sweep.step(w).unwrap();
+            let t = Some(TransferAt::at_speed(&tf, w));
+            let a = analytic(&model, &p, &pt, &wrt, t).unwrap();
+            let f = finite_difference(&model, &p, &pt, &wrt, t).unwrap();
+            let hmag = a.transfer_magnitude.unwrap();
+            for (va, vf) in a.variables.iter().zip(&f.variables) {
+                let b = p[va.param].abs();
+                let name = &model.parameters[va.param].name;
+                match (va.d_transfer_magnitude, vf.d_transfer_magnitude) {
+                    (Some(ha), Some(hf)) => assert!(
+                        agree(ha, hf, 1e-9 * hmag / b + 1e-15),
+                        "{file} Ω = {w} d|H|/d{name}: AD {ha} FD {hf}"
+                    ),
+                    (None, _) => assert!(
+                        hmag < 1e-12,
+                        "{file} Ω = {w}: d|H|/d{name} missing though |H| = {hmag}"
+                    ),
+                    (Some(ha), None) => {
+                        panic!("{file} Ω = {w}: FD has no d|H|/d{name}, AD says {ha}")
+                    }
+                }
+                for (k, (ma, mf)) in va.modes.iter().zip(&vf.modes).enumerate() {
+                    if ma.status != Status::Ok || mf.status != Status::Ok {
+                        continue;
+                    }
+                    let wn = pt.modes[k].natural_frequency;
+                    for (what, x, y, floor) in [
+                        (
+                            "dω_d",
+                            ma.d_damped_frequency,
+                            mf.d_damped_frequency,
+                            1e-9 * wn / b,
+                        ),
+                        (
+                            "dω_n",
+                            ma.d_natural_frequency,
+                            mf.d_natural_frequency,
+                            1e-9 * wn / b,
+                        ),
+                        ("dζ", ma.d_damping_ratio, mf.d_damping_ratio, 1e-9 / b),
+                        ("dRe λ", ma.d_eigen_re, mf.d_eigen_re, 1e-9 * wn / b),
+                    ] {
+                        assert!(
+                            agree(x, y, floor),
+                            "{file} Ω = {w} mode {} {what}/d{name}: AD {x} FD {y}",
+                            k + 1
+                        );
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert!(
+            compared >= 20 * toleranced(&model).len() / 2,
+            "{file}: only {compared} comparisons"
+        );
+    }
+}
+
+#[test]
+fn governor_transfer_peaks_at_1_595() {
+    let model = example("governor.toml");
+    let tf = model.analysis.transfer.unwrap();
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let mut best = (0.0, 0.0);
+    for i in 0..=600 {
+        let w = 1.3 + i as f64 * 0.001;
+        let pt = sweep.step(w).unwrap();
+        let h = nominal_transfer(&pt, &TransferAt::at_speed(&tf, w))
+            .unwrap()
+            .magnitude();
+        if h > best.1 {
+            best = (w, h);
+        }
+    }
+    assert!((best.0 - 1.595).abs() <= 0.002, "peak at {} rad/s", best.0);
+}
+
+#[test]
+fn gyroscopic_example_needs_the_left_eigenvector() {
+    let model = example("spinning_universal_pendulum.toml");
+    let p = model.nominal();
+    let wrt = toleranced(&model);
+    let pt = at(&model, 4.0);
+    let f = finite_difference(&model, &p, &pt, &wrt, None).unwrap();
+    let a = analytic(&model, &p, &pt, &wrt, None).unwrap();
+    let mut worst_symmetric = 0.0f64;
+    for (k, &b) in wrt.iter().enumerate() {
+        // Re-derive M̂', Ĉ', K̂' by central differences to feed both formulas.
+        let h = 1e-6 * p[b].abs();
+        let lin = |s: f64| {
+            let mut pp = p.clone();
+            pp[b] += s * h;
+            let o = Options {
+                independent: Some(pt.linear.independent.clone()),
+                no_branch_switch: true,
+                ..Default::default()
+            };
+            point(&model, &pp, 4.0, &pt.equilibrium.q, &o)
+                .unwrap()
+                .linear
+        };
+        let (lp, lm) = (lin(1.0), lin(-1.0));
+        let d = |x: &nalgebra::DMatrix<f64>, y: &nalgebra::DMatrix<f64>| (x - y) / (2.0 * h);
+        let (dm, dc, dk) = (d(&lp.m, &lm.m), d(&lp.c, &lm.c), d(&lp.k, &lm.k));
+        for (j, mode) in pt.modes.iter().enumerate() {
+            let r = &mode.root;
+            let proper = eigenvalue_derivative(
+                r.lambda,
+                &r.right,
+                &r.left,
+                (&pt.linear.m, &pt.linear.c),
+                (&dm, &dc, &dk),
+            );
+            let symmetric = eigenvalue_derivative(
+                r.lambda,
+                &r.right,
+                &r.right,
+                (&pt.linear.m, &pt.linear.c),
+                (&dm, &dc, &dk),
+            );
+            let fd = f.variables[k].modes[j].d_damped_frequency;
+            assert!(
+                agree(a.variables[k].modes[j].d_damped_frequency, fd, 1e-9),
+                "AD vs FD"
+            );
+            assert!(
+                (proper.im - fd).abs() <= 1e-5 * fd.abs().max(1e-3),
+                "left-vector formula {} vs FD {fd}",
+                proper.im
+            );
+            worst_symmetric = worst_symmetric.max((symmetric.im - fd).abs() / fd.abs().max(1e-3));
+        }
+    }
+    assert!(
+        worst_symmetric > 1e-2,
+        "the symmetric formula φᵀ(…)φ should be visibly wrong here, off by only {worst_symmetric}"
+    );
+}
