@@ -3,9 +3,11 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
-use modaltol::model::{Model, SpeedRange};
-use modaltol::report;
-use modaltol::sweep::{Options, Sweep, initial_guess, point};
+use modaltol::frf::transfer;
+use modaltol::model::{Model, SpeedRange, Transfer};
+use modaltol::report::{self, SweepColumns, SweepExtras};
+use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
+use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
@@ -29,6 +31,14 @@ struct Cli {
 enum Format {
     Table,
     Json,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum Derivatives {
+    /// Exact, by automatic differentiation through the equilibrium (default).
+    Ad,
+    /// Central finite differences of the whole pipeline, Richardson-extrapolated (a cross-check).
+    Fd,
 }
 
 #[derive(Subcommand)]
@@ -61,8 +71,13 @@ enum Command {
     /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
     /// (underdamped|overdamped|unstable|failed), damped_frequency, natural_frequency (rad/s),
     /// damping_ratio, eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
-    /// partner root), q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force,
-    /// N·m or N), iterations (Newton), message (why a speed failed, or a branch switch).
+    /// partner root); with --transfer: transfer_magnitude (output unit per input unit, e.g.
+    /// rad/(N·m) or m/N), transfer_phase (rad); with --sensitivity, for every design variable P:
+    /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with
+    /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
+    /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
+    /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
+    /// iterations (Newton), message (why a speed failed, or a branch switch).
     Sweep {
         /// Model file (TOML).
         model: PathBuf,
@@ -72,9 +87,75 @@ enum Command {
         /// Independent coordinates (joint names, comma separated), overriding the model.
         #[arg(long, value_delimiter = ',')]
         independent: Option<Vec<String>>,
+        /// Transfer function `input=JOINT,output=JOINT[,order=K]`: generalised force on `input`,
+        /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
+        /// uses the model's [analysis] transfer.
+        #[arg(long)]
+        transfer: Option<String>,
+        /// Add the derivatives of every mode (and of |H|) with respect to the design variables.
+        #[arg(long)]
+        sensitivity: bool,
+        /// Design variables (parameter names, comma separated); default: those with a tolerance.
+        #[arg(long, value_delimiter = ',')]
+        wrt: Option<Vec<String>>,
+        /// How derivatives are computed.
+        #[arg(long, value_enum, default_value = "ad")]
+        derivatives: Derivatives,
         /// Write the CSV to this file instead of stdout.
         #[arg(short, long)]
         output: Option<PathBuf>,
+    },
+    /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
+    /// the design variables at one speed, through the move of the equilibrium.
+    Sensitivity {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Operating speed, rad/s.
+        #[arg(long, allow_hyphen_values = true)]
+        speed: f64,
+        /// Design variables (parameter names, comma separated); default: those with a tolerance.
+        #[arg(long, value_delimiter = ',')]
+        wrt: Option<Vec<String>>,
+        /// How derivatives are computed.
+        #[arg(long, value_enum, default_value = "ad")]
+        derivatives: Derivatives,
+        /// Transfer function `input=JOINT,output=JOINT[,order=K]`; default: the model's.
+        #[arg(long)]
+        transfer: Option<String>,
+        /// Output format.
+        #[arg(long, value_enum, default_value = "table")]
+        format: Format,
+        /// Write to this file instead of stdout.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Frequency response at one speed: H(jω) from a generalised force on one joint coordinate
+    /// to the response of another, over a range of excitation frequencies.
+    ///
+    /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
+    /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
+    /// derivative).
+    Frf {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Operating speed, rad/s.
+        #[arg(long, allow_hyphen_values = true)]
+        speed: f64,
+        /// Joint whose coordinate receives the generalised force.
+        #[arg(long)]
+        input: String,
+        /// Joint whose coordinate is the response.
+        #[arg(long)]
+        output: String,
+        /// Excitation frequencies FROM:TO:STEP in rad/s.
+        #[arg(long)]
+        freq: String,
+        /// Design variables (parameter names, comma separated); default: those with a tolerance.
+        #[arg(long, value_delimiter = ',')]
+        wrt: Option<Vec<String>>,
+        /// Write the CSV to this file instead of stdout.
+        #[arg(short = 'o', long = "out")]
+        out: Option<PathBuf>,
     },
 }
 
@@ -110,6 +191,84 @@ fn independent(model: &Model, names: &Option<Vec<String>>) -> Result<Option<Vec<
         .into());
     }
     Ok(Some(out))
+}
+
+/// Design variables by name, or those with a tolerance.
+fn design_variables(model: &Model, names: &Option<Vec<String>>) -> Result<Vec<usize>> {
+    match names {
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                model
+                    .parameter(n)
+                    .ok_or_else(|| InputError(format!("--wrt: unknown parameter '{n}'")).into())
+            })
+            .collect(),
+        None => Ok((0..model.parameters.len())
+            .filter(|&i| model.parameters[i].tolerance.is_some())
+            .collect()),
+    }
+}
+
+/// Parses `input=J,output=J[,order=K]` (or `model` for the model's own transfer function).
+fn parse_transfer(model: &Model, spec: &str) -> Result<Transfer> {
+    if spec == "model" {
+        return model.analysis.transfer.ok_or_else(|| {
+            InputError("--transfer model: the model declares no [analysis] transfer".into()).into()
+        });
+    }
+    let (mut input, mut output, mut order) = (None, None, 1.0);
+    for part in spec.split(',') {
+        let (k, v) = part
+            .split_once('=')
+            .ok_or_else(|| InputError(format!("--transfer: '{part}' is not key=value")))?;
+        let coord = |v: &str| {
+            model
+                .coordinate(v.trim())
+                .filter(|&i| !model.coordinates[i].driven)
+                .ok_or_else(|| {
+                    InputError(format!("--transfer: '{v}' is not a free joint coordinate"))
+                })
+        };
+        match k.trim() {
+            "input" => input = Some(coord(v)?),
+            "output" => output = Some(coord(v)?),
+            "order" => {
+                order = v
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|o| o.is_finite() && *o >= 0.0)
+                    .ok_or_else(|| {
+                        InputError(format!("--transfer: order '{v}' must be a number ≥ 0"))
+                    })?
+            }
+            _ => {
+                return Err(InputError(format!(
+                    "--transfer: unknown key '{k}' (input, output, order)"
+                ))
+                .into());
+            }
+        }
+    }
+    Ok(Transfer {
+        input: input.ok_or_else(|| InputError("--transfer needs input=JOINT".into()))?,
+        output: output.ok_or_else(|| InputError("--transfer needs output=JOINT".into()))?,
+        order,
+    })
+}
+
+fn sensitivities(
+    m: &Model,
+    pt: &Point,
+    wrt: &[usize],
+    tf: Option<TransferAt>,
+    how: Derivatives,
+) -> Result<sensitivity::Sensitivity, modaltol::sweep::PointError> {
+    match how {
+        Derivatives::Ad => sensitivity::analytic(m, &m.nominal(), pt, wrt, tf),
+        Derivatives::Fd => sensitivity::finite_difference(m, &m.nominal(), pt, wrt, tf),
+    }
 }
 
 fn writer(output: &Option<PathBuf>) -> Result<Box<dyn Write>> {
@@ -163,6 +322,10 @@ fn run(cli: Cli) -> Result<()> {
             model,
             speed,
             independent: ind,
+            transfer: tspec,
+            sensitivity: sens,
+            wrt,
+            derivatives,
             output,
         } => {
             let m = load(&model)?;
@@ -172,22 +335,45 @@ fn run(cli: Cli) -> Result<()> {
                     InputError("no --speed given and the model has no [analysis] speed".into())
                 })?,
             };
+            let tf = tspec
+                .as_deref()
+                .map(|s| parse_transfer(&m, s))
+                .transpose()?;
+            let cols = SweepColumns {
+                transfer: tf.is_some(),
+                wrt: if sens {
+                    design_variables(&m, &wrt)?
+                } else {
+                    Vec::new()
+                },
+            };
             let opt = Options {
                 independent: independent(&m, &ind)?,
                 ..Default::default()
             };
             let mut sweep = Sweep::new(&m, m.nominal(), opt);
             let mut csv = csv::Writer::from_writer(writer(&output)?);
-            csv.write_record(report::sweep_header(&m))?;
+            csv.write_record(report::sweep_header(&m, &cols))?;
             let n = range.len();
             let progress = std::io::stderr().is_terminal() && n >= 2000;
             let mut failed = 0usize;
             for (i, w) in range.speeds().enumerate() {
-                let r = sweep.step(w);
+                let mut r = sweep.step(w);
+                let mut extras = SweepExtras::default();
+                if let Ok(pt) = &r {
+                    let t = tf.map(|t| TransferAt::at_speed(&t, w));
+                    extras.transfer = t.and_then(|t| sensitivity::nominal_transfer(pt, &t));
+                    if !cols.wrt.is_empty() {
+                        match sensitivities(&m, pt, &cols.wrt, t, derivatives) {
+                            Ok(s) => extras.sensitivity = Some(s),
+                            Err(e) => r = Err(e),
+                        }
+                    }
+                }
                 if r.is_err() {
                     failed += 1;
                 }
-                for row in report::sweep_rows(&m, w, &r) {
+                for row in report::sweep_rows(&m, &cols, w, &r, &extras) {
                     csv.write_record(&row)?;
                 }
                 if progress && i % 500 == 0 {
@@ -203,6 +389,104 @@ fn run(cli: Cli) -> Result<()> {
                     "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
                 );
             }
+        }
+        Command::Sensitivity {
+            model,
+            speed,
+            wrt,
+            derivatives,
+            transfer: tspec,
+            format,
+            output,
+        } => {
+            let m = load(&model)?;
+            if !speed.is_finite() {
+                return Err(InputError("--speed must be finite".into()).into());
+            }
+            let wrt = design_variables(&m, &wrt)?;
+            let tf = match tspec.as_deref() {
+                Some(s) => Some(parse_transfer(&m, s)?),
+                None => m.analysis.transfer,
+            };
+            let p = m.nominal();
+            let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+            let pt = point(&m, &p, speed, &q0, &Options::default())
+                .with_context(|| format!("speed {speed} rad/s"))?;
+            let s = sensitivities(
+                &m,
+                &pt,
+                &wrt,
+                tf.map(|t| TransferAt::at_speed(&t, speed)),
+                derivatives,
+            )
+            .with_context(|| format!("sensitivities at {speed} rad/s"))?;
+            let method = if derivatives == Derivatives::Ad {
+                "ad"
+            } else {
+                "fd"
+            };
+            let mut w = writer(&output)?;
+            match format {
+                Format::Json => writeln!(
+                    w,
+                    "{}",
+                    serde_json::to_string_pretty(&report::sensitivity_json(
+                        &m, speed, method, &pt, &s
+                    ))?
+                )?,
+                Format::Table => write!(
+                    w,
+                    "{}",
+                    report::sensitivity_table(&m, speed, method, &pt, &s)
+                )?,
+            }
+            w.flush()?;
+        }
+        Command::Frf {
+            model,
+            speed,
+            input,
+            output,
+            freq,
+            wrt,
+            out,
+        } => {
+            let m = load(&model)?;
+            let tf = parse_transfer(&m, &format!("input={input},output={output}"))?;
+            let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
+            let wrt = design_variables(&m, &wrt)?;
+            let p = m.nominal();
+            let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+            let pt = point(&m, &p, speed, &q0, &Options::default())
+                .with_context(|| format!("speed {speed} rad/s"))?;
+            let duals = dual_linearizations(&m, &p, &pt, &wrt)
+                .with_context(|| format!("sensitivities at {speed} rad/s"))?;
+            let mut csv = csv::Writer::from_writer(writer(&out)?);
+            let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect();
+            header.extend(
+                wrt.iter()
+                    .map(|&b| format!("d(magnitude)/d({})", m.parameters[b].name)),
+            );
+            csv.write_record(&header)?;
+            for f in range.speeds() {
+                let mut row = vec![f.to_string()];
+                match transfer(&pt.linear, tf.input, tf.output, f) {
+                    Some(h) => {
+                        row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string()))
+                    }
+                    None => row.extend(std::iter::repeat_n(String::new(), 4)),
+                }
+                for d in &duals {
+                    let v = transfer(&d.linear, tf.input, tf.output, f)
+                        .and_then(|h| transfer_derivative(&h).0);
+                    row.push(v.map_or(String::new(), |x| x.to_string()));
+                }
+                csv.write_record(&row)?;
+            }
+            csv.flush()?;
         }
     }
     Ok(())

@@ -4,7 +4,9 @@
 //! Units: speeds and frequencies in rad/s, angles in rad, translations in m, drive forces in
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
+use crate::frf::Complex;
 use crate::model::{JointKind, Model};
+use crate::sensitivity::{Sensitivity, Status as SensStatus};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 use serde_json::{Value, json};
@@ -26,8 +28,29 @@ pub fn force_unit(kind: JointKind) -> &'static str {
     }
 }
 
+/// Optional column groups of the sweep CSV.
+#[derive(Debug, Clone, Default)]
+pub struct SweepColumns {
+    /// Add `transfer_magnitude,transfer_phase`.
+    pub transfer: bool,
+    /// Design variables (parameter indices) for `d(…)/d(P)` columns; empty: none.
+    pub wrt: Vec<usize>,
+}
+
+/// Transfer function and sensitivities at one speed, for the optional sweep columns.
+#[derive(Debug, Clone, Default)]
+pub struct SweepExtras {
+    pub transfer: Option<Complex<f64>>,
+    pub sensitivity: Option<Sensitivity>,
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.filter(|x| x.is_finite())
+        .map_or(String::new(), |x| x.to_string())
+}
+
 /// Header of the sweep CSV.
-pub fn sweep_header(model: &Model) -> Vec<String> {
+pub fn sweep_header(model: &Model, cols: &SweepColumns) -> Vec<String> {
     let mut h: Vec<String> = [
         "speed",
         "mode",
@@ -43,6 +66,22 @@ pub fn sweep_header(model: &Model) -> Vec<String> {
     .iter()
     .map(|s| s.to_string())
     .collect();
+    if cols.transfer {
+        h.push("transfer_magnitude".into());
+        h.push("transfer_phase".into());
+    }
+    for &b in &cols.wrt {
+        let p = &model.parameters[b].name;
+        h.push(format!("d(damped_frequency)/d({p})"));
+        h.push(format!("d(natural_frequency)/d({p})"));
+        h.push(format!("d(damping_ratio)/d({p})"));
+        if cols.transfer {
+            h.push(format!("d(transfer_magnitude)/d({p})"));
+        }
+    }
+    if !cols.wrt.is_empty() {
+        h.push("sensitivity_status".into());
+    }
     h.extend(model.coordinates.iter().map(|c| format!("q:{}", c.name)));
     h.extend(
         model
@@ -56,13 +95,16 @@ pub fn sweep_header(model: &Model) -> Vec<String> {
 }
 
 /// Rows of the sweep CSV for one speed: one per mode (a failed speed gets one `failed` row per
-/// degree of freedom, with the reason).
+/// degree of freedom, with the reason). Derivatives that do not exist are left empty and
+/// `sensitivity_status` says `not_differentiable`.
 pub fn sweep_rows(
     model: &Model,
+    cols: &SweepColumns,
     speed: f64,
     result: &Result<Point, PointError>,
+    extras: &SweepExtras,
 ) -> Vec<Vec<String>> {
-    let ncols = sweep_header(model).len();
+    let ncols = sweep_header(model, cols).len();
     match result {
         Ok(p) => p
             .modes
@@ -81,6 +123,32 @@ pub fn sweep_rows(
                     m.partner.lambda.re.to_string(),
                     m.partner.lambda.im.to_string(),
                 ];
+                if cols.transfer {
+                    r.push(opt(extras.transfer.map(|h| h.magnitude())));
+                    r.push(opt(extras.transfer.map(|h| h.phase())));
+                }
+                if !cols.wrt.is_empty() {
+                    let mut status = "ok";
+                    for (k, _) in cols.wrt.iter().enumerate() {
+                        let v = extras.sensitivity.as_ref().map(|s| &s.variables[k]);
+                        let ms = v.map(|v| &v.modes[i]);
+                        let ok = ms.is_some_and(|m| m.status == SensStatus::Ok);
+                        if !ok {
+                            status = "not_differentiable";
+                        }
+                        r.push(opt(ms.filter(|_| ok).map(|m| m.d_damped_frequency)));
+                        r.push(opt(ms.filter(|_| ok).map(|m| m.d_natural_frequency)));
+                        r.push(opt(ms.filter(|_| ok).map(|m| m.d_damping_ratio)));
+                        if cols.transfer {
+                            let d = v.and_then(|v| v.d_transfer_magnitude);
+                            if d.is_none() {
+                                status = "not_differentiable";
+                            }
+                            r.push(opt(d));
+                        }
+                    }
+                    r.push(status.into());
+                }
                 r.extend(p.equilibrium.q.iter().map(|v| v.to_string()));
                 r.extend(
                     model
@@ -104,6 +172,110 @@ pub fn sweep_rows(
             })
             .collect(),
     }
+}
+
+/// The `sensitivity` result as JSON.
+pub fn sensitivity_json(
+    model: &Model,
+    speed: f64,
+    method: &str,
+    pt: &Point,
+    s: &Sensitivity,
+) -> Value {
+    let vars: Vec<Value> = s
+        .variables
+        .iter()
+        .map(|v| {
+            let p = &model.parameters[v.param];
+            json!({
+                "parameter": p.name, "value": p.value,
+                "d_transfer_magnitude": v.d_transfer_magnitude, "d_transfer_phase": v.d_transfer_phase,
+                "d_equilibrium": model.coordinates.iter().zip(&v.d_equilibrium).map(|(c, d)| json!({"name": c.name, "value": d})).collect::<Vec<_>>(),
+                "modes": v.modes.iter().enumerate().map(|(i, m)| {
+                    let ok = m.status == SensStatus::Ok;
+                    json!({"mode": i + 1, "status": m.status,
+                           "d_damped_frequency": ok.then_some(m.d_damped_frequency),
+                           "d_natural_frequency": ok.then_some(m.d_natural_frequency),
+                           "d_damping_ratio": ok.then_some(m.d_damping_ratio),
+                           "d_eigen_re": m.d_eigen_re, "d_eigen_im": m.d_eigen_im})
+                }).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    json!({
+        "model": model.name, "speed": speed, "derivatives": method,
+        "units": {"frequency": "rad/s", "derivative": "quantity unit per parameter unit"},
+        "modes": pt.modes.iter().enumerate().map(|(i, m)| json!({"mode": i + 1, "status": m.class.as_str(),
+            "damped_frequency": m.damped_frequency, "natural_frequency": m.natural_frequency, "damping_ratio": m.damping_ratio})).collect::<Vec<_>>(),
+        "transfer_magnitude": s.transfer_magnitude, "transfer_phase": s.transfer_phase,
+        "variables": vars,
+    })
+}
+
+/// The `sensitivity` result as a text table.
+pub fn sensitivity_table(
+    model: &Model,
+    speed: f64,
+    method: &str,
+    pt: &Point,
+    s: &Sensitivity,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "model: {}    speed: {speed} rad/s    derivatives: {method}",
+        model.name
+    );
+    if let (Some(h), Some(ph)) = (s.transfer_magnitude, s.transfer_phase) {
+        let _ = writeln!(out, "transfer |H| = {h:.8e}, arg H = {ph:.6} rad");
+    }
+    for (i, m) in pt.modes.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "\nmode {} ({}): ω_d = {:.8} rad/s, ω_n = {:.8} rad/s, ζ = {:.6}",
+            i + 1,
+            m.class.as_str(),
+            m.damped_frequency,
+            m.natural_frequency,
+            m.damping_ratio
+        );
+        let _ = writeln!(
+            out,
+            "  {:<14} {:>16} {:>16} {:>16} {:>16}",
+            "parameter", "dω_d/dP", "dω_n/dP", "dζ/dP", "d|H|/dP"
+        );
+        for v in &s.variables {
+            let ms = &v.modes[i];
+            let f = |x: f64| {
+                if ms.status == SensStatus::Ok {
+                    format!("{x:>16.8e}")
+                } else {
+                    format!("{:>16}", "n/a")
+                }
+            };
+            let dh = v
+                .d_transfer_magnitude
+                .map_or(format!("{:>16}", "-"), |x| format!("{x:>16.8e}"));
+            let _ = writeln!(
+                out,
+                "  {:<14} {} {} {} {dh}",
+                model.parameters[v.param].name,
+                f(ms.d_damped_frequency),
+                f(ms.d_natural_frequency),
+                f(ms.d_damping_ratio)
+            );
+        }
+        if s.variables
+            .iter()
+            .any(|v| v.modes[i].status != SensStatus::Ok)
+        {
+            let _ = writeln!(
+                out,
+                "  n/a: roots coalescing or the mode changes class here; ω_d is not differentiable"
+            );
+        }
+    }
+    out
 }
 
 fn matrix(m: &DMatrix<f64>) -> Value {

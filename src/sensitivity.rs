@@ -28,7 +28,7 @@
 
 use crate::equilibrium::{Problem, equations};
 use crate::frf::{Complex, transfer};
-use crate::linearize::linearize;
+use crate::linearize::{Linearization, linearize};
 use crate::mechanics::System;
 use crate::mechanics::dynamics::Lifted;
 use crate::modal::{C64, Mode, similarity};
@@ -154,14 +154,22 @@ pub fn eigenvalue_derivative(
     -a / b
 }
 
-/// Exact sensitivities by automatic differentiation through the equilibrium.
-pub fn analytic(
+/// The linearisation over dual numbers seeded along one design variable, with the equilibrium
+/// shift `dq*/db` (all coordinates).
+pub struct DualLinearization {
+    pub param: usize,
+    pub linear: Linearization<Dual64>,
+    pub d_equilibrium: Vec<f64>,
+}
+
+/// `M̂, Ĉ, K̂` (and `R`) over dual numbers for each design variable in `wrt`: the equilibrium
+/// shift by the implicit function theorem, then one dual-number linearisation.
+pub fn dual_linearizations(
     model: &Model,
     p: &[f64],
     pt: &Point,
     wrt: &[usize],
-    tf: Option<TransferAt>,
-) -> Result<Sensitivity, PointError> {
+) -> Result<Vec<DualLinearization>, PointError> {
     let speed = pt.speed;
     let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
@@ -170,8 +178,7 @@ pub fn analytic(
     let (_, jac) = problem.residual_and_jacobian(&eq.q, &eq.lambda);
     let lu = jac.lu();
     let free = &pt.linear.free;
-    let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
-    let mut variables = Vec::with_capacity(wrt.len());
+    let mut out = Vec::with_capacity(wrt.len());
     for &b in wrt {
         let pd: Vec<Dual64> = p
             .iter()
@@ -197,7 +204,7 @@ pub fn analytic(
         let lambda: Vec<Dual64> = (0..eq.lambda.len())
             .map(|k| Dual64::new(eq.lambda[k], dx[free.len() + k]))
             .collect();
-        let lin = linearize(
+        let linear = linearize(
             &Lifted::new(sysd.map(lift1)),
             free,
             &q,
@@ -205,6 +212,48 @@ pub fn analytic(
             &lambda,
             &pt.linear.independent,
         )?;
+        out.push(DualLinearization {
+            param: b,
+            linear,
+            d_equilibrium: dq,
+        });
+    }
+    Ok(out)
+}
+
+/// d|H|/db and d(arg H)/db from `H` over dual numbers; `None` where the derivative does not
+/// exist (`H` passing through zero).
+pub fn transfer_derivative(h: &Complex<Dual64>) -> (Option<f64>, Option<f64>) {
+    let mag = h.magnitude();
+    if mag.re > 0.0 {
+        (
+            Some(mag.eps).filter(|v| v.is_finite()),
+            Some(h.phase().eps).filter(|v| v.is_finite()),
+        )
+    } else if h.re.eps == 0.0 && h.im.eps == 0.0 {
+        // H ≡ 0 to first order: |H| = o(Δb), its derivative is 0; the phase is undefined.
+        (Some(0.0), None)
+    } else {
+        (None, None)
+    }
+}
+
+/// Exact sensitivities by automatic differentiation through the equilibrium.
+pub fn analytic(
+    model: &Model,
+    p: &[f64],
+    pt: &Point,
+    wrt: &[usize],
+    tf: Option<TransferAt>,
+) -> Result<Sensitivity, PointError> {
+    let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
+    let mut variables = Vec::with_capacity(wrt.len());
+    for DualLinearization {
+        param: b,
+        linear: lin,
+        d_equilibrium: dq,
+    } in dual_linearizations(model, p, pt, wrt)?
+    {
         let eps = |a: &DMatrix<Dual64>| a.map(|v| v.eps);
         let (dm, dc, dk) = (eps(&lin.m), eps(&lin.c), eps(&lin.k));
         let (m, c) = (&pt.linear.m, &pt.linear.c);
@@ -229,22 +278,11 @@ pub fn analytic(
                 mode_derivative(md, d1, d2)
             })
             .collect();
-        let (mut dmag, mut dphase) = (None, None);
-        if let (Some(t), Some(_)) = (tf, nominal)
-            && let Some(h) = transfer(&lin, t.input, t.output, t.omega)
-        {
-            {
-                let mag = h.magnitude();
-                if mag.re > 0.0 {
-                    dmag = Some(mag.eps).filter(|v| v.is_finite());
-                    dphase = Some(h.phase().eps).filter(|v| v.is_finite());
-                } else if h.re.eps == 0.0 && h.im.eps == 0.0 {
-                    // H ≡ 0 to first order: |H| = o(Δb), its derivative is 0; the phase is undefined.
-                    dmag = Some(0.0);
-                }
-                // Otherwise H passes through 0: |H| has a kink, no derivative (None).
-            }
-        }
+        let (dmag, dphase) = match (tf, nominal) {
+            (Some(t), Some(_)) => transfer(&lin, t.input, t.output, t.omega)
+                .map_or((None, None), |h| transfer_derivative(&h)),
+            _ => (None, None),
+        };
         variables.push(VariableSensitivity {
             param: b,
             modes,

@@ -203,3 +203,112 @@ fn failed_speeds_are_rows_and_the_sweep_goes_on() {
     assert!(lines[2].contains("underdamped") && lines[3].contains("underdamped"));
     assert!(stderr(&o).contains("1 of 3 speeds failed"));
 }
+
+#[test]
+fn sweep_with_transfer_and_sensitivity_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.csv");
+    let o = run(&[
+        "sweep",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "1:2:0.5",
+        "--sensitivity",
+        "--transfer",
+        "input=slide,output=slide",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = csv::Reader::from_path(&out).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    for p in ["ball_mass", "spring_k", "attach"] {
+        for q in ["damped_frequency", "damping_ratio", "transfer_magnitude"] {
+            assert!(
+                header.contains(&format!("d({q})/d({p})")),
+                "d({q})/d({p}) missing"
+            );
+        }
+    }
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    assert_eq!(rows.len(), 3);
+    for row in &rows {
+        let h: f64 = row[col("transfer_magnitude")].parse().unwrap();
+        assert!(h > 0.0 && h < 1.0);
+        assert_eq!(&row[col("sensitivity_status")], "ok");
+        assert!(
+            row[col("d(damped_frequency)/d(spring_k)")]
+                .parse::<f64>()
+                .unwrap()
+                > 0.0
+        );
+    }
+}
+
+#[test]
+fn sensitivity_json_ad_and_fd_agree() {
+    let get = |how: &str| {
+        let o = run(&[
+            "sensitivity",
+            example("governor.toml").to_str().unwrap(),
+            "--speed",
+            "1.595",
+            "--format",
+            "json",
+            "--derivatives",
+            how,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()
+    };
+    let (ad, fd) = (get("ad"), get("fd"));
+    assert_eq!(ad["derivatives"], "ad");
+    let vars = ad["variables"].as_array().unwrap();
+    assert_eq!(vars.len(), 3);
+    for (a, f) in vars.iter().zip(fd["variables"].as_array().unwrap()) {
+        let x = a["modes"][0]["d_damped_frequency"].as_f64().unwrap();
+        let y = f["modes"][0]["d_damped_frequency"].as_f64().unwrap();
+        assert!(
+            (x - y).abs() <= 1e-6 * x.abs(),
+            "{} {x} vs {y}",
+            a["parameter"]
+        );
+    }
+}
+
+#[test]
+fn frf_columns_and_unknown_joint() {
+    let o = run(&[
+        "frf",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "1.595",
+        "--input",
+        "slide",
+        "--output",
+        "slide",
+        "--freq",
+        "0.5:5:0.5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    let header = s.lines().next().unwrap();
+    assert!(header.starts_with("frequency,magnitude,phase"), "{header}");
+    assert!(header.contains("d(magnitude)/d(spring_k)"));
+    assert_eq!(s.lines().count(), 11);
+    let o = run(&[
+        "frf",
+        example("governor.toml").to_str().unwrap(),
+        "--speed",
+        "1",
+        "--input",
+        "nope",
+        "--output",
+        "slide",
+        "--freq",
+        "1:2:1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("'nope' is not a free joint coordinate"));
+}

@@ -1,0 +1,44 @@
+//! Sensitivities of all modes and of |H| with respect to all toleranced design variables at one
+//! speed, against one modal point. Run with `cargo bench --bench sensitivity`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use modaltol::model::Model;
+use modaltol::sensitivity::{TransferAt, analytic};
+use modaltol::sweep::{Options, initial_guess, point};
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    for (file, speed) in [
+        ("rotating_pendulum.toml", 5.0),
+        ("governor.toml", 1.595),
+        ("spinning_universal_pendulum.toml", 3.0),
+    ] {
+        let model = Model::from_file(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("examples")
+                .join(file),
+        )
+        .unwrap();
+        let p = model.nominal();
+        let wrt: Vec<usize> = (0..p.len())
+            .filter(|&i| model.parameters[i].tolerance.is_some())
+            .collect();
+        let tf = Some(TransferAt::at_speed(
+            &model.analysis.transfer.unwrap(),
+            speed,
+        ));
+        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+        let q = pt.equilibrium.q.clone();
+        let name = file.trim_end_matches(".toml");
+        c.bench_function(&format!("{name}/modal_point"), |b| {
+            b.iter(|| point(&model, &p, black_box(speed), &q, &Options::default()).unwrap())
+        });
+        c.bench_function(&format!("{name}/sensitivities_all_variables"), |b| {
+            b.iter(|| analytic(&model, &p, &pt, black_box(&wrt), tf).unwrap())
+        });
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
