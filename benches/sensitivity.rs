@@ -20,9 +20,7 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         let p = model.nominal();
-        let wrt: Vec<usize> = (0..p.len())
-            .filter(|&i| model.parameters[i].tolerance.is_some())
-            .collect();
+        let wrt = model.toleranced();
         let tf = Some(TransferAt::at_speed(
             &model.analysis.transfer.unwrap(),
             speed,

@@ -204,9 +204,7 @@ fn design_variables(model: &Model, names: &Option<Vec<String>>) -> Result<Vec<us
                     .ok_or_else(|| InputError(format!("--wrt: unknown parameter '{n}'")).into())
             })
             .collect(),
-        None => Ok((0..model.parameters.len())
-            .filter(|&i| model.parameters[i].tolerance.is_some())
-            .collect()),
+        None => Ok(model.toleranced()),
     }
 }
 

@@ -1,16 +1,12 @@
 //! The real binary on real files: exit codes, CSV columns, JSON shape, failed rows.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::example_path as example;
 use std::process::{Command, Output};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_modaltol"))
-}
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(name)
 }
 
 fn run(args: &[&str]) -> Output {
@@ -153,9 +149,8 @@ fn modal_table_with_chosen_independent_coordinate() {
 fn bad_model_exits_2_with_location() {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("m.toml");
-    let text = std::fs::read_to_string(example("rotating_pendulum.toml"))
-        .unwrap()
-        .replace("mass = \"m\"", "mass = \"m +\"");
+    let text =
+        common::example_text("rotating_pendulum.toml").replace("mass = \"m\"", "mass = \"m +\"");
     std::fs::write(&f, text).unwrap();
     let o = run(&["check", f.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
@@ -185,8 +180,7 @@ fn failed_speeds_are_rows_and_the_sweep_goes_on() {
     // Division by zero at speed 0 only: that row fails, the others are solved.
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("m.toml");
-    let text = std::fs::read_to_string(example("rotating_pendulum.toml"))
-        .unwrap()
+    let text = common::example_text("rotating_pendulum.toml")
         .replace("damping = \"c\"", "damping = \"c * speed / speed\"");
     std::fs::write(&f, text).unwrap();
     let o = run(&["sweep", f.to_str().unwrap(), "--speed", "0:1:0.5"]);

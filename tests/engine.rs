@@ -2,31 +2,19 @@
 //! hand for the rotating pendulum and the governor, finite differences of the nonlinear reduced
 //! equations, a second choice of independent coordinates, and time-domain integration.
 
+mod common;
+
 use approx::assert_relative_eq;
+use common::{at, example, example_text};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, constraints_at, evaluate};
 use modaltol::modal::ModeClass;
 use modaltol::model::Model;
-use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use modaltol::sweep::{Options, Sweep, point};
 use nalgebra::DMatrix;
 use num_dual::{Dual2, Dual64};
 
 const G: f64 = 9.80665;
-
-fn example(name: &str) -> Model {
-    Model::from_file(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples")
-            .join(name),
-    )
-    .unwrap()
-}
-
-fn at(model: &Model, speed: f64, opt: &Options) -> Point {
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
-    point(model, &p, speed, &q0, opt).unwrap()
-}
 
 /// Pendulum closed form: I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0, I = mL²/3.
 /// Returns (θ*, linearised stiffness K) on the stable branch.
@@ -429,10 +417,7 @@ fn gyroscopic_example_has_skew_coupling_and_valid_left_vectors() {
 
 #[test]
 fn drive_torque_balances_joint_damping_on_the_drive() {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
-    )
-    .unwrap();
+    let text = example_text("rotating_pendulum.toml");
     let text = text.replace("drive = \"speed\"", "drive = \"speed\"\ndamping = 0.7");
     let model = Model::from_str(&text, "damped_spin.toml").unwrap();
     let p = at(&model, 2.5, &Options::default());
@@ -445,10 +430,7 @@ fn drive_torque_balances_joint_damping_on_the_drive() {
 
 #[test]
 fn gravity_off_the_spin_axis_has_no_steady_state() {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
-    )
-    .unwrap();
+    let text = example_text("rotating_pendulum.toml");
     let text = text.replace("gravity = [0, -9.80665, 0]", "gravity = [-3, -9, 0]");
     let model = Model::from_str(&text, "tilted.toml").unwrap();
     let p = model.nominal();
@@ -462,10 +444,7 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
 
 #[test]
 fn massless_coordinate_is_reported_as_singular_mass() {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/rotating_pendulum.toml"),
-    )
-    .unwrap();
+    let text = example_text("rotating_pendulum.toml");
     let text = text
         .replace("mass = \"m\"", "mass = 0")
         .replace(

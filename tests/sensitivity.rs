@@ -1,35 +1,16 @@
 //! Sensitivities: closed forms for the pendulum, AD against finite differences of the whole
 //! pipeline for every example, the governor's transfer peak, and why the left eigenvector matters.
 
-use modaltol::model::Model;
+mod common;
+
+use common::example;
 use modaltol::sensitivity::{
     Status, TransferAt, analytic, eigenvalue_derivative, finite_difference, nominal_transfer,
 };
-use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use modaltol::sweep::{Options, Sweep, point};
 use num_dual::{Dual64, DualNum};
 
 const G: f64 = 9.80665;
-
-fn example(name: &str) -> Model {
-    Model::from_file(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples")
-            .join(name),
-    )
-    .unwrap()
-}
-
-fn at(model: &Model, speed: f64) -> Point {
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
-    point(model, &p, speed, &q0, &Options::default()).unwrap()
-}
-
-fn toleranced(model: &Model) -> Vec<usize> {
-    (0..model.parameters.len())
-        .filter(|&i| model.parameters[i].tolerance.is_some())
-        .collect()
-}
 
 /// Linearised closed form of the pendulum, I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0,
 /// differentiated in L with dual numbers: (ω_d, |H(jΩ)|, discriminant 4IK − c²).
@@ -105,7 +86,7 @@ fn pendulum_sensitivities_match_closed_form() {
     // The paper's observation: the length tolerance does not move |H| at the undamped
     // synchronous resonance √(3g/4L), nor anywhere on the swung-out branch.
     for w in [resonance, 4.2, 5.0, 6.0] {
-        let pt = at(&model, w);
+        let pt = common::at(&model, w, &Options::default());
         let sens = analytic(
             &model,
             &model.nominal(),
@@ -125,7 +106,7 @@ fn overdamped_roots_coalescing_are_flagged_not_differentiated() {
     let l = model.parameter("L").unwrap();
     // Critical damping on the hanging branch: Ω² = 3g/2L − c²/(4I²).
     let w = (1.5 * G - 2.25f64).sqrt();
-    let pt = at(&model, w);
+    let pt = common::at(&model, w, &Options::default());
     let sens = analytic(&model, &model.nominal(), &pt, &[l], None).unwrap();
     assert_eq!(sens.variables[0].modes[0].status, Status::NotDifferentiable);
 }
@@ -144,7 +125,7 @@ fn automatic_and_finite_differences_agree_for_every_example() {
     ] {
         let model = example(file);
         let tf = model.analysis.transfer.unwrap();
-        let wrt = toleranced(&model);
+        let wrt = model.toleranced();
         let p = model.nominal();
         let mut sweep = Sweep::new(&model, p.clone(), Options::default());
         let mut compared = 0;
@@ -203,7 +184,7 @@ fn automatic_and_finite_differences_agree_for_every_example() {
             }
         }
         assert!(
-            compared >= 20 * toleranced(&model).len() / 2,
+            compared >= 20 * model.toleranced().len() / 2,
             "{file}: only {compared} comparisons"
         );
     }
@@ -232,8 +213,8 @@ fn governor_transfer_peaks_at_1_595() {
 fn gyroscopic_example_needs_the_left_eigenvector() {
     let model = example("spinning_universal_pendulum.toml");
     let p = model.nominal();
-    let wrt = toleranced(&model);
-    let pt = at(&model, 4.0);
+    let wrt = model.toleranced();
+    let pt = common::at(&model, 4.0, &Options::default());
     let f = finite_difference(&model, &p, &pt, &wrt, None).unwrap();
     let a = analytic(&model, &p, &pt, &wrt, None).unwrap();
     let mut worst_symmetric = 0.0f64;

@@ -380,6 +380,13 @@ impl Model {
         self.parameters.iter().map(|p| p.value).collect()
     }
 
+    /// Indices of the parameters that carry a tolerance: the default design variables.
+    pub fn toleranced(&self) -> Vec<usize> {
+        (0..self.parameters.len())
+            .filter(|&i| self.parameters[i].tolerance.is_some())
+            .collect()
+    }
+
     /// Index of a parameter by name.
     pub fn parameter(&self, name: &str) -> Option<usize> {
         self.parameters.iter().position(|p| p.name == name)
