@@ -60,6 +60,10 @@ pub struct Equilibrium {
     pub residual: f64,
     /// Largest constraint violation |Φ| at the solution.
     pub constraint_violation: f64,
+    /// Tangent stiffness `∂(r_R + Φ_Rᵀλ)/∂q_R` at the solution, λ held fixed: the `q_R` block
+    /// of Newton's last Jacobian, reused as the linearisation's stiffness.
+    #[serde(skip)]
+    pub stiffness: DMatrix<f64>,
 }
 
 /// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
@@ -129,18 +133,42 @@ impl Problem {
     }
 
     /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
+    ///
+    /// One dual pass per free coordinate; `F` is linear in `λ`, so the `λ` columns are
+    /// `[Φ_Rᵀ; 0]`, read off `Φ_q` from those same passes.
     pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
         let nf = self.free.len();
-        let mut x: Vec<f64> = self.free.iter().map(|&i| q[i]).collect();
-        x.extend_from_slice(lambda);
+        let m = lambda.len();
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
-        crate::linalg::jacobian(&x, |xd| {
-            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-            for (k, &i) in self.free.iter().enumerate() {
-                qq[i] = xd[k];
+        let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
+        let zero = vec![lift1(0.0); q.len()];
+        let base: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+        let mut value = Vec::new();
+        let mut jac = DMatrix::zeros(nf + m, nf + m);
+        for (k, &i) in self.free.iter().enumerate() {
+            let mut qq = base.clone();
+            qq[i] = Dual64::new(q[i], 1.0);
+            let d = evaluate(&self.dual, &qq, &qd, &zero);
+            let g = d.with_multipliers(&ld);
+            let f: Vec<D1<f64>> = self
+                .free
+                .iter()
+                .map(|&j| g[j])
+                .chain(d.phi.iter().copied())
+                .collect();
+            for (r, v) in f.iter().enumerate() {
+                jac[(r, k)] = v.eps;
             }
-            equations(&self.dual, &self.free, &qq, &qd, &xd[nf..])
-        })
+            if k == 0 {
+                value = f.iter().map(|v| v.re).collect();
+                for c in 0..m {
+                    for (r, &j) in self.free.iter().enumerate() {
+                        jac[(r, nf + c)] = d.phi_q[(c, j)].re;
+                    }
+                }
+            }
+        }
+        (value, jac)
     }
 
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
@@ -236,6 +264,7 @@ impl Problem {
             speed,
             constraint_violation: norm(&d.phi),
             residual: norm(&f),
+            stiffness: jac.view((0, 0), (nf, nf)).into_owned(),
             q,
             qd: self.qd.clone(),
             lambda,

@@ -68,7 +68,8 @@ pub fn choose_independent(
 }
 
 /// Linearises at `(q, q̇ = qd, q̈ = 0, λ)`. `l` is the system lifted to `Dual<T>`;
-/// `independent` are coordinate indices from [`choose_independent`].
+/// `independent` are coordinate indices from [`choose_independent`]. `stiffness`, when given,
+/// is `∂(r_R + Φ_Rᵀλ)/∂q_R` already known (Newton's last Jacobian) and is not recomputed.
 pub fn linearize<T: Real>(
     l: &Lifted<D1<T>>,
     free: &[usize],
@@ -76,6 +77,7 @@ pub fn linearize<T: Real>(
     qd: &[T],
     lambda: &[T],
     independent: &[usize],
+    stiffness: Option<&DMatrix<T>>,
 ) -> Result<Linearization<T>, LinearizeError> {
     let n = q.len();
     let nf = free.len();
@@ -94,7 +96,10 @@ pub fn linearize<T: Real>(
         }
         out
     };
-    let (_, k_full) = jacobian(&xr, |x| rows(&put(&q1, x), &qd1, &qdd1));
+    let k_full = match stiffness {
+        Some(k) => k.clone(),
+        None => jacobian(&xr, |x| rows(&put(&q1, x), &qd1, &qdd1)).1,
+    };
     let vr: Vec<T> = free.iter().map(|&i| qd[i]).collect();
     let (_, c_full) = jacobian(&vr, |x| rows(&q1, &put(&qd1, x), &qdd1));
     let ar = vec![cst::<T>(0.0); nf];

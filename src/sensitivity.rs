@@ -211,6 +211,7 @@ pub fn dual_linearizations(
             &qd,
             &lambda,
             &pt.linear.independent,
+            None,
         )?;
         out.push(DualLinearization {
             param: b,

@@ -163,6 +163,7 @@ fn analyse(
         &eq.qd,
         &eq.lambda,
         &independent,
+        Some(&eq.stiffness),
     )?;
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
