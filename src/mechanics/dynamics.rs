@@ -87,8 +87,99 @@ pub fn constraints_at<U: Real>(sys: &System<U>, q: &[U]) -> Vec<U> {
     constraint_values(sys, &poses(sys, q))
 }
 
+/// Partial velocities at `q`, one dual pass per coordinate: for coordinate `i`, `J_v` and
+/// `J_ω` of every body, `∂ℓ/∂q_i` of every spring-damper, and column `i` of `Φ_q`. They depend
+/// on `q` only, so a linearisation in `q̇` and `q̈` computes them once.
+#[derive(Debug, Clone)]
+pub struct Partials<T: Real> {
+    /// `jv[i][b]`: ∂(centre of mass of body b)/∂q_i.
+    pub jv: Vec<Vec<V3<T>>>,
+    /// `jw[i][b]`: ∂ω_b/∂q̇_i.
+    pub jw: Vec<Vec<V3<T>>>,
+    /// `dlen[i][s]`: ∂ℓ_s/∂q_i.
+    pub dlen: Vec<Vec<T>>,
+    pub phi_q: DMatrix<T>,
+}
+
+impl<T: Real> Partials<T> {
+    /// The same partials over another scalar.
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Partials<U> {
+        Partials {
+            jv: self
+                .jv
+                .iter()
+                .map(|v| v.iter().map(|x| x.map(f)).collect())
+                .collect(),
+            jw: self
+                .jw
+                .iter()
+                .map(|v| v.iter().map(|x| x.map(f)).collect())
+                .collect(),
+            dlen: self
+                .dlen
+                .iter()
+                .map(|v| v.iter().map(|&x| f(x)).collect())
+                .collect(),
+            phi_q: self.phi_q.map(f),
+        }
+    }
+}
+
+/// Partial velocities at `q`; `partial` is the system lifted to `Dual<T>`.
+pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
+    let n = q.len();
+    let mut out = Partials {
+        jv: Vec::with_capacity(n),
+        jw: Vec::with_capacity(n),
+        dlen: Vec::with_capacity(n),
+        phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
+    };
+    let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
+    for i in 0..n {
+        let mut qi = base.clone();
+        qi[i] = Dual::new(q[i], cst(1.0));
+        let pp = poses(partial, &qi);
+        let (mut jv, mut jw) = (Vec::with_capacity(pp.len()), Vec::with_capacity(pp.len()));
+        for (b, pose) in pp.iter().enumerate() {
+            let x = pose.apply(&partial.bodies[b].cm);
+            jv.push(x.map(|c| c.eps));
+            let a = pose.rot.map(|c| c.re);
+            let ae = pose.rot.map(|c| c.eps);
+            jw.push(axial(&(ae * a.transpose())));
+        }
+        out.jv.push(jv);
+        out.jw.push(jw);
+        out.dlen.push(
+            partial
+                .springs
+                .iter()
+                .map(|s| {
+                    (point(&pp, s.body2, &s.point2) - point(&pp, s.body1, &s.point1))
+                        .norm_dual()
+                        .eps
+                })
+                .collect(),
+        );
+        for (k, c) in constraint_values(partial, &pp).iter().enumerate() {
+            out.phi_q[(k, i)] = c.eps;
+        }
+    }
+    out
+}
+
 /// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
 pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamics<T> {
+    evaluate_with(l, &partials(&l.partial, q), q, qd, qdd)
+}
+
+/// As [`evaluate`], with the partial velocities at `q` already known.
+pub fn evaluate_with<T: Real>(
+    l: &Lifted<T>,
+    j: &Partials<T>,
+    q: &[T],
+    qd: &[T],
+    qdd: &[T],
+) -> Dynamics<T> {
     let sys = &l.base;
     let n = sys.n;
     // Time pass: velocities and accelerations of every body.
@@ -120,40 +211,26 @@ pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamic
         .iter()
         .map(|c| c.re)
         .collect();
-
-    // Partial passes: J_v, J_ω, ∂ℓ/∂q_i and Φ_q, one coordinate at a time.
-    let mut r = vec![cst::<T>(0.0); n];
-    let mut phi_q = DMatrix::from_element(sys.m, n, cst::<T>(0.0));
-    let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
-    for i in 0..n {
-        let mut qi = base.clone();
-        qi[i] = Dual::new(q[i], cst(1.0));
-        let pp = poses(&l.partial, &qi);
-        let mut ri = cst::<T>(0.0);
-        for b in 0..sys.bodies.len() {
-            let x = pp[b].apply(&l.partial.bodies[b].cm);
-            let jv: V3<T> = x.map(|c| c.eps);
-            let a = pp[b].rot.map(|c| c.re);
-            let ae = pp[b].rot.map(|c| c.eps);
-            let jw = axial(&(ae * a.transpose()));
-            ri += jv.dot(&force[b]) + jw.dot(&moment[b]);
-        }
-        for (k, s) in l.partial.springs.iter().enumerate() {
-            let d = point(&pp, s.body2, &s.point2) - point(&pp, s.body1, &s.point1);
-            ri += spring_force[k] * d.norm_dual().eps;
-        }
-        for (k, c) in constraint_values(&l.partial, &pp).iter().enumerate() {
-            phi_q[(k, i)] = c.eps;
-        }
-        r[i] = ri;
-    }
+    // Project onto the partial velocities.
+    let mut r: Vec<T> = (0..n)
+        .map(|i| {
+            let mut ri = cst::<T>(0.0);
+            for b in 0..sys.bodies.len() {
+                ri += j.jv[i][b].dot(&force[b]) + j.jw[i][b].dot(&moment[b]);
+            }
+            for (k, f) in spring_force.iter().enumerate() {
+                ri += *f * j.dlen[i][k];
+            }
+            ri
+        })
+        .collect();
     for e in &sys.joint_elements {
         r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
     }
     Dynamics {
         r,
         phi,
-        phi_q,
+        phi_q: j.phi_q.clone(),
         spring_force,
     }
 }
