@@ -288,19 +288,21 @@ impl Problem {
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
         for &c in &self.driven {
-            for (offset, seed) in [(0.0, 1.0), (1.0, 0.0), (2.5, 0.0)] {
-                let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-                qq[c] = Dual64::new(q[c] + offset, seed);
-                let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
-                let s = f.iter().fold(0.0f64, |a, v| {
-                    a.max(if seed > 0.0 { v.eps.abs() } else { v.re.abs() })
+            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+            qq[c] = Dual64::new(q[c], 1.0);
+            let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
+            let mut change = f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()));
+            for offset in [1.0, 2.5] {
+                let mut qo = q.to_vec();
+                qo[c] += offset;
+                let f = equations(&self.value, &self.free, &qo, &self.qd, lambda);
+                change = f.iter().fold(change, |a, v| a.max(v.abs()));
+            }
+            if change > tol {
+                return Err(EquilibriumError::NoSteadyState {
+                    coordinate: self.names[c].clone(),
+                    sensitivity: change,
                 });
-                if s > tol {
-                    return Err(EquilibriumError::NoSteadyState {
-                        coordinate: self.names[c].clone(),
-                        sensitivity: s,
-                    });
-                }
             }
         }
         Ok(())

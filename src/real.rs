@@ -51,3 +51,25 @@ pub fn axial<T: Real>(m: &M3<T>) -> V3<T> {
         (m[(1, 0)] - m[(0, 1)]) * h,
     )
 }
+
+/// `a b` for 3×3 matrices, written out: nalgebra's generic product is slow for dual scalars.
+#[inline]
+pub fn mul3<T: Real>(a: &M3<T>, b: &M3<T>) -> M3<T> {
+    M3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
+/// `a bᵀ` for 3×3 matrices.
+#[inline]
+pub fn mul3_t<T: Real>(a: &M3<T>, b: &M3<T>) -> M3<T> {
+    M3::from_fn(|i, j| a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)])
+}
+
+/// `a x` for a 3×3 matrix and a 3-vector, written out.
+#[inline]
+pub fn mulv<T: Real>(a: &M3<T>, x: &V3<T>) -> V3<T> {
+    V3::new(
+        a[(0, 0)] * x.x + a[(0, 1)] * x.y + a[(0, 2)] * x.z,
+        a[(1, 0)] * x.x + a[(1, 1)] * x.y + a[(1, 2)] * x.z,
+        a[(2, 0)] * x.x + a[(2, 1)] * x.y + a[(2, 2)] * x.z,
+    )
+}

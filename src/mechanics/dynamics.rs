@@ -14,7 +14,7 @@
 
 use super::kinematics::{Pose, point, poses};
 use super::{ConstraintData, NormDual, System};
-use crate::real::{D1, D2, Real, V3, axial, cst, lift1, lift2};
+use crate::real::{D1, D2, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
 
@@ -145,7 +145,7 @@ pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
             jv.push(x.map(|c| c.eps));
             let a = pose.rot.map(|c| c.re);
             let ae = pose.rot.map(|c| c.eps);
-            jw.push(axial(&(ae * a.transpose())));
+            jw.push(axial(&mul3_t(&ae, &a)));
         }
         out.jv.push(jv);
         out.jw.push(jw);
@@ -193,13 +193,12 @@ pub fn evaluate_with<T: Real>(
         let a = pt[b].rot.map(|c| c.re);
         let ad = pt[b].rot.map(|c| c.v1);
         let add = pt[b].rot.map(|c| c.v2);
-        let at = a.transpose();
-        let omega = axial(&(ad * at));
-        let alpha = axial(&(add * at));
-        let iw = a * body.inertia * at;
+        let omega = axial(&mul3_t(&ad, &a));
+        let alpha = axial(&mul3_t(&add, &a));
+        let iw = mul3_t(&mul3(&a, &body.inertia), &a);
         force.push((acc - sys.gravity) * body.mass);
-        let h = iw * omega;
-        moment.push(iw * alpha + omega.cross(&h));
+        let h = mulv(&iw, &omega);
+        moment.push(mulv(&iw, &alpha) + omega.cross(&h));
     }
     let mut spring_force = Vec::with_capacity(sys.springs.len());
     for (s, st) in sys.springs.iter().zip(&l.time.springs) {

@@ -16,7 +16,7 @@
 
 use super::System;
 use crate::model::JointKind;
-use crate::real::{M3, Real, V3, cst};
+use crate::real::{M3, Real, V3, cst, mul3, mulv};
 
 /// Rigid motion of a body from the reference configuration: `x = rot · x₀ + trans`.
 #[derive(Debug, Clone, Copy)]
@@ -36,26 +36,28 @@ impl<T: Real> Pose<T> {
 
     /// Current position of a point given in the reference configuration.
     pub fn apply(&self, x0: &V3<T>) -> V3<T> {
-        self.rot * x0 + self.trans
+        mulv(&self.rot, x0) + self.trans
     }
 }
 
-/// Rotation by `angle` about the unit vector `a` (Rodrigues' formula).
+/// Rotation by `angle` about the unit vector `a` (Rodrigues' formula):
+/// `R = cos q I + sin q [a]× + (1 − cos q) a aᵀ`.
 pub fn rotation<T: Real>(a: &V3<T>, angle: T) -> M3<T> {
     let (s, c) = angle.sin_cos();
-    let one = cst::<T>(1.0);
-    let k = M3::new(
-        cst(0.0),
-        -a.z,
-        a.y,
-        a.z,
-        cst(0.0),
-        -a.x,
-        -a.y,
-        a.x,
-        cst(0.0),
-    );
-    M3::identity() * c + k * s + (a * a.transpose()) * (one - c)
+    let v = cst::<T>(1.0) - c;
+    let (x, y, z) = (a.x, a.y, a.z);
+    let (xs, ys, zs) = (x * s, y * s, z * s);
+    M3::new(
+        c + x * x * v,
+        x * y * v - zs,
+        x * z * v + ys,
+        y * x * v + zs,
+        c + y * y * v,
+        y * z * v - xs,
+        z * x * v - ys,
+        z * y * v + xs,
+        c + z * z * v,
+    )
 }
 
 /// Poses of all bodies at coordinates `q` (ground excluded).
@@ -68,7 +70,7 @@ pub fn poses<T: Real>(sys: &System<T>, q: &[T]) -> Vec<Pose<T>> {
                 let r = rotation(&j.axis, q[c]);
                 Pose {
                     rot: r,
-                    trans: j.at - r * j.at,
+                    trans: j.at - mulv(&r, &j.at),
                 }
             }
             (JointKind::Prismatic, Some(c)) => Pose {
@@ -78,8 +80,8 @@ pub fn poses<T: Real>(sys: &System<T>, q: &[T]) -> Vec<Pose<T>> {
             _ => Pose::identity(),
         };
         out[j.child] = Pose {
-            rot: parent.rot * rel.rot,
-            trans: parent.rot * rel.trans + parent.trans,
+            rot: mul3(&parent.rot, &rel.rot),
+            trans: mulv(&parent.rot, &rel.trans) + parent.trans,
         };
     }
     out
