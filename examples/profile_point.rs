@@ -1,30 +1,34 @@
-//! Profiling driver (not shipped as a feature): repeats one governor modal point.
-//! `cargo run --release --example profile_point`.
+//! Profiling driver: repeats one modal point (or, with a third argument `sens`, the
+//! sensitivities at that point) for `perf record`.
+//! `cargo run --release --example profile_point -- examples/governor.toml 1.595 [sens]`.
 use modaltol::model::Model;
+use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 
 fn main() {
-    let model = Model::from_file(std::path::Path::new(
-        &std::env::args()
-            .nth(1)
-            .unwrap_or("examples/governor.toml".into()),
-    ))
-    .unwrap();
-    let speed: f64 = std::env::args()
-        .nth(2)
-        .map_or(1.595, |s| s.parse().unwrap());
+    let args: Vec<String> = std::env::args().collect();
+    let file = args.get(1).map_or("examples/governor.toml", |s| s.as_str());
+    let speed: f64 = args.get(2).map_or(1.595, |s| s.parse().unwrap());
+    let sens = args.get(3).is_some_and(|s| s == "sens");
+    let model = Model::from_file(std::path::Path::new(file)).unwrap();
     let p = model.nominal();
     let q0 = initial_guess(&model, &p, speed).unwrap();
-    let q = point(&model, &p, speed, &q0, &Options::default())
-        .unwrap()
-        .equilibrium
-        .q;
+    let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+    let tf = model
+        .analysis
+        .transfer
+        .map(|t| TransferAt::at_speed(&t, speed));
+    let wrt = model.toleranced();
     let mut n = 0;
     for _ in 0..3000 {
-        n += point(&model, &p, speed, &q, &Options::default())
-            .unwrap()
-            .equilibrium
-            .iterations;
+        if sens {
+            n += analytic(&model, &p, &pt, &wrt, tf).unwrap().variables.len();
+        } else {
+            n += point(&model, &p, speed, &pt.equilibrium.q, &Options::default())
+                .unwrap()
+                .equilibrium
+                .iterations;
+        }
     }
     println!("{n}");
 }

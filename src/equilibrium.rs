@@ -16,7 +16,7 @@
 //! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
 
 use crate::mechanics::System;
-use crate::mechanics::dynamics::{Lifted, evaluate};
+use crate::mechanics::dynamics::{Lifted, evaluate, evaluate_rows};
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -75,7 +75,7 @@ pub fn equations<T: Real>(
     lambda: &[T],
 ) -> Vec<T> {
     let zero = vec![cst::<T>(0.0); q.len()];
-    let d = evaluate(l, q, qd, &zero);
+    let d = evaluate_rows(l, q, qd, &zero, free);
     let g = d.with_multipliers(lambda);
     free.iter()
         .map(|&i| g[i])
@@ -148,7 +148,7 @@ impl Problem {
         for (k, &i) in self.free.iter().enumerate() {
             let mut qq = base.clone();
             qq[i] = Dual64::new(q[i], 1.0);
-            let d = evaluate(&self.dual, &qq, &qd, &zero);
+            let d = evaluate_rows(&self.dual, &qq, &qd, &zero, &self.free);
             let g = d.with_multipliers(&ld);
             let f: Vec<D1<f64>> = self
                 .free
@@ -185,7 +185,7 @@ impl Problem {
         // Least-squares start for λ at the guess: Φ_Rᵀ λ ≈ −r_R.
         if m > 0 {
             let zero = vec![0.0; q.len()];
-            let d = evaluate(&self.value, &q, &self.qd, &zero);
+            let d = evaluate_rows(&self.value, &q, &self.qd, &zero, &self.free);
             let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
             let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
             if let Ok(l) = a.svd(true, true).solve(&b, 1e-12)

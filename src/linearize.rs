@@ -14,7 +14,7 @@
 //! code gives the matrices' derivatives with respect to design variables.
 
 use crate::linalg::{jacobian, pivot_columns, solve};
-use crate::mechanics::dynamics::{Lifted, evaluate, evaluate_with, partials};
+use crate::mechanics::dynamics::{Lifted, evaluate_rows, evaluate_with, partials_for};
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::DMatrix;
 
@@ -86,7 +86,7 @@ pub fn linearize<T: Real>(
     let (q1, qd1, qdd1) = (lift(q), lift(qd), vec![lift1(cst::<T>(0.0)); n]);
     let xr: Vec<T> = free.iter().map(|&i| q[i]).collect();
     let rows = |qq: &[D1<T>], vv: &[D1<T>], aa: &[D1<T>]| -> Vec<D1<T>> {
-        let g = evaluate(l, qq, vv, aa).with_multipliers(&lam);
+        let g = evaluate_rows(l, qq, vv, aa, free).with_multipliers(&lam);
         free.iter().map(|&i| g[i]).collect()
     };
     let put = |base: &[D1<T>], x: &[D1<T>]| {
@@ -101,7 +101,7 @@ pub fn linearize<T: Real>(
         None => jacobian(&xr, |x| rows(&put(&q1, x), &qd1, &qdd1)).1,
     };
     // M and C: the partial velocities depend on q only; compute them once, over T.
-    let j = partials(&l.base, q).map(lift1);
+    let j = partials_for(&l.base, q, free).map(lift1);
     let rows_v = |vv: &[D1<T>], aa: &[D1<T>]| -> Vec<D1<T>> {
         let g = evaluate_with(l, &j, &q1, vv, aa).with_multipliers(&lam);
         free.iter().map(|&i| g[i]).collect()

@@ -10,7 +10,7 @@
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize};
 use crate::mechanics::System;
-use crate::mechanics::dynamics::evaluate;
+use crate::mechanics::dynamics::evaluate_rows;
 use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
 use crate::model::{FieldError, Model};
 use nalgebra::{DMatrix, DVector};
@@ -148,7 +148,7 @@ fn analyse(
 ) -> Result<Point, PointError> {
     let free = model.free();
     let zero = vec![0.0; eq.q.len()];
-    let d = evaluate(&problem.value, &eq.q, &eq.qd, &zero);
+    let d = evaluate_rows(&problem.value, &eq.q, &eq.qd, &zero, &free);
     let phi_r = DMatrix::from_fn(d.phi.len(), free.len(), |k, j| d.phi_q[(k, free[j])]);
     let user = opt.independent.as_deref().or(model.independent.as_deref());
     let independent = if d.phi.is_empty() {

@@ -125,8 +125,15 @@ impl<T: Real> Partials<T> {
     }
 }
 
-/// Partial velocities at `q`; `partial` is the system lifted to `Dual<T>`.
+/// Partial velocities at `q` for every coordinate; `partial` is the system lifted to `Dual<T>`.
 pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
+    let all: Vec<usize> = (0..q.len()).collect();
+    partials_for(partial, q, &all)
+}
+
+/// Partial velocities for the coordinates `coords` only (one dual pass each). Rows of `r`
+/// evaluated with them exist for those coordinates only; the others come out NaN.
+pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize]) -> Partials<T> {
     let n = q.len();
     let mut out = Partials {
         jv: Vec::with_capacity(n),
@@ -136,6 +143,12 @@ pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
     };
     let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
     for i in 0..n {
+        if !coords.contains(&i) {
+            out.jv.push(Vec::new());
+            out.jw.push(Vec::new());
+            out.dlen.push(Vec::new());
+            continue;
+        }
         let mut qi = base.clone();
         qi[i] = Dual::new(q[i], cst(1.0));
         let pp = poses(partial, &qi);
@@ -170,6 +183,18 @@ pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
 /// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
 pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamics<T> {
     evaluate_with(l, &partials(&l.partial, q), q, qd, qdd)
+}
+
+/// `r` rows for the coordinates `coords` only (others NaN), `Φ`, and the `coords` columns of
+/// `Φ_q`: what the equilibrium and linearisation of the free coordinates need.
+pub fn evaluate_rows<T: Real>(
+    l: &Lifted<T>,
+    q: &[T],
+    qd: &[T],
+    qdd: &[T],
+    coords: &[usize],
+) -> Dynamics<T> {
+    evaluate_with(l, &partials_for(&l.partial, q, coords), q, qd, qdd)
 }
 
 /// As [`evaluate`], with the partial velocities at `q` already known.
@@ -213,6 +238,9 @@ pub fn evaluate_with<T: Real>(
     // Project onto the partial velocities.
     let mut r: Vec<T> = (0..n)
         .map(|i| {
+            if j.jv[i].is_empty() && !sys.bodies.is_empty() {
+                return cst::<T>(f64::NAN);
+            }
             let mut ri = cst::<T>(0.0);
             for b in 0..sys.bodies.len() {
                 ri += j.jv[i][b].dot(&force[b]) + j.jw[i][b].dot(&moment[b]);
