@@ -60,10 +60,11 @@ pub struct Equilibrium {
     pub residual: f64,
     /// Largest constraint violation |Φ| at the solution.
     pub constraint_violation: f64,
-    /// Tangent stiffness `∂(r_R + Φ_Rᵀλ)/∂q_R` at the solution, λ held fixed: the `q_R` block
-    /// of Newton's last Jacobian, reused as the linearisation's stiffness.
+    /// Newton's Jacobian `∂F/∂[q_R; λ]` at the solution. Its `q_R` block is the tangent
+    /// stiffness `∂(r_R + Φ_Rᵀλ)/∂q_R` (λ held fixed), reused as the linearisation's K; the
+    /// whole matrix is reused by the implicit-function step of the sensitivities.
     #[serde(skip)]
-    pub stiffness: DMatrix<f64>,
+    pub jacobian: DMatrix<f64>,
 }
 
 /// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
@@ -264,7 +265,7 @@ impl Problem {
             speed,
             constraint_violation: norm(&d.phi),
             residual: norm(&f),
-            stiffness: jac.view((0, 0), (nf, nf)).into_owned(),
+            jacobian: jac,
             q,
             qd: self.qd.clone(),
             lambda,

@@ -26,7 +26,7 @@
 //! Kim, Yoo (2007) eq. 24; Adhikari, *Rates of change of eigenvalues and eigenvectors in damped
 //! dynamic systems*, AIAA J. 37 (1999).
 
-use crate::equilibrium::{Problem, equations};
+use crate::equilibrium::equations;
 use crate::frf::{Complex, transfer};
 use crate::linearize::{Linearization, linearize};
 use crate::mechanics::System;
@@ -171,11 +171,8 @@ pub fn dual_linearizations(
     wrt: &[usize],
 ) -> Result<Vec<DualLinearization>, PointError> {
     let speed = pt.speed;
-    let sys = System::new(model, p, speed)?;
-    let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
-    let problem = Problem::new(&sys, model.free(), model.driven(), names);
     let eq = &pt.equilibrium;
-    let (_, jac) = problem.residual_and_jacobian(&eq.q, &eq.lambda);
+    let jac = eq.jacobian.clone();
     let lu = jac.lu();
     let free = &pt.linear.free;
     let mut out = Vec::with_capacity(wrt.len());

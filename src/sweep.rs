@@ -163,7 +163,11 @@ fn analyse(
         &eq.qd,
         &eq.lambda,
         &independent,
-        Some(&eq.stiffness),
+        Some(
+            &eq.jacobian
+                .view((0, 0), (free.len(), free.len()))
+                .into_owned(),
+        ),
     )?;
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
