@@ -56,6 +56,10 @@ pub struct ModeSensitivity {
     pub d_damped_frequency: f64,
     pub d_natural_frequency: f64,
     pub d_damping_ratio: f64,
+    /// Derivatives of the pair invariants `λ₁ + λ₂` and `λ₁ λ₂`, smooth even where the roots
+    /// coalesce (for one degree of freedom they are `−ĉ/m̂` and `k̂/m̂`, taken from the matrices).
+    pub d_sum: f64,
+    pub d_product: f64,
 }
 
 /// Derivatives with respect to one design variable.
@@ -105,8 +109,9 @@ pub fn nominal_transfer(pt: &Point, t: &TransferAt) -> Option<Complex<f64>> {
     transfer(&pt.linear, t.input, t.output, t.omega)
 }
 
-/// Derivatives of a mode from the derivatives of its two roots.
-fn mode_derivative(m: &Mode, d1: C64, d2: C64) -> ModeSensitivity {
+/// Derivatives of a mode from the derivatives of its two roots; `invariants`, when given, are
+/// the exact derivatives of `λ₁ + λ₂` and `λ₁ λ₂` (used instead of the roots' sums).
+fn mode_derivative(m: &Mode, d1: C64, d2: C64, invariants: Option<(f64, f64)>) -> ModeSensitivity {
     let (l1, l2) = (m.root.lambda, m.partner.lambda);
     let gap = (l1 - l2).norm();
     let scale = l1.norm().max(l2.norm()).max(1e-300);
@@ -117,8 +122,7 @@ fn mode_derivative(m: &Mode, d1: C64, d2: C64) -> ModeSensitivity {
     };
     let p = (l1 * l2).re;
     let s = (l1 + l2).re;
-    let dp = (d1 * l2 + l1 * d2).re;
-    let ds = (d1 + d2).re;
+    let (ds, dp) = invariants.unwrap_or(((d1 + d2).re, (d1 * l2 + l1 * d2).re));
     let wn = m.natural_frequency;
     let dwn = if wn > 0.0 {
         p.signum() * dp / (2.0 * wn)
@@ -133,6 +137,8 @@ fn mode_derivative(m: &Mode, d1: C64, d2: C64) -> ModeSensitivity {
         d_damped_frequency: if l1.im > 0.0 { d1.im } else { 0.0 },
         d_natural_frequency: dwn,
         d_damping_ratio: dzeta,
+        d_sum: ds,
+        d_product: dp,
     }
 }
 
@@ -255,6 +261,13 @@ pub fn analytic(
         let eps = |a: &DMatrix<Dual64>| a.map(|v| v.eps);
         let (dm, dc, dk) = (eps(&lin.m), eps(&lin.c), eps(&lin.k));
         let (m, c) = (&pt.linear.m, &pt.linear.c);
+        // One degree of freedom: λ₁ + λ₂ = −ĉ/m̂ and λ₁λ₂ = k̂/m̂ exactly.
+        let invariants = (m.nrows() == 1).then(|| {
+            let (m0, c0, k0) = (m[(0, 0)], c[(0, 0)], pt.linear.k[(0, 0)]);
+            let ds = -(dc[(0, 0)] * m0 - c0 * dm[(0, 0)]) / (m0 * m0);
+            let dp = (dk[(0, 0)] * m0 - k0 * dm[(0, 0)]) / (m0 * m0);
+            (ds, dp)
+        });
         let modes = pt
             .modes
             .iter()
@@ -273,7 +286,7 @@ pub fn analytic(
                     (m, c),
                     (&dm, &dc, &dk),
                 );
-                mode_derivative(md, d1, d2)
+                mode_derivative(md, d1, d2, invariants)
             })
             .collect();
         let (dmag, dphase) = match (tf, nominal) {
@@ -296,11 +309,14 @@ pub fn analytic(
     })
 }
 
+/// Quantities per mode in [`fd_quantities`].
+const NQ: usize = 7;
+
 /// Relative step of the central differences.
 const FD_STEP: f64 = 1e-4;
 
 /// Quantities compared by finite differences at one perturbed point: per mode
-/// `[Re λ, Im λ, ω_d, ω_n, ζ]` (modes matched to the nominal ones by shape), then `|H|`,
+/// `[Re λ, Im λ, ω_d, ω_n, ζ, λ₁+λ₂, λ₁λ₂]` (modes matched to the nominal ones by shape), then `|H|`,
 /// `arg H`, then the coordinates; and whether every mode kept its class.
 fn fd_quantities(
     model: &Model,
@@ -324,6 +340,8 @@ fn fd_quantities(
             m.damped_frequency,
             m.natural_frequency,
             m.damping_ratio,
+            (m.root.lambda + m.partner.lambda).re,
+            (m.root.lambda * m.partner.lambda).re,
         ]);
     }
     match tf.and_then(|t| nominal_transfer(&q, &t)) {
@@ -383,20 +401,22 @@ pub fn finite_difference(
         let modes = (0..nm)
             .map(|k| ModeSensitivity {
                 status,
-                d_eigen_re: d[5 * k],
-                d_eigen_im: d[5 * k + 1],
-                d_damped_frequency: d[5 * k + 2],
-                d_natural_frequency: d[5 * k + 3],
-                d_damping_ratio: d[5 * k + 4],
+                d_eigen_re: d[NQ * k],
+                d_eigen_im: d[NQ * k + 1],
+                d_damped_frequency: d[NQ * k + 2],
+                d_natural_frequency: d[NQ * k + 3],
+                d_damping_ratio: d[NQ * k + 4],
+                d_sum: d[NQ * k + 5],
+                d_product: d[NQ * k + 6],
             })
             .collect();
-        let has_tf = nominal.is_some() && d[5 * nm].is_finite();
+        let has_tf = nominal.is_some() && d[NQ * nm].is_finite();
         variables.push(VariableSensitivity {
             param: b,
             modes,
-            d_transfer_magnitude: has_tf.then(|| d[5 * nm]),
-            d_transfer_phase: has_tf.then(|| d[5 * nm + 1]),
-            d_equilibrium: d[5 * nm + 2..].to_vec(),
+            d_transfer_magnitude: has_tf.then(|| d[NQ * nm]),
+            d_transfer_phase: has_tf.then(|| d[NQ * nm + 1]),
+            d_equilibrium: d[NQ * nm + 2..].to_vec(),
         });
     }
     Ok(Sensitivity {

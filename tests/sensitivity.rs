@@ -172,6 +172,8 @@ fn automatic_and_finite_differences_agree_for_every_example() {
                         ),
                         ("dζ", ma.d_damping_ratio, mf.d_damping_ratio, 1e-9 / b),
                         ("dRe λ", ma.d_eigen_re, mf.d_eigen_re, 1e-9 * wn / b),
+                        ("d(λ₁+λ₂)", ma.d_sum, mf.d_sum, 1e-9 * wn / b),
+                        ("d(λ₁λ₂)", ma.d_product, mf.d_product, 1e-9 * wn * wn / b),
                     ] {
                         assert!(
                             agree(x, y, floor),
