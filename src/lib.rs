@@ -7,6 +7,7 @@
 //! differentiation gives exact derivatives everywhere.
 #![deny(clippy::float_cmp)]
 
+pub mod analyze;
 pub mod equilibrium;
 pub mod frf;
 pub mod linalg;
@@ -14,7 +15,9 @@ pub mod linearize;
 pub mod mechanics;
 pub mod modal;
 pub mod model;
+pub mod montecarlo;
 pub mod real;
 pub mod report;
 pub mod sensitivity;
 pub mod sweep;
+pub mod tolerance;

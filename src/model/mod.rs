@@ -309,11 +309,35 @@ pub struct Transfer {
     pub order: f64,
 }
 
-/// A named tolerance case: per-parameter tolerances.
+/// A correlation matrix between parameters (rows and columns in the order of `params`).
+#[derive(Debug, Clone)]
+pub struct Correlation {
+    pub params: Vec<usize>,
+    pub matrix: Vec<Vec<f64>>,
+}
+
+/// A named tolerance case: per-parameter tolerances and optional correlations.
 #[derive(Debug, Clone)]
 pub struct Case {
     pub name: String,
     pub tolerances: Vec<(usize, Tolerance)>,
+    pub correlation: Option<Correlation>,
+}
+
+impl Case {
+    /// The case made of the tolerances declared on the parameters themselves.
+    pub fn from_parameters(model: &Model) -> Case {
+        Case {
+            name: "parameters".into(),
+            tolerances: model
+                .parameters
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| p.tolerance.map(|t| (i, t)))
+                .collect(),
+            correlation: None,
+        }
+    }
 }
 
 /// The `[analysis]` table: what the model's author wants analysed by default.

@@ -135,6 +135,8 @@ pub struct TransferSchema {
 pub struct CaseSchema {
     pub name: Spanned<String>,
     pub tolerances: BTreeMap<Spanned<String>, Spanned<toml::Value>>,
+    /// Correlation matrix, rows and columns in the order the tolerances are written.
+    pub correlation: Option<Spanned<Vec<Vec<f64>>>>,
 }
 
 #[derive(Debug, Deserialize)]

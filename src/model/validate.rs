@@ -958,9 +958,44 @@ fn analysis(
                 )?,
             ));
         }
+        let correlation = match &c.correlation {
+            None => None,
+            Some(m) => {
+                let rows = m.get_ref();
+                let n = tolerances.len();
+                let bad = |msg: &str| {
+                    ctx.err(
+                        m.span(),
+                        format!("case '{}' correlation: {msg}", c.name.get_ref()),
+                    )
+                };
+                if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+                    return Err(bad(&format!(
+                        "expected a {n}×{n} matrix (one row per tolerance, in the order written)"
+                    )));
+                }
+                let mat = nalgebra::DMatrix::from_fn(n, n, |i, j| rows[i][j]);
+                if mat.iter().any(|v| !v.is_finite() || v.abs() > 1.0)
+                    || (0..n).any(|i| (mat[(i, i)] - 1.0).abs() > 1e-12)
+                {
+                    return Err(bad("entries must lie in [−1, 1] with a unit diagonal"));
+                }
+                if (&mat - mat.transpose()).amax() > 1e-12 {
+                    return Err(bad("the matrix is not symmetric"));
+                }
+                if mat.symmetric_eigenvalues().min() < -1e-12 {
+                    return Err(bad("the matrix is not positive semi-definite"));
+                }
+                Some(Correlation {
+                    params: tolerances.iter().map(|t| t.0).collect(),
+                    matrix: rows.clone(),
+                })
+            }
+        };
         a.cases.push(Case {
             name: c.name.get_ref().clone(),
             tolerances,
+            correlation,
         });
     }
     Ok(a)

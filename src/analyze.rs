@@ -1,0 +1,227 @@
+//! The main job: how the tolerance cases spread every mode's ω_d and ζ and the transfer
+//! magnitude across the speed range, by every analytic method and by Monte Carlo.
+//!
+//! One nominal sweep; at each speed one [`LocalModel`] for the union of the cases' variables
+//! (derivatives do not depend on the tolerances, so cases share them); then per case the
+//! first-order, second-order and invariant statistics, and optionally the Monte Carlo. Wall times
+//! of the analytic part and of the Monte Carlo are measured for the summary.
+
+use crate::model::{Case, Model};
+use crate::montecarlo::{self, McOptions, McStat};
+use crate::sweep::{Options, Point, Sweep};
+use crate::tolerance::{
+    LocalModel, Output, Quantity, Spread, first_order, invariant, local_model, outputs,
+    second_order,
+};
+use std::time::Instant;
+
+/// Propagation methods, as named in the outputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    FirstOrder,
+    SecondOrder,
+    /// ω_d from the pair invariants (see [`crate::tolerance`]).
+    Invariant,
+    MonteCarlo,
+}
+
+impl Method {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Method::FirstOrder => "first_order",
+            Method::SecondOrder => "second_order",
+            Method::Invariant => "invariant",
+            Method::MonteCarlo => "monte_carlo",
+        }
+    }
+}
+
+/// One line of the result: a statistic of one output at one speed by one method.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub speed: f64,
+    pub quantity: Quantity,
+    /// 0-based mode, `None` for the transfer magnitude.
+    pub mode: Option<usize>,
+    pub case: usize,
+    pub method: Method,
+    /// NaN where the method gives no answer (an output not differentiable there).
+    pub mean: f64,
+    pub std: f64,
+    pub mc: Option<McStat>,
+    /// First order: each variable's share of the variance.
+    pub shares: Option<Vec<f64>>,
+}
+
+/// What to analyse.
+#[derive(Debug, Clone)]
+pub struct AnalyzeOptions {
+    pub speeds: Vec<f64>,
+    pub cases: Vec<Case>,
+    pub monte_carlo: Option<McOptions>,
+}
+
+/// Result of [`analyze`].
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    /// Design variables (union over the cases), the order of `shares`.
+    pub vars: Vec<usize>,
+    pub cases: Vec<Case>,
+    pub rows: Vec<Row>,
+    pub analytic_seconds: f64,
+    pub monte_carlo_seconds: Option<f64>,
+    /// Speeds whose nominal point or local model failed, with the reason.
+    pub failures: Vec<(f64, String)>,
+    /// The nominal points (for plots), `None` where they failed.
+    pub nominal: Vec<Option<Point>>,
+}
+
+/// Progress callback: (stage, done, total).
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// Runs the analysis. Failed speeds are reported in `failures` and skipped; the run goes on.
+pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analysis {
+    let mut vars: Vec<usize> = opt
+        .cases
+        .iter()
+        .flat_map(|c| c.tolerances.iter().map(|t| t.0))
+        .collect();
+    vars.sort_unstable();
+    vars.dedup();
+    let transfer = model.analysis.transfer;
+    let p = model.nominal();
+    let t0 = Instant::now();
+    let mut sweep = Sweep::new(model, p.clone(), Options::default());
+    let mut failures = Vec::new();
+    let mut nominal = Vec::with_capacity(opt.speeds.len());
+    let mut locals: Vec<Option<LocalModel>> = Vec::with_capacity(opt.speeds.len());
+    for (i, &w) in opt.speeds.iter().enumerate() {
+        match sweep.step(w) {
+            Ok(pt) => {
+                match local_model(model, &p, &pt, &vars, transfer.as_ref(), true) {
+                    Ok(lm) => locals.push(Some(lm)),
+                    Err(e) => {
+                        failures.push((w, format!("derivatives: {e}")));
+                        locals.push(None);
+                    }
+                }
+                nominal.push(Some(pt));
+            }
+            Err(e) => {
+                failures.push((w, e.to_string()));
+                nominal.push(None);
+                locals.push(None);
+            }
+        }
+        progress("derivatives", i + 1, opt.speeds.len());
+    }
+    let spreads: Vec<Spread> = opt
+        .cases
+        .iter()
+        .map(|c| Spread::new(model, c, &vars))
+        .collect();
+    let mut rows = Vec::new();
+    for (ci, s) in spreads.iter().enumerate() {
+        for (si, lm) in locals.iter().enumerate() {
+            let Some(lm) = lm else { continue };
+            rows.extend(analytic_rows(opt.speeds[si], ci, lm, s));
+        }
+    }
+    let analytic_seconds = t0.elapsed().as_secs_f64();
+
+    let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
+        let t1 = Instant::now();
+        let modes = nominal
+            .iter()
+            .flatten()
+            .map(|p| p.modes.len())
+            .next()
+            .unwrap_or(0);
+        let outs = outputs(modes, transfer.is_some());
+        for (ci, s) in spreads.iter().enumerate() {
+            let name = format!("monte carlo {}", opt.cases[ci].name);
+            let stats = montecarlo::run(
+                model,
+                &vars,
+                s,
+                &opt.speeds,
+                &nominal,
+                &outs,
+                transfer.as_ref(),
+                mc,
+                &|d| progress(&name, d, mc.samples),
+            );
+            for (si, row) in stats.iter().enumerate() {
+                if nominal[si].is_none() {
+                    continue;
+                }
+                for (o, st) in outs.iter().zip(row) {
+                    rows.push(Row {
+                        speed: opt.speeds[si],
+                        quantity: o.quantity,
+                        mode: o.mode,
+                        case: ci,
+                        method: Method::MonteCarlo,
+                        mean: st.mean,
+                        std: st.std,
+                        mc: Some(*st),
+                        shares: None,
+                    });
+                }
+            }
+        }
+        t1.elapsed().as_secs_f64()
+    });
+    Analysis {
+        vars,
+        cases: opt.cases.clone(),
+        rows,
+        analytic_seconds,
+        monte_carlo_seconds,
+        failures,
+        nominal,
+    }
+}
+
+/// First-order, second-order and (for ω_d) invariant rows of one speed and case.
+fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let row = |o: &Output, method, mean: f64, std: f64, shares| Row {
+        speed,
+        quantity: o.quantity,
+        mode: o.mode,
+        case,
+        method,
+        mean,
+        std,
+        mc: None,
+        shares,
+    };
+    for (k, o) in lm.outputs.iter().enumerate() {
+        let v = lm.value[k];
+        match &lm.grad[k] {
+            Some(g) => {
+                let (st, shares) = first_order(v, g, s);
+                rows.push(row(o, Method::FirstOrder, st.mean, st.std, Some(shares)));
+                let so = lm.hess[k].as_ref().map_or((f64::NAN, f64::NAN), |h| {
+                    let st = second_order(v, g, h, s);
+                    (st.mean, st.std)
+                });
+                rows.push(row(o, Method::SecondOrder, so.0, so.1, None));
+            }
+            None => {
+                rows.push(row(o, Method::FirstOrder, f64::NAN, f64::NAN, None));
+                rows.push(row(o, Method::SecondOrder, f64::NAN, f64::NAN, None));
+            }
+        }
+        if let (Quantity::DampedFrequency, Some(m)) = (o.quantity, o.mode) {
+            let (d, g, h) = &lm.disc[m];
+            let st = g.as_ref().map_or((f64::NAN, f64::NAN), |g| {
+                let st = invariant(*d, g, h.as_ref(), s);
+                (st.mean, st.std)
+            });
+            rows.push(row(o, Method::Invariant, st.0, st.1, None));
+        }
+    }
+    rows
+}

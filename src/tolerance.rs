@@ -1,0 +1,502 @@
+//! Analytic propagation of tolerances to the modal outputs (Kim & Yoo 2007, eq. 28, and beyond).
+//!
+//! At each speed a [`LocalModel`] holds every output's value, its exact gradient with respect to
+//! the design variables (automatic differentiation through the equilibrium) and its Hessian
+//! (central differences of the exact gradient, step `1e-4 × max(|b|, 1e-3)`, error O(h²)).
+//! With the covariance `Σ` of the design variables (tolerance `T` read as ±3σ of a normal
+//! distribution, or as the half-width of a uniform one, σ = T/√3; optional correlations):
+//!
+//! ```text
+//! first_order:   mean = f(b₀),                 σ² = gᵀ Σ g                  (paper eq. 28)
+//! second_order:  mean = f(b₀) + ½ tr(H Σ),     σ² = gᵀ Σ g + ½ tr(H Σ H Σ)  (normal variables)
+//! invariant:     D = λ₁λ₂ − (λ₁+λ₂)²/4 propagated to second order, taken as normal, and mapped
+//!                through ω_d = √max(0, D) exactly (E[max(0, D)] in closed form, E[√max(0, D)]
+//!                by quadrature)
+//! ```
+//!
+//! `first_order` is the paper's method: where ω_d has a kink (a mode turning overdamped) or an
+//! output is stationary in the variables (|H| at the undamped resonance) it gives a spread of
+//! zero or none at all. `second_order` repairs stationary points; `invariant` repairs the kink,
+//! because the pair invariants λ₁+λ₂ and λ₁λ₂ (hence D) stay smooth where the roots coalesce.
+//! For uniform variables without correlations the second-order variance uses their fourth moment
+//! (`μ₄ = 9σ⁴/5`) instead of the normal one.
+//!
+//! # Reference
+//! Kim, Yoo (2007) eq. 28; Kendall & Stuart, *The Advanced Theory of Statistics*, §10.6 (moments
+//! of quadratic forms in normal variables).
+
+use crate::model::{Case, Distribution, Model, Transfer};
+use crate::sensitivity::{Status, TransferAt, analytic};
+use crate::sweep::{Options, Point, PointError, point};
+use nalgebra::DMatrix;
+
+/// Output kinds whose spread is propagated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    DampedFrequency,
+    DampingRatio,
+    TransferMagnitude,
+}
+
+impl Quantity {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Quantity::DampedFrequency => "damped_frequency",
+            Quantity::DampingRatio => "damping_ratio",
+            Quantity::TransferMagnitude => "transfer_magnitude",
+        }
+    }
+}
+
+/// One output: a quantity of a mode (0-based), or the transfer magnitude (`mode = None`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Output {
+    pub quantity: Quantity,
+    pub mode: Option<usize>,
+}
+
+/// The outputs of a system with `modes` modes, with or without a transfer function.
+pub fn outputs(modes: usize, transfer: bool) -> Vec<Output> {
+    let mut out = Vec::new();
+    for m in 0..modes {
+        out.push(Output {
+            quantity: Quantity::DampedFrequency,
+            mode: Some(m),
+        });
+        out.push(Output {
+            quantity: Quantity::DampingRatio,
+            mode: Some(m),
+        });
+    }
+    if transfer {
+        out.push(Output {
+            quantity: Quantity::TransferMagnitude,
+            mode: None,
+        });
+    }
+    out
+}
+
+/// Value of an output at a point (modes in the point's order); `None` if not defined.
+pub fn value(pt: &Point, o: &Output, tf: Option<TransferAt>) -> Option<f64> {
+    match (o.quantity, o.mode) {
+        (Quantity::DampedFrequency, Some(m)) => pt.modes.get(m).map(|x| x.damped_frequency),
+        (Quantity::DampingRatio, Some(m)) => pt.modes.get(m).map(|x| x.damping_ratio),
+        (Quantity::TransferMagnitude, _) => tf
+            .and_then(|t| crate::sensitivity::nominal_transfer(pt, &t))
+            .map(|h| h.magnitude()),
+        _ => None,
+    }
+    .filter(|v| v.is_finite())
+}
+
+/// A scalar's value, gradient and Hessian (`None` where they do not exist).
+pub type Expansion = (f64, Option<Vec<f64>>, Option<DMatrix<f64>>);
+
+/// Outputs, gradients and Hessians at one speed.
+#[derive(Debug, Clone)]
+pub struct LocalModel {
+    /// Design variables (parameter indices), the order of gradients and Hessians.
+    pub vars: Vec<usize>,
+    pub outputs: Vec<Output>,
+    pub value: Vec<f64>,
+    /// `None` where the output is not differentiable (a mode changing class).
+    pub grad: Vec<Option<Vec<f64>>>,
+    pub hess: Vec<Option<DMatrix<f64>>>,
+    /// Per mode: the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` (ω_d = √max(0, D)), its gradient
+    /// and Hessian.
+    pub disc: Vec<Expansion>,
+}
+
+type FirstOrder = (
+    Vec<f64>,
+    Vec<Option<Vec<f64>>>,
+    Vec<(f64, Option<Vec<f64>>)>,
+);
+
+fn first(
+    model: &Model,
+    p: &[f64],
+    pt: &Point,
+    vars: &[usize],
+    outs: &[Output],
+    tf: Option<TransferAt>,
+) -> Result<FirstOrder, PointError> {
+    let s = analytic(model, p, pt, vars, tf)?;
+    let mut values = Vec::with_capacity(outs.len());
+    let mut grads = Vec::with_capacity(outs.len());
+    for o in outs {
+        values.push(value(pt, o, tf).unwrap_or(f64::NAN));
+        let g: Option<Vec<f64>> = s
+            .variables
+            .iter()
+            .map(|v| match (o.quantity, o.mode) {
+                (Quantity::TransferMagnitude, _) => v.d_transfer_magnitude,
+                (q, Some(m)) => {
+                    let ms = &v.modes[m];
+                    (ms.status == Status::Ok).then_some(if q == Quantity::DampedFrequency {
+                        ms.d_damped_frequency
+                    } else {
+                        ms.d_damping_ratio
+                    })
+                }
+                _ => None,
+            })
+            .collect::<Option<Vec<f64>>>()
+            .filter(|g| g.iter().all(|x| x.is_finite()));
+        grads.push(g);
+    }
+    let discs = pt
+        .modes
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let (l1, l2) = (m.root.lambda, m.partner.lambda);
+            let (sum, prod) = ((l1 + l2).re, (l1 * l2).re);
+            let g: Vec<f64> = s
+                .variables
+                .iter()
+                .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
+                .collect();
+            (
+                prod - 0.25 * sum * sum,
+                g.iter().all(|x| x.is_finite()).then_some(g),
+            )
+        })
+        .collect();
+    Ok((values, grads, discs))
+}
+
+/// Reorders the modes of `q` to match the shapes of `reference` (most similar first).
+pub fn match_modes(reference: &Point, mut q: Point) -> Point {
+    if q.modes.len() != reference.modes.len() {
+        return q;
+    }
+    let n = q.modes.len();
+    let mut order = vec![usize::MAX; n];
+    let mut used = vec![false; n];
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, a) in reference.shapes.iter().enumerate() {
+        for (j, b) in q.shapes.iter().enumerate() {
+            pairs.push((crate::modal::similarity(a, b), i, j));
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, i, j) in pairs {
+        if order[i] == usize::MAX && !used[j] {
+            order[i] = j;
+            used[j] = true;
+        }
+    }
+    q.modes = order.iter().map(|&j| q.modes[j].clone()).collect();
+    q.shapes = order.iter().map(|&j| q.shapes[j].clone()).collect();
+    q
+}
+
+/// Relative step for the Hessian differences.
+const HESS_STEP: f64 = 1e-4;
+
+/// Builds the local model at `pt` for design variables `vars`; with `hessian`, also the Hessians
+/// (two extra points and sensitivity evaluations per variable).
+pub fn local_model(
+    model: &Model,
+    p: &[f64],
+    pt: &Point,
+    vars: &[usize],
+    transfer: Option<&Transfer>,
+    hessian: bool,
+) -> Result<LocalModel, PointError> {
+    let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
+    let outs = outputs(pt.modes.len(), tf.is_some());
+    let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
+    let nv = vars.len();
+    let mut hess: Vec<Option<DMatrix<f64>>> = vec![
+        if hessian {
+            Some(DMatrix::zeros(nv, nv))
+        } else {
+            None
+        };
+        outs.len()
+    ];
+    let mut dhess: Vec<Option<DMatrix<f64>>> = vec![
+        if hessian {
+            Some(DMatrix::zeros(nv, nv))
+        } else {
+            None
+        };
+        pt.modes.len()
+    ];
+    if hessian {
+        let opt = Options {
+            independent: Some(pt.linear.independent.clone()),
+            no_branch_switch: true,
+            ..Default::default()
+        };
+        for (j, &b) in vars.iter().enumerate() {
+            let h = HESS_STEP * p[b].abs().max(1e-3);
+            let mut sides = Vec::new();
+            for s in [1.0, -1.0] {
+                let mut pp = p.to_vec();
+                pp[b] += s * h;
+                let side = point(model, &pp, pt.speed, &pt.equilibrium.q, &opt)
+                    .ok()
+                    .map(|q| match_modes(pt, q))
+                    .and_then(|q| first(model, &pp, &q, vars, &outs, tf).ok());
+                sides.push(side);
+            }
+            let (Some((_, gp, dp)), Some((_, gm, dm))) = (&sides[0], &sides[1]) else {
+                hess.iter_mut().for_each(|x| *x = None);
+                dhess.iter_mut().for_each(|x| *x = None);
+                break;
+            };
+            for (o, hm) in hess.iter_mut().enumerate() {
+                match (hm.as_mut(), &gp[o], &gm[o]) {
+                    (Some(m), Some(a), Some(c)) => {
+                        (0..nv).for_each(|i| m[(i, j)] = (a[i] - c[i]) / (2.0 * h))
+                    }
+                    _ => *hm = None,
+                }
+            }
+            for (k, hm) in dhess.iter_mut().enumerate() {
+                match (hm.as_mut(), &dp[k].1, &dm[k].1) {
+                    (Some(m), Some(a), Some(c)) => {
+                        (0..nv).for_each(|i| m[(i, j)] = (a[i] - c[i]) / (2.0 * h))
+                    }
+                    _ => *hm = None,
+                }
+            }
+        }
+        for m in hess.iter_mut().chain(dhess.iter_mut()).flatten() {
+            *m = (&*m + m.transpose()) * 0.5;
+        }
+    }
+    Ok(LocalModel {
+        vars: vars.to_vec(),
+        outputs: outs,
+        value,
+        grad,
+        hess,
+        disc: disc0
+            .into_iter()
+            .zip(dhess)
+            .map(|((v, g), h)| (v, g, h))
+            .collect(),
+    })
+}
+
+/// The spread of the design variables in one tolerance case.
+#[derive(Debug, Clone)]
+pub struct Spread {
+    /// Standard deviation of each design variable (0 when the case leaves it at nominal).
+    pub sigma: Vec<f64>,
+    pub distribution: Vec<Distribution>,
+    /// Correlation matrix (identity unless the case gives one).
+    pub correlation: DMatrix<f64>,
+    pub covariance: DMatrix<f64>,
+}
+
+impl Spread {
+    /// The spread of `vars` under `case` (tolerances not in the case are zero).
+    pub fn new(model: &Model, case: &Case, vars: &[usize]) -> Spread {
+        let n = vars.len();
+        let mut sigma = vec![0.0; n];
+        let mut distribution = vec![Distribution::Normal; n];
+        for (i, &b) in vars.iter().enumerate() {
+            let par = &model.parameters[b];
+            distribution[i] = par.distribution;
+            if let Some((_, t)) = case.tolerances.iter().find(|(p, _)| *p == b) {
+                let half = t.absolute(par.value);
+                sigma[i] = match par.distribution {
+                    Distribution::Normal => half / 3.0,
+                    Distribution::Uniform => half / 3f64.sqrt(),
+                };
+            }
+        }
+        let mut correlation = DMatrix::identity(n, n);
+        if let Some(c) = &case.correlation {
+            for (a, &pa) in c.params.iter().enumerate() {
+                for (bb, &pb) in c.params.iter().enumerate() {
+                    if let (Some(i), Some(j)) = (
+                        vars.iter().position(|&v| v == pa),
+                        vars.iter().position(|&v| v == pb),
+                    ) {
+                        correlation[(i, j)] = c.matrix[a][bb];
+                    }
+                }
+            }
+        }
+        let covariance = DMatrix::from_fn(n, n, |i, j| sigma[i] * correlation[(i, j)] * sigma[j]);
+        Spread {
+            sigma,
+            distribution,
+            correlation,
+            covariance,
+        }
+    }
+
+    fn independent(&self) -> bool {
+        (&self.correlation - DMatrix::identity(self.sigma.len(), self.sigma.len())).amax() == 0.0
+    }
+}
+
+/// Mean and standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stat {
+    pub mean: f64,
+    pub std: f64,
+}
+
+/// First order (the paper's method): mean = value, σ² = gᵀΣg; shares `gᵢ (Σg)ᵢ / σ²` (each
+/// variable's share of the variance; for independent variables `gᵢ²σᵢ²/σ²`).
+pub fn first_order(value: f64, grad: &[f64], s: &Spread) -> (Stat, Vec<f64>) {
+    let n = grad.len();
+    let sg: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|j| s.covariance[(i, j)] * grad[j]).sum())
+        .collect();
+    let var: f64 = (0..n).map(|i| grad[i] * sg[i]).sum();
+    let shares = (0..n)
+        .map(|i| {
+            if var > 0.0 {
+                grad[i] * sg[i] / var
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    (
+        Stat {
+            mean: value,
+            std: var.max(0.0).sqrt(),
+        },
+        shares,
+    )
+}
+
+/// Second order: mean + ½ tr(HΣ), σ² = gᵀΣg + ½ tr(HΣHΣ) (normal variables); for independent
+/// variables the diagonal term uses each variable's fourth moment.
+pub fn second_order(value: f64, grad: &[f64], hess: &DMatrix<f64>, s: &Spread) -> Stat {
+    let n = grad.len();
+    let hs = hess * &s.covariance;
+    let mean = value + 0.5 * hs.trace();
+    let first: f64 = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| grad[i] * s.covariance[(i, j)] * grad[j])
+                .sum::<f64>()
+        })
+        .sum();
+    let second = if s.independent() {
+        let mut v = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let term = hess[(i, j)].powi(2) * s.sigma[i].powi(2) * s.sigma[j].powi(2);
+                if i == j {
+                    // ¼ H_ii² (μ₄ − σ⁴): ½ H_ii² σ⁴ for a normal variable, ⅕ for a uniform one.
+                    v += term
+                        * if s.distribution[i] == Distribution::Uniform {
+                            0.2
+                        } else {
+                            0.5
+                        };
+                } else {
+                    v += 0.5 * term;
+                }
+            }
+        }
+        v
+    } else {
+        0.5 * (&hs * &hs).trace()
+    };
+    Stat {
+        mean,
+        std: (first + second).max(0.0).sqrt(),
+    }
+}
+
+/// Invariant-based ω_d: `D` (value, gradient, optional Hessian) propagated to second order and
+/// taken as normal, then mapped through `√max(0, D)` exactly.
+pub fn invariant(value: f64, grad: &[f64], hess: Option<&DMatrix<f64>>, s: &Spread) -> Stat {
+    let d = match hess {
+        Some(h) => second_order(value, grad, h, s),
+        None => first_order(value, grad, s).0,
+    };
+    sqrt_positive_part(d.mean, d.std)
+}
+
+/// Mean and σ of `√max(0, D)` for `D ~ N(μ, σ²)`: `E[max(0, D)] = μΦ(μ/σ) + σφ(μ/σ)` and
+/// `E[√max(0, D)] = ∫₀^∞ 2u² φ((u² − μ)/σ)/σ du` (substitution `D = u²`, composite Simpson).
+pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
+    if sigma <= 0.0 || !sigma.is_finite() {
+        let v = mu.max(0.0).sqrt();
+        return Stat { mean: v, std: 0.0 };
+    }
+    let phi = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+    let big_phi = |z: f64| 0.5 * libm_erfc(-z / std::f64::consts::SQRT_2);
+    let z = mu / sigma;
+    let second = mu * big_phi(z) + sigma * phi(z);
+    let upper = (mu + 10.0 * sigma).max(0.0).sqrt();
+    if upper == 0.0 {
+        return Stat {
+            mean: 0.0,
+            std: 0.0,
+        };
+    }
+    let n = 4000;
+    let h = upper / n as f64;
+    let f = |u: f64| 2.0 * u * u * phi((u * u - mu) / sigma) / sigma;
+    let mut sum = f(0.0) + f(upper);
+    for k in 1..n {
+        sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    let mean = sum * h / 3.0;
+    Stat {
+        mean,
+        std: (second - mean * mean).max(0.0).sqrt(),
+    }
+}
+
+/// Complementary error function (statrs).
+fn libm_erfc(x: f64) -> f64 {
+    statrs::function::erf::erfc(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sqrt_positive_part_limits() {
+        // Far from zero: √D ≈ √μ with σ_ω ≈ σ/(2√μ).
+        let s = sqrt_positive_part(100.0, 1.0);
+        assert!((s.mean - (10.0 - 1.0 / 8000.0)).abs() < 1e-6, "{s:?}");
+        assert!((s.std - 0.05).abs() < 1e-4, "{s:?}");
+        // Centred at zero: E√max(0,D) = σ^½ Γ(3/4) / (2^{3/4} √π)... check against the moments.
+        let s = sqrt_positive_part(0.0, 4.0);
+        let exact_mean = 2.0f64.sqrt() * 4.0f64.sqrt() * 1.2254167024651776
+            / (2.0 * std::f64::consts::PI.sqrt())
+            / 2f64.powf(0.25);
+        assert!(
+            (s.mean - exact_mean).abs() < 1e-6 * exact_mean,
+            "{} vs {exact_mean}",
+            s.mean
+        );
+        assert!(
+            (s.mean * s.mean + s.std * s.std - 4.0 / (2.0 * std::f64::consts::PI).sqrt()).abs()
+                < 1e-9
+        );
+    }
+
+    #[test]
+    fn second_order_of_a_quadratic_is_exact() {
+        // f = g x + ½ h x², x ~ N(0, σ²): mean ½hσ², var g²σ² + ½h²σ⁴.
+        let s = Spread {
+            sigma: vec![0.3],
+            distribution: vec![Distribution::Normal],
+            correlation: DMatrix::identity(1, 1),
+            covariance: DMatrix::from_element(1, 1, 0.09),
+        };
+        let st = second_order(1.0, &[2.0], &DMatrix::from_element(1, 1, 5.0), &s);
+        assert!((st.mean - (1.0 + 0.5 * 5.0 * 0.09)).abs() < 1e-15);
+        assert!((st.std - (4.0 * 0.09 + 0.5 * 25.0 * 0.0081f64).sqrt()).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,389 @@
+//! Tolerance propagation against closed forms and Monte Carlo (3000 samples, seed 1).
+
+mod common;
+
+use common::example;
+use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
+use modaltol::model::{Case, Model, Sampling};
+use modaltol::montecarlo::McOptions;
+use modaltol::tolerance::Quantity;
+use num_dual::{Dual64, DualNum};
+
+const G: f64 = 9.80665;
+
+fn case(model: &Model, name: &str) -> Case {
+    model
+        .analysis
+        .cases
+        .iter()
+        .find(|c| c.name == name)
+        .unwrap()
+        .clone()
+}
+
+fn run(
+    model: &Model,
+    case: Case,
+    speeds: &[f64],
+    samples: usize,
+    threads: Option<usize>,
+    sampling: Sampling,
+) -> Analysis {
+    let opt = AnalyzeOptions {
+        speeds: speeds.to_vec(),
+        cases: vec![case],
+        monte_carlo: (samples > 0).then_some(McOptions {
+            samples,
+            seed: 1,
+            sampling,
+            threads,
+        }),
+    };
+    analyze(model, &opt, &|_, _, _| {})
+}
+
+fn row(a: &Analysis, speed: f64, q: Quantity, method: Method) -> &Row {
+    a.rows
+        .iter()
+        .find(|r| {
+            (r.speed - speed).abs() < 1e-12
+                && r.quantity == q
+                && r.method == method
+                && r.mode.unwrap_or(0) == 0
+        })
+        .unwrap_or_else(|| panic!("no {} {} row at {speed}", q.as_str(), method.as_str()))
+}
+
+/// Closed-form pendulum (hanging or swung-out branch) as a function of L, differentiated by
+/// dual numbers: ω_d and |H(jΩ)|.
+fn closed_form(l: Dual64, w: f64) -> (Dual64, Dual64) {
+    let (m, c) = (3.0, 3.0);
+    let i = l * l * (m / 3.0);
+    let k = if w * w <= 3.0 * G / (2.0 * l.re) {
+        l * (m * G / 2.0) - i * w * w
+    } else {
+        let cos = (l * w * w * 2.0).recip() * (3.0 * G);
+        i * w * w * (-cos * cos + 1.0)
+    };
+    let wd = (i * k * 4.0 - c * c).sqrt() / (i * 2.0);
+    let real = k - i * w * w;
+    (wd, (real * real + (w * c) * (w * c)).sqrt().recip())
+}
+
+#[test]
+fn pendulum_first_order_spread_matches_closed_form() {
+    let model = example("rotating_pendulum.toml");
+    let speeds: Vec<f64> = (0..60)
+        .map(|i| 0.05 + 0.1 * i as f64)
+        .filter(|w| !(3.4..4.1).contains(w))
+        .collect();
+    let a = run(
+        &model,
+        case(&model, "L3"),
+        &speeds,
+        0,
+        None,
+        Sampling::Random,
+    );
+    let sigma_l = 0.03 / 3.0;
+    for &w in &speeds {
+        let (wd, h) = closed_form(Dual64::new(1.0, 1.0), w);
+        let fo = row(&a, w, Quantity::DampedFrequency, Method::FirstOrder);
+        assert!(
+            (fo.std - wd.eps.abs() * sigma_l).abs() <= 1e-8 * fo.std,
+            "Ω = {w}: σ(ω_d) {} vs {}",
+            fo.std,
+            wd.eps.abs() * sigma_l
+        );
+        assert!((fo.mean - wd.re).abs() <= 1e-10 * wd.re);
+        let fh = row(&a, w, Quantity::TransferMagnitude, Method::FirstOrder);
+        assert!(
+            (fh.std - h.eps.abs() * sigma_l).abs() <= 1e-8 * fh.std + 1e-15,
+            "Ω = {w}: σ|H| {} vs {}",
+            fh.std,
+            h.eps.abs() * sigma_l
+        );
+        // Each variable's share of the variance: L is the only one.
+        assert!((fo.shares.as_ref().unwrap()[0] - 1.0).abs() < 1e-12);
+    }
+}
+
+/// The second-order mean and σ inside the Monte Carlo 95 % intervals; with `first_too`, the
+/// first-order σ as well.
+fn agrees_with_monte_carlo(a: &Analysis, w: f64, q: Quantity, what: &str, first_too: bool) {
+    let mc = row(a, w, q, Method::MonteCarlo).mc.unwrap();
+    assert_eq!(mc.failed, 0, "{what} Ω = {w}");
+    let fo = row(a, w, q, Method::FirstOrder);
+    let so = row(a, w, q, Method::SecondOrder);
+    if mc.std <= 1e-12 * mc.mean.abs() {
+        // |H| on the swung-out branch does not depend on L at all: every method says so.
+        assert!(fo.std < 1e-12 && so.std < 1e-12, "{what} Ω = {w}");
+        return;
+    }
+    if first_too {
+        assert!(
+            mc.std_ci.0 <= fo.std && fo.std <= mc.std_ci.1,
+            "{what} {} Ω = {w}: first-order σ {} outside {:?}",
+            q.as_str(),
+            fo.std,
+            mc.std_ci
+        );
+    }
+    assert!(
+        mc.std_ci.0 <= so.std && so.std <= mc.std_ci.1,
+        "{what} {} Ω = {w}: second-order σ {} outside {:?}",
+        q.as_str(),
+        so.std,
+        mc.std_ci
+    );
+    assert!(
+        mc.mean_ci.0 <= so.mean && so.mean <= mc.mean_ci.1,
+        "{what} {} Ω = {w}: second-order mean {} outside {:?}",
+        q.as_str(),
+        so.mean,
+        mc.mean_ci
+    );
+}
+
+#[test]
+fn pendulum_monte_carlo_agrees_where_smooth() {
+    let model = example("rotating_pendulum.toml");
+    let speeds = [1.0, 2.0, 3.0, 4.5, 5.5];
+    let a = run(
+        &model,
+        case(&model, "L3"),
+        &speeds,
+        3000,
+        None,
+        Sampling::Random,
+    );
+    for w in speeds {
+        agrees_with_monte_carlo(&a, w, Quantity::DampedFrequency, "pendulum L3", true);
+        agrees_with_monte_carlo(&a, w, Quantity::TransferMagnitude, "pendulum L3", true);
+    }
+}
+
+#[test]
+fn governor_monte_carlo_agrees_where_smooth() {
+    let model = example("governor.toml");
+    let speeds = [0.5, 1.595, 3.0, 5.0];
+    for name in ["k3", "mass3", "attach3"] {
+        let a = run(
+            &model,
+            case(&model, name),
+            &speeds,
+            3000,
+            None,
+            Sampling::Random,
+        );
+        for w in speeds {
+            agrees_with_monte_carlo(&a, w, Quantity::DampedFrequency, name, false);
+            if name == "attach3" {
+                // Not claimed: |H| is strongly nonlinear in the attachment point, and at 3 %
+                // terms beyond second order matter (second order is 9–17 % off, in either
+                // direction, across these speeds). The convergence test below shows the
+                // expansion itself is right; for this output, trust the Monte Carlo.
+                continue;
+            }
+            agrees_with_monte_carlo(&a, w, Quantity::TransferMagnitude, name, false);
+        }
+    }
+}
+
+#[test]
+fn second_order_converges_to_monte_carlo_as_the_tolerance_shrinks() {
+    // The governor's |H| against the attachment point: the gap between second order and Monte
+    // Carlo (LHS, 3000 samples) must shrink like σ² (neglected higher-order terms), and at
+    // 0.1 % lie inside the Monte Carlo interval: the Hessians are right.
+    let model = example("governor.toml");
+    let b = model.parameter("attach").unwrap();
+    let w = 1.595;
+    let mut gaps = Vec::new();
+    for pct in [3.0, 1.0, 0.1] {
+        let c = Case {
+            name: format!("attach{pct}"),
+            tolerances: vec![(b, modaltol::model::Tolerance::Relative(pct / 100.0))],
+            correlation: None,
+        };
+        let a = run(&model, c, &[w], 3000, None, Sampling::Lhs);
+        let mc = row(&a, w, Quantity::TransferMagnitude, Method::MonteCarlo)
+            .mc
+            .unwrap();
+        let so = row(&a, w, Quantity::TransferMagnitude, Method::SecondOrder).std;
+        gaps.push((so - mc.std).abs() / mc.std);
+        if pct == 0.1 {
+            assert!(
+                mc.std_ci.0 <= so && so <= mc.std_ci.1,
+                "{so} outside {:?}",
+                mc.std_ci
+            );
+        }
+    }
+    assert!(
+        gaps[1] < gaps[0] / 4.0 && gaps[2] < gaps[0] / 20.0,
+        "gaps {gaps:?}"
+    );
+}
+
+#[test]
+fn second_order_repairs_the_stationary_transfer_at_resonance() {
+    // |H| at the undamped synchronous resonance √(3g/4L): d|H|/dL = 0, first-order σ = 0.
+    let model = example("rotating_pendulum.toml");
+    let w = (0.75 * G).sqrt();
+    for (name, inside) in [("L3", true), ("L12", false)] {
+        let a = run(
+            &model,
+            case(&model, name),
+            &[w],
+            3000,
+            None,
+            Sampling::Random,
+        );
+        let mc = row(&a, w, Quantity::TransferMagnitude, Method::MonteCarlo)
+            .mc
+            .unwrap();
+        let fo = row(&a, w, Quantity::TransferMagnitude, Method::FirstOrder);
+        let so = row(&a, w, Quantity::TransferMagnitude, Method::SecondOrder);
+        assert!(
+            fo.std < 1e-12 * so.mean,
+            "{name}: first-order σ should vanish, is {}",
+            fo.std
+        );
+        if inside {
+            assert!(
+                mc.std_ci.0 <= so.std && so.std <= mc.std_ci.1,
+                "{name}: {} outside {:?}",
+                so.std,
+                mc.std_ci
+            );
+        } else {
+            // 12 %: the quadratic model is 3 % off; first order is 100 % off.
+            assert!(
+                (so.std - mc.std).abs() <= 0.1 * mc.std,
+                "{name}: second-order σ {} vs Monte Carlo {}",
+                so.std,
+                mc.std
+            );
+        }
+    }
+}
+
+#[test]
+fn invariant_method_repairs_damped_frequency_at_class_changes() {
+    // 12 % on L at the edges of the overdamped band, where ω_d = √max(0, D) has its kink inside
+    // the spread: the invariant-based mean and σ are within 10 % of the Monte Carlo σ of the
+    // Monte Carlo values, and at least five times closer than first order's.
+    let model = example("rotating_pendulum.toml");
+    let speeds = [3.52, 3.55, 3.95, 3.98];
+    let a = run(
+        &model,
+        case(&model, "L12"),
+        &speeds,
+        3000,
+        None,
+        Sampling::Random,
+    );
+    for w in speeds {
+        let mc = row(&a, w, Quantity::DampedFrequency, Method::MonteCarlo)
+            .mc
+            .unwrap();
+        assert!(
+            mc.class_changed > 300,
+            "Ω = {w}: the spread should straddle the class change ({} samples)",
+            mc.class_changed
+        );
+        let inv = row(&a, w, Quantity::DampedFrequency, Method::Invariant);
+        let fo = row(&a, w, Quantity::DampedFrequency, Method::FirstOrder);
+        let (e_mean, e_std) = ((inv.mean - mc.mean).abs(), (inv.std - mc.std).abs());
+        assert!(
+            e_mean <= 0.1 * mc.std && e_std <= 0.1 * mc.std,
+            "Ω = {w}: invariant {:.4}±{:.4} vs Monte Carlo {:.4}±{:.4}",
+            inv.mean,
+            inv.std,
+            mc.mean,
+            mc.std
+        );
+        let fo_err = (fo.mean - mc.mean).abs().max((fo.std - mc.std).abs());
+        assert!(
+            fo_err >= 5.0 * e_mean.max(e_std),
+            "Ω = {w}: first order ({:.4}±{:.4}) is not much worse",
+            fo.mean,
+            fo.std
+        );
+    }
+}
+
+#[test]
+fn monte_carlo_is_identical_for_any_thread_count() {
+    let model = example("governor.toml");
+    for sampling in [Sampling::Random, Sampling::Lhs, Sampling::Sobol] {
+        let one = run(
+            &model,
+            case(&model, "k12"),
+            &[1.0, 1.595],
+            200,
+            Some(1),
+            sampling,
+        );
+        let two = run(
+            &model,
+            case(&model, "k12"),
+            &[1.0, 1.595],
+            200,
+            Some(2),
+            sampling,
+        );
+        let mc = |a: &Analysis| {
+            a.rows
+                .iter()
+                .filter(|r| r.method == Method::MonteCarlo)
+                .map(|r| (r.mean.to_bits(), r.std.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(mc(&one), mc(&two), "{sampling:?}");
+        assert!(!mc(&one).is_empty());
+    }
+}
+
+#[test]
+fn lhs_and_sobol_estimate_the_same_spread() {
+    let model = example("governor.toml");
+    let w = 1.595;
+    let q = Quantity::TransferMagnitude;
+    let random = row(
+        &run(
+            &model,
+            case(&model, "k12"),
+            &[w],
+            3000,
+            None,
+            Sampling::Random,
+        ),
+        w,
+        q,
+        Method::MonteCarlo,
+    )
+    .mc
+    .unwrap();
+    for sampling in [Sampling::Lhs, Sampling::Sobol] {
+        let mc = row(
+            &run(&model, case(&model, "k12"), &[w], 1024, None, sampling),
+            w,
+            q,
+            Method::MonteCarlo,
+        )
+        .mc
+        .unwrap();
+        assert!(
+            (mc.std - random.std).abs() <= 0.03 * random.std,
+            "{sampling:?}: σ {} vs random {}",
+            mc.std,
+            random.std
+        );
+        assert!(
+            (mc.mean - random.mean).abs() <= 0.5 * (random.mean_ci.1 - random.mean_ci.0),
+            "{sampling:?}: mean {}",
+            mc.mean
+        );
+    }
+}
