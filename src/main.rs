@@ -3,8 +3,11 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::frf::transfer;
+use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
+use modaltol::montecarlo::McOptions;
 use modaltol::report::{self, SweepColumns, SweepExtras};
 use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
@@ -31,6 +34,16 @@ struct Cli {
 enum Format {
     Table,
     Json,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum SamplingArg {
+    /// Independent pseudo-random draws.
+    Random,
+    /// Latin hypercube.
+    Lhs,
+    /// Owen-scrambled Sobol sequence.
+    Sobol,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -129,6 +142,40 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
+    /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
+    /// paper's method), second order, the invariant-based method for ω_d, and Monte Carlo.
+    ///
+    /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
+    /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
+    /// share:<parameter>; SI units, rad/s for speeds and frequencies) and DIR/summary.json
+    /// (cases, wall times beside the paper's, failures). Without MODEL, runs the governor example
+    /// built into the binary.
+    Analyze {
+        /// Model file (TOML); default: the built-in governor example.
+        model: Option<PathBuf>,
+        /// Output directory (created if missing).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
+        #[arg(long)]
+        speed: Option<String>,
+        /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
+        #[arg(long)]
+        samples: Option<usize>,
+        /// Random seed; default: the model's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads for the Monte Carlo (results do not depend on it); default: all cores.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Skip the Monte Carlo.
+        #[arg(long)]
+        no_monte_carlo: bool,
+        /// Sampling of the design variables; default: the model's.
+        #[arg(long, value_enum)]
+        sampling: Option<SamplingArg>,
+    },
     /// Frequency response at one speed: H(jω) from a generalised force on one joint coordinate
     /// to the response of another, over a range of excitation frequencies.
     ///
@@ -158,6 +205,9 @@ enum Command {
         out: Option<PathBuf>,
     },
 }
+
+/// The governor example, built into the binary so `analyze` runs with no model file.
+const EMBEDDED_GOVERNOR: &str = include_str!("../examples/governor.toml");
 
 /// Bad input (model, arguments): exit code 2.
 #[derive(Debug, thiserror::Error)]
@@ -439,6 +489,97 @@ fn run(cli: Cli) -> Result<()> {
                 )?,
             }
             w.flush()?;
+        }
+        Command::Analyze {
+            model,
+            output,
+            speed,
+            samples,
+            seed,
+            threads,
+            no_monte_carlo,
+            sampling,
+        } => {
+            let m = match &model {
+                Some(path) => load(path)?,
+                None => Model::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
+                    .map_err(|e| InputError(e.to_string()))?,
+            };
+            let range = match &speed {
+                Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+                None => m.analysis.speed.ok_or_else(|| {
+                    InputError("no --speed given and the model has no [analysis] speed".into())
+                })?,
+            };
+            let mut cases = m.analysis.cases.clone();
+            if cases.is_empty() {
+                let c = modaltol::model::Case::from_parameters(&m);
+                if c.tolerances.is_empty() {
+                    return Err(InputError(
+                        "the model declares no tolerance case and no parameter carries a tolerance"
+                            .into(),
+                    )
+                    .into());
+                }
+                cases.push(c);
+            }
+            if samples == Some(0) || samples == Some(1) {
+                return Err(InputError("--samples must be at least 2".into()).into());
+            }
+            let mc = (!no_monte_carlo).then(|| McOptions {
+                samples: samples.unwrap_or(m.analysis.samples),
+                seed: seed.unwrap_or(m.analysis.seed),
+                sampling: match sampling {
+                    Some(SamplingArg::Random) => Sampling::Random,
+                    Some(SamplingArg::Lhs) => Sampling::Lhs,
+                    Some(SamplingArg::Sobol) => Sampling::Sobol,
+                    None => m.analysis.sampling,
+                },
+                threads,
+            });
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("cannot create {}", output.display()))?;
+            let opt = AnalyzeOptions {
+                speeds: range.speeds().collect(),
+                cases,
+                monte_carlo: mc,
+            };
+            let show = std::io::stderr().is_terminal();
+            let progress = |stage: &str, done: usize, total: usize| {
+                if show && (done == total || done % 16 == 0) {
+                    eprint!("\r{stage}: {done}/{total}          ");
+                    if done == total {
+                        eprintln!();
+                    }
+                }
+            };
+            let a = analyze(&m, &opt, &progress);
+            let mut csv = csv::Writer::from_path(output.join("tolerance.csv"))?;
+            csv.write_record(report::tolerance_header(&m, &a))?;
+            for row in report::tolerance_rows(&a) {
+                csv.write_record(&row)?;
+            }
+            csv.flush()?;
+            let used = threads.unwrap_or_else(rayon::current_num_threads);
+            std::fs::write(
+                output.join("summary.json"),
+                serde_json::to_string_pretty(&report::summary_json(&m, &a, mc.as_ref(), used))?,
+            )?;
+            eprintln!(
+                "modaltol: analytic {:.3} s{}; wrote {}",
+                a.analytic_seconds,
+                a.monte_carlo_seconds.map_or(String::new(), |t| format!(
+                    ", Monte Carlo {t:.3} s (ratio {:.0})",
+                    t / a.analytic_seconds
+                )),
+                output.display()
+            );
+            if !a.failures.is_empty() {
+                eprintln!(
+                    "modaltol: {} speed(s) failed; see summary.json",
+                    a.failures.len()
+                );
+            }
         }
         Command::Frf {
             model,

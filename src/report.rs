@@ -4,8 +4,10 @@
 //! Units: speeds and frequencies in rad/s, angles in rad, translations in m, drive forces in
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
+use crate::analyze::Analysis;
 use crate::frf::Complex;
 use crate::model::{JointKind, Model};
+use crate::montecarlo::McOptions;
 use crate::sensitivity::{Sensitivity, Status as SensStatus};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
@@ -498,4 +500,107 @@ pub fn check_summary(model: &Model) -> String {
         let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
     }
     s
+}
+
+/// Header of `tolerance.csv`.
+pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
+    let mut h: Vec<String> = [
+        "speed",
+        "quantity",
+        "mode",
+        "case",
+        "method",
+        "mean",
+        "std",
+        "mean_ci_low",
+        "mean_ci_high",
+        "std_ci_low",
+        "std_ci_high",
+        "samples",
+        "failed",
+        "class_changed",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    h.extend(
+        a.vars
+            .iter()
+            .map(|&b| format!("share:{}", model.parameters[b].name)),
+    );
+    h
+}
+
+/// Rows of `tolerance.csv`: one per (speed, quantity, mode, case, method). Empty cells where a
+/// method gives no answer (an output not differentiable there) or a column does not apply.
+pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
+    a.rows
+        .iter()
+        .map(|r| {
+            let mut v = vec![
+                r.speed.to_string(),
+                r.quantity.as_str().to_string(),
+                r.mode.map_or(String::new(), |m| (m + 1).to_string()),
+                a.cases[r.case].name.clone(),
+                r.method.as_str().to_string(),
+                opt(Some(r.mean)),
+                opt(Some(r.std)),
+            ];
+            match &r.mc {
+                Some(m) => v.extend([
+                    opt(Some(m.mean_ci.0)),
+                    opt(Some(m.mean_ci.1)),
+                    opt(Some(m.std_ci.0)),
+                    opt(Some(m.std_ci.1)),
+                    m.n.to_string(),
+                    m.failed.to_string(),
+                    m.class_changed.to_string(),
+                ]),
+                None => v.extend(std::iter::repeat_n(String::new(), 7)),
+            }
+            match &r.shares {
+                Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
+                None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
+            }
+            v
+        })
+        .collect()
+}
+
+/// `summary.json` of an analysis: model, cases, timings beside the paper's, failures.
+pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads: usize) -> Value {
+    let cases: Vec<Value> = a
+        .cases
+        .iter()
+        .map(|c| {
+            json!({"name": c.name, "tolerances": c.tolerances.iter().map(|(b, t)| {
+                let p = &model.parameters[*b];
+                json!({"parameter": p.name, "nominal": p.value, "tolerance": t.absolute(p.value),
+                       "distribution": p.distribution})
+            }).collect::<Vec<_>>(), "correlated": c.correlation.is_some()})
+        })
+        .collect();
+    let speeds: Vec<f64> = {
+        let mut s: Vec<f64> = a.rows.iter().map(|r| r.speed).collect();
+        s.dedup();
+        s
+    };
+    let mc_failed: usize = a.rows.iter().filter_map(|r| r.mc.map(|m| m.failed)).sum();
+    json!({
+        "model": model.name,
+        "file": model.file,
+        "units": {"speed": "rad/s", "damped_frequency": "rad/s", "damping_ratio": "1", "time": "s"},
+        "speeds": {"count": a.nominal.len(), "from": speeds.first(), "to": speeds.last()},
+        "design_variables": a.vars.iter().map(|&b| model.parameters[b].name.clone()).collect::<Vec<_>>(),
+        "cases": cases,
+        "methods": ["first_order", "second_order", "invariant", "monte_carlo"],
+        "analytic_seconds": a.analytic_seconds,
+        "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
+                                          "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed})),
+        "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
+        "paper": {"note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
+                  "pendulum": {"analytic_seconds": 0.703, "monte_carlo_seconds": 448.281, "ratio": 638},
+                  "governor": {"analytic_seconds": 2.188, "monte_carlo_seconds": 2525.375, "ratio": 1154}},
+        "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
+    })
 }
