@@ -546,7 +546,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             let show = std::io::stderr().is_terminal();
             let progress = |stage: &str, done: usize, total: usize| {
-                if show && (done == total || done % 16 == 0) {
+                if show && (done == total || done.is_multiple_of(16)) {
                     eprint!("\r{stage}: {done}/{total}          ");
                     if done == total {
                         eprintln!();
