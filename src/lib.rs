@@ -16,6 +16,7 @@ pub mod mechanics;
 pub mod modal;
 pub mod model;
 pub mod montecarlo;
+pub mod plots;
 pub mod real;
 pub mod report;
 pub mod sensitivity;

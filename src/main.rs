@@ -560,6 +560,22 @@ fn run(cli: Cli) -> Result<()> {
                 csv.write_record(&row)?;
             }
             csv.flush()?;
+            let (plots, critical) = modaltol::plots::plots(&m, &a);
+            let fonts = modaltol::plots::fonts();
+            let mut files = Vec::new();
+            for p in &plots {
+                let svg = format!("{}.svg", p.stem);
+                std::fs::write(output.join(&svg), &p.svg)?;
+                match modaltol::plots::png(&p.svg, &fonts) {
+                    Ok(png) => std::fs::write(output.join(format!("{}.png", p.stem)), png)?,
+                    Err(e) => eprintln!("modaltol: no PNG for {}: {e}", p.stem),
+                }
+                files.push((svg, p.title.clone()));
+            }
+            std::fs::write(
+                output.join("report.html"),
+                report::report_html(&m, &a, &files, &critical, mc.as_ref()),
+            )?;
             let used = threads.unwrap_or_else(rayon::current_num_threads);
             std::fs::write(
                 output.join("summary.json"),

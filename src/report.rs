@@ -604,3 +604,133 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
     })
 }
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// `report.html`: the plots, the timing table beside the paper's Tables 1–2, the critical speeds
+/// and a short reading guide. `plots` are (file name, title) pairs in the same directory.
+pub fn report_html(
+    model: &Model,
+    a: &Analysis,
+    plots: &[(String, String)],
+    critical: &[crate::plots::CriticalSpeed],
+    mc: Option<&McOptions>,
+) -> String {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>modaltol: {}</title>\n<style>body{{font-family:sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222}}table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:4px 10px;text-align:right}}th{{background:#eee}}img{{max-width:100%;border:1px solid #ddd;margin:0.5em 0}}code{{background:#f4f4f4}}</style></head><body>\n",
+        esc(&model.name)
+    );
+    let _ = writeln!(h, "<h1>Tolerance analysis: {}</h1>", esc(&model.name));
+    let _ = writeln!(
+        h,
+        "<p>Model file <code>{}</code>. Speeds {} points. SI units; speeds and frequencies in rad/s.</p>",
+        esc(&model.file),
+        a.nominal.len()
+    );
+    let _ = writeln!(
+        h,
+        "<h2>Tolerance cases</h2><table><tr><th>case</th><th>variable</th><th>nominal</th><th>tolerance (±, = 3σ for normal)</th></tr>"
+    );
+    for c in &a.cases {
+        for (b, t) in &c.tolerances {
+            let p = &model.parameters[*b];
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.6}</td></tr>",
+                esc(&c.name),
+                esc(&p.name),
+                p.value,
+                t.absolute(p.value)
+            );
+        }
+    }
+    let _ = writeln!(h, "</table>");
+    let _ = writeln!(
+        h,
+        "<h2>Timing</h2><table><tr><th></th><th>analytic (s)</th><th>Monte Carlo (s)</th><th>ratio</th></tr>"
+    );
+    let _ = writeln!(
+        h,
+        "<tr><td>paper, pendulum (2007, 3000 samples)</td><td>0.703</td><td>448.281</td><td>638</td></tr>"
+    );
+    let _ = writeln!(
+        h,
+        "<tr><td>paper, governor (2007, 3000 samples)</td><td>2.188</td><td>2525.375</td><td>1154</td></tr>"
+    );
+    let mcs = a
+        .monte_carlo_seconds
+        .map_or("not run".to_string(), |t| format!("{t:.3}"));
+    let ratio = a.monte_carlo_seconds.map_or("–".to_string(), |t| {
+        format!("{:.0}", t / a.analytic_seconds)
+    });
+    let samples = mc.map_or(String::new(), |m| {
+        format!(
+            ", {} samples, {:?} sampling, seed {}",
+            m.samples, m.sampling, m.seed
+        )
+    });
+    let _ = writeln!(
+        h,
+        "<tr><td>this run ({} case(s), {} speeds{samples})</td><td>{:.3}</td><td>{mcs}</td><td>{ratio}</td></tr></table>",
+        a.cases.len(),
+        a.nominal.len(),
+        a.analytic_seconds
+    );
+    let _ = writeln!(
+        h,
+        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and all analytic methods for all cases; the paper's covers first order only.</p>"
+    );
+    if !critical.is_empty() {
+        let _ = writeln!(
+            h,
+            "<h2>Critical speeds</h2><table><tr><th>mode</th><th>speed (rad/s)</th><th>σ (rad/s), case {}</th></tr>",
+            esc(&a.cases[0].name)
+        );
+        for c in critical {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{:.4}</td><td>{:.4}</td></tr>",
+                c.mode + 1,
+                c.speed,
+                c.std
+            );
+        }
+        let _ = writeln!(h, "</table>");
+    }
+    if !a.failures.is_empty() {
+        let _ = writeln!(h, "<h2>Failed speeds</h2><ul>");
+        for (w, m) in &a.failures {
+            let _ = writeln!(h, "<li>{w} rad/s: {}</li>", esc(m));
+        }
+        let _ = writeln!(h, "</ul>");
+    }
+    let _ = writeln!(
+        h,
+        "<h2>Reading guide</h2><ul>\
+<li><b>first_order</b> is the paper's method: mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
+<li><b>second_order</b> adds the curvature (Hessians): a mean shift and variance terms. It repairs points where first order gives σ = 0 but the output does vary (|H| at the undamped resonance).</li>\
+<li><b>invariant</b> (ω_d only) propagates the pair discriminant D = λ₁λ₂ − (λ₁+λ₂)²/4, which stays smooth where a mode turns overdamped, and maps it through ω_d = √max(0, D). Use it near class changes, where first and second order fail.</li>\
+<li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample; it is the reference, with 95 % confidence intervals in <code>tolerance.csv</code>, and counts of failed samples and of samples whose mode changed class. Where many samples change class or cross a bifurcation, only Monte Carlo is reliable.</li>\
+<li>Bands are mean ± σ; the Campbell diagram shows ±3σ of the first case and the order line.</li></ul>"
+    );
+    let _ = writeln!(h, "<h2>Plots</h2>");
+    for (file, title) in plots {
+        let _ = writeln!(
+            h,
+            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+            esc(file),
+            esc(title),
+            esc(title)
+        );
+    }
+    let _ = writeln!(h, "</body></html>");
+    h
+}
