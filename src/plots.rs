@@ -138,13 +138,7 @@ fn draw(title: &str, ylabel: &str, lines: &[Line], bands: &[Band]) -> Result<Str
     Ok(svg)
 }
 
-fn series(
-    a: &Analysis,
-    case: usize,
-    q: Quantity,
-    mode: Option<usize>,
-    m: Method,
-) -> Vec<&Row> {
+fn series(a: &Analysis, case: usize, q: Quantity, mode: Option<usize>, m: Method) -> Vec<&Row> {
     a.rows
         .iter()
         .filter(|r| r.case == case && r.quantity == q && r.mode == mode && r.method == m)

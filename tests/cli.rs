@@ -306,3 +306,97 @@ fn frf_columns_and_unknown_joint() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("'nope' is not a free joint coordinate"));
 }
+
+#[test]
+fn analyze_writes_tables_plots_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a");
+    let o = run(&[
+        "analyze",
+        example("rotating_pendulum.toml").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--speed",
+        "1:4:0.5",
+        "--samples",
+        "40",
+        "--seed",
+        "3",
+        "--threads",
+        "2",
+        "--sampling",
+        "sobol",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = csv::Reader::from_path(out.join("tolerance.csv")).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    for c in [
+        "speed",
+        "quantity",
+        "mode",
+        "case",
+        "method",
+        "mean",
+        "std",
+        "mean_ci_low",
+        "std_ci_high",
+        "failed",
+        "class_changed",
+        "share:L",
+    ] {
+        assert!(header.contains(&c.to_string()), "{c} missing");
+    }
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    let methods: std::collections::BTreeSet<&str> =
+        rows.iter().map(|r| r.get(4).unwrap()).collect();
+    assert_eq!(
+        methods.into_iter().collect::<Vec<_>>(),
+        ["first_order", "invariant", "monte_carlo", "second_order"]
+    );
+    // 7 speeds × 3 cases × (ω_d: 4 methods, ζ: 3, |H|: 3).
+    assert_eq!(rows.len(), 7 * 3 * 10);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["monte_carlo"]["samples"], 40);
+    assert!(summary["analytic_seconds"].as_f64().unwrap() > 0.0);
+    assert_eq!(summary["paper"]["governor"]["ratio"], 1154);
+    // Every image the report shows exists, as SVG and PNG.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let imgs: Vec<&str> = html
+        .split("<img src=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+        .collect();
+    assert!(imgs.len() >= 13, "{} plots", imgs.len());
+    for img in imgs {
+        assert!(out.join(img).exists(), "{img}");
+        let png = out.join(img.replace(".svg", ".png"));
+        assert!(
+            std::fs::read(&png).unwrap().starts_with(b"\x89PNG"),
+            "{}",
+            png.display()
+        );
+    }
+    assert!(html.contains("448.281") && html.contains("Reading guide"));
+    let svg = std::fs::read_to_string(out.join("campbell.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn analyze_without_a_model_runs_the_built_in_governor() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g");
+    let o = run(&[
+        "analyze",
+        "-o",
+        out.to_str().unwrap(),
+        "--no-monte-carlo",
+        "--speed",
+        "1:2:0.5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("tolerance.csv")).unwrap();
+    for case in ["k3", "k6", "k12", "mass3", "attach3"] {
+        assert!(text.contains(&format!(",{case},")), "{case}");
+    }
+}
