@@ -371,9 +371,27 @@ pub struct Model {
 }
 
 impl Model {
+    /// Largest model file accepted (bytes): real models are a few kilobytes.
+    pub const MAX_FILE_BYTES: u64 = 4 << 20;
+
     /// Reads and validates a model file.
     pub fn from_file(path: &Path) -> Result<Model, ModelError> {
         let file = path.display().to_string();
+        if let Ok(meta) = std::fs::metadata(path)
+            && meta.len() > Self::MAX_FILE_BYTES
+        {
+            return Err(ModelError {
+                file,
+                line: None,
+                column: None,
+                message: format!(
+                    "the file is {:.1} MB; model files are limited to {} MiB",
+                    meta.len() as f64 / 1e6,
+                    Self::MAX_FILE_BYTES >> 20
+                ),
+                snippet: None,
+            });
+        }
         let bytes = std::fs::read(path).map_err(|e| ModelError {
             file: file.clone(),
             line: None,
@@ -386,6 +404,19 @@ impl Model {
 
     /// Validates a model given as bytes; `file` names it in messages.
     pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Model, ModelError> {
+        if bytes.len() as u64 > Self::MAX_FILE_BYTES {
+            return Err(ModelError {
+                file: file.to_string(),
+                line: None,
+                column: None,
+                message: format!(
+                    "the model is {} bytes; the limit is {} MiB",
+                    bytes.len(),
+                    Self::MAX_FILE_BYTES >> 20
+                ),
+                snippet: None,
+            });
+        }
         let text = std::str::from_utf8(bytes).map_err(|e| {
             let off = e.valid_up_to();
             let prefix = String::from_utf8_lossy(&bytes[..off]).into_owned();

@@ -85,7 +85,11 @@ impl Ctx<'_> {
                         self.file,
                         self.text,
                         off,
-                        &format!("{what}: bad expression \"{s}\": {}", e.message),
+                        &format!(
+                            "{what}: bad expression \"{}\": {}",
+                            abbreviate(s),
+                            e.message
+                        ),
                     )
                 })?
             }
@@ -138,6 +142,16 @@ impl Ctx<'_> {
             message: format!("{}: {e}", f.site.what),
             snippet: Some(locate_line(self.text, f.site.line)),
         })
+    }
+}
+
+/// An expression shortened for messages (hostile input can be kilobytes long).
+fn abbreviate(s: &str) -> String {
+    const MAX: usize = 60;
+    if s.chars().count() <= MAX {
+        s.to_string()
+    } else {
+        format!("{}…", s.chars().take(MAX).collect::<String>())
     }
 }
 
