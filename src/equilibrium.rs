@@ -32,8 +32,14 @@ pub enum EquilibriumError {
     SingularJacobian { iterations: usize },
     #[error("non-finite residual after {iterations} iterations")]
     NotFinite { iterations: usize },
+    #[error("redundant cut joints: {} duplicate(s) the others here (the constraint Jacobian has rank {rank} for {equations} equations); remove it or them", names.join(", "))]
+    RedundantConstraints {
+        names: Vec<String>,
+        rank: usize,
+        equations: usize,
+    },
     #[error(
-        "no steady state: the equations depend on the driven coordinate '{coordinate}' (|∂F/∂q| = {sensitivity:.3e}); is gravity along the drive axis?"
+        "no steady state: the equilibrium equations depend on the value of the driven coordinate '{coordinate}' (residual change {sensitivity:.3e}); is gravity along the drive axis?"
     )]
     NoSteadyState {
         coordinate: String,
@@ -307,6 +313,20 @@ impl Problem {
             }
         }
         Ok(())
+    }
+
+    /// Constraint equations (indices) that are linear combinations of the others at `q`, so
+    /// that the equilibrium Jacobian is singular whatever the speed.
+    pub fn redundant_equations(&self, q: &[f64]) -> Vec<usize> {
+        if self.value.base.m == 0 {
+            return Vec::new();
+        }
+        let zero = vec![0.0; q.len()];
+        let d = evaluate_rows(&self.value, q, &self.qd, &zero, &self.free);
+        let phi_r = DMatrix::from_fn(self.value.base.m, self.free.len(), |k, j| {
+            d.phi_q[(k, self.free[j])]
+        });
+        crate::linalg::dependent_rows(&phi_r)
     }
 
     /// Newton unknowns.

@@ -109,6 +109,40 @@ pub fn pivot_columns(a: &DMatrix<f64>) -> Option<Vec<usize>> {
     Some(chosen)
 }
 
+/// Rows of `a` that are linear combinations of the others (elimination with complete pivoting,
+/// relative tolerance 1e-10): the redundant equations of a rank-deficient system.
+pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
+    let (m, n) = a.shape();
+    let mut a = a.clone();
+    let scale = a.amax().max(f64::MIN_POSITIVE);
+    let mut rows: Vec<usize> = (0..m).collect();
+    let mut cols: Vec<usize> = (0..n).collect();
+    while !rows.is_empty() && !cols.is_empty() {
+        let mut best = (0, 0, -1.0);
+        for &r in &rows {
+            for &c in &cols {
+                if a[(r, c)].abs() > best.2 {
+                    best = (r, c, a[(r, c)].abs());
+                }
+            }
+        }
+        let (pr, pc, v) = best;
+        if v <= 1e-10 * scale {
+            break;
+        }
+        rows.retain(|&r| r != pr);
+        cols.retain(|&c| c != pc);
+        for &r in &rows {
+            let f = a[(r, pc)] / a[(pr, pc)];
+            for c in 0..n {
+                let x = a[(pr, c)];
+                a[(r, c)] -= f * x;
+            }
+        }
+    }
+    rows
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,6 +169,13 @@ mod tests {
             assert!((x[(i, 0)].re - x0[(i, 0)]).abs() < 1e-15);
             assert!((x[(i, 0)].eps - dx[(i, 0)]).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn dependent_rows_finds_the_duplicate_equation() {
+        let a = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 2.0, 0.0, 1.0, 0.0, 2.0, 0.0, 4.0]);
+        assert_eq!(dependent_rows(&a), vec![0]);
+        assert!(dependent_rows(&DMatrix::identity(2, 3)).is_empty());
     }
 
     #[test]

@@ -79,7 +79,25 @@ pub fn point(
     let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
     let problem = Problem::new(&sys, model.free(), model.driven(), names);
-    let eq = problem.solve(speed, q0, opt.newton)?;
+    let eq = problem.solve(speed, q0, opt.newton).map_err(|e| {
+        // A failed solve with redundant cut joints is reported as such, naming them.
+        let redundant = problem.redundant_equations(q0);
+        if redundant.is_empty() {
+            return e;
+        }
+        let owners: Vec<&str> = model
+            .constraints
+            .iter()
+            .flat_map(|c| std::iter::repeat_n(c.name.as_str(), c.kind.equations()))
+            .collect();
+        let mut names: Vec<String> = redundant.iter().map(|&k| owners[k].to_string()).collect();
+        names.dedup();
+        EquilibriumError::RedundantConstraints {
+            names,
+            rank: model.n_constraints() - redundant.len(),
+            equations: model.n_constraints(),
+        }
+    })?;
     let first = analyse(model, &problem, eq, opt)?;
     if first.stable() || opt.no_branch_switch {
         return Ok(first);

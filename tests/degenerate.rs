@@ -1,0 +1,162 @@
+//! Degenerate mechanisms: each is reported per speed (never a panic or a silent NaN) and the
+//! rest of the run goes on.
+
+mod common;
+
+use common::{example, example_text};
+use modaltol::modal::ModeClass;
+use modaltol::model::Model;
+use modaltol::sweep::{Options, Sweep, initial_guess, point};
+
+/// The governor with one more body (a small flap hinged on the collar, so there is a free
+/// coordinate to spare) and a second copy of the link1 cut joint: the constraint count leaves one
+/// degree of freedom, but the constraint Jacobian has rank 2, not 3.
+fn redundant_governor() -> Model {
+    let mut text = example_text("governor.toml");
+    let link3 = text[text.find("[[constraints]]\nname = \"link1\"").unwrap()
+        ..text.find("[[constraints]]\nname = \"link2\"").unwrap()]
+        .replace("link1", "link3");
+    text.push_str(&format!(
+        "\n[[bodies]]\nname = \"flap\"\nmass = 0.1\ninertia = [1e-3, 1e-3, 1e-3]\ncm = [0.05, 0.05, 0]\n\n[[joints]]\nname = \"flap_hinge\"\ntype = \"revolute\"\nparent = \"collar\"\nchild = \"flap\"\nat = [0, 0.05, 0]\naxis = [0, 0, 1]\nstiffness = 5\ndamping = 0.1\n\n{link3}"
+    ));
+    Model::from_str(&text, "redundant.toml").unwrap()
+}
+
+#[test]
+fn redundant_cut_joints_are_named_at_every_speed() {
+    let model = redundant_governor();
+    assert_eq!(model.dof(), 1);
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    for w in [0.5, 1.0, 2.0] {
+        let err = sweep
+            .step(w)
+            .expect_err("redundant constraints cannot be solved");
+        let msg = err.to_string();
+        assert!(
+            msg.contains("redundant cut joints")
+                && (msg.contains("link1") || msg.contains("link3")),
+            "{msg}"
+        );
+        assert!(msg.contains("rank 2 for 3 equations"), "{msg}");
+    }
+}
+
+#[test]
+fn a_loop_that_cannot_close_fails_cleanly() {
+    // Two 0.5 m links from the origin cannot reach a distance of 1 m from the point (3, 0, 0).
+    let text = r#"
+gravity = [0, -9.81, 0]
+[[bodies]]
+name = "a"
+mass = 1
+inertia = [0.01, 0.01, 0.01]
+cm = [0.25, 0, 0]
+[[bodies]]
+name = "b"
+mass = 1
+inertia = [0.01, 0.01, 0.01]
+cm = [0.75, 0, 0]
+[[joints]]
+name = "spin"
+type = "revolute"
+parent = "ground"
+child = "a"
+at = [0, 0, 0]
+axis = [0, 1, 0]
+drive = "speed"
+[[joints]]
+name = "j1"
+type = "revolute"
+parent = "a"
+child = "b"
+at = [0.5, 0, 0]
+axis = [0, 0, 1]
+[[bodies]]
+name = "c"
+mass = 1
+inertia = [0.01, 0.01, 0.01]
+cm = [1.0, 0, 0]
+[[joints]]
+name = "j2"
+type = "revolute"
+parent = "b"
+child = "c"
+at = [1.0, 0, 0]
+axis = [0, 0, 1]
+[[constraints]]
+name = "unreachable"
+type = "distance"
+body1 = "ground"
+point1 = [3, 0, 0]
+body2 = "c"
+point2 = [1.0, 0, 0]
+length = 0.2
+"#;
+    let model = Model::from_str(text, "open_loop.toml").unwrap();
+    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    for w in [0.0, 0.5, 1.0] {
+        let err = sweep.step(w).expect_err("the loop cannot close");
+        let msg = err.to_string();
+        assert!(msg.contains("equilibrium"), "{msg}");
+    }
+}
+
+#[test]
+fn repeated_eigenvalues_give_two_identical_modes() {
+    // Isotropic hinges and a massless yoke: at rest the two swing modes coincide.
+    let text = example_text("spinning_universal_pendulum.toml")
+        .replace(
+            "kx = { value = 30.0, tolerance = \"5%\" }",
+            "kx = { value = 45.0, tolerance = \"5%\" }",
+        )
+        .replace(
+            "mass = 0.2\ninertia = [1e-3, 2e-3, 1e-3]",
+            "mass = 0\ninertia = [0, 0, 0]",
+        );
+    let model = Model::from_str(&text, "isotropic.toml").unwrap();
+    let p = model.nominal();
+    let pt = point(
+        &model,
+        &p,
+        0.0,
+        &initial_guess(&model, &p, 0.0).unwrap(),
+        &Options::default(),
+    )
+    .unwrap();
+    assert_eq!(pt.modes.len(), 2);
+    let (a, b) = (&pt.modes[0], &pt.modes[1]);
+    assert!(
+        (a.damped_frequency - b.damped_frequency).abs() < 1e-9 * a.damped_frequency,
+        "{} {}",
+        a.damped_frequency,
+        b.damped_frequency
+    );
+    for m in &pt.modes {
+        assert_eq!(m.class, ModeClass::Underdamped);
+        assert!(
+            m.root
+                .right
+                .iter()
+                .all(|z| z.re.is_finite() && z.im.is_finite())
+        );
+    }
+    // Spinning splits them (gyroscopic coupling) and the sweep tracks both without failing.
+    let mut sweep = Sweep::new(&model, p, Options::default());
+    for i in 0..=20 {
+        let pt = sweep.step(0.2 * i as f64).unwrap();
+        assert!(pt.modes.iter().all(|m| m.damped_frequency.is_finite()));
+    }
+}
+
+#[test]
+fn an_unstable_equilibrium_is_reported_as_such() {
+    // Past √(3g/2L) without the branch switch, the hanging pendulum is reported unstable.
+    let model = example("rotating_pendulum.toml");
+    let opt = Options {
+        no_branch_switch: true,
+        ..Default::default()
+    };
+    let pt = point(&model, &model.nominal(), 4.5, &[0.0, 0.0], &opt).unwrap();
+    assert_eq!(pt.modes[0].class, ModeClass::Unstable);
+    assert!(pt.modes[0].root.lambda.re > 0.0 && !pt.stable());
+}
