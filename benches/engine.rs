@@ -20,6 +20,7 @@ fn bench(c: &mut Criterion) {
         ("rotating_pendulum.toml", 5.0, 6.0),
         ("governor.toml", 1.595, 5.0),
         ("spinning_universal_pendulum.toml", 3.0, 6.0),
+        ("multi_arm_governor.toml", 1.595, 5.0),
     ] {
         let model = example(file);
         let p = model.nominal();
