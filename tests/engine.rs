@@ -480,16 +480,28 @@ fn twelve_arm_governor_matches_the_two_arm_governor() {
     // on each of 12 evenly spaced arms, the symmetric collar mode is the two-arm governor's.
     let many = example("multi_arm_governor.toml");
     let two = example("governor.toml");
-    assert_eq!((many.bodies.len(), many.constraints.len(), many.dof()), (32, 12, 1));
+    assert_eq!(
+        (many.bodies.len(), many.constraints.len(), many.dof()),
+        (32, 12, 1)
+    );
     let mut s_many = Sweep::new(&many, many.nominal(), Options::default());
     let mut s_two = Sweep::new(&two, two.nominal(), Options::default());
-    let slide = (many.coordinate("slide").unwrap(), two.coordinate("slide").unwrap());
+    let slide = (
+        many.coordinate("slide").unwrap(),
+        two.coordinate("slide").unwrap(),
+    );
     for i in 0..=10 {
         let w = 0.5 * i as f64;
         let (a, b) = (s_many.step(w).unwrap(), s_two.step(w).unwrap());
-        assert!((a.equilibrium.q[slide.0] - b.equilibrium.q[slide.1]).abs() < 1e-10, "Ω = {w}");
+        assert!(
+            (a.equilibrium.q[slide.0] - b.equilibrium.q[slide.1]).abs() < 1e-10,
+            "Ω = {w}"
+        );
         let (la, lb) = (a.modes[0].root.lambda, b.modes[0].root.lambda);
-        assert!((la - lb).norm() <= 1e-9 * lb.norm(), "Ω = {w}: {la} vs {lb}");
+        assert!(
+            (la - lb).norm() <= 1e-9 * lb.norm(),
+            "Ω = {w}: {la} vs {lb}"
+        );
         assert!(a.equilibrium.constraint_violation < 1e-12);
     }
 }
