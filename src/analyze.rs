@@ -74,6 +74,15 @@ pub struct Analysis {
     pub failures: Vec<(f64, String)>,
     /// The nominal points (for plots), `None` where they failed.
     pub nominal: Vec<Option<Point>>,
+    /// Monte Carlo samples evaluated per case (fewer than asked if the run was interrupted).
+    pub samples_done: Vec<usize>,
+}
+
+impl Analysis {
+    /// Was the Monte Carlo interrupted before all samples were evaluated?
+    pub fn interrupted(&self, asked: usize) -> bool {
+        self.samples_done.iter().any(|&n| n < asked)
+    }
 }
 
 /// Progress callback: (stage, done, total).
@@ -129,6 +138,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     }
     let analytic_seconds = t0.elapsed().as_secs_f64();
 
+    let mut samples_done = Vec::new();
     let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
         let t1 = Instant::now();
         let modes = nominal
@@ -140,7 +150,11 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         let outs = outputs(modes, transfer.is_some());
         for (ci, s) in spreads.iter().enumerate() {
             let name = format!("monte carlo {}", opt.cases[ci].name);
-            let stats = montecarlo::run(
+            if montecarlo::STOP.load(std::sync::atomic::Ordering::SeqCst) {
+                samples_done.push(0);
+                continue;
+            }
+            let (stats, done) = montecarlo::run(
                 model,
                 &vars,
                 s,
@@ -151,8 +165,9 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                 mc,
                 &|d| progress(&name, d, mc.samples),
             );
+            samples_done.push(done);
             for (si, row) in stats.iter().enumerate() {
-                if nominal[si].is_none() {
+                if nominal[si].is_none() || done < 2 {
                     continue;
                 }
                 for (o, st) in outs.iter().zip(row) {
@@ -180,6 +195,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         monte_carlo_seconds,
         failures,
         nominal,
+        samples_done,
     }
 }
 

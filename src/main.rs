@@ -209,6 +209,11 @@ enum Command {
 /// The governor example, built into the binary so `analyze` runs with no model file.
 const EMBEDDED_GOVERNOR: &str = include_str!("../examples/governor.toml");
 
+/// The run was interrupted after writing a partial result: exit code 130.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted; the outputs hold a partial result")]
+struct Interrupted;
+
 /// Bad input (model, arguments): exit code 2.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
@@ -553,7 +558,16 @@ fn run(cli: Cli) -> Result<()> {
                     }
                 }
             };
+            // Ctrl-C stops the Monte Carlo after its current chunk; what was done is written,
+            // flagged as partial, and the exit code is 130.
+            let _ = ctrlc::set_handler(|| {
+                eprintln!(
+                    "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
+                );
+                modaltol::montecarlo::request_stop();
+            });
             let a = analyze(&m, &opt, &progress);
+            let partial = mc.is_some_and(|mc| a.interrupted(mc.samples));
             let mut csv = csv::Writer::from_path(output.join("tolerance.csv"))?;
             csv.write_record(report::tolerance_header(&m, &a))?;
             for row in report::tolerance_rows(&a) {
@@ -595,6 +609,13 @@ fn run(cli: Cli) -> Result<()> {
                     "modaltol: {} speed(s) failed; see summary.json",
                     a.failures.len()
                 );
+            }
+            if partial {
+                eprintln!(
+                    "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
+                    a.samples_done
+                );
+                return Err(Interrupted.into());
             }
         }
         Command::Frf {
@@ -653,6 +674,8 @@ fn main() {
         eprintln!("modaltol: error: {e:#}");
         let code = if e.downcast_ref::<InputError>().is_some() {
             2
+        } else if e.downcast_ref::<Interrupted>().is_some() {
+            130
         } else {
             1
         };

@@ -25,6 +25,16 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
+/// Set to stop a running Monte Carlo after its current chunk (e.g. from a Ctrl-C handler);
+/// the statistics then cover the samples done so far. Never cleared: once set, later runs in
+/// the same process stop at once.
+pub static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Asks running Monte Carlo loops to stop after their current chunk.
+pub fn request_stop() {
+    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
 /// Monte Carlo settings.
 #[derive(Debug, Clone, Copy)]
 pub struct McOptions {
@@ -245,7 +255,8 @@ fn run_sample(
 
 /// Runs the Monte Carlo over `speeds`; `nominal[s]` is the nominal point at speed s (`None` if
 /// it failed; such speeds get no statistics). Returns `stats[speed][output]`. `progress` is
-/// called with the number of samples done.
+/// called with the number of samples done. Returns the statistics and the number of samples
+/// evaluated (fewer than asked when [`request_stop`] interrupted the run).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     model: &Model,
@@ -257,7 +268,7 @@ pub fn run(
     transfer: Option<&Transfer>,
     opt: McOptions,
     progress: &(dyn Fn(usize) + Sync),
-) -> Vec<Vec<McStat>> {
+) -> (Vec<Vec<McStat>>, usize) {
     let sampler = Sampler::new(model, vars, spread, opt);
     let mut acc = vec![vec![Welford::default(); outs.len()]; speeds.len()];
     let pool = rayon::ThreadPoolBuilder::new()
@@ -266,7 +277,7 @@ pub fn run(
         .expect("thread pool");
     const CHUNK: usize = 64;
     let mut done = 0;
-    while done < opt.samples {
+    while done < opt.samples && !STOP.load(std::sync::atomic::Ordering::SeqCst) {
         let end = (done + CHUNK).min(opt.samples);
         let results: Vec<SampleResult> = pool.install(|| {
             (done..end)
@@ -305,9 +316,11 @@ pub fn run(
         done = end;
         progress(done);
     }
-    acc.iter()
+    let stats = acc
+        .iter()
         .map(|row| row.iter().map(Welford::stat).collect())
-        .collect()
+        .collect();
+    (stats, done)
 }
 
 #[cfg(test)]

@@ -596,7 +596,9 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "methods": ["first_order", "second_order", "invariant", "monte_carlo"],
         "analytic_seconds": a.analytic_seconds,
         "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
-                                          "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed})),
+                                          "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
+                                          "samples_done": a.samples_done, "partial": a.interrupted(m.samples)})),
+        "partial": mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
         "paper": {"note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
                   "pendulum": {"analytic_seconds": 0.703, "monte_carlo_seconds": 448.281, "ratio": 638},
@@ -629,6 +631,13 @@ pub fn report_html(
         esc(&model.name)
     );
     let _ = writeln!(h, "<h1>Tolerance analysis: {}</h1>", esc(&model.name));
+    if let Some(m) = mc.filter(|m| a.interrupted(m.samples)) {
+        let _ = writeln!(
+            h,
+            "<p><b>Partial result:</b> the Monte Carlo was interrupted; samples done per case {:?} of {} asked.</p>",
+            a.samples_done, m.samples
+        );
+    }
     let _ = writeln!(
         h,
         "<p>Model file <code>{}</code>. Speeds {} points. SI units; speeds and frequencies in rad/s.</p>",

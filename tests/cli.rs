@@ -400,3 +400,51 @@ fn analyze_without_a_model_runs_the_built_in_governor() {
         assert!(text.contains(&format!(",{case},")), "{case}");
     }
 }
+
+#[test]
+fn interrupted_monte_carlo_leaves_a_flagged_partial_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let mut child = bin()
+        .args([
+            "analyze",
+            "-o",
+            out.to_str().unwrap(),
+            "--speed",
+            "1:1.5:0.5",
+            "--samples",
+            "1000000",
+            "--threads",
+            "2",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("partial result"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["partial"], true);
+    let done = summary["monte_carlo"]["samples_done"].as_array().unwrap();
+    assert!(
+        done[0].as_u64().unwrap() >= 64 && done[0].as_u64().unwrap() < 1_000_000,
+        "{done:?}"
+    );
+    let csv = std::fs::read_to_string(out.join("tolerance.csv")).unwrap();
+    assert!(
+        csv.contains(",monte_carlo,"),
+        "the samples done are in the table"
+    );
+    assert!(
+        std::fs::read_to_string(out.join("report.html"))
+            .unwrap()
+            .contains("Partial result")
+    );
+}
