@@ -405,7 +405,7 @@ fn analyze_without_a_model_runs_the_built_in_governor() {
 fn interrupted_monte_carlo_leaves_a_flagged_partial_result() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p");
-    let mut child = bin()
+    let child = bin()
         .args([
             "analyze",
             "-o",
