@@ -16,7 +16,12 @@ fn lookup(s: &str) -> Option<usize> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000),
+        // Failing seeds are kept beside the corpus (replayed by proptest on the next run).
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::Direct("tests/fuzz_corpus/proptest-regressions.txt"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn expressions_parse_or_fail_cleanly(s in "[-+*/^()a-zL0-9., eEpisqrtcoanlbx_]{0,60}") {
