@@ -12,7 +12,7 @@
 //! `J_ω = axial(∂A/∂q_i Aᵀ)`, and in the same pass the constraint Jacobian `Φ_q`.
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
-use super::kinematics::{Pose, point, poses};
+use super::kinematics::{Pose, point, poses, update};
 use super::{ConstraintData, NormDual, System};
 use crate::real::{D1, D2, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
@@ -142,6 +142,9 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
     };
     let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
+    // Poses without derivative, once; per coordinate only the bodies below its joint move.
+    let p0 = poses(partial, &base);
+    let zero = V3::from_element(cst::<T>(0.0));
     for i in 0..n {
         if !coords.contains(&i) {
             out.jv.push(Vec::new());
@@ -151,14 +154,17 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         }
         let mut qi = base.clone();
         qi[i] = Dual::new(q[i], cst(1.0));
-        let pp = poses(partial, &qi);
-        let (mut jv, mut jw) = (Vec::with_capacity(pp.len()), Vec::with_capacity(pp.len()));
-        for (b, pose) in pp.iter().enumerate() {
+        let mut pp = p0.clone();
+        update(partial, &qi, &mut pp, partial.subtree[i].iter().copied());
+        let (mut jv, mut jw) = (vec![zero; pp.len()], vec![zero; pp.len()]);
+        for &ji in &partial.subtree[i] {
+            let b = partial.joints[ji].child;
+            let pose = &pp[b];
             let x = pose.apply(&partial.bodies[b].cm);
-            jv.push(x.map(|c| c.eps));
+            jv[b] = x.map(|c| c.eps);
             let a = pose.rot.map(|c| c.re);
             let ae = pose.rot.map(|c| c.eps);
-            jw.push(axial(&mul3_t(&ae, &a)));
+            jw[b] = axial(&mul3_t(&ae, &a));
         }
         out.jv.push(jv);
         out.jw.push(jw);

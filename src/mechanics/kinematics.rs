@@ -63,7 +63,20 @@ pub fn rotation<T: Real>(a: &V3<T>, angle: T) -> M3<T> {
 /// Poses of all bodies at coordinates `q` (ground excluded).
 pub fn poses<T: Real>(sys: &System<T>, q: &[T]) -> Vec<Pose<T>> {
     let mut out = vec![Pose::identity(); sys.bodies.len()];
-    for j in &sys.joints {
+    update(sys, q, &mut out, 0..sys.joints.len());
+    out
+}
+
+/// Recomputes the children of the joints `which` (indices into `sys.joints`, parents first),
+/// leaving the other poses in `out` as they are.
+pub fn update<T: Real>(
+    sys: &System<T>,
+    q: &[T],
+    out: &mut [Pose<T>],
+    which: impl IntoIterator<Item = usize>,
+) {
+    for ji in which {
+        let j = &sys.joints[ji];
         let parent = j.parent.map_or(Pose::identity(), |p| out[p]);
         let rel = match (j.kind, j.coord) {
             (JointKind::Revolute, Some(c)) => {
@@ -84,7 +97,6 @@ pub fn poses<T: Real>(sys: &System<T>, q: &[T]) -> Vec<Pose<T>> {
             trans: mulv(&parent.rot, &rel.trans) + parent.trans,
         };
     }
-    out
 }
 
 /// Current position of a point on `body` (`None` = ground) given in the reference configuration.

@@ -80,6 +80,10 @@ pub struct System<T> {
     pub constraints: Vec<ConstraintData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
+    /// For each coordinate, the joints (indices into `joints`, parents first) whose child
+    /// moves with it: the joint of the coordinate and every joint below it. Only the poses of
+    /// their children depend on the coordinate.
+    pub subtree: Vec<Vec<usize>>,
     /// Number of coordinates.
     pub n: usize,
     /// Number of constraint equations.
@@ -198,6 +202,7 @@ impl<T: Real> System<T> {
                 }
             }
         }
+        let subtree = subtrees(&joints, model.coordinates.len());
         Ok(System {
             gravity: v3(&model.gravity, p, w)?,
             bodies,
@@ -206,6 +211,7 @@ impl<T: Real> System<T> {
             springs,
             constraints,
             drive,
+            subtree,
             n: model.coordinates.len(),
             m: model.n_constraints(),
         })
@@ -281,6 +287,7 @@ impl<T: Real> System<T> {
                 })
                 .collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),
+            subtree: self.subtree.clone(),
             n: self.n,
             m: self.m,
         }
@@ -290,6 +297,24 @@ impl<T: Real> System<T> {
     pub fn steady_speeds(&self) -> Vec<T> {
         self.drive.iter().map(|d| d.unwrap_or(cst(0.0))).collect()
     }
+}
+
+/// The joints below each coordinate's joint (see [`System::subtree`]).
+fn subtrees<T: Real>(joints: &[JointData<T>], n: usize) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new(); n];
+    for (ji, j) in joints.iter().enumerate() {
+        let Some(c) = j.coord else { continue };
+        let mut moving = vec![false; joints.len()];
+        let mut bodies = vec![j.child];
+        for (k, other) in joints.iter().enumerate().skip(ji) {
+            if k == ji || other.parent.is_some_and(|p| bodies.contains(&p)) {
+                moving[k] = true;
+                bodies.push(other.child);
+            }
+        }
+        out[c] = (0..joints.len()).filter(|&k| moving[k]).collect();
+    }
+    out
 }
 
 /// Euclidean norm over any [`Real`] (nalgebra's `norm` needs a `RealField`).
