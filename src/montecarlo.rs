@@ -60,9 +60,10 @@ pub struct McStat {
     pub class_changed: usize,
 }
 
-/// One-pass central moments (Welford, extended to the fourth moment by Terriberry).
-#[derive(Debug, Clone, Copy, Default)]
-struct Welford {
+/// One-pass central moments (Welford, extended to the fourth moment by Terriberry), with the
+/// counts of failed and class-changed samples; combinable (Pébay's pairwise formulas).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Moments {
     n: usize,
     mean: f64,
     m2: f64,
@@ -72,7 +73,41 @@ struct Welford {
     class_changed: usize,
 }
 
-impl Welford {
+/// Moments of one chunk of samples: `[speed][output]`.
+pub type ChunkState = Vec<Vec<Moments>>;
+
+impl Moments {
+    /// Merges `b` (later samples) into `self` (Pébay 2008, eqs. 2.1–2.4).
+    pub fn combine(&mut self, b: &Moments) {
+        let (fa, fb) = (self.failed + b.failed, self.class_changed + b.class_changed);
+        if b.n == 0 {
+        } else if self.n == 0 {
+            *self = *b;
+        } else {
+            let (na, nb) = (self.n as f64, b.n as f64);
+            let n = na + nb;
+            let d = b.mean - self.mean;
+            let (d2, d3, d4) = (d * d, d * d * d, d * d * d * d);
+            let m4 = self.m4
+                + b.m4
+                + d4 * na * nb * (na * na - na * nb + nb * nb) / (n * n * n)
+                + 6.0 * d2 * (na * na * b.m2 + nb * nb * self.m2) / (n * n)
+                + 4.0 * d * (na * b.m3 - nb * self.m3) / n;
+            let m3 = self.m3
+                + b.m3
+                + d3 * na * nb * (na - nb) / (n * n)
+                + 3.0 * d * (na * b.m2 - nb * self.m2) / n;
+            let m2 = self.m2 + b.m2 + d2 * na * nb / n;
+            self.mean += d * nb / n;
+            self.m2 = m2;
+            self.m3 = m3;
+            self.m4 = m4;
+            self.n += b.n;
+        }
+        self.failed = fa;
+        self.class_changed = fb;
+    }
+
     fn add(&mut self, x: f64) {
         let n1 = self.n as f64;
         self.n += 1;
@@ -253,12 +288,25 @@ fn run_sample(
         .collect()
 }
 
-/// Runs the Monte Carlo over `speeds`; `nominal[s]` is the nominal point at speed s (`None` if
-/// it failed; such speeds get no statistics). Returns `stats[speed][output]`. `progress` is
-/// called with the number of samples done. Returns the statistics and the number of samples
-/// evaluated (fewer than asked when [`request_stop`] interrupted the run).
+/// Samples per chunk: the unit of parallel work, of interruption and of sharding.
+pub const CHUNK: usize = 64;
+
+/// Number of chunks for `samples` samples.
+pub fn chunks(samples: usize) -> usize {
+    samples.div_ceil(CHUNK)
+}
+
+/// The chunks `[from, to)` of shard `k` (0-based) of `n`: contiguous, as even as possible.
+pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize> {
+    let c = chunks(samples);
+    (c * k / n)..(c * (k + 1) / n)
+}
+
+/// Evaluates the chunks `range` (samples `CHUNK·i .. CHUNK·(i+1)` of chunk `i`) and returns each
+/// chunk's moments `[chunk][speed][output]`, in chunk order. Stops early (fewer chunks) when
+/// [`request_stop`] is called. `progress` gets the number of samples done in this call.
 #[allow(clippy::too_many_arguments)]
-pub fn run(
+pub fn run_chunks(
     model: &Model,
     vars: &[usize],
     spread: &Spread,
@@ -267,20 +315,23 @@ pub fn run(
     outs: &[Output],
     transfer: Option<&Transfer>,
     opt: McOptions,
+    range: std::ops::Range<usize>,
     progress: &(dyn Fn(usize) + Sync),
-) -> (Vec<Vec<McStat>>, usize) {
+) -> Vec<ChunkState> {
     let sampler = Sampler::new(model, vars, spread, opt);
-    let mut acc = vec![vec![Welford::default(); outs.len()]; speeds.len()];
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opt.threads.unwrap_or(0))
         .build()
         .expect("thread pool");
-    const CHUNK: usize = 64;
+    let mut out = Vec::with_capacity(range.len());
     let mut done = 0;
-    while done < opt.samples && !STOP.load(std::sync::atomic::Ordering::SeqCst) {
-        let end = (done + CHUNK).min(opt.samples);
+    for chunk in range {
+        if STOP.load(std::sync::atomic::Ordering::SeqCst) {
+            break;
+        }
+        let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(opt.samples));
         let results: Vec<SampleResult> = pool.install(|| {
-            (done..end)
+            (start..end)
                 .into_par_iter()
                 .map(|i| {
                     run_sample(
@@ -294,6 +345,7 @@ pub fn run(
                 })
                 .collect()
         });
+        let mut acc = vec![vec![Moments::default(); outs.len()]; speeds.len()];
         for r in results {
             for (s, at) in r.iter().enumerate() {
                 match at {
@@ -313,13 +365,70 @@ pub fn run(
                 }
             }
         }
-        done = end;
+        out.push(acc);
+        done += end - start;
         progress(done);
     }
-    let stats = acc
-        .iter()
-        .map(|row| row.iter().map(Welford::stat).collect())
-        .collect();
+    out
+}
+
+/// Folds chunk moments in order into statistics `[speed][output]` and the number of samples
+/// they cover. A single run and merged shards fold the same chunks in the same order, so their
+/// results are identical.
+pub fn fold<'a>(
+    chunks: impl IntoIterator<Item = &'a ChunkState>,
+    speeds: usize,
+    outs: usize,
+) -> (Vec<Vec<McStat>>, usize) {
+    let mut acc = vec![vec![Moments::default(); outs]; speeds];
+    let mut samples = 0;
+    for c in chunks {
+        for (a, row) in acc.iter_mut().zip(c) {
+            for (x, m) in a.iter_mut().zip(row) {
+                x.combine(m);
+            }
+        }
+        samples += c
+            .first()
+            .and_then(|r| r.first())
+            .map_or(0, |m| m.n + m.failed);
+    }
+    (
+        acc.iter()
+            .map(|row| row.iter().map(Moments::stat).collect())
+            .collect(),
+        samples,
+    )
+}
+
+/// Runs the whole Monte Carlo: all chunks, folded. Returns `stats[speed][output]` and the
+/// number of samples evaluated (fewer than asked when [`request_stop`] interrupted the run).
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    model: &Model,
+    vars: &[usize],
+    spread: &Spread,
+    speeds: &[f64],
+    nominal: &[Option<Point>],
+    outs: &[Output],
+    transfer: Option<&Transfer>,
+    opt: McOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> (Vec<Vec<McStat>>, usize) {
+    let states = run_chunks(
+        model,
+        vars,
+        spread,
+        speeds,
+        nominal,
+        outs,
+        transfer,
+        opt,
+        0..chunks(opt.samples),
+        progress,
+    );
+    let (stats, _) = fold(&states, speeds.len(), outs.len());
+    let done = (states.len() * CHUNK).min(opt.samples);
     (stats, done)
 }
 
@@ -332,7 +441,7 @@ mod tests {
         let xs: Vec<f64> = (0..1000)
             .map(|i| ((i * 7919) % 1000) as f64 / 100.0 + (i as f64 * 0.37).sin().powi(3))
             .collect();
-        let mut w = Welford::default();
+        let mut w = Moments::default();
         xs.iter().for_each(|&x| w.add(x));
         let n = xs.len() as f64;
         let mean = xs.iter().sum::<f64>() / n;
@@ -343,6 +452,16 @@ mod tests {
         assert!((w.m2 - m2).abs() < 1e-10 * m2);
         assert!((w.m3 - m3).abs() < 1e-8 * m3.abs().max(m2));
         assert!((w.m4 - m4).abs() < 1e-10 * m4);
+        // Combining two halves gives the moments of the whole.
+        let (mut a, mut b) = (Moments::default(), Moments::default());
+        xs[..377].iter().for_each(|&x| a.add(x));
+        xs[377..].iter().for_each(|&x| b.add(x));
+        a.combine(&b);
+        assert_eq!(a.n, w.n);
+        assert!((a.mean - w.mean).abs() < 1e-12 * w.mean.abs());
+        assert!((a.m2 - w.m2).abs() < 1e-10 * w.m2);
+        assert!((a.m3 - w.m3).abs() < 1e-8 * w.m3.abs().max(w.m2));
+        assert!((a.m4 - w.m4).abs() < 1e-10 * w.m4);
         // Normal-like data: the σ interval is close to the χ² one, about ±1.96/√(2n).
         let s = w.stat();
         assert!(s.std_ci.0 < s.std && s.std < s.std_ci.1);
