@@ -27,6 +27,7 @@ fn bench(c: &mut Criterion) {
         speeds: speeds.clone(),
         cases: springs.clone(),
         monte_carlo: None,
+        ..Default::default()
     };
     g.bench_function("analytic_501_speeds_3_cases", |b| {
         b.iter(|| analyze(&model, &analytic, &|_, _, _| {}))
@@ -40,6 +41,7 @@ fn bench(c: &mut Criterion) {
             sampling: Sampling::Random,
             threads: None,
         }),
+        ..Default::default()
     };
     g.bench_function(
         "analytic_and_monte_carlo_100_samples_501_speeds_1_case",

@@ -7,7 +7,7 @@
 //! of the analytic part and of the Monte Carlo are measured for the summary.
 
 use crate::model::{Case, Model};
-use crate::montecarlo::{self, McOptions, McStat};
+use crate::montecarlo::{self, ChunkState, McOptions, McStat};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{
     LocalModel, Output, Quantity, Spread, first_order, invariant, local_model, outputs,
@@ -53,12 +53,26 @@ pub struct Row {
     pub shares: Option<Vec<f64>>,
 }
 
+/// How the Monte Carlo samples are split across runs.
+#[derive(Debug, Clone, Default)]
+pub enum Split {
+    /// All samples here.
+    #[default]
+    Whole,
+    /// Only the chunks of shard `k` (0-based) of `n`; no Monte Carlo rows, the chunk moments are
+    /// returned in [`Analysis::shard_states`] for [`Split::Merged`].
+    Shard(usize, usize),
+    /// The chunk moments of all shards, per case, in chunk order: folded as a whole run would.
+    Merged(Vec<Vec<ChunkState>>),
+}
+
 /// What to analyse.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct AnalyzeOptions {
     pub speeds: Vec<f64>,
     pub cases: Vec<Case>,
     pub monte_carlo: Option<McOptions>,
+    pub split: Split,
 }
 
 /// Result of [`analyze`].
@@ -76,6 +90,8 @@ pub struct Analysis {
     pub nominal: Vec<Option<Point>>,
     /// Monte Carlo samples evaluated per case (fewer than asked if the run was interrupted).
     pub samples_done: Vec<usize>,
+    /// With [`Split::Shard`]: this shard's chunk moments per case, in chunk order.
+    pub shard_states: Vec<Vec<ChunkState>>,
 }
 
 impl Analysis {
@@ -139,6 +155,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     let analytic_seconds = t0.elapsed().as_secs_f64();
 
     let mut samples_done = Vec::new();
+    let mut shard_states = Vec::new();
     let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
         let t1 = Instant::now();
         let modes = nominal
@@ -150,21 +167,49 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         let outs = outputs(modes, transfer.is_some());
         for (ci, s) in spreads.iter().enumerate() {
             let name = format!("monte carlo {}", opt.cases[ci].name);
-            if montecarlo::STOP.load(std::sync::atomic::Ordering::SeqCst) {
-                samples_done.push(0);
-                continue;
-            }
-            let (stats, done) = montecarlo::run(
-                model,
-                &vars,
-                s,
-                &opt.speeds,
-                &nominal,
-                &outs,
-                transfer.as_ref(),
-                mc,
-                &|d| progress(&name, d, mc.samples),
-            );
+            let (stats, done) = match &opt.split {
+                Split::Merged(states) => {
+                    let (stats, _) = montecarlo::fold(&states[ci], opt.speeds.len(), outs.len());
+                    (
+                        stats,
+                        (states[ci].len() * montecarlo::CHUNK).min(mc.samples),
+                    )
+                }
+                Split::Shard(k, n) => {
+                    let range = montecarlo::shard_chunks(mc.samples, *k, *n);
+                    let states = montecarlo::run_chunks(
+                        model,
+                        &vars,
+                        s,
+                        &opt.speeds,
+                        &nominal,
+                        &outs,
+                        transfer.as_ref(),
+                        mc,
+                        range,
+                        &|d| progress(&name, d, mc.samples),
+                    );
+                    shard_states.push(states);
+                    continue;
+                }
+                Split::Whole => {
+                    if montecarlo::STOP.load(std::sync::atomic::Ordering::SeqCst) {
+                        samples_done.push(0);
+                        continue;
+                    }
+                    montecarlo::run(
+                        model,
+                        &vars,
+                        s,
+                        &opt.speeds,
+                        &nominal,
+                        &outs,
+                        transfer.as_ref(),
+                        mc,
+                        &|d| progress(&name, d, mc.samples),
+                    )
+                }
+            };
             samples_done.push(done);
             for (si, row) in stats.iter().enumerate() {
                 if nominal[si].is_none() || done < 2 {
@@ -196,6 +241,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         failures,
         nominal,
         samples_done,
+        shard_states,
     }
 }
 

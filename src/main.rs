@@ -3,11 +3,11 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
-use modaltol::analyze::{AnalyzeOptions, analyze};
+use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::frf::transfer;
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
-use modaltol::montecarlo::McOptions;
+use modaltol::montecarlo::{ChunkState, McOptions};
 use modaltol::report::{self, SweepColumns, SweepExtras};
 use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
@@ -175,6 +175,23 @@ enum Command {
         /// Sampling of the design variables; default: the model's.
         #[arg(long, value_enum)]
         sampling: Option<SamplingArg>,
+        /// Compute only shard K of N of the Monte Carlo samples (e.g. 2/8, one per batch job)
+        /// and write DIR/shard-K-of-N.json; combine the shards with `modaltol merge`.
+        #[arg(long)]
+        shard: Option<String>,
+    },
+    /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
+    /// (same seed, same numbers): writes the same files as `analyze`.
+    Merge {
+        /// Model file the shards were made from; default: the built-in governor example.
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Output directory (created if missing).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The shard files (shard-K-of-N.json), all N of them, in any order.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
     },
     /// Frequency response at one speed: H(jω) from a generalised force on one joint coordinate
     /// to the response of another, over a range of excitation frequencies.
@@ -322,6 +339,147 @@ fn sensitivities(
         Derivatives::Ad => sensitivity::analytic(m, &m.nominal(), pt, wrt, tf),
         Derivatives::Fd => sensitivity::finite_difference(m, &m.nominal(), pt, wrt, tf),
     }
+}
+
+/// Format tag of shard files.
+const SHARD_FORMAT: &str = "modaltol-shard-1";
+
+/// What `analyze --shard K/N` writes: the chunk moments of its share of the samples.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ShardFile {
+    format: String,
+    /// Identifies the model and its tolerance cases.
+    fingerprint: String,
+    speed: String,
+    samples: usize,
+    seed: u64,
+    sampling: Sampling,
+    shard: usize,
+    of: usize,
+    states: Vec<Vec<ChunkState>>,
+}
+
+/// A fingerprint of the model's numbers and the tolerance cases (shards must match them).
+fn fingerprint(m: &Model, cases: &[modaltol::model::Case]) -> String {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    m.name.hash(&mut h);
+    for p in &m.parameters {
+        p.name.hash(&mut h);
+        p.value.to_bits().hash(&mut h);
+    }
+    format!("{cases:?}").hash(&mut h);
+    format!("{:016x}", h.finish())
+}
+
+fn model_or_governor(model: &Option<PathBuf>) -> Result<Model> {
+    match model {
+        Some(path) => load(path),
+        None => Model::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
+            .map_err(|e| InputError(e.to_string()).into()),
+    }
+}
+
+/// The model's tolerance cases, or one made of the parameters' own tolerances.
+fn tolerance_cases(m: &Model) -> Result<Vec<modaltol::model::Case>> {
+    let mut cases = m.analysis.cases.clone();
+    if cases.is_empty() {
+        let c = modaltol::model::Case::from_parameters(m);
+        if c.tolerances.is_empty() {
+            return Err(InputError(
+                "the model declares no tolerance case and no parameter carries a tolerance".into(),
+            )
+            .into());
+        }
+        cases.push(c);
+    }
+    Ok(cases)
+}
+
+/// Progress on stderr when it is a terminal.
+fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
+    let show = std::io::stderr().is_terminal();
+    move |stage: &str, done: usize, total: usize| {
+        if show && (done == total || done.is_multiple_of(16)) {
+            eprint!("\r{stage}: {done}/{total}          ");
+            if done == total {
+                eprintln!();
+            }
+        }
+    }
+}
+
+/// Ctrl-C stops the Monte Carlo after its current chunk; what was done is written, flagged as
+/// partial, and the exit code is 130.
+fn install_interrupt_handler() {
+    let _ = ctrlc::set_handler(|| {
+        eprintln!(
+            "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
+        );
+        modaltol::montecarlo::request_stop();
+    });
+}
+
+/// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
+fn write_outputs(
+    m: &Model,
+    a: &modaltol::analyze::Analysis,
+    mc: Option<&McOptions>,
+    threads: Option<usize>,
+    output: &std::path::Path,
+) -> Result<()> {
+    std::fs::create_dir_all(output)
+        .with_context(|| format!("cannot create {}", output.display()))?;
+    let mut csv = csv::Writer::from_path(output.join("tolerance.csv"))?;
+    csv.write_record(report::tolerance_header(m, a))?;
+    for row in report::tolerance_rows(a) {
+        csv.write_record(&row)?;
+    }
+    csv.flush()?;
+    let (plots, critical) = modaltol::plots::plots(m, a);
+    let fonts = modaltol::plots::fonts();
+    let mut files = Vec::new();
+    for p in &plots {
+        let svg = format!("{}.svg", p.stem);
+        std::fs::write(output.join(&svg), &p.svg)?;
+        match modaltol::plots::png(&p.svg, &fonts) {
+            Ok(png) => std::fs::write(output.join(format!("{}.png", p.stem)), png)?,
+            Err(e) => eprintln!("modaltol: no PNG for {}: {e}", p.stem),
+        }
+        files.push((svg, p.title.clone()));
+    }
+    std::fs::write(
+        output.join("report.html"),
+        report::report_html(m, a, &files, &critical, mc),
+    )?;
+    let used = threads.unwrap_or_else(rayon::current_num_threads);
+    std::fs::write(
+        output.join("summary.json"),
+        serde_json::to_string_pretty(&report::summary_json(m, a, mc, used))?,
+    )?;
+    eprintln!(
+        "modaltol: analytic {:.3} s{}; wrote {}",
+        a.analytic_seconds,
+        a.monte_carlo_seconds.map_or(String::new(), |t| format!(
+            ", Monte Carlo {t:.3} s (ratio {:.0})",
+            t / a.analytic_seconds
+        )),
+        output.display()
+    );
+    if !a.failures.is_empty() {
+        eprintln!(
+            "modaltol: {} speed(s) failed; see summary.json",
+            a.failures.len()
+        );
+    }
+    if mc.is_some_and(|mc| a.interrupted(mc.samples)) {
+        eprintln!(
+            "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
+            a.samples_done
+        );
+        return Err(Interrupted.into());
+    }
+    Ok(())
 }
 
 fn writer(output: &Option<PathBuf>) -> Result<Box<dyn Write>> {
@@ -504,30 +662,16 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             no_monte_carlo,
             sampling,
+            shard,
         } => {
-            let m = match &model {
-                Some(path) => load(path)?,
-                None => Model::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
-                    .map_err(|e| InputError(e.to_string()))?,
-            };
+            let m = model_or_governor(&model)?;
             let range = match &speed {
                 Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
                 None => m.analysis.speed.ok_or_else(|| {
                     InputError("no --speed given and the model has no [analysis] speed".into())
                 })?,
             };
-            let mut cases = m.analysis.cases.clone();
-            if cases.is_empty() {
-                let c = modaltol::model::Case::from_parameters(&m);
-                if c.tolerances.is_empty() {
-                    return Err(InputError(
-                        "the model declares no tolerance case and no parameter carries a tolerance"
-                            .into(),
-                    )
-                    .into());
-                }
-                cases.push(c);
-            }
+            let cases = tolerance_cases(&m)?;
             if samples == Some(0) || samples == Some(1) {
                 return Err(InputError("--samples must be at least 2".into()).into());
             }
@@ -542,81 +686,146 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 threads,
             });
+            let split = match &shard {
+                None => Split::Whole,
+                Some(spec) => {
+                    let bad =
+                        || InputError(format!("--shard '{spec}': expected K/N with 1 ≤ K ≤ N"));
+                    let (k, n) = spec.split_once('/').ok_or_else(bad)?;
+                    let (k, n): (usize, usize) = (
+                        k.trim().parse().map_err(|_| bad())?,
+                        n.trim().parse().map_err(|_| bad())?,
+                    );
+                    if k == 0 || k > n {
+                        return Err(bad().into());
+                    }
+                    if mc.is_none() {
+                        return Err(InputError(
+                            "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo"
+                                .into(),
+                        )
+                        .into());
+                    }
+                    Split::Shard(k - 1, n)
+                }
+            };
             std::fs::create_dir_all(&output)
                 .with_context(|| format!("cannot create {}", output.display()))?;
             let opt = AnalyzeOptions {
                 speeds: range.speeds().collect(),
                 cases,
                 monte_carlo: mc,
+                split,
             };
-            let show = std::io::stderr().is_terminal();
-            let progress = |stage: &str, done: usize, total: usize| {
-                if show && (done == total || done.is_multiple_of(16)) {
-                    eprint!("\r{stage}: {done}/{total}          ");
-                    if done == total {
-                        eprintln!();
-                    }
+            install_interrupt_handler();
+            let a = analyze(&m, &opt, &progress_printer());
+            if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
+                let file = ShardFile {
+                    format: SHARD_FORMAT.into(),
+                    fingerprint: fingerprint(&m, &opt.cases),
+                    speed: format!("{}:{}:{}", range.from, range.to, range.step),
+                    samples: mc.samples,
+                    seed: mc.seed,
+                    sampling: mc.sampling,
+                    shard: k + 1,
+                    of: *n,
+                    states: a.shard_states.clone(),
+                };
+                let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+                std::fs::write(&path, serde_json::to_string(&file)?)?;
+                let done: Vec<usize> = a.shard_states.iter().map(|c| c.len()).collect();
+                let expect = modaltol::montecarlo::shard_chunks(mc.samples, *k, *n).len();
+                eprintln!(
+                    "modaltol: wrote {} (chunks per case {done:?} of {expect}); combine the shards with `modaltol merge`",
+                    path.display()
+                );
+                if done.iter().any(|&d| d < expect) {
+                    return Err(Interrupted.into());
                 }
+                return Ok(());
+            }
+            write_outputs(&m, &a, mc.as_ref(), threads, &output)?;
+        }
+        Command::Merge {
+            model,
+            output,
+            shards,
+        } => {
+            let m = model_or_governor(&model)?;
+            let cases = tolerance_cases(&m)?;
+            let mut files: Vec<ShardFile> = Vec::new();
+            for path in &shards {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("cannot read {}", path.display()))?;
+                let f: ShardFile = serde_json::from_str(&text).map_err(|e| {
+                    InputError(format!(
+                        "{}: not a modaltol shard file: {e}",
+                        path.display()
+                    ))
+                })?;
+                if f.format != SHARD_FORMAT {
+                    return Err(InputError(format!(
+                        "{}: unknown shard format '{}'",
+                        path.display(),
+                        f.format
+                    ))
+                    .into());
+                }
+                if f.fingerprint != fingerprint(&m, &cases) {
+                    return Err(InputError(format!(
+                        "{}: made from another model or other tolerance cases",
+                        path.display()
+                    ))
+                    .into());
+                }
+                files.push(f);
+            }
+            files.sort_by_key(|f| f.shard);
+            let Some(first) = files.first() else {
+                return Err(InputError("merge needs at least one shard file".into()).into());
             };
-            // Ctrl-C stops the Monte Carlo after its current chunk; what was done is written,
-            // flagged as partial, and the exit code is 130.
-            let _ = ctrlc::set_handler(|| {
-                eprintln!(
-                    "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
-                );
-                modaltol::montecarlo::request_stop();
-            });
-            let a = analyze(&m, &opt, &progress);
-            let partial = mc.is_some_and(|mc| a.interrupted(mc.samples));
-            let mut csv = csv::Writer::from_path(output.join("tolerance.csv"))?;
-            csv.write_record(report::tolerance_header(&m, &a))?;
-            for row in report::tolerance_rows(&a) {
-                csv.write_record(&row)?;
+            let n = first.of;
+            let same = |f: &ShardFile| {
+                f.of == n
+                    && f.speed == first.speed
+                    && f.samples == first.samples
+                    && f.seed == first.seed
+                    && f.sampling == first.sampling
+            };
+            if let Some(f) = files.iter().find(|f| !same(f)) {
+                return Err(InputError(format!(
+                    "shard {}/{} was run with other settings than shard {}/{}",
+                    f.shard, f.of, first.shard, n
+                ))
+                .into());
             }
-            csv.flush()?;
-            let (plots, critical) = modaltol::plots::plots(&m, &a);
-            let fonts = modaltol::plots::fonts();
-            let mut files = Vec::new();
-            for p in &plots {
-                let svg = format!("{}.svg", p.stem);
-                std::fs::write(output.join(&svg), &p.svg)?;
-                match modaltol::plots::png(&p.svg, &fonts) {
-                    Ok(png) => std::fs::write(output.join(format!("{}.png", p.stem)), png)?,
-                    Err(e) => eprintln!("modaltol: no PNG for {}: {e}", p.stem),
+            let got: Vec<usize> = files.iter().map(|f| f.shard).collect();
+            if got != (1..=n).collect::<Vec<_>>() {
+                return Err(
+                    InputError(format!("need shards 1..={n} once each, got {got:?}")).into(),
+                );
+            }
+            let mut states: Vec<Vec<ChunkState>> = vec![Vec::new(); cases.len()];
+            for f in &files {
+                for (ci, s) in f.states.iter().enumerate() {
+                    states[ci].extend(s.iter().cloned());
                 }
-                files.push((svg, p.title.clone()));
             }
-            std::fs::write(
-                output.join("report.html"),
-                report::report_html(&m, &a, &files, &critical, mc.as_ref()),
-            )?;
-            let used = threads.unwrap_or_else(rayon::current_num_threads);
-            std::fs::write(
-                output.join("summary.json"),
-                serde_json::to_string_pretty(&report::summary_json(&m, &a, mc.as_ref(), used))?,
-            )?;
-            eprintln!(
-                "modaltol: analytic {:.3} s{}; wrote {}",
-                a.analytic_seconds,
-                a.monte_carlo_seconds.map_or(String::new(), |t| format!(
-                    ", Monte Carlo {t:.3} s (ratio {:.0})",
-                    t / a.analytic_seconds
-                )),
-                output.display()
-            );
-            if !a.failures.is_empty() {
-                eprintln!(
-                    "modaltol: {} speed(s) failed; see summary.json",
-                    a.failures.len()
-                );
-            }
-            if partial {
-                eprintln!(
-                    "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
-                    a.samples_done
-                );
-                return Err(Interrupted.into());
-            }
+            let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
+            let mc = McOptions {
+                samples: first.samples,
+                seed: first.seed,
+                sampling: first.sampling,
+                threads: None,
+            };
+            let opt = AnalyzeOptions {
+                speeds: range.speeds().collect(),
+                cases,
+                monte_carlo: Some(mc),
+                split: Split::Merged(states),
+            };
+            let a = analyze(&m, &opt, &progress_printer());
+            write_outputs(&m, &a, Some(&mc), None, &output)?;
         }
         Command::Frf {
             model,

@@ -448,3 +448,75 @@ fn interrupted_monte_carlo_leaves_a_flagged_partial_result() {
             .contains("Partial result")
     );
 }
+
+#[test]
+fn merged_shards_equal_one_run_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |s: &str| dir.path().join(s).to_str().unwrap().to_string();
+    let model = example("rotating_pendulum.toml");
+    let m = model.to_str().unwrap();
+    let common = [
+        "--speed",
+        "1:4:0.5",
+        "--samples",
+        "200",
+        "--seed",
+        "11",
+        "--sampling",
+        "lhs",
+    ];
+    let whole = run(&[&["analyze", m, "-o", &d("whole")][..], &common].concat());
+    assert!(whole.status.success(), "{}", stderr(&whole));
+    for k in 1..=3 {
+        let o = run(&[
+            &[
+                "analyze",
+                m,
+                "-o",
+                &d(&format!("s{k}")),
+                "--shard",
+                &format!("{k}/3"),
+                "--threads",
+                "1",
+            ][..],
+            &common,
+        ]
+        .concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let shards: Vec<String> = [3, 1, 2]
+        .iter()
+        .map(|k| d(&format!("s{k}/shard-{k}-of-3.json")))
+        .collect();
+    let o = run(&[
+        &["merge", "--model", m, "-o", &d("merged")][..],
+        &shards.iter().map(String::as_str).collect::<Vec<_>>()[..],
+    ]
+    .concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = std::fs::read(dir.path().join("whole/tolerance.csv")).unwrap();
+    let b = std::fs::read(dir.path().join("merged/tolerance.csv")).unwrap();
+    assert!(a == b, "merged shards differ from one run");
+    // A missing shard, or a shard of another model, is refused.
+    let o = run(&[
+        "merge",
+        "--model",
+        m,
+        "-o",
+        &d("bad"),
+        &shards[0],
+        &shards[1],
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("need shards 1..=3"), "{}", stderr(&o));
+    let o = run(&[
+        "merge",
+        "-o",
+        &d("bad2"),
+        &shards[0],
+        &shards[1],
+        &shards[2],
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("another model"), "{}", stderr(&o));
+}

@@ -38,6 +38,7 @@ fn run(
             sampling,
             threads,
         }),
+        ..Default::default()
     };
     analyze(model, &opt, &|_, _, _| {})
 }

@@ -292,7 +292,7 @@ impl SpeedRange {
 }
 
 /// Monte Carlo sampling schemes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Sampling {
     Random,
