@@ -14,7 +14,7 @@
 //! code gives the matrices' derivatives with respect to design variables.
 
 use crate::linalg::{jacobian, pivot_columns, solve};
-use crate::mechanics::dynamics::{Lifted, evaluate_rows, evaluate_with, partials_for};
+use crate::mechanics::dynamics::{Lifted, evaluate_rows, evaluate_with, mass_matrix, partials_for};
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::DMatrix;
 
@@ -100,16 +100,17 @@ pub fn linearize<T: Real>(
         Some(k) => k.clone(),
         None => jacobian(&xr, |x| rows(&put(&q1, x), &qd1, &qdd1)).1,
     };
-    // M and C: the partial velocities depend on q only; compute them once, over T.
-    let j = partials_for(&l.base, q, free).map(lift1);
+    // M and C: the partial velocities depend on q only; compute them once, over T. M is
+    // JᵀMJ from them directly (r is linear in q̈); C by dual passes in q̇.
+    let jt = partials_for(&l.base, q, free);
+    let m_full = mass_matrix(&l.base, &jt, free);
+    let j = jt.map(lift1);
     let rows_v = |vv: &[D1<T>], aa: &[D1<T>]| -> Vec<D1<T>> {
         let g = evaluate_with(l, &j, &q1, vv, aa).with_multipliers(&lam);
         free.iter().map(|&i| g[i]).collect()
     };
     let vr: Vec<T> = free.iter().map(|&i| qd[i]).collect();
     let (_, c_full) = jacobian(&vr, |x| rows_v(&put(&qd1, x), &qdd1));
-    let ar = vec![cst::<T>(0.0); nf];
-    let (_, m_full) = jacobian(&ar, |x| rows_v(&qd1, &put(&qdd1, x)));
     // Basis of the null space of Φ_R.
     let basis = if l.base.m == 0 {
         DMatrix::identity(nf, nf)

@@ -14,7 +14,7 @@
 
 use super::kinematics::{Pose, point, poses, update};
 use super::{ConstraintData, NormDual, System};
-use crate::real::{D1, D2, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
+use crate::real::{D1, D2, M3, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
 
@@ -99,6 +99,8 @@ pub struct Partials<T: Real> {
     /// `dlen[i][s]`: ∂ℓ_s/∂q_i.
     pub dlen: Vec<Vec<T>>,
     pub phi_q: DMatrix<T>,
+    /// Rotation of every body at `q`.
+    pub rot: Vec<M3<T>>,
 }
 
 impl<T: Real> Partials<T> {
@@ -121,8 +123,31 @@ impl<T: Real> Partials<T> {
                 .map(|v| v.iter().map(|&x| f(x)).collect())
                 .collect(),
             phi_q: self.phi_q.map(f),
+            rot: self.rot.iter().map(|r| r.map(f)).collect(),
         }
     }
+}
+
+/// The mass matrix `∂r/∂q̈ = Σ_b (m J_vᵀ J_v + J_ωᵀ I_w J_ω)` for the coordinates `coords`,
+/// from partial velocities computed for them (r is linear in q̈ with exactly these
+/// coefficients, so no time pass is needed).
+pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usize]) -> DMatrix<T> {
+    let n = coords.len();
+    let iw: Vec<M3<T>> = sys
+        .bodies
+        .iter()
+        .zip(&j.rot)
+        .map(|(b, a)| mul3_t(&mul3(a, &b.inertia.map(|x| x.re)), a))
+        .collect();
+    DMatrix::from_fn(n, n, |r, c| {
+        let (i, k) = (coords[r], coords[c]);
+        let mut s = cst::<T>(0.0);
+        for (b, body) in sys.bodies.iter().enumerate() {
+            s += j.jv[i][b].dot(&j.jv[k][b]) * body.mass.re
+                + j.jw[i][b].dot(&mulv(&iw[b], &j.jw[k][b]));
+        }
+        s
+    })
 }
 
 /// Partial velocities at `q` for every coordinate; `partial` is the system lifted to `Dual<T>`.
@@ -140,10 +165,12 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         jw: Vec::with_capacity(n),
         dlen: Vec::with_capacity(n),
         phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
+        rot: Vec::new(),
     };
     let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
     // Poses without derivative, once; per coordinate only the bodies below its joint move.
     let p0 = poses(partial, &base);
+    out.rot = p0.iter().map(|p| p.rot.map(|c| c.re)).collect();
     let zero = V3::from_element(cst::<T>(0.0));
     for i in 0..n {
         if !coords.contains(&i) {
