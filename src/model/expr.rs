@@ -92,7 +92,7 @@ pub enum BinOp {
     Pow,
 }
 
-/// A parsed expression. Names are resolved to parameter indices by [`Expr::resolve`].
+/// A parsed expression. Names are resolved to parameter indices while parsing ([`Expr::parse`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Expr {
     Num(f64),

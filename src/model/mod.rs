@@ -1,6 +1,6 @@
 //! Model files: the TOML format, expressions, and validation into an immutable [`Model`].
 //!
-//! Raw text → [`schema`] (serde mirror, with spans) → [`validate`] → [`Model`]. Nothing
+//! Raw text → [`schema`] (serde mirror, with spans) → `validate` → [`Model`]. Nothing
 //! downstream sees a raw string reference: bodies, joints and parameters are indices, numeric
 //! fields are parsed [`Expr`]essions with the [`Site`] they came from, so a failure at run time
 //! (say a division by zero at one speed) can still name the file, line and field.

@@ -1,6 +1,6 @@
 //! Serde structures that mirror the TOML model file one to one, with source spans.
 //!
-//! Nothing here is checked beyond TOML types; [`super::validate`] turns these into a
+//! Nothing here is checked beyond TOML types; `validate` turns these into a
 //! [`super::Model`]. Spans are byte ranges into the file, turned into line and column there.
 
 use serde::Deserialize;
