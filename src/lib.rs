@@ -10,6 +10,7 @@
 pub mod analyze;
 pub mod equilibrium;
 pub mod frf;
+pub mod hessian;
 pub mod linalg;
 pub mod linearize;
 pub mod mechanics;

@@ -1,8 +1,8 @@
 //! Analytic propagation of tolerances to the modal outputs (Kim & Yoo 2007, eq. 28, and beyond).
 //!
 //! At each speed a [`LocalModel`] holds every output's value, its exact gradient with respect to
-//! the design variables (automatic differentiation through the equilibrium) and its Hessian
-//! (central differences of the exact gradient, step `1e-4 × max(|b|, 1e-3)`, error O(h²)).
+//! the design variables (automatic differentiation through the equilibrium) and its exact Hessian
+//! (hyper-dual numbers through the equilibrium and the eigenproblem, [`crate::hessian`]).
 //! With the covariance `Σ` of the design variables (tolerance `T` read as ±3σ of a normal
 //! distribution, or as the half-width of a uniform one, σ = T/√3; optional correlations):
 //!
@@ -25,9 +25,10 @@
 //! Kim, Yoo (2007) eq. 28; Kendall & Stuart, *The Advanced Theory of Statistics*, §10.6 (moments
 //! of quadratic forms in normal variables).
 
+use crate::hessian::hessians;
 use crate::model::{Case, Distribution, Model, Transfer};
 use crate::sensitivity::{Status, TransferAt, analytic};
-use crate::sweep::{Options, Point, PointError, point};
+use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 
 /// Output kinds whose spread is propagated.
@@ -193,11 +194,8 @@ pub fn match_modes(reference: &Point, mut q: Point) -> Point {
     q
 }
 
-/// Relative step for the Hessian differences.
-const HESS_STEP: f64 = 1e-4;
-
-/// Builds the local model at `pt` for design variables `vars`; with `hessian`, also the Hessians
-/// (two extra points and sensitivity evaluations per variable).
+/// Builds the local model at `pt` for design variables `vars`; with `hessian`, also the exact
+/// Hessians (hyper-dual numbers, see [`crate::hessian`]).
 pub fn local_model(
     model: &Model,
     p: &[f64],
@@ -209,67 +207,12 @@ pub fn local_model(
     let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
     let outs = outputs(pt.modes.len(), tf.is_some());
     let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
-    let nv = vars.len();
-    let mut hess: Vec<Option<DMatrix<f64>>> = vec![
-        if hessian {
-            Some(DMatrix::zeros(nv, nv))
-        } else {
-            None
-        };
-        outs.len()
-    ];
-    let mut dhess: Vec<Option<DMatrix<f64>>> = vec![
-        if hessian {
-            Some(DMatrix::zeros(nv, nv))
-        } else {
-            None
-        };
-        pt.modes.len()
-    ];
-    if hessian {
-        let opt = Options {
-            independent: Some(pt.linear.independent.clone()),
-            no_branch_switch: true,
-            ..Default::default()
-        };
-        for (j, &b) in vars.iter().enumerate() {
-            let h = HESS_STEP * p[b].abs().max(1e-3);
-            let mut sides = Vec::new();
-            for s in [1.0, -1.0] {
-                let mut pp = p.to_vec();
-                pp[b] += s * h;
-                let side = point(model, &pp, pt.speed, &pt.equilibrium.q, &opt)
-                    .ok()
-                    .map(|q| match_modes(pt, q))
-                    .and_then(|q| first(model, &pp, &q, vars, &outs, tf).ok());
-                sides.push(side);
-            }
-            let (Some((_, gp, dp)), Some((_, gm, dm))) = (&sides[0], &sides[1]) else {
-                hess.iter_mut().for_each(|x| *x = None);
-                dhess.iter_mut().for_each(|x| *x = None);
-                break;
-            };
-            for (o, hm) in hess.iter_mut().enumerate() {
-                match (hm.as_mut(), &gp[o], &gm[o]) {
-                    (Some(m), Some(a), Some(c)) => {
-                        (0..nv).for_each(|i| m[(i, j)] = (a[i] - c[i]) / (2.0 * h))
-                    }
-                    _ => *hm = None,
-                }
-            }
-            for (k, hm) in dhess.iter_mut().enumerate() {
-                match (hm.as_mut(), &dp[k].1, &dm[k].1) {
-                    (Some(m), Some(a), Some(c)) => {
-                        (0..nv).for_each(|i| m[(i, j)] = (a[i] - c[i]) / (2.0 * h))
-                    }
-                    _ => *hm = None,
-                }
-            }
-        }
-        for m in hess.iter_mut().chain(dhess.iter_mut()).flatten() {
-            *m = (&*m + m.transpose()) * 0.5;
-        }
-    }
+    let (hess, dhess) = if hessian {
+        let h = hessians(model, p, pt, vars, &outs, tf)?;
+        (h.outputs, h.discriminant)
+    } else {
+        (vec![None; outs.len()], vec![None; pt.modes.len()])
+    };
     Ok(LocalModel {
         vars: vars.to_vec(),
         outputs: outs,
@@ -435,18 +378,21 @@ pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
     let z = mu / sigma;
     let second = mu * big_phi(z) + sigma * phi(z);
     let upper = (mu + 10.0 * sigma).max(0.0).sqrt();
+    // Below √(μ − 10σ) the integrand is under e⁻⁵⁰ of its peak.
+    let lower = (mu - 10.0 * sigma).max(0.0).sqrt();
     if upper == 0.0 {
         return Stat {
             mean: 0.0,
             std: 0.0,
         };
     }
-    let n = 4000;
-    let h = upper / n as f64;
+    // [lower, upper] spans at most 20σ of D: 400 Simpson panels resolve it to ~1e-10.
+    let n = 400;
+    let h = (upper - lower) / n as f64;
     let f = |u: f64| 2.0 * u * u * phi((u * u - mu) / sigma) / sigma;
-    let mut sum = f(0.0) + f(upper);
+    let mut sum = f(lower) + f(upper);
     for k in 1..n {
-        sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+        sum += f(lower + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
     }
     let mean = sum * h / 3.0;
     Stat {
@@ -484,6 +430,33 @@ mod tests {
             (s.mean * s.mean + s.std * s.std - 4.0 / (2.0 * std::f64::consts::PI).sqrt()).abs()
                 < 1e-9
         );
+    }
+
+    #[test]
+    fn sqrt_positive_part_matches_a_fine_reference() {
+        // Reference: 200 000 Simpson panels over [0, √(μ + 10σ)].
+        let reference = |mu: f64, sigma: f64| {
+            let phi = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+            let upper = (mu + 10.0 * sigma).sqrt();
+            let n = 200_000;
+            let h = upper / n as f64;
+            let f = |u: f64| 2.0 * u * u * phi((u * u - mu) / sigma) / sigma;
+            let mut sum = f(0.0) + f(upper);
+            for k in 1..n {
+                sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+            }
+            sum * h / 3.0
+        };
+        for z in [-3.0, -0.5, 0.0, 0.7, 3.0, 30.0, 1000.0] {
+            let sigma = 2.5e-3;
+            let s = sqrt_positive_part(z * sigma, sigma);
+            let r = reference(z * sigma, sigma);
+            assert!(
+                (s.mean - r).abs() <= 1e-9 * r,
+                "μ/σ = {z}: {} vs {r}",
+                s.mean
+            );
+        }
     }
 
     #[test]

@@ -6,8 +6,11 @@ use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
 use modaltol::model::{Case, Model, Sampling};
 use modaltol::montecarlo::McOptions;
+use modaltol::sweep::{Options, Point, initial_guess, point};
 use modaltol::tolerance::Quantity;
-use num_dual::{Dual64, DualNum};
+use modaltol::tolerance::{LocalModel, local_model, match_modes};
+use nalgebra::DMatrix;
+use num_dual::{Dual64, HyperDual64};
 
 const G: f64 = 9.80665;
 
@@ -57,10 +60,10 @@ fn row(a: &Analysis, speed: f64, q: Quantity, method: Method) -> &Row {
 
 /// Closed-form pendulum (hanging or swung-out branch) as a function of L, differentiated by
 /// dual numbers: ω_d and |H(jΩ)|.
-fn closed_form(l: Dual64, w: f64) -> (Dual64, Dual64) {
+fn closed_form<D: modaltol::real::Real>(l: D, w: f64) -> (D, D) {
     let (m, c) = (3.0, 3.0);
     let i = l * l * (m / 3.0);
-    let k = if w * w <= 3.0 * G / (2.0 * l.re) {
+    let k = if w * w <= 3.0 * G / (2.0 * l.re()) {
         l * (m * G / 2.0) - i * w * w
     } else {
         let cos = (l * w * w * 2.0).recip() * (3.0 * G);
@@ -106,6 +109,173 @@ fn pendulum_first_order_spread_matches_closed_form() {
         );
         // Each variable's share of the variance: L is the only one.
         assert!((fo.shares.as_ref().unwrap()[0] - 1.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn pendulum_hessians_match_closed_form() {
+    // d²ω_d/dL² and d²|H|/dL² from hyper-duals through the equilibrium and the eigenproblem,
+    // against the closed form differentiated twice, on both branches.
+    let model = example("rotating_pendulum.toml");
+    let p = model.nominal();
+    let vars = model.toleranced();
+    let mut sweep = modaltol::sweep::Sweep::new(&model, p.clone(), Options::default());
+    for i in 0..60 {
+        let w = 0.05 + 0.1 * i as f64;
+        let pt = sweep.step(w).unwrap();
+        if (3.4..4.1).contains(&w) || (2.6..2.8).contains(&w) {
+            continue; // class changes; |H| is stationary near 2.71 and checked by the test below
+        }
+        let lm = local_model(
+            &model,
+            &p,
+            &pt,
+            &vars,
+            model.analysis.transfer.as_ref(),
+            true,
+        )
+        .unwrap();
+        let (wd, h) = closed_form(HyperDual64::new(1.0, 1.0, 1.0, 0.0), w);
+        let hwd = lm.hess[0].as_ref().unwrap()[(0, 0)];
+        assert!(
+            (hwd - wd.eps1eps2).abs() <= 1e-7 * wd.eps1eps2.abs().max(1e-3),
+            "Ω = {w}: d²ω_d/dL² {hwd} vs {}",
+            wd.eps1eps2
+        );
+        let hh = lm.hess[2].as_ref().unwrap()[(0, 0)];
+        assert!(
+            (hh - h.eps1eps2).abs() <= 1e-7 * h.eps1eps2.abs().max(h.re),
+            "Ω = {w}: d²|H|/dL² {hh} vs {}",
+            h.eps1eps2
+        );
+    }
+    // At the stationary resonance the curvature is all there is.
+    let w = (0.75 * G).sqrt();
+    let pt = sweep.step(w).unwrap();
+    let lm = local_model(
+        &model,
+        &p,
+        &pt,
+        &vars,
+        model.analysis.transfer.as_ref(),
+        true,
+    )
+    .unwrap();
+    let (_, h) = closed_form(HyperDual64::new(1.0, 1.0, 1.0, 0.0), w);
+    let hh = lm.hess[2].as_ref().unwrap()[(0, 0)];
+    assert!(
+        (hh - h.eps1eps2).abs() <= 1e-7 * h.eps1eps2.abs(),
+        "{hh} vs {}",
+        h.eps1eps2
+    );
+}
+
+/// Hessians by central differences of the exact gradients (an independent route: the gradient
+/// code at re-solved perturbed points).
+fn differenced_hessians(model: &Model, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
+    let tf = model.analysis.transfer.as_ref();
+    let mut lm = local_model(model, p, pt, vars, tf, false).unwrap();
+    let nv = vars.len();
+    let opt = Options {
+        independent: Some(pt.linear.independent.clone()),
+        no_branch_switch: true,
+        ..Default::default()
+    };
+    let mut hess = vec![Some(DMatrix::zeros(nv, nv)); lm.outputs.len()];
+    let mut dhess = vec![Some(DMatrix::zeros(nv, nv)); lm.disc.len()];
+    for (j, &b) in vars.iter().enumerate() {
+        let h = 2e-5 * p[b].abs().max(1e-3);
+        let side = |s: f64| {
+            let mut pp = p.to_vec();
+            pp[b] += s * h;
+            let q = match_modes(
+                pt,
+                point(model, &pp, pt.speed, &pt.equilibrium.q, &opt).unwrap(),
+            );
+            local_model(model, &pp, &q, vars, tf, false).unwrap()
+        };
+        let (up, down) = (side(1.0), side(-1.0));
+        let column = |slot: &mut Option<DMatrix<f64>>,
+                      a: &Option<Vec<f64>>,
+                      c: &Option<Vec<f64>>| {
+            match (slot.as_mut(), a, c) {
+                (Some(m), Some(a), Some(c)) => {
+                    (0..nv).for_each(|i| m[(i, j)] = (a[i] - c[i]) / (2.0 * h))
+                }
+                _ => *slot = None,
+            }
+        };
+        for (o, slot) in hess.iter_mut().enumerate() {
+            column(slot, &up.grad[o], &down.grad[o]);
+        }
+        for (k, slot) in dhess.iter_mut().enumerate() {
+            column(slot, &up.disc[k].1, &down.disc[k].1);
+        }
+    }
+    lm.hess = hess;
+    for (d, h) in lm.disc.iter_mut().zip(dhess) {
+        d.2 = h;
+    }
+    lm
+}
+
+/// Value of output `k` of [`hessians_match_differences_of_the_exact_gradient_on_every_example`]'s
+/// list: the outputs, then each mode's discriminant.
+fn exact_value(lm: &LocalModel, k: usize) -> f64 {
+    lm.value
+        .get(k)
+        .copied()
+        .unwrap_or_else(|| lm.disc[k - lm.value.len()].0)
+}
+
+#[test]
+fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
+    for (file, speeds) in [
+        ("rotating_pendulum.toml", vec![1.0, 3.0, 5.0]),
+        ("governor.toml", vec![0.5, 1.595, 3.0, 4.5]),
+        ("spinning_universal_pendulum.toml", vec![0.5, 2.0, 6.0]),
+    ] {
+        let model = example(file);
+        let p = model.nominal();
+        let vars = model.toleranced();
+        let tf = model.analysis.transfer.as_ref();
+        let q0 = initial_guess(&model, &p, speeds[0]).unwrap();
+        let mut checked = 0;
+        let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
+        for &w in &speeds {
+            let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
+            let exact = local_model(&model, &p, &pt, &vars, tf, true).unwrap();
+            let fd = differenced_hessians(&model, &p, &pt, &vars);
+            let pairs = exact.hess.iter().zip(&fd.hess).chain(
+                exact
+                    .disc
+                    .iter()
+                    .map(|d| &d.2)
+                    .zip(fd.disc.iter().map(|d| &d.2)),
+            );
+            for (k, (a, b)) in pairs.enumerate() {
+                let (Some(a), Some(b)) = (a, b) else {
+                    assert!(
+                        a.is_none() || b.is_some(),
+                        "{file} Ω = {w} #{k}: exact only"
+                    );
+                    continue;
+                };
+                // Central differences: O(h²) truncation and O(ε/h) rounding, about 1e-6 relative,
+                // and no better than 1e-9 |f|/b² where the curvature vanishes.
+                let natural = exact_value(&exact, k).abs() / b_min2;
+                let scale = a.amax().max(b.amax()).max(1e-4 * natural);
+                assert!(
+                    (a - b).amax() <= 1e-5 * scale,
+                    "{file} Ω = {w} output #{k}: exact {a} vs differenced {b}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            checked >= speeds.len() * 2,
+            "{file}: only {checked} Hessians compared"
+        );
     }
 }
 
