@@ -16,7 +16,7 @@
 //! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
 
 use crate::mechanics::System;
-use crate::mechanics::dynamics::{Lifted, evaluate, evaluate_rows};
+use crate::mechanics::dynamics::{Lifted, evaluate_rows};
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -107,6 +107,18 @@ impl Default for Settings {
     }
 }
 
+/// What Newton may start from besides the coordinates.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Start<'a> {
+    /// Multipliers (least squares at the start when absent).
+    pub lambda: Option<&'a [f64]>,
+    /// Jacobian of a nearby solution, kept for chord steps while they contract.
+    pub jacobian: Option<&'a DMatrix<f64>>,
+    /// The steady-state check has passed for this model and these parameters (at the previous
+    /// speed of a sweep); it is not repeated.
+    pub steady_known: bool,
+}
+
 /// Everything needed to solve for the equilibrium of one instantiated system.
 pub struct Problem {
     pub free: Vec<usize>,
@@ -178,55 +190,109 @@ impl Problem {
         (value, jac)
     }
 
+    /// `F` alone, in `f64` (one partial-velocity pass per free coordinate, no derivatives of
+    /// them).
+    pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
+        equations(&self.value, &self.free, q, &self.qd, lambda)
+    }
+
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
+    ///
+    /// Newton–chord: a Jacobian is kept while the steps it gives shrink at least twofold
+    /// (each step then costs one `f64` residual instead of a Jacobian), and re-evaluated when
+    /// they do not, or when the line search fails with it. `start` may supply the multipliers
+    /// and the Jacobian of a nearby solution (the previous speed of a sweep). The returned
+    /// Jacobian is always evaluated at the solution (to the step tolerance): the linearisation
+    /// and the sensitivities use it.
     pub fn solve(
         &self,
         speed: f64,
         q0: &[f64],
+        start: Start,
         settings: Settings,
     ) -> Result<Equilibrium, EquilibriumError> {
         let nf = self.free.len();
         let m = self.value.base.m;
+        let nx = nf + m;
         let mut q = q0.to_vec();
-        let mut lambda = vec![0.0; m];
-        // Least-squares start for λ at the guess: Φ_Rᵀ λ ≈ −r_R.
-        if m > 0 {
-            let zero = vec![0.0; q.len()];
-            let d = evaluate_rows(&self.value, &q, &self.qd, &zero, &self.free);
-            let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
-            let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
-            if let Ok(l) = a.svd(true, true).solve(&b, 1e-12)
-                && l.iter().all(|v| v.is_finite())
-            {
-                lambda = l.iter().copied().collect();
-            }
-        }
+        let mut lambda = match start.lambda {
+            Some(l) if l.len() == m => l.to_vec(),
+            _ => self.least_squares_multipliers(&q),
+        };
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let (mut f, mut jac, mut fresh) = match start.jacobian {
+            Some(j) if j.nrows() == nx && j.ncols() == nx => {
+                (self.residual(&q, &lambda), j.clone(), false)
+            }
+            _ => {
+                let (f, j) = self.residual_and_jacobian(&q, &lambda);
+                (f, j, true)
+            }
+        };
+        let mut lu = jac.clone().lu();
+        // Size of the last step (relative), for the contraction test.
+        let mut last_step = f64::INFINITY;
         let mut converged = false;
         let mut iterations = 0;
-        let (mut f, mut jac) = self.residual_and_jacobian(&q, &lambda);
         while iterations < settings.max_iterations {
             if f.iter().any(|v| !v.is_finite()) {
                 return Err(EquilibriumError::NotFinite { iterations });
             }
             iterations += 1;
-            let Some(step) = jac.clone().lu().solve(&DVector::from_column_slice(&f)) else {
-                return Err(EquilibriumError::SingularJacobian { iterations });
+            let step = lu
+                .solve(&DVector::from_column_slice(&f))
+                .filter(|s| s.iter().all(|v| v.is_finite()));
+            let Some(step) = step else {
+                if fresh {
+                    return Err(EquilibriumError::SingularJacobian { iterations });
+                }
+                (f, jac) = self.residual_and_jacobian(&q, &lambda);
+                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                continue;
             };
-            if step.iter().any(|v| !v.is_finite()) {
-                return Err(EquilibriumError::SingularJacobian { iterations });
-            }
             let q_scale = 1.0 + self.free.iter().fold(0.0f64, |s, &i| s.max(q[i].abs()));
             let l_scale = 1.0 + norm(&lambda);
             let dq = (0..nf).fold(0.0f64, |s, k| s.max(step[k].abs()));
             let dl = (0..m).fold(0.0f64, |s, k| s.max(step[nf + k].abs()));
-            // A Newton step this small lands on the solution to rounding: take it and stop.
-            let last = dq <= settings.step_tolerance * q_scale
-                && dl <= 1e3 * settings.step_tolerance * l_scale;
+            let size = (dq / q_scale).max(dl / (1e3 * l_scale));
+            // Converged when the step is at the step tolerance with a fresh Jacobian; with a
+            // stale one (a chord step leaves an error up to its own size) at a thousandth of
+            // it, or where the steps stop contracting (rounding).
+            let small = size <= settings.step_tolerance;
+            if small && (fresh || size <= 1e-3 * settings.step_tolerance || size > 0.5 * last_step)
+            {
+                for (k, &i) in self.free.iter().enumerate() {
+                    q[i] -= step[k];
+                }
+                for (k, l) in lambda.iter_mut().enumerate() {
+                    *l -= step[nf + k];
+                }
+                converged = true;
+                break;
+            }
+            if small {
+                // A contracting chord step at rounding level: no line search can judge it.
+                for (k, &i) in self.free.iter().enumerate() {
+                    q[i] -= step[k];
+                }
+                for (k, l) in lambda.iter_mut().enumerate() {
+                    *l -= step[nf + k];
+                }
+                f = self.residual(&q, &lambda);
+                last_step = size;
+                continue;
+            }
+            // A stale Jacobian whose steps do not contract fast: evaluate it here.
+            if !fresh && size > 0.5 * last_step {
+                (f, jac) = self.residual_and_jacobian(&q, &lambda);
+                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                continue;
+            }
             // Otherwise backtrack on ‖F‖₂.
             let f0 = f.iter().map(|v| v * v).sum::<f64>().sqrt();
             let mut alpha = 1.0;
-            let (mut q_new, mut l_new, mut f_new, mut j_new);
+            let (mut q_new, mut l_new, mut f_new);
+            let mut decreased;
             loop {
                 q_new = q.clone();
                 for (k, &i) in self.free.iter().enumerate() {
@@ -235,21 +301,22 @@ impl Problem {
                 l_new = (0..m)
                     .map(|k| lambda[k] - alpha * step[nf + k])
                     .collect::<Vec<_>>();
-                (f_new, j_new) = self.residual_and_jacobian(&q_new, &l_new);
+                f_new = self.residual(&q_new, &l_new);
                 let f1 = f_new.iter().map(|v| v * v).sum::<f64>().sqrt();
-                if last || (f1.is_finite() && f1 <= (1.0 - 1e-4 * alpha) * f0) || alpha < 1e-4 {
+                decreased = f1.is_finite() && f1 <= (1.0 - 1e-4 * alpha) * f0;
+                if decreased || alpha < 1e-4 {
                     break;
                 }
                 alpha *= 0.5;
             }
-            q = q_new;
-            lambda = l_new;
-            f = f_new;
-            jac = j_new;
-            if last {
-                converged = true;
-                break;
+            if !decreased && !fresh {
+                (f, jac) = self.residual_and_jacobian(&q, &lambda);
+                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                continue;
             }
+            (q, lambda, f) = (q_new, l_new, f_new);
+            fresh = false;
+            last_step = alpha * size;
         }
         if f.iter().any(|v| !v.is_finite()) {
             return Err(EquilibriumError::NotFinite { iterations });
@@ -260,9 +327,13 @@ impl Problem {
                 residual: norm(&f),
             });
         }
-        self.check_steady(&q, &lambda, &jac)?;
+        // The linearisation and the sensitivities need the Jacobian at the solution itself.
+        (f, jac) = self.residual_and_jacobian(&q, &lambda);
+        if !start.steady_known {
+            self.check_steady(&q, &lambda, &jac)?;
+        }
         let zero = vec![0.0; q.len()];
-        let d = evaluate(&self.value, &q, &self.qd, &zero);
+        let d = evaluate_rows(&self.value, &q, &self.qd, &zero, &self.driven);
         let g = d.with_multipliers(&lambda);
         let drive_force = (0..q.len())
             .map(|i| if self.driven.contains(&i) { g[i] } else { 0.0 })
@@ -278,6 +349,22 @@ impl Problem {
             drive_force,
             iterations,
         })
+    }
+
+    /// Least-squares multipliers at `q`: `Φ_Rᵀ λ ≈ −r_R` (zero if that fails).
+    fn least_squares_multipliers(&self, q: &[f64]) -> Vec<f64> {
+        let (nf, m) = (self.free.len(), self.value.base.m);
+        if m == 0 {
+            return Vec::new();
+        }
+        let zero = vec![0.0; q.len()];
+        let d = evaluate_rows(&self.value, q, &self.qd, &zero, &self.free);
+        let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
+        let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
+        match a.svd(true, true).solve(&b, 1e-12) {
+            Ok(l) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
+            _ => vec![0.0; m],
+        }
     }
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the

@@ -7,7 +7,7 @@
 //! nearest stable equilibrium, noting the switch. Modes keep their identity across speeds by
 //! the similarity of their shapes in the free coordinates, not by sorting.
 
-use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings};
+use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize};
 use crate::mechanics::System;
 use crate::mechanics::dynamics::evaluate_rows;
@@ -76,10 +76,22 @@ pub fn point(
     q0: &[f64],
     opt: &Options,
 ) -> Result<Point, PointError> {
+    point_from(model, p, speed, q0, Start::default(), opt)
+}
+
+/// As [`point`], with more to start Newton from (see [`Start`]).
+pub fn point_from(
+    model: &Model,
+    p: &[f64],
+    speed: f64,
+    q0: &[f64],
+    start: Start,
+    opt: &Options,
+) -> Result<Point, PointError> {
     let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
     let problem = Problem::new(&sys, model.free(), model.driven(), names);
-    let eq = problem.solve(speed, q0, opt.newton).map_err(|e| {
+    let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);
         if redundant.is_empty() {
@@ -135,7 +147,7 @@ pub fn point(
             for (k, &i) in free.iter().enumerate() {
                 q[i] += s * amp * dir[k];
             }
-            let Ok(eq) = problem.solve(speed, &q, opt.newton) else {
+            let Ok(eq) = problem.solve(speed, &q, Start::default(), opt.newton) else {
                 continue;
             };
             let moved = free.iter().fold(0.0f64, |m, &i| {
@@ -200,15 +212,25 @@ fn analyse(
     })
 }
 
+/// A converged state kept for continuation.
+struct Solved {
+    speed: f64,
+    q: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
 /// A sweep over speeds with continuation of the equilibrium and tracking of the modes.
 pub struct Sweep<'a> {
     model: &'a Model,
     params: Vec<f64>,
     options: Options,
-    last_q: Option<Vec<f64>>,
-    /// The solution before `last_q` and the speeds of both, for the secant predictor.
-    before_q: Option<(f64, Vec<f64>)>,
-    last_speed: f64,
+    last: Option<Solved>,
+    /// The solution before `last`, for the secant predictor.
+    before: Option<Solved>,
+    /// Newton's Jacobian at `last`, for chord steps at the next speed.
+    last_jacobian: Option<DMatrix<f64>>,
+    /// The steady-state check passed at an earlier speed (the parameters do not change).
+    steady_known: bool,
     last_shapes: Option<Vec<DVector<C64>>>,
     last_stable: Option<bool>,
 }
@@ -219,9 +241,10 @@ impl<'a> Sweep<'a> {
             model,
             params,
             options,
-            last_q: None,
-            before_q: None,
-            last_speed: 0.0,
+            last: None,
+            before: None,
+            last_jacobian: None,
+            steady_known: false,
             last_shapes: None,
             last_stable: None,
         }
@@ -229,34 +252,41 @@ impl<'a> Sweep<'a> {
 
     /// Solves the next speed. Failures leave the continuation state as it was.
     ///
-    /// The Newton start is the secant extrapolation of the last two solutions (so a branch that
-    /// has just bent away from a bifurcation is followed, not jumped over), then the last
-    /// solution, then the model's initial guess.
+    /// The Newton start is the secant extrapolation of the last two solutions (coordinates and
+    /// multipliers; so a branch that has just bent away from a bifurcation is followed, not
+    /// jumped over) with the last Jacobian for chord steps, then the last solution, then the
+    /// model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
         let guess = initial_guess(self.model, &self.params, speed)?;
-        let mut starts = Vec::new();
-        if let (Some(q1), Some((w0, q0))) = (&self.last_q, &self.before_q) {
-            let dw = self.last_speed - w0;
+        let mut starts: Vec<(Vec<f64>, Option<Vec<f64>>)> = Vec::new();
+        if let (Some(s1), Some(s0)) = (&self.last, &self.before) {
+            let dw = s1.speed - s0.speed;
             if dw.abs() > 0.0 {
-                let t = (speed - self.last_speed) / dw;
+                let t = (speed - s1.speed) / dw;
+                let secant =
+                    |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x + t * (x - y)).collect();
                 if t.abs() <= 2.0 {
-                    starts.push(
-                        q1.iter()
-                            .zip(q0)
-                            .map(|(a, b)| a + t * (a - b))
-                            .collect::<Vec<_>>(),
-                    );
+                    starts.push((secant(&s1.q, &s0.q), Some(secant(&s1.lambda, &s0.lambda))));
                 }
             }
         }
-        starts.extend(self.last_q.clone());
-        starts.push(guess);
-        let mut result = point(self.model, &self.params, speed, &starts[0], &self.options);
-        for q0 in &starts[1..] {
+        if let Some(s1) = &self.last {
+            starts.push((s1.q.clone(), Some(s1.lambda.clone())));
+        }
+        starts.push((guess, None));
+        let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
+            iterations: 0,
+        }));
+        for (q0, lambda) in &starts {
+            let start = Start {
+                lambda: lambda.as_deref(),
+                jacobian: lambda.as_ref().and(self.last_jacobian.as_ref()),
+                steady_known: self.steady_known,
+            };
+            result = point_from(self.model, &self.params, speed, q0, start, &self.options);
             if result.is_ok() {
                 break;
             }
-            result = point(self.model, &self.params, speed, q0, &self.options);
         }
         let mut pt = result?;
         if let Some(prev) = &self.last_shapes
@@ -276,9 +306,14 @@ impl<'a> Sweep<'a> {
                 "stability regained since the previous speed".into()
             });
         }
-        self.before_q = self.last_q.take().map(|q| (self.last_speed, q));
-        self.last_q = Some(pt.equilibrium.q.clone());
-        self.last_speed = speed;
+        self.before = self.last.take();
+        self.last = Some(Solved {
+            speed,
+            q: pt.equilibrium.q.clone(),
+            lambda: pt.equilibrium.lambda.clone(),
+        });
+        self.last_jacobian = Some(pt.equilibrium.jacobian.clone());
+        self.steady_known = true;
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
         Ok(pt)
