@@ -1,7 +1,7 @@
 //! The main job: how the tolerance cases spread every mode's ω_d and ζ and the transfer
 //! magnitude across the speed range, by every analytic method and by Monte Carlo.
 //!
-//! One nominal sweep; at each speed one [`LocalModel`] for the union of the cases' variables
+//! One nominal sweep; at each speed (in parallel) one [`LocalModel`] for the union of the cases' variables
 //! (derivatives do not depend on the tolerances, so cases share them); then per case the
 //! first-order, second-order and invariant statistics, and optionally the Monte Carlo. Wall times
 //! of the analytic part and of the Monte Carlo are measured for the summary.
@@ -13,6 +13,8 @@ use crate::tolerance::{
     LocalModel, Output, Quantity, Spread, first_order, invariant, local_model, outputs,
     second_order,
 };
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Propagation methods, as named in the outputs.
@@ -73,6 +75,9 @@ pub struct AnalyzeOptions {
     pub cases: Vec<Case>,
     pub monte_carlo: Option<McOptions>,
     pub split: Split,
+    /// Worker threads for the derivatives (`None`: rayon's default); the Monte Carlo uses its
+    /// own setting.
+    pub threads: Option<usize>,
 }
 
 /// Result of [`analyze`].
@@ -119,27 +124,48 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     let mut sweep = Sweep::new(model, p.clone(), Options::default());
     let mut failures = Vec::new();
     let mut nominal = Vec::with_capacity(opt.speeds.len());
-    let mut locals: Vec<Option<LocalModel>> = Vec::with_capacity(opt.speeds.len());
     for (i, &w) in opt.speeds.iter().enumerate() {
         match sweep.step(w) {
-            Ok(pt) => {
-                match local_model(model, &p, &pt, &vars, transfer.as_ref(), true) {
-                    Ok(lm) => locals.push(Some(lm)),
-                    Err(e) => {
-                        failures.push((w, format!("derivatives: {e}")));
-                        locals.push(None);
-                    }
-                }
-                nominal.push(Some(pt));
-            }
+            Ok(pt) => nominal.push(Some(pt)),
             Err(e) => {
                 failures.push((w, e.to_string()));
                 nominal.push(None);
-                locals.push(None);
             }
         }
-        progress("derivatives", i + 1, opt.speeds.len());
+        progress("sweep", i + 1, opt.speeds.len());
     }
+    // Local models are independent once the nominal points are known: in parallel.
+    let done = AtomicUsize::new(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opt.threads.unwrap_or(0))
+        .build()
+        .expect("thread pool");
+    let locals: Vec<Option<Result<LocalModel, String>>> = pool.install(|| {
+        nominal
+            .par_iter()
+            .map(|pt| {
+                let lm = pt.as_ref().map(|pt| {
+                    local_model(model, &p, pt, &vars, transfer.as_ref(), true)
+                        .map_err(|e| format!("derivatives: {e}"))
+                });
+                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress("derivatives", d, opt.speeds.len());
+                lm
+            })
+            .collect()
+    });
+    let locals: Vec<Option<LocalModel>> = locals
+        .into_iter()
+        .zip(&opt.speeds)
+        .map(|(lm, &w)| match lm? {
+            Ok(lm) => Some(lm),
+            Err(e) => {
+                failures.push((w, e));
+                None
+            }
+        })
+        .collect();
+    failures.sort_by(|a, b| a.0.total_cmp(&b.0));
     let spreads: Vec<Spread> = opt
         .cases
         .iter()

@@ -716,6 +716,7 @@ fn run(cli: Cli) -> Result<()> {
                 cases,
                 monte_carlo: mc,
                 split,
+                threads,
             };
             install_interrupt_handler();
             let a = analyze(&m, &opt, &progress_printer());
@@ -823,6 +824,7 @@ fn run(cli: Cli) -> Result<()> {
                 cases,
                 monte_carlo: Some(mc),
                 split: Split::Merged(states),
+                threads: None,
             };
             let a = analyze(&m, &opt, &progress_printer());
             write_outputs(&m, &a, Some(&mc), None, &output)?;
