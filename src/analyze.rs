@@ -10,8 +10,8 @@ use crate::model::{Case, Model};
 use crate::montecarlo::{self, ChunkState, McOptions, McStat};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{
-    LocalModel, Output, Quantity, Spread, first_order, invariant, local_model, outputs,
-    second_order,
+    KINK_SIGMAS, LocalModel, Output, Quantity, Spread, discriminant, first_order, invariant,
+    local_model, outputs, second_order,
 };
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -25,6 +25,10 @@ pub enum Method {
     /// ω_d from the pair invariants (see [`crate::tolerance`]).
     Invariant,
     MonteCarlo,
+    /// The automatic choice among the analytic methods: for ω_d the invariant method within
+    /// [`crate::tolerance::KINK_SIGMAS`] σ of a change of class, otherwise second order where it
+    /// exists, else first order. The row's `basis` says which.
+    Analytic,
 }
 
 impl Method {
@@ -34,6 +38,7 @@ impl Method {
             Method::SecondOrder => "second_order",
             Method::Invariant => "invariant",
             Method::MonteCarlo => "monte_carlo",
+            Method::Analytic => "analytic",
         }
     }
 }
@@ -53,6 +58,8 @@ pub struct Row {
     pub mc: Option<McStat>,
     /// First order: each variable's share of the variance.
     pub shares: Option<Vec<f64>>,
+    /// For [`Method::Analytic`]: the method its mean and σ come from.
+    pub basis: Option<Method>,
 }
 
 /// How the Monte Carlo samples are split across runs.
@@ -252,6 +259,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                         std: st.std,
                         mc: Some(*st),
                         shares: None,
+                        basis: None,
                     });
                 }
             }
@@ -271,10 +279,11 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     }
 }
 
-/// First-order, second-order and (for ω_d) invariant rows of one speed and case.
+/// First-order, second-order, (for ω_d) invariant and the automatic `analytic` rows of one
+/// speed and case.
 fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Row> {
     let mut rows = Vec::new();
-    let row = |o: &Output, method, mean: f64, std: f64, shares| Row {
+    let row = |o: &Output, method, mean: f64, std: f64, shares, basis| Row {
         speed,
         quantity: o.quantity,
         mode: o.mode,
@@ -284,32 +293,52 @@ fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Ro
         std,
         mc: None,
         shares,
+        basis,
     };
     for (k, o) in lm.outputs.iter().enumerate() {
         let v = lm.value[k];
-        match &lm.grad[k] {
+        let (fo, so) = match &lm.grad[k] {
             Some(g) => {
                 let (st, shares) = first_order(v, g, s);
-                rows.push(row(o, Method::FirstOrder, st.mean, st.std, Some(shares)));
-                let so = lm.hess[k].as_ref().map_or((f64::NAN, f64::NAN), |h| {
-                    let st = second_order(v, g, h, s);
-                    (st.mean, st.std)
-                });
-                rows.push(row(o, Method::SecondOrder, so.0, so.1, None));
+                rows.push(row(
+                    o,
+                    Method::FirstOrder,
+                    st.mean,
+                    st.std,
+                    Some(shares),
+                    None,
+                ));
+                let so = lm.hess[k].as_ref().map(|h| second_order(v, g, h, s));
+                (Some(st), so)
             }
             None => {
-                rows.push(row(o, Method::FirstOrder, f64::NAN, f64::NAN, None));
-                rows.push(row(o, Method::SecondOrder, f64::NAN, f64::NAN, None));
+                rows.push(row(o, Method::FirstOrder, f64::NAN, f64::NAN, None, None));
+                (None, None)
             }
-        }
+        };
+        let so_ms = so.map_or((f64::NAN, f64::NAN), |st| (st.mean, st.std));
+        rows.push(row(o, Method::SecondOrder, so_ms.0, so_ms.1, None, None));
+        let mut choice = so
+            .map(|st| (Method::SecondOrder, st))
+            .or(fo.map(|st| (Method::FirstOrder, st)));
         if let (Quantity::DampedFrequency, Some(m)) = (o.quantity, o.mode) {
             let (d, g, h) = &lm.disc[m];
-            let st = g.as_ref().map_or((f64::NAN, f64::NAN), |g| {
-                let st = invariant(*d, g, h.as_ref(), s);
-                (st.mean, st.std)
+            let inv = g.as_ref().map(|g| {
+                let dst = discriminant(*d, g, h.as_ref(), s);
+                (invariant(*d, g, h.as_ref(), s), dst)
             });
-            rows.push(row(o, Method::Invariant, st.0, st.1, None));
+            let ms = inv.map_or((f64::NAN, f64::NAN), |(st, _)| (st.mean, st.std));
+            rows.push(row(o, Method::Invariant, ms.0, ms.1, None, None));
+            if let Some((st, dst)) = inv
+                && (choice.is_none() || dst.mean.abs() < KINK_SIGMAS * dst.std)
+            {
+                choice = Some((Method::Invariant, st));
+            }
         }
+        let (basis, mean, std) = choice.map_or((None, f64::NAN, f64::NAN), |(m, st)| {
+            (Some(m), st.mean, st.std)
+        });
+        rows.push(row(o, Method::Analytic, mean, std, None, basis));
     }
     rows
 }

@@ -144,11 +144,13 @@ enum Command {
     },
     /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
     /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
-    /// paper's method), second order, the invariant-based method for ω_d, and Monte Carlo.
+    /// paper's method), second order, the invariant-based method for ω_d, the automatic choice
+    /// among them ("analytic": invariant near a change of class, else second order), and Monte
+    /// Carlo.
     ///
     /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
     /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
-    /// share:<parameter>; SI units, rad/s for speeds and frequencies) and DIR/summary.json
+    /// basis (the method an "analytic" row took), share:<parameter>; SI units, rad/s for speeds and frequencies) and DIR/summary.json
     /// (cases, wall times beside the paper's, failures). Without MODEL, runs the governor example
     /// built into the binary.
     Analyze {

@@ -283,7 +283,8 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
     (out, critical)
 }
 
-/// Campbell diagram: nominal ω_d of every mode with ±3σ (first case, first order), the order
+/// Campbell diagram: nominal ω_d of every mode with ±3σ (first case, the automatic `analytic`
+/// choice, so the bands stay right through changes of class), the order
 /// line, and the critical speeds where a mode crosses it.
 fn campbell(model: &Model, a: &Analysis, modes: usize) -> (Option<Plot>, Vec<CriticalSpeed>) {
     let order = model.analysis.transfer.map_or(1.0, |t| t.order);
@@ -291,7 +292,7 @@ fn campbell(model: &Model, a: &Analysis, modes: usize) -> (Option<Plot>, Vec<Cri
     let mut bands = Vec::new();
     let mut critical = Vec::new();
     for m in 0..modes {
-        let rows = series(a, 0, Quantity::DampedFrequency, Some(m), Method::FirstOrder);
+        let rows = series(a, 0, Quantity::DampedFrequency, Some(m), Method::Analytic);
         let color = COLORS[m % COLORS.len()];
         let pts: Vec<(f64, f64)> = rows.iter().map(|r| (r.speed, r.mean)).collect();
         for w in rows.windows(2) {

@@ -519,6 +519,7 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
         "samples",
         "failed",
         "class_changed",
+        "basis",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -558,6 +559,7 @@ pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
                 ]),
                 None => v.extend(std::iter::repeat_n(String::new(), 7)),
             }
+            v.push(r.basis.map_or(String::new(), |m| m.as_str().to_string()));
             match &r.shares {
                 Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
@@ -593,7 +595,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "speeds": {"count": a.nominal.len(), "from": speeds.first(), "to": speeds.last()},
         "design_variables": a.vars.iter().map(|&b| model.parameters[b].name.clone()).collect::<Vec<_>>(),
         "cases": cases,
-        "methods": ["first_order", "second_order", "invariant", "monte_carlo"],
+        "methods": ["first_order", "second_order", "invariant", "analytic", "monte_carlo"],
         "analytic_seconds": a.analytic_seconds,
         "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
@@ -727,8 +729,9 @@ pub fn report_html(
 <li><b>first_order</b> is the paper's method: mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
 <li><b>second_order</b> adds the curvature (Hessians): a mean shift and variance terms. It repairs points where first order gives σ = 0 but the output does vary (|H| at the undamped resonance).</li>\
 <li><b>invariant</b> (ω_d only) propagates the pair discriminant D = λ₁λ₂ − (λ₁+λ₂)²/4, which stays smooth where a mode turns overdamped, and maps it through ω_d = √max(0, D). Use it near class changes, where first and second order fail.</li>\
+<li><b>analytic</b> is that choice made for you, per speed: the invariant method for ω_d where the change of class lies within 4 σ of D, otherwise second order (first order where no Hessian exists). The <code>basis</code> column of <code>tolerance.csv</code> names the method taken.</li>\
 <li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample; it is the reference, with 95 % confidence intervals in <code>tolerance.csv</code>, and counts of failed samples and of samples whose mode changed class. Where many samples change class or cross a bifurcation, only Monte Carlo is reliable.</li>\
-<li>Bands are mean ± σ; the Campbell diagram shows ±3σ of the first case and the order line.</li></ul>"
+<li>Bands are mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case and the order line.</li></ul>"
     );
     let _ = writeln!(h, "<h2>Plots</h2>");
     for (file, title) in plots {

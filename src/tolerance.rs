@@ -359,12 +359,21 @@ pub fn second_order(value: f64, grad: &[f64], hess: &DMatrix<f64>, s: &Spread) -
 /// Invariant-based ω_d: `D` (value, gradient, optional Hessian) propagated to second order and
 /// taken as normal, then mapped through `√max(0, D)` exactly.
 pub fn invariant(value: f64, grad: &[f64], hess: Option<&DMatrix<f64>>, s: &Spread) -> Stat {
-    let d = match hess {
-        Some(h) => second_order(value, grad, h, s),
-        None => first_order(value, grad, s).0,
-    };
+    let d = discriminant(value, grad, hess, s);
     sqrt_positive_part(d.mean, d.std)
 }
+
+/// Mean and σ of the discriminant `D` itself (second order when its Hessian is known).
+pub fn discriminant(value: f64, grad: &[f64], hess: Option<&DMatrix<f64>>, s: &Spread) -> Stat {
+    match hess {
+        Some(h) => second_order(value, grad, h, s),
+        None => first_order(value, grad, s).0,
+    }
+}
+
+/// Distance from a change of class, in standard deviations of `D`, below which the
+/// `analytic` choice takes the invariant method for ω_d (`P(D < 0) > 3·10⁻⁵` for normal `D`).
+pub const KINK_SIGMAS: f64 = 4.0;
 
 /// Mean and σ of `√max(0, D)` for `D ~ N(μ, σ²)`: `E[max(0, D)] = μΦ(μ/σ) + σφ(μ/σ)` and
 /// `E[√max(0, D)] = ∫₀^∞ 2u² φ((u² − μ)/σ)/σ du` (substitution `D = u²`, composite Simpson).

@@ -342,6 +342,7 @@ fn analyze_writes_tables_plots_and_report() {
         "std_ci_high",
         "failed",
         "class_changed",
+        "basis",
         "share:L",
     ] {
         assert!(header.contains(&c.to_string()), "{c} missing");
@@ -351,10 +352,16 @@ fn analyze_writes_tables_plots_and_report() {
         rows.iter().map(|r| r.get(4).unwrap()).collect();
     assert_eq!(
         methods.into_iter().collect::<Vec<_>>(),
-        ["first_order", "invariant", "monte_carlo", "second_order"]
+        [
+            "analytic",
+            "first_order",
+            "invariant",
+            "monte_carlo",
+            "second_order"
+        ]
     );
-    // 7 speeds × 3 cases × (ω_d: 4 methods, ζ: 3, |H|: 3).
-    assert_eq!(rows.len(), 7 * 3 * 10);
+    // 7 speeds × 3 cases × (ω_d: 5 methods, ζ: 4, |H|: 4).
+    assert_eq!(rows.len(), 7 * 3 * 13);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["monte_carlo"]["samples"], 40);

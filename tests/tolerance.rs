@@ -481,6 +481,41 @@ fn invariant_method_repairs_damped_frequency_at_class_changes() {
             fo.mean,
             fo.std
         );
+        // The automatic choice takes the invariant method here.
+        let auto = row(&a, w, Quantity::DampedFrequency, Method::Analytic);
+        assert_eq!(auto.basis, Some(Method::Invariant), "Ω = {w}");
+        assert!(
+            auto.mean.to_bits() == inv.mean.to_bits() && auto.std.to_bits() == inv.std.to_bits()
+        );
+    }
+}
+
+#[test]
+fn analytic_choice_is_second_order_away_from_class_changes() {
+    let model = example("rotating_pendulum.toml");
+    let speeds = [1.0, 2.0, 4.5, 5.5];
+    let a = run(
+        &model,
+        case(&model, "L3"),
+        &speeds,
+        0,
+        None,
+        Sampling::Random,
+    );
+    for w in speeds {
+        for q in [Quantity::DampedFrequency, Quantity::TransferMagnitude] {
+            let auto = row(&a, w, q, Method::Analytic);
+            let so = row(&a, w, q, Method::SecondOrder);
+            assert_eq!(
+                auto.basis,
+                Some(Method::SecondOrder),
+                "Ω = {w} {}",
+                q.as_str()
+            );
+            assert!(
+                auto.mean.to_bits() == so.mean.to_bits() && auto.std.to_bits() == so.std.to_bits()
+            );
+        }
     }
 }
 

@@ -167,10 +167,12 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
         rot: Vec::new(),
     };
-    let base: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
-    // Poses without derivative, once; per coordinate only the bodies below its joint move.
-    let p0 = poses(partial, &base);
+    let mut qi: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
+    // Poses without derivative, once; per coordinate only the bodies below its joint move, so
+    // only their poses are recomputed (and restored afterwards).
+    let p0 = poses(partial, &qi);
     out.rot = p0.iter().map(|p| p.rot.map(|c| c.re)).collect();
+    let mut pp = p0.clone();
     let zero = V3::from_element(cst::<T>(0.0));
     for i in 0..n {
         if !coords.contains(&i) {
@@ -179,10 +181,9 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             out.dlen.push(Vec::new());
             continue;
         }
-        let mut qi = base.clone();
         qi[i] = Dual::new(q[i], cst(1.0));
-        let mut pp = p0.clone();
         update(partial, &qi, &mut pp, partial.subtree[i].iter().copied());
+        qi[i] = lift1(q[i]);
         let (mut jv, mut jw) = (vec![zero; pp.len()], vec![zero; pp.len()]);
         for &ji in &partial.subtree[i] {
             let b = partial.joints[ji].child;
@@ -208,6 +209,10 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         );
         for (k, c) in constraint_values(partial, &pp).iter().enumerate() {
             out.phi_q[(k, i)] = c.eps;
+        }
+        for &ji in &partial.subtree[i] {
+            let b = partial.joints[ji].child;
+            pp[b] = p0[b];
         }
     }
     out
