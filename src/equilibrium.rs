@@ -256,11 +256,21 @@ impl Problem {
             let dl = (0..m).fold(0.0f64, |s, k| s.max(step[nf + k].abs()));
             let size = (dq / q_scale).max(dl / (1e3 * l_scale));
             // Converged when the step is at the step tolerance with a fresh Jacobian; with a
-            // stale one (a chord step leaves an error up to its own size) at a thousandth of
-            // it, or where the steps stop contracting (rounding).
+            // stale one (a chord step contracting by ρ leaves an error of about ρ/(1−ρ) times
+            // its size) when that error is a thousandth of the tolerance, or where the steps
+            // stop contracting (rounding).
             let small = size <= settings.step_tolerance;
-            if small && (fresh || size <= 1e-3 * settings.step_tolerance || size > 0.5 * last_step)
-            {
+            let rho = if last_step.is_finite() {
+                size / last_step
+            } else {
+                1.0
+            };
+            let left = if rho < 1.0 {
+                size * rho / (1.0 - rho)
+            } else {
+                size
+            };
+            if small && (fresh || left <= 1e-3 * settings.step_tolerance || rho > 0.5) {
                 for (k, &i) in self.free.iter().enumerate() {
                     q[i] -= step[k];
                 }

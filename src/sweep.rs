@@ -10,7 +10,6 @@
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize};
 use crate::mechanics::System;
-use crate::mechanics::dynamics::evaluate_rows;
 use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
 use crate::model::{FieldError, Model};
 use nalgebra::{DMatrix, DVector};
@@ -177,11 +176,12 @@ fn analyse(
     opt: &Options,
 ) -> Result<Point, PointError> {
     let free = model.free();
-    let zero = vec![0.0; eq.q.len()];
-    let d = evaluate_rows(&problem.value, &eq.q, &eq.qd, &zero, &free);
-    let phi_r = DMatrix::from_fn(d.phi.len(), free.len(), |k, j| d.phi_q[(k, free[j])]);
+    let nf = free.len();
+    // Φ_R from the λ columns of Newton's Jacobian, which are [Φ_Rᵀ; 0].
+    let m = eq.lambda.len();
+    let phi_r = DMatrix::from_fn(m, nf, |k, j| eq.jacobian[(j, nf + k)]);
     let user = opt.independent.as_deref().or(model.independent.as_deref());
-    let independent = if d.phi.is_empty() {
+    let independent = if m == 0 {
         free.clone()
     } else {
         choose_independent(&phi_r, &free, user)?
