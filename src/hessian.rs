@@ -1,10 +1,12 @@
-//! Exact second derivatives of the modal outputs with respect to design variables, by hyper-dual
-//! numbers carried through the equilibrium, the linearisation, the eigenproblem and the transfer
-//! function.
+//! Exact first and second derivatives of the modal outputs with respect to design variables, by
+//! truncated Taylor numbers carried through the equilibrium, the linearisation, the eigenproblem
+//! and the transfer function.
 //!
 //! For a pair of design variables `(b_i, b_j)` every parameter becomes a hyper-dual number
-//! `b + ε₁[i] + ε₂[j]` (`ε₁² = ε₂² = 0`); the `ε₁ε₂` part of any output is then `∂²f/∂b_i∂b_j`,
-//! with no step size and no truncation error. Two implicit solves are expanded the same way, by
+//! `b + ε₁[i] + ε₂[j]` (`ε₁² = ε₂² = 0`); the `ε₁ε₂` part of any output is then `∂²f/∂b_i∂b_j`.
+//! For a single variable a `Dual2` number `b + ε[i]` gives `∂f/∂b_i` and `∂²f/∂b_i²` at once, so
+//! the gradient comes with the diagonal (checked against the first-order formulas of
+//! [`crate::sensitivity`] in the tests). No step size, no truncation error. Two implicit solves are expanded the same way, by
 //! chord iterations from the nominal solution with the nominal (`f64`) Jacobian `J₀`:
 //!
 //! ```text
@@ -12,7 +14,8 @@
 //! ```
 //!
 //! Each iteration removes one order of the error (`e_{k+1} = (I − J₀⁻¹J) e_k + O(e_k²)` with
-//! `J − J₀ = O(ε)`): the first makes the `ε₁`, `ε₂` parts exact, the second the `ε₁ε₂` part.
+//! `J − J₀ = O(ε)`): the first makes the first-order parts exact, the second the second-order
+//! part.
 //!
 //! 1. equilibrium: `G = F(q_R, λ; b)`, the equilibrium equations, `J₀` Newton's Jacobian;
 //! 2. each root: `G = [P(λ) x; wᵀx − 1]`, `P(λ) = λ²M̂ + λĈ + K̂` over hyper-duals, with `w`
@@ -36,57 +39,71 @@ use crate::mechanics::System;
 use crate::mechanics::dynamics::Lifted;
 use crate::modal::{C64, Root};
 use crate::model::Model;
+use crate::real::Real;
 use crate::real::lift1;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::{Output, Quantity};
 use nalgebra::{Complex, DMatrix, DVector};
-use num_dual::HyperDual64;
+use num_dual::{Dual2_64, HyperDual64};
 
 type Hd = HyperDual64;
-type Chd = Complex<Hd>;
 
-/// The four parts of a hyper-dual number.
-const PARTS: usize = 4;
+/// A truncated Taylor number whose parts can be read and written one by one: hyper-dual numbers
+/// for mixed second derivatives, `Dual2` for a gradient entry and a diagonal one.
+pub trait Jet: Real {
+    /// Number of parts, the value first.
+    const PARTS: usize;
+    fn part(&self, k: usize) -> f64;
+    fn set_part(&mut self, k: usize, v: f64);
+}
 
-fn part(x: Hd, k: usize) -> f64 {
-    match k {
-        0 => x.re,
-        1 => x.eps1,
-        2 => x.eps2,
-        _ => x.eps1eps2,
+impl Jet for HyperDual64 {
+    const PARTS: usize = 4;
+    fn part(&self, k: usize) -> f64 {
+        [self.re, self.eps1, self.eps2, self.eps1eps2][k]
+    }
+    fn set_part(&mut self, k: usize, v: f64) {
+        *[
+            &mut self.re,
+            &mut self.eps1,
+            &mut self.eps2,
+            &mut self.eps1eps2,
+        ][k] = v;
     }
 }
 
-fn with_part(mut x: Hd, k: usize, v: f64) -> Hd {
-    match k {
-        0 => x.re = v,
-        1 => x.eps1 = v,
-        2 => x.eps2 = v,
-        _ => x.eps1eps2 = v,
+impl Jet for Dual2_64 {
+    const PARTS: usize = 3;
+    fn part(&self, k: usize) -> f64 {
+        [self.re, self.v1, self.v2][k]
     }
-    x
+    fn set_part(&mut self, k: usize, v: f64) {
+        *[&mut self.re, &mut self.v1, &mut self.v2][k] = v;
+    }
 }
 
-/// Second derivatives at one point: per output (as [`crate::tolerance::outputs`] lists them)
-/// and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; `None` where the output is not
-/// twice differentiable there (a root not simple, `H` through zero).
+/// First and second derivatives at one point: per output (as [`crate::tolerance::outputs`]
+/// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; `None` where the
+/// output is not differentiable there (roots coalescing, `H` through zero).
 #[derive(Debug, Clone)]
 pub struct Hessians {
+    pub gradients: Vec<Option<Vec<f64>>>,
     pub outputs: Vec<Option<DMatrix<f64>>>,
+    pub discriminant_gradients: Vec<Option<Vec<f64>>>,
     pub discriminant: Vec<Option<DMatrix<f64>>>,
 }
 
 /// Second-order expansion of one root `λ(b)` by two chord iterations on the bordered eigen
 /// equations; `None` when the root is not simple.
-fn root_expansion(
+fn root_expansion<J: Jet>(
     root: &Root,
-    (m, c, k): (&DMatrix<Hd>, &DMatrix<Hd>, &DMatrix<Hd>),
-) -> Option<Chd> {
+    (m, c, k): (&DMatrix<J>, &DMatrix<J>, &DMatrix<J>),
+) -> Option<Complex<J>> {
     let n = m.nrows();
     let l0 = root.lambda;
     let x0 = &root.right;
-    let re = |a: &DMatrix<Hd>| a.map(|v| C64::new(v.re, 0.0));
+    let re = |a: &DMatrix<J>| a.map(|v| C64::new(v.re(), 0.0));
     let (m0, c0, k0) = (re(m), re(c), re(k));
     let p0 = &m0 * (l0 * l0) + &c0 * l0 + &k0;
     let dp0 = (&m0 * (l0 * 2.0) + &c0) * x0;
@@ -103,12 +120,12 @@ fn root_expansion(
     if det.is_nan() || det <= 1e-10 * scale.powi(n as i32 + 1) {
         return None;
     }
-    let lift = |z: C64| Chd::new(Hd::from_re(z.re), Hd::from_re(z.im));
-    let mut x: Vec<Chd> = x0.iter().map(|&z| lift(z)).collect();
+    let lift = |z: C64| Complex::new(J::from(z.re), J::from(z.im));
+    let mut x: Vec<Complex<J>> = x0.iter().map(|&z| lift(z)).collect();
     let mut lambda = lift(l0);
-    let cm = |a: &DMatrix<Hd>, i: usize, j: usize| Chd::new(a[(i, j)], Hd::from_re(0.0));
+    let cm = |a: &DMatrix<J>, i: usize, j: usize| Complex::new(a[(i, j)], J::from(0.0));
     for _ in 0..2 {
-        let mut g = vec![Chd::new(Hd::from_re(0.0), Hd::from_re(0.0)); n + 1];
+        let mut g = vec![lift(C64::new(0.0, 0.0)); n + 1];
         for (i, gi) in g.iter_mut().take(n).enumerate() {
             for (j, xj) in x.iter().enumerate() {
                 let pij = lambda * lambda * cm(m, i, j) + lambda * cm(c, i, j) + cm(k, i, j);
@@ -116,19 +133,19 @@ fn root_expansion(
             }
         }
         for (wj, xj) in w.iter().zip(&x) {
-            g[n] += Chd::new(Hd::from_re(wj.re), Hd::from_re(wj.im)) * *xj;
+            g[n] += lift(*wj) * *xj;
         }
-        g[n] -= Chd::new(Hd::from_re(1.0), Hd::from_re(0.0));
+        g[n] -= lift(C64::new(1.0, 0.0));
         // Correct the derivative parts only: the nominal root stays as the modal solve gave it.
-        for pk in 1..PARTS {
+        for pk in 1..J::PARTS {
             let rhs = DVector::from_iterator(
                 n + 1,
-                g.iter().map(|z| C64::new(part(z.re, pk), part(z.im, pk))),
+                g.iter().map(|z| C64::new(z.re.part(pk), z.im.part(pk))),
             );
             let d = lu.solve(&rhs)?;
-            let upd = |z: &mut Chd, dz: C64| {
-                z.re = with_part(z.re, pk, part(z.re, pk) - dz.re);
-                z.im = with_part(z.im, pk, part(z.im, pk) - dz.im);
+            let upd = |z: &mut Complex<J>, dz: C64| {
+                z.re.set_part(pk, z.re.part(pk) - dz.re);
+                z.im.set_part(pk, z.im.part(pk) - dz.im);
             };
             for (xi, &di) in x.iter_mut().zip(d.iter()) {
                 upd(xi, di);
@@ -139,8 +156,106 @@ fn root_expansion(
     Some(lambda)
 }
 
-/// Hessians of `outs` (see [`crate::tolerance::outputs`]) and of each mode's discriminant with
-/// respect to the parameters `vars`, at the nominal point `pt` of parameters `p`.
+/// The outputs `outs` and each mode's discriminant as jets: the pipeline at `pt` evaluated with
+/// the parameters `seeded` (`None` where an output is not differentiable there).
+type Jets<J> = (Vec<Option<J>>, Vec<Option<J>>);
+
+fn expand<J: Jet>(
+    model: &Model,
+    seeded: &[J],
+    pt: &Point,
+    outs: &[Output],
+    tf: Option<TransferAt>,
+) -> Result<Jets<J>, PointError> {
+    let eq = &pt.equilibrium;
+    let free = &pt.linear.free;
+    let nf = free.len();
+    let lu = eq.jacobian.clone().lu();
+    let sys = System::new(model, seeded, J::from(pt.speed))?;
+    let lifted = Lifted::new(sys.clone());
+    let qd = sys.steady_speeds();
+    let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
+    let mut lambda: Vec<J> = eq.lambda.iter().map(|&v| J::from(v)).collect();
+    // Equilibrium expansion: two chord iterations with Newton's Jacobian.
+    for _ in 0..2 {
+        let f = equations(&lifted, free, &q, &qd, &lambda);
+        for pk in 1..J::PARTS {
+            let rhs = DVector::from_iterator(f.len(), f.iter().map(|v| v.part(pk)));
+            let d = lu.solve(&rhs).ok_or(PointError::Equilibrium(
+                crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
+            ))?;
+            for (k, &i) in free.iter().enumerate() {
+                let v = q[i].part(pk) - d[k];
+                q[i].set_part(pk, v);
+            }
+            for (k, l) in lambda.iter_mut().enumerate() {
+                let v = l.part(pk) - d[nf + k];
+                l.set_part(pk, v);
+            }
+        }
+    }
+    let lin = linearize(
+        &Lifted::new(sys.map(lift1)),
+        free,
+        &q,
+        &qd,
+        &lambda,
+        &pt.linear.independent,
+        None,
+    )?;
+    let mats = (&lin.m, &lin.c, &lin.k);
+    let one_dof = lin.m.nrows() == 1;
+    // Per mode: ω_d, ζ and D (ω_d and ζ not where the roots coalesce, as in
+    // [`crate::sensitivity`]).
+    let mut mode_values = Vec::with_capacity(pt.modes.len());
+    for md in &pt.modes {
+        let (l1, l2) = (md.root.lambda, md.partner.lambda);
+        let scale = l1.norm().max(l2.norm()).max(1e-300);
+        let separate = (l1 - l2).norm() > 1e-6 * scale;
+        let r1 = root_expansion(&md.root, mats).filter(|_| separate);
+        let r2 = root_expansion(&md.partner, mats).filter(|_| separate);
+        let roots = r1.zip(r2);
+        let invariants = if one_dof {
+            let (m0, c0, k0) = (lin.m[(0, 0)], lin.c[(0, 0)], lin.k[(0, 0)]);
+            Some((-c0 / m0, k0 / m0))
+        } else {
+            roots.map(|(l1, l2)| ((l1 + l2).re, (l1 * l2).re))
+        };
+        let wd = r1.map(|l1| {
+            if md.root.lambda.im > 0.0 {
+                l1.im
+            } else {
+                J::from(0.0)
+            }
+        });
+        let zeta = roots.and(invariants).map(|(s, pr)| {
+            let pr = if pr.re() < 0.0 { -pr } else { pr };
+            -s / (pr.sqrt() * 2.0)
+        });
+        let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
+        mode_values.push((wd, zeta, d));
+    }
+    let h = tf.and_then(|t| {
+        transfer(&lin, t.input, t.output, t.omega)
+            .filter(|h| h.magnitude().re() > 0.0)
+            .map(|h| h.magnitude())
+    });
+    let outputs = outs
+        .iter()
+        .map(|o| match (o.quantity, o.mode) {
+            (Quantity::DampedFrequency, Some(k)) => mode_values.get(k).and_then(|x| x.0),
+            (Quantity::DampingRatio, Some(k)) => mode_values.get(k).and_then(|x| x.1),
+            (Quantity::TransferMagnitude, _) => h,
+            _ => None,
+        })
+        .collect();
+    Ok((outputs, mode_values.iter().map(|x| x.2).collect()))
+}
+
+/// Gradients and Hessians of `outs` (see [`crate::tolerance::outputs`]) and of each mode's
+/// discriminant with respect to the parameters `vars`, at the nominal point `pt` of parameters
+/// `p`: one `Dual2` pass per variable (its gradient entry and diagonal Hessian entry), one
+/// hyper-dual pass per pair of variables (the mixed entry).
 pub fn hessians(
     model: &Model,
     p: &[f64],
@@ -151,20 +266,58 @@ pub fn hessians(
 ) -> Result<Hessians, PointError> {
     let nv = vars.len();
     let nm = pt.modes.len();
-    let mut out: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); outs.len()];
-    let mut disc: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); nm];
-    let eq = &pt.equilibrium;
-    let free = &pt.linear.free;
-    let nf = free.len();
-    let lu = eq.jacobian.clone().lu();
-    let singular = || {
-        PointError::Equilibrium(crate::equilibrium::EquilibriumError::SingularJacobian {
-            iterations: 0,
-        })
-    };
+    let mut grad: Vec<Option<Vec<f64>>> = vec![Some(vec![0.0; nv]); outs.len()];
+    let mut dgrad: Vec<Option<Vec<f64>>> = vec![Some(vec![0.0; nv]); nm];
+    let mut hess: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); outs.len()];
+    let mut dhess: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); nm];
+    fn put(
+        g: Option<&mut Option<Vec<f64>>>,
+        h: &mut Option<DMatrix<f64>>,
+        (a, b): (usize, usize),
+        first: Option<f64>,
+        second: Option<f64>,
+    ) {
+        if let Some(g) = g {
+            match (g.as_mut(), first) {
+                (Some(v), Some(x)) if x.is_finite() => v[a] = x,
+                _ => *g = None,
+            }
+        }
+        match (h.as_mut(), second) {
+            (Some(m), Some(x)) if x.is_finite() => {
+                m[(a, b)] = x;
+                m[(b, a)] = x;
+            }
+            _ => *h = None,
+        }
+    }
     for a in 0..nv {
-        for b in a..nv {
-            let pd: Vec<Hd> = p
+        let seeded: Vec<Dual2_64> = p
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| Dual2_64::new(v, if i == vars[a] { 1.0 } else { 0.0 }, 0.0))
+            .collect();
+        let (o, d) = expand(model, &seeded, pt, outs, tf)?;
+        for (k, v) in o.iter().enumerate() {
+            put(
+                Some(&mut grad[k]),
+                &mut hess[k],
+                (a, a),
+                v.map(|x| x.v1),
+                v.map(|x| x.v2),
+            );
+        }
+        for (k, v) in d.iter().enumerate() {
+            put(
+                Some(&mut dgrad[k]),
+                &mut dhess[k],
+                (a, a),
+                v.map(|x| x.v1),
+                v.map(|x| x.v2),
+            );
+        }
+        for b in a + 1..nv {
+            let seeded: Vec<Hd> = p
                 .iter()
                 .enumerate()
                 .map(|(i, &v)| {
@@ -173,91 +326,19 @@ pub fn hessians(
                     Hd::new(v, e1, e2, 0.0)
                 })
                 .collect();
-            let sys = System::new(model, &pd, Hd::from_re(pt.speed))?;
-            let lifted = Lifted::new(sys.clone());
-            let qd = sys.steady_speeds();
-            let mut q: Vec<Hd> = eq.q.iter().map(|&v| Hd::from_re(v)).collect();
-            let mut lambda: Vec<Hd> = eq.lambda.iter().map(|&v| Hd::from_re(v)).collect();
-            // Equilibrium expansion: two chord iterations with Newton's Jacobian.
-            for _ in 0..2 {
-                let f = equations(&lifted, free, &q, &qd, &lambda);
-                for pk in 1..PARTS {
-                    let rhs = DVector::from_iterator(f.len(), f.iter().map(|&v| part(v, pk)));
-                    let d = lu.solve(&rhs).ok_or_else(singular)?;
-                    for (k, &i) in free.iter().enumerate() {
-                        q[i] = with_part(q[i], pk, part(q[i], pk) - d[k]);
-                    }
-                    for (k, l) in lambda.iter_mut().enumerate() {
-                        *l = with_part(*l, pk, part(*l, pk) - d[nf + k]);
-                    }
-                }
+            let (o, d) = expand(model, &seeded, pt, outs, tf)?;
+            for (k, v) in o.iter().enumerate() {
+                put(None, &mut hess[k], (a, b), None, v.map(|x| x.eps1eps2));
             }
-            let lin = linearize(
-                &Lifted::new(sys.map(lift1)),
-                free,
-                &q,
-                &qd,
-                &lambda,
-                &pt.linear.independent,
-                None,
-            )?;
-            let mats = (&lin.m, &lin.c, &lin.k);
-            // Per mode: ω_d, ζ and D as hyper-duals (None where not twice differentiable).
-            let one_dof = lin.m.nrows() == 1;
-            let mut mode_values = Vec::with_capacity(nm);
-            for md in &pt.modes {
-                let r1 = root_expansion(&md.root, mats);
-                let r2 = root_expansion(&md.partner, mats);
-                let roots = r1.zip(r2);
-                let invariants = if one_dof {
-                    let (m0, c0, k0) = (lin.m[(0, 0)], lin.c[(0, 0)], lin.k[(0, 0)]);
-                    Some((-c0 / m0, k0 / m0))
-                } else {
-                    roots.map(|(l1, l2)| ((l1 + l2).re, (l1 * l2).re))
-                };
-                let wd = r1.map(|l1| {
-                    if md.root.lambda.im > 0.0 {
-                        l1.im
-                    } else {
-                        Hd::from_re(0.0)
-                    }
-                });
-                let zeta = roots.and(invariants).map(|(s, pr)| {
-                    -s / (num_dual::DualNum::sqrt(&num_traits::Signed::abs(&pr)) * 2.0)
-                });
-                let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
-                mode_values.push((wd, zeta, d));
-            }
-            let h = tf.and_then(|t| {
-                transfer(&lin, t.input, t.output, t.omega)
-                    .filter(|h| h.magnitude().re > 0.0)
-                    .map(|h| h.magnitude())
-            });
-            let store = |slot: &mut Option<DMatrix<f64>>, v: Option<Hd>| match v {
-                Some(v) if v.eps1eps2.is_finite() => {
-                    if let Some(mm) = slot.as_mut() {
-                        mm[(a, b)] = v.eps1eps2;
-                        mm[(b, a)] = v.eps1eps2;
-                    }
-                }
-                _ => *slot = None,
-            };
-            for (o, slot) in outs.iter().zip(out.iter_mut()) {
-                let v = match (o.quantity, o.mode) {
-                    (Quantity::DampedFrequency, Some(k)) => mode_values.get(k).and_then(|x| x.0),
-                    (Quantity::DampingRatio, Some(k)) => mode_values.get(k).and_then(|x| x.1),
-                    (Quantity::TransferMagnitude, _) => h,
-                    _ => None,
-                };
-                store(slot, v);
-            }
-            for (k, slot) in disc.iter_mut().enumerate() {
-                store(slot, mode_values[k].2);
+            for (k, v) in d.iter().enumerate() {
+                put(None, &mut dhess[k], (a, b), None, v.map(|x| x.eps1eps2));
             }
         }
     }
     Ok(Hessians {
-        outputs: out,
-        discriminant: disc,
+        gradients: grad,
+        outputs: hess,
+        discriminant_gradients: dgrad,
+        discriminant: dhess,
     })
 }

@@ -150,19 +150,16 @@ fn first(
     let discs = pt
         .modes
         .iter()
+        .zip(discriminants(pt))
         .enumerate()
-        .map(|(k, m)| {
-            let (l1, l2) = (m.root.lambda, m.partner.lambda);
-            let (sum, prod) = ((l1 + l2).re, (l1 * l2).re);
+        .map(|(k, (m, d))| {
+            let sum = (m.root.lambda + m.partner.lambda).re;
             let g: Vec<f64> = s
                 .variables
                 .iter()
                 .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
                 .collect();
-            (
-                prod - 0.25 * sum * sum,
-                g.iter().all(|x| x.is_finite()).then_some(g),
-            )
+            (d, g.iter().all(|x| x.is_finite()).then_some(g))
         })
         .collect();
     Ok((values, grads, discs))
@@ -206,25 +203,48 @@ pub fn local_model(
 ) -> Result<LocalModel, PointError> {
     let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
     let outs = outputs(pt.modes.len(), tf.is_some());
-    let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
-    let (hess, dhess) = if hessian {
-        let h = hessians(model, p, pt, vars, &outs, tf)?;
-        (h.outputs, h.discriminant)
-    } else {
-        (vec![None; outs.len()], vec![None; pt.modes.len()])
-    };
+    if !hessian {
+        let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
+        return Ok(LocalModel {
+            vars: vars.to_vec(),
+            hess: vec![None; outs.len()],
+            outputs: outs,
+            value,
+            grad,
+            disc: disc0.into_iter().map(|(v, g)| (v, g, None)).collect(),
+        });
+    }
+    // Gradients and Hessians together from the second-order passes.
+    let h = hessians(model, p, pt, vars, &outs, tf)?;
+    let value = outs
+        .iter()
+        .map(|o| value(pt, o, tf).unwrap_or(f64::NAN))
+        .collect();
     Ok(LocalModel {
         vars: vars.to_vec(),
         outputs: outs,
         value,
-        grad,
-        hess,
-        disc: disc0
+        grad: h.gradients,
+        hess: h.outputs,
+        disc: discriminants(pt)
             .into_iter()
-            .zip(dhess)
+            .zip(h.discriminant_gradients)
+            .zip(h.discriminant)
             .map(|((v, g), h)| (v, g, h))
             .collect(),
     })
+}
+
+/// Each mode's discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` at a point.
+fn discriminants(pt: &Point) -> Vec<f64> {
+    pt.modes
+        .iter()
+        .map(|m| {
+            let (l1, l2) = (m.root.lambda, m.partner.lambda);
+            let (sum, prod) = ((l1 + l2).re, (l1 * l2).re);
+            prod - 0.25 * sum * sum
+        })
+        .collect()
 }
 
 /// The spread of the design variables in one tolerance case.

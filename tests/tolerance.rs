@@ -246,6 +246,27 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
             let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
             let exact = local_model(&model, &p, &pt, &vars, tf, true).unwrap();
             let fd = differenced_hessians(&model, &p, &pt, &vars);
+            // Gradients from the second-order passes equal the first-order sensitivities
+            // (eigenvalue-derivative formula with left vectors).
+            let grads = exact.grad.iter().zip(&fd.grad).chain(
+                exact
+                    .disc
+                    .iter()
+                    .map(|d| &d.1)
+                    .zip(fd.disc.iter().map(|d| &d.1)),
+            );
+            for (k, (a, b)) in grads.enumerate() {
+                assert_eq!(a.is_some(), b.is_some(), "{file} Ω = {w} gradient #{k}");
+                if let (Some(a), Some(b)) = (a, b) {
+                    let scale = a.iter().chain(b).fold(1e-300f64, |s, x| s.max(x.abs()));
+                    for (x, y) in a.iter().zip(b) {
+                        assert!(
+                            (x - y).abs() <= 1e-9 * scale,
+                            "{file} Ω = {w} gradient #{k}: {a:?} vs {b:?}"
+                        );
+                    }
+                }
+            }
             let pairs = exact.hess.iter().zip(&fd.hess).chain(
                 exact
                     .disc
