@@ -13,7 +13,7 @@ use crate::tolerance::{
     KINK_SIGMAS, LocalModel, Output, Quantity, Spread, discriminant, first_order, invariant,
     local_model, outputs, second_order,
 };
-use rayon::prelude::*;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -128,39 +128,48 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     let transfer = model.analysis.transfer;
     let p = model.nominal();
     let t0 = Instant::now();
-    let mut sweep = Sweep::new(model, p.clone(), Options::default());
-    let mut failures = Vec::new();
-    let mut nominal = Vec::with_capacity(opt.speeds.len());
-    for (i, &w) in opt.speeds.iter().enumerate() {
-        match sweep.step(w) {
-            Ok(pt) => nominal.push(Some(pt)),
-            Err(e) => {
-                failures.push((w, e.to_string()));
-                nominal.push(None);
-            }
-        }
-        progress("sweep", i + 1, opt.speeds.len());
-    }
-    // Local models are independent once the nominal points are known: in parallel.
+    // The sweep is sequential (continuation); each point's local model is independent, so it is
+    // handed to the other worker threads as soon as the point is solved.
+    let n = opt.speeds.len();
+    let slots: Vec<Mutex<Option<Result<LocalModel, String>>>> =
+        (0..n).map(|_| Mutex::new(None)).collect();
     let done = AtomicUsize::new(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opt.threads.unwrap_or(0))
         .build()
         .expect("thread pool");
-    let locals: Vec<Option<Result<LocalModel, String>>> = pool.install(|| {
-        nominal
-            .par_iter()
-            .map(|pt| {
-                let lm = pt.as_ref().map(|pt| {
-                    local_model(model, &p, pt, &vars, transfer.as_ref(), true)
-                        .map_err(|e| format!("derivatives: {e}"))
-                });
-                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress("derivatives", d, opt.speeds.len());
-                lm
-            })
-            .collect()
+    let mut failures = Vec::new();
+    let mut nominal = Vec::with_capacity(n);
+    pool.install(|| {
+        rayon::scope(|scope| {
+            let mut sweep = Sweep::new(model, p.clone(), Options::default());
+            for (i, &w) in opt.speeds.iter().enumerate() {
+                match sweep.step(w) {
+                    Ok(pt) => {
+                        let (slot, done, pt_local, p, vars) =
+                            (&slots[i], &done, pt.clone(), &p, &vars);
+                        scope.spawn(move |_| {
+                            let lm =
+                                local_model(model, p, &pt_local, vars, transfer.as_ref(), true)
+                                    .map_err(|e| format!("derivatives: {e}"));
+                            *slot.lock().expect("unpoisoned") = Some(lm);
+                            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                            progress("derivatives", d, n);
+                        });
+                        nominal.push(Some(pt));
+                    }
+                    Err(e) => {
+                        failures.push((w, e.to_string()));
+                        nominal.push(None);
+                    }
+                }
+                progress("sweep", i + 1, n);
+            }
+        })
     });
+    let locals = slots
+        .into_iter()
+        .map(|m| m.into_inner().expect("unpoisoned"));
     let locals: Vec<Option<LocalModel>> = locals
         .into_iter()
         .zip(&opt.speeds)
