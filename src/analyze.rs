@@ -163,7 +163,6 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                         nominal.push(None);
                     }
                 }
-                progress("sweep", i + 1, n);
             }
         })
     });
