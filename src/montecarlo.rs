@@ -267,12 +267,17 @@ fn run_sample(
     transfer: Option<&Transfer>,
 ) -> SampleResult {
     let mut sweep = Sweep::new(model, p, Options::default());
+    let mut started = false;
     speeds
         .iter()
         .zip(nominal)
         .map(|(&w, nom)| {
             let nom = nom.as_ref()?;
+            if !started {
+                sweep.warm_start(nom);
+            }
             let pt = match_modes(nom, sweep.step(w).ok()?);
+            started = true;
             let tf = transfer.map(|t| TransferAt::at_speed(t, w));
             Some(
                 outs.iter()

@@ -250,6 +250,21 @@ impl<'a> Sweep<'a> {
         }
     }
 
+    /// Continues from `pt` as if it had been solved last (its equilibrium, Jacobian and mode
+    /// shapes): a Monte Carlo sample starts from the nominal point at its first speed instead of
+    /// the model's initial guess.
+    pub fn warm_start(&mut self, pt: &Point) {
+        self.last = Some(Solved {
+            speed: pt.speed,
+            q: pt.equilibrium.q.clone(),
+            lambda: pt.equilibrium.lambda.clone(),
+        });
+        self.before = None;
+        self.last_jacobian = Some(pt.equilibrium.jacobian.clone());
+        self.last_shapes = Some(pt.shapes.clone());
+        self.last_stable = Some(pt.stable());
+    }
+
     /// Solves the next speed. Failures leave the continuation state as it was.
     ///
     /// The Newton start is the secant extrapolation of the last two solutions (coordinates and
