@@ -235,10 +235,16 @@ fn expand<J: Jet>(
         let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
         mode_values.push((wd, zeta, d));
     }
+    // |H| is not differentiable where H passes through zero, unless H vanishes identically
+    // to this order (a transfer that symmetry makes zero): then |H| ≡ 0.
     let h = tf.and_then(|t| {
-        transfer(&lin, t.input, t.output, t.omega)
-            .filter(|h| h.magnitude().re() > 0.0)
-            .map(|h| h.magnitude())
+        let h = transfer(&lin, t.input, t.output, t.omega)?;
+        let zero = (0..J::PARTS).all(|k| h.re.part(k) == 0.0 && h.im.part(k) == 0.0);
+        if h.magnitude().re() > 0.0 {
+            Some(h.magnitude())
+        } else {
+            zero.then(|| J::from(0.0))
+        }
     });
     let outputs = outs
         .iter()

@@ -300,6 +300,36 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
     }
 }
 
+#[test]
+fn a_transfer_zero_by_symmetry_has_zero_derivatives() {
+    // The gyroscopic example at rest: the cross transfer vanishes for any parameters, so |H| has
+    // gradient and Hessian zero (not "not differentiable"), by either route.
+    let model = example("spinning_universal_pendulum.toml");
+    let p = model.nominal();
+    let vars = model.toleranced();
+    let tf = model.analysis.transfer.as_ref();
+    let pt = point(
+        &model,
+        &p,
+        0.0,
+        &initial_guess(&model, &p, 0.0).unwrap(),
+        &Options::default(),
+    )
+    .unwrap();
+    let k = pt.modes.len() * 2; // |H| follows ω_d and ζ of every mode
+    for hessian in [false, true] {
+        let lm = local_model(&model, &p, &pt, &vars, tf, hessian).unwrap();
+        assert_eq!(lm.value[k], 0.0);
+        assert!(
+            lm.grad[k].as_ref().unwrap().iter().all(|&g| g == 0.0),
+            "{hessian}"
+        );
+        if hessian {
+            assert!(lm.hess[k].as_ref().unwrap().iter().all(|&h| h == 0.0));
+        }
+    }
+}
+
 /// The second-order mean and σ inside the Monte Carlo 95 % intervals; with `first_too`, the
 /// first-order σ as well.
 fn agrees_with_monte_carlo(a: &Analysis, w: f64, q: Quantity, what: &str, first_too: bool) {
