@@ -39,14 +39,14 @@ use crate::mechanics::System;
 use crate::mechanics::dynamics::Lifted;
 use crate::modal::{C64, Root};
 use crate::model::Model;
-use crate::real::Real;
-use crate::real::lift1;
+use crate::real::{Real, lift1};
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::{Output, Quantity};
 use nalgebra::{Complex, DMatrix, DVector};
 use num_dual::{Dual2_64, HyperDual64};
 
+/// Scalar of the mixed (pair) passes.
 type Hd = HyperDual64;
 
 /// A truncated Taylor number whose parts can be read and written one by one: hyper-dual numbers
