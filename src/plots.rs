@@ -201,8 +201,17 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
                     pts: rows.iter().map(|r| (r.speed, r.mean)).collect(),
                     color,
                 });
+                // ω_d and |H| cannot be negative: the band stops at zero.
+                let floor = if q == Quantity::DampingRatio {
+                    f64::NEG_INFINITY
+                } else {
+                    0.0
+                };
                 bands.push(Band {
-                    lower: rows.iter().map(|r| (r.speed, r.mean - r.std)).collect(),
+                    lower: rows
+                        .iter()
+                        .map(|r| (r.speed, (r.mean - r.std).max(floor)))
+                        .collect(),
                     upper: rows.iter().map(|r| (r.speed, r.mean + r.std)).collect(),
                     color,
                 });
@@ -320,7 +329,7 @@ fn campbell(model: &Model, a: &Analysis, modes: usize) -> (Option<Plot>, Vec<Cri
         bands.push(Band {
             lower: rows
                 .iter()
-                .map(|r| (r.speed, r.mean - 3.0 * r.std))
+                .map(|r| (r.speed, (r.mean - 3.0 * r.std).max(0.0)))
                 .collect(),
             upper: rows
                 .iter()
