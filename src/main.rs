@@ -168,7 +168,8 @@ enum Command {
         /// Random seed; default: the model's.
         #[arg(long)]
         seed: Option<u64>,
-        /// Worker threads for the Monte Carlo (results do not depend on it); default: all cores.
+        /// Worker threads for the derivatives and the Monte Carlo (results do not depend on it);
+        /// default: all cores.
         #[arg(long)]
         threads: Option<usize>,
         /// Skip the Monte Carlo.
@@ -181,6 +182,9 @@ enum Command {
         /// and write DIR/shard-K-of-N.json; combine the shards with `modaltol merge`.
         #[arg(long)]
         shard: Option<String>,
+        /// Only this tolerance case of the model's [analysis] table (repeatable); default: all.
+        #[arg(long = "case", value_name = "NAME")]
+        cases: Vec<String>,
     },
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`.
@@ -194,6 +198,9 @@ enum Command {
         /// The shard files (shard-K-of-N.json), all N of them, in any order.
         #[arg(required = true)]
         shards: Vec<PathBuf>,
+        /// The tolerance cases the shards were run with (as given to `analyze --case`).
+        #[arg(long = "case", value_name = "NAME")]
+        cases: Vec<String>,
     },
     /// Frequency response at one speed: H(jω) from a generalised force on one joint coordinate
     /// to the response of another, over a range of excitation frequencies.
@@ -383,8 +390,19 @@ fn model_or_governor(model: &Option<PathBuf>) -> Result<Model> {
 }
 
 /// The model's tolerance cases, or one made of the parameters' own tolerances.
-fn tolerance_cases(m: &Model) -> Result<Vec<modaltol::model::Case>> {
+fn tolerance_cases(m: &Model, only: &[String]) -> Result<Vec<modaltol::model::Case>> {
     let mut cases = m.analysis.cases.clone();
+    if !only.is_empty() {
+        let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+        if let Some(bad) = only.iter().find(|n| !names.contains(&n.as_str())) {
+            return Err(InputError(format!(
+                "--case {bad}: the model has no such tolerance case (it has: {})",
+                names.join(", ")
+            ))
+            .into());
+        }
+        cases.retain(|c| only.contains(&c.name));
+    }
     if cases.is_empty() {
         let c = modaltol::model::Case::from_parameters(m);
         if c.tolerances.is_empty() {
@@ -665,6 +683,7 @@ fn run(cli: Cli) -> Result<()> {
             no_monte_carlo,
             sampling,
             shard,
+            cases: only,
         } => {
             let m = model_or_governor(&model)?;
             let range = match &speed {
@@ -673,7 +692,7 @@ fn run(cli: Cli) -> Result<()> {
                     InputError("no --speed given and the model has no [analysis] speed".into())
                 })?,
             };
-            let cases = tolerance_cases(&m)?;
+            let cases = tolerance_cases(&m, &only)?;
             if samples == Some(0) || samples == Some(1) {
                 return Err(InputError("--samples must be at least 2".into()).into());
             }
@@ -753,9 +772,10 @@ fn run(cli: Cli) -> Result<()> {
             model,
             output,
             shards,
+            cases: only,
         } => {
             let m = model_or_governor(&model)?;
-            let cases = tolerance_cases(&m)?;
+            let cases = tolerance_cases(&m, &only)?;
             let mut files: Vec<ShardFile> = Vec::new();
             for path in &shards {
                 let text = std::fs::read_to_string(path)

@@ -406,6 +406,17 @@ fn analyze_without_a_model_runs_the_built_in_governor() {
     for case in ["k3", "k6", "k12", "mass3", "attach3"] {
         assert!(text.contains(&format!(",{case},")), "{case}");
     }
+    // An unknown --case is an input error naming the cases there are.
+    let o = run(&[
+        "analyze",
+        "-o",
+        out.to_str().unwrap(),
+        "--no-monte-carlo",
+        "--case",
+        "k4",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("k3, k6, k12"), "{}", stderr(&o));
 }
 
 #[test]
@@ -471,6 +482,10 @@ fn merged_shards_equal_one_run_exactly() {
         "11",
         "--sampling",
         "lhs",
+        "--case",
+        "L3",
+        "--case",
+        "L12",
     ];
     let whole = run(&[&["analyze", m, "-o", &d("whole")][..], &common].concat());
     assert!(whole.status.success(), "{}", stderr(&whole));
@@ -495,12 +510,38 @@ fn merged_shards_equal_one_run_exactly() {
         .iter()
         .map(|k| d(&format!("s{k}/shard-{k}-of-3.json")))
         .collect();
+    let shard_args: Vec<&str> = shards.iter().map(String::as_str).collect();
     let o = run(&[
-        &["merge", "--model", m, "-o", &d("merged")][..],
-        &shards.iter().map(String::as_str).collect::<Vec<_>>()[..],
+        &[
+            "merge",
+            "--model",
+            m,
+            "-o",
+            &d("merged"),
+            "--case",
+            "L3",
+            "--case",
+            "L12",
+        ][..],
+        &shard_args[..],
     ]
     .concat());
     assert!(o.status.success(), "{}", stderr(&o));
+    // Only the chosen cases were run.
+    let text = std::fs::read_to_string(dir.path().join("whole/tolerance.csv")).unwrap();
+    assert!(text.contains(",L3,") && text.contains(",L12,") && !text.contains(",L6,"));
+    // Merging them as if all cases had been run is refused.
+    let o = run(&[
+        &["merge", "--model", m, "-o", &d("bad0")][..],
+        &shard_args[..],
+    ]
+    .concat());
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("other tolerance cases"),
+        "{}",
+        stderr(&o)
+    );
     let a = std::fs::read(dir.path().join("whole/tolerance.csv")).unwrap();
     let b = std::fs::read(dir.path().join("merged/tolerance.csv")).unwrap();
     assert!(a == b, "merged shards differ from one run");
@@ -511,6 +552,10 @@ fn merged_shards_equal_one_run_exactly() {
         m,
         "-o",
         &d("bad"),
+        "--case",
+        "L3",
+        "--case",
+        "L12",
         &shards[0],
         &shards[1],
     ]);
