@@ -17,9 +17,11 @@
 
 use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, evaluate_rows};
+use crate::program::Instance;
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
+use std::cell::OnceCell;
 
 /// Why an equilibrium was not found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -71,6 +73,10 @@ pub struct Equilibrium {
     /// whole matrix is reused by the implicit-function step of the sensitivities.
     #[serde(skip)]
     pub jacobian: DMatrix<f64>,
+    /// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at the solution, when the recorded program computed
+    /// them with the Jacobian (the linearisation then does not compute them again).
+    #[serde(skip)]
+    pub rates: Option<(DMatrix<f64>, DMatrix<f64>)>,
 }
 
 /// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
@@ -120,16 +126,24 @@ pub struct Start<'a> {
 }
 
 /// Everything needed to solve for the equilibrium of one instantiated system.
-pub struct Problem {
+pub struct Problem<'a> {
     pub free: Vec<usize>,
     pub driven: Vec<usize>,
     pub names: Vec<String>,
-    pub value: Lifted<f64>,
-    pub dual: Lifted<Dual64>,
+    sys: System<f64>,
+    /// The system lifted for the direct route, made on first use (with a recorded program
+    /// only the rare paths need it).
+    value: OnceCell<Lifted<f64>>,
+    dual: OnceCell<Lifted<Dual64>>,
     pub qd: Vec<f64>,
+    /// Number of constraint equations.
+    m: usize,
+    /// The model's recorded program at this system's parameters and speed: the residual, the
+    /// Jacobian and the drive forces come from it when present (same numbers, less work).
+    pub compiled: Option<Instance<'a>>,
 }
 
-impl Problem {
+impl<'a> Problem<'a> {
     /// Prepares the solve for `sys`; `free`/`driven` partition the coordinates.
     pub fn new(
         sys: &System<f64>,
@@ -142,13 +156,31 @@ impl Problem {
             driven,
             names,
             qd: sys.steady_speeds(),
-            value: Lifted::new(sys.clone()),
-            dual: Lifted::new(sys.map(lift1)),
+            m: sys.m,
+            sys: sys.clone(),
+            value: OnceCell::new(),
+            dual: OnceCell::new(),
+            compiled: None,
         }
     }
 
+    /// The system lifted for the direct route's values.
+    fn value(&self) -> &Lifted<f64> {
+        self.value.get_or_init(|| Lifted::new(self.sys.clone()))
+    }
+
+    /// The system lifted for the direct route's first derivatives (also the linearisation's).
+    pub fn dual(&self) -> &Lifted<Dual64> {
+        self.dual.get_or_init(|| Lifted::new(self.sys.map(lift1)))
+    }
+
+    /// Uses the recorded program `compiled` (at the same parameters and speed).
+    pub fn with_program(self, compiled: Option<Instance<'a>>) -> Self {
+        Problem { compiled, ..self }
+    }
+
     fn n_unknowns(&self) -> usize {
-        self.free.len() + self.value.base.m
+        self.free.len() + self.m
     }
 
     /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
@@ -156,6 +188,9 @@ impl Problem {
     /// One dual pass per free coordinate; `F` is linear in `λ`, so the `λ` columns are
     /// `[Φ_Rᵀ; 0]`, read off `Φ_q` from those same passes.
     pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        if let Some(c) = &self.compiled {
+            return c.residual_and_jacobian(q, lambda);
+        }
         let nf = self.free.len();
         let m = lambda.len();
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
@@ -167,7 +202,7 @@ impl Problem {
         for (k, &i) in self.free.iter().enumerate() {
             let mut qq = base.clone();
             qq[i] = Dual64::new(q[i], 1.0);
-            let d = evaluate_rows(&self.dual, &qq, &qd, &zero, &self.free);
+            let d = evaluate_rows(self.dual(), &qq, &qd, &zero, &self.free);
             let g = d.with_multipliers(&ld);
             let f: Vec<D1<f64>> = self
                 .free
@@ -193,7 +228,10 @@ impl Problem {
     /// `F` alone, in `f64` (one partial-velocity pass per free coordinate, no derivatives of
     /// them).
     pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
-        equations(&self.value, &self.free, q, &self.qd, lambda)
+        if let Some(c) = &self.compiled {
+            return c.residual(q, lambda);
+        }
+        equations(self.value(), &self.free, q, &self.qd, lambda)
     }
 
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
@@ -212,7 +250,7 @@ impl Problem {
         settings: Settings,
     ) -> Result<Equilibrium, EquilibriumError> {
         let nf = self.free.len();
-        let m = self.value.base.m;
+        let m = self.m;
         let nx = nf + m;
         let mut q = q0.to_vec();
         let mut lambda = match start.lambda {
@@ -338,19 +376,39 @@ impl Problem {
             });
         }
         // The linearisation and the sensitivities need the Jacobian at the solution itself.
-        (f, jac) = self.residual_and_jacobian(&q, &lambda);
+        let mut rates = None;
+        match &self.compiled {
+            Some(c) => {
+                let lin = c.linear(&q, &lambda);
+                (f, jac) = (lin.residual, lin.jacobian);
+                rates = Some((lin.damping, lin.mass));
+            }
+            None => (f, jac) = self.residual_and_jacobian(&q, &lambda),
+        }
         if !start.steady_known {
             self.check_steady(&q, &lambda, &jac)?;
         }
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(&self.value, &q, &self.qd, &zero, &self.driven);
-        let g = d.with_multipliers(&lambda);
-        let drive_force = (0..q.len())
-            .map(|i| if self.driven.contains(&i) { g[i] } else { 0.0 })
-            .collect();
+        let mut drive_force = vec![0.0; q.len()];
+        match &self.compiled {
+            Some(c) => {
+                for (&i, v) in self.driven.iter().zip(c.drive_rows(&q, &lambda)) {
+                    drive_force[i] = v;
+                }
+            }
+            None => {
+                let zero = vec![0.0; q.len()];
+                let d = evaluate_rows(self.value(), &q, &self.qd, &zero, &self.driven);
+                let g = d.with_multipliers(&lambda);
+                for &i in &self.driven {
+                    drive_force[i] = g[i];
+                }
+            }
+        }
+        let constraint_violation = norm(&f[nf..]);
         Ok(Equilibrium {
             speed,
-            constraint_violation: norm(&d.phi),
+            constraint_violation,
+            rates,
             residual: norm(&f),
             jacobian: jac,
             q,
@@ -363,12 +421,12 @@ impl Problem {
 
     /// Least-squares multipliers at `q`: `Φ_Rᵀ λ ≈ −r_R` (zero if that fails).
     fn least_squares_multipliers(&self, q: &[f64]) -> Vec<f64> {
-        let (nf, m) = (self.free.len(), self.value.base.m);
+        let (nf, m) = (self.free.len(), self.m);
         if m == 0 {
             return Vec::new();
         }
         let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(&self.value, q, &self.qd, &zero, &self.free);
+        let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
         let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
         let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
         match a.svd(true, true).solve(&b, 1e-12) {
@@ -394,12 +452,12 @@ impl Problem {
         for &c in &self.driven {
             let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
             qq[c] = Dual64::new(q[c], 1.0);
-            let f = equations(&self.dual, &self.free, &qq, &qd, &ld);
+            let f = equations(self.dual(), &self.free, &qq, &qd, &ld);
             let mut change = f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()));
             for offset in [1.0, 2.5] {
                 let mut qo = q.to_vec();
                 qo[c] += offset;
-                let f = equations(&self.value, &self.free, &qo, &self.qd, lambda);
+                let f = equations(self.value(), &self.free, &qo, &self.qd, lambda);
                 change = f.iter().fold(change, |a, v| a.max(v.abs()));
             }
             if change > tol {
@@ -415,14 +473,12 @@ impl Problem {
     /// Constraint equations (indices) that are linear combinations of the others at `q`, so
     /// that the equilibrium Jacobian is singular whatever the speed.
     pub fn redundant_equations(&self, q: &[f64]) -> Vec<usize> {
-        if self.value.base.m == 0 {
+        if self.m == 0 {
             return Vec::new();
         }
         let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(&self.value, q, &self.qd, &zero, &self.free);
-        let phi_r = DMatrix::from_fn(self.value.base.m, self.free.len(), |k, j| {
-            d.phi_q[(k, self.free[j])]
-        });
+        let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
+        let phi_r = DMatrix::from_fn(self.m, self.free.len(), |k, j| d.phi_q[(k, self.free[j])]);
         crate::linalg::dependent_rows(&phi_r)
     }
 

@@ -111,11 +111,25 @@ pub fn linearize<T: Real>(
     };
     let vr: Vec<T> = free.iter().map(|&i| qd[i]).collect();
     let (_, c_full) = jacobian(&vr, |x| rows_v(&put(&qd1, x), &qdd1));
+    let phi_r = DMatrix::from_fn(l.base.m, nf, |k, c| j.phi_q[(k, free[c])].re);
+    reduce(free, independent, &phi_r, m_full, c_full, k_full)
+}
+
+/// The reduced matrices from the full ones: `R` from `Φ_R` (`m × n_R`) and the independent
+/// coordinates, then `M̂ = Rᵀ M R` and likewise `Ĉ`, `K̂`.
+pub fn reduce<T: Real>(
+    free: &[usize],
+    independent: &[usize],
+    phi_r: &DMatrix<T>,
+    m_full: DMatrix<T>,
+    c_full: DMatrix<T>,
+    k_full: DMatrix<T>,
+) -> Result<Linearization<T>, LinearizeError> {
+    let nf = free.len();
     // Basis of the null space of Φ_R.
-    let basis = if l.base.m == 0 {
+    let basis = if phi_r.nrows() == 0 {
         DMatrix::identity(nf, nf)
     } else {
-        let phi_r = DMatrix::from_fn(l.base.m, nf, |k, c| j.phi_q[(k, free[c])].re);
         let ind: Vec<usize> = independent
             .iter()
             .map(|c| {

@@ -8,7 +8,7 @@
 //! the similarity of their shapes in the free coordinates, not by sorting.
 
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
-use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize};
+use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize, reduce};
 use crate::mechanics::System;
 use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
 use crate::model::{FieldError, Model};
@@ -56,6 +56,9 @@ pub struct Options {
     pub newton: Settings,
     /// Do not look for a stable branch when the equilibrium found is unstable.
     pub no_branch_switch: bool,
+    /// Evaluate the mechanics directly, not through the model's recorded program (the two
+    /// give the same numbers; this is for cross-checks and timing).
+    pub direct: bool,
 }
 
 /// The model's initial guesses at parameters `p` and `speed`.
@@ -89,7 +92,13 @@ pub fn point_from(
 ) -> Result<Point, PointError> {
     let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
-    let problem = Problem::new(&sys, model.free(), model.driven(), names);
+    let program = if opt.direct {
+        None
+    } else {
+        model.program(p, speed, q0)
+    };
+    let problem = Problem::new(&sys, model.free(), model.driven(), names)
+        .with_program(program.map(|pr| pr.at(p, speed)));
     let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);
@@ -186,19 +195,26 @@ fn analyse(
     } else {
         choose_independent(&phi_r, &free, user)?
     };
-    let linear = linearize(
-        &problem.dual,
-        &free,
-        &eq.q,
-        &eq.qd,
-        &eq.lambda,
-        &independent,
-        Some(
-            &eq.jacobian
-                .view((0, 0), (free.len(), free.len()))
-                .into_owned(),
-        ),
-    )?;
+    let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
+    let linear = match &eq.rates {
+        Some((damping, mass)) => reduce(
+            &free,
+            &independent,
+            &phi_r,
+            mass.clone(),
+            damping.clone(),
+            stiffness,
+        )?,
+        None => linearize(
+            problem.dual(),
+            &free,
+            &eq.q,
+            &eq.qd,
+            &eq.lambda,
+            &independent,
+            Some(&stiffness),
+        )?,
+    };
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
     let shapes = modes.iter().map(|m| &basis * &m.root.right).collect();

@@ -779,6 +779,7 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         constraints,
         independent,
         analysis,
+        program: Default::default(),
     })
 }
 

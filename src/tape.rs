@@ -1,0 +1,1037 @@
+//! Recorded programs: the generic mechanics traced once into a flat list of scalar operations,
+//! then evaluated over any [`Real`].
+//!
+//! The mechanics is written once over [`Real`] and differentiated by nesting dual numbers: a
+//! Jacobian of the equations of motion runs the tree kinematics once per coordinate over
+//! `Dual<Dual2<f64>>`, most of whose parts are structurally zero, and repeats the same pose
+//! products in every pass. Tracing that very code with [`Var`] (a scalar that records each
+//! operation instead of only computing it) gives a straight-line program in which
+//!
+//! * operations on constants are folded (`x·0`, `x·1`, `x+0`, the zero parts of the duals),
+//! * identical operations on identical operands are recorded once (hash-consing), so the pose
+//!   products shared by all the dual passes appear once,
+//! * operations that no output needs are dropped ([`Tape::prune`]).
+//!
+//! The program is then evaluated over `f64` for values, or over any dual number for exact
+//! derivatives: no derivative is written by hand here either, the dual numbers differentiate the
+//! recorded operations. A trace is only valid where the traced code does not branch on the
+//! values: any comparison of a [`Var`] marks the trace as tainted, and [`record`] then returns
+//! `None` so that the caller keeps to the direct route.
+//!
+//! This is operator-overloading tracing in the sense of Griewank & Walther, *Evaluating
+//! Derivatives* (2nd ed., SIAM 2008), §3 and §5.
+
+// Folding compares with exact constants (0, 1, −1) on purpose.
+#![allow(clippy::float_cmp)]
+
+use crate::real::Real;
+use num_dual::{Dual, DualNum, DualStruct, Mappable};
+use num_traits::{FromPrimitive, Inv, Num, One, Signed, Zero};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::fmt;
+use std::ops::{
+    Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Rem, RemAssign, Sub, SubAssign,
+};
+
+/// Elementary functions of one argument.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Fun {
+    Recip,
+    Sqrt,
+    Cbrt,
+    Exp,
+    Exp2,
+    ExpM1,
+    Ln,
+    Log2,
+    Log10,
+    Ln1p,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+    Asinh,
+    Acosh,
+    Atanh,
+    SphJ0,
+    SphJ1,
+    SphJ2,
+    Abs,
+}
+
+impl Fun {
+    fn apply<S: Real>(self, x: S) -> S {
+        match self {
+            Fun::Recip => x.recip(),
+            Fun::Sqrt => x.sqrt(),
+            Fun::Cbrt => x.cbrt(),
+            Fun::Exp => x.exp(),
+            Fun::Exp2 => x.exp2(),
+            Fun::ExpM1 => x.exp_m1(),
+            Fun::Ln => x.ln(),
+            Fun::Log2 => x.log2(),
+            Fun::Log10 => x.log10(),
+            Fun::Ln1p => x.ln_1p(),
+            Fun::Sin => x.sin(),
+            Fun::Cos => x.cos(),
+            Fun::Tan => x.tan(),
+            Fun::Asin => x.asin(),
+            Fun::Acos => x.acos(),
+            Fun::Atan => x.atan(),
+            Fun::Sinh => x.sinh(),
+            Fun::Cosh => x.cosh(),
+            Fun::Tanh => x.tanh(),
+            Fun::Asinh => x.asinh(),
+            Fun::Acosh => x.acosh(),
+            Fun::Atanh => x.atanh(),
+            Fun::SphJ0 => x.sph_j0(),
+            Fun::SphJ1 => x.sph_j1(),
+            Fun::SphJ2 => x.sph_j2(),
+            Fun::Abs => x.abs(),
+        }
+    }
+}
+
+/// One recorded operation; operands are indices of earlier operations.
+#[derive(Debug, Clone, Copy)]
+pub enum Op {
+    /// Input number `k`.
+    Input(u32),
+    Const(f64),
+    Add(u32, u32),
+    Sub(u32, u32),
+    Mul(u32, u32),
+    Div(u32, u32),
+    Neg(u32),
+    /// `a + c`.
+    AddC(u32, f64),
+    /// `a · c`.
+    MulC(u32, f64),
+    /// `a / c`.
+    DivC(u32, f64),
+    /// `c − a`.
+    CSub(f64, u32),
+    /// `c / a`.
+    CDiv(f64, u32),
+    Fun(Fun, u32),
+    Powi(u32, i32),
+    Powf(u32, f64),
+    Log(u32, f64),
+    Atan2(u32, u32),
+    Powd(u32, u32),
+}
+
+/// Hash key of an operation (constants by their bits).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Key {
+    Input(u32),
+    Bin(u8, u32, u32),
+    Un(u8, u32),
+    Const(u8, u32, u64),
+    Fun(Fun, u32),
+}
+
+impl Op {
+    fn key(self) -> Key {
+        match self {
+            Op::Input(k) => Key::Input(k),
+            Op::Const(c) => Key::Const(8, 0, c.to_bits()),
+            Op::Add(a, b) => Key::Bin(0, a.min(b), a.max(b)),
+            Op::Mul(a, b) => Key::Bin(1, a.min(b), a.max(b)),
+            Op::Sub(a, b) => Key::Bin(2, a, b),
+            Op::Div(a, b) => Key::Bin(3, a, b),
+            Op::Atan2(a, b) => Key::Bin(4, a, b),
+            Op::Powd(a, b) => Key::Bin(5, a, b),
+            Op::Neg(a) => Key::Un(0, a),
+            Op::Powi(a, n) => Key::Const(0, a, n as u64),
+            Op::AddC(a, c) => Key::Const(1, a, c.to_bits()),
+            Op::MulC(a, c) => Key::Const(2, a, c.to_bits()),
+            Op::DivC(a, c) => Key::Const(3, a, c.to_bits()),
+            Op::CSub(c, a) => Key::Const(4, a, c.to_bits()),
+            Op::CDiv(c, a) => Key::Const(5, a, c.to_bits()),
+            Op::Powf(a, c) => Key::Const(6, a, c.to_bits()),
+            Op::Log(a, c) => Key::Const(7, a, c.to_bits()),
+            Op::Fun(f, a) => Key::Fun(f, a),
+        }
+    }
+
+    /// The operation with its operands renumbered by `f`.
+    fn map(self, f: impl Fn(u32) -> u32) -> Op {
+        match self {
+            Op::Input(k) => Op::Input(k),
+            Op::Const(c) => Op::Const(c),
+            Op::Add(a, b) => Op::Add(f(a), f(b)),
+            Op::Sub(a, b) => Op::Sub(f(a), f(b)),
+            Op::Mul(a, b) => Op::Mul(f(a), f(b)),
+            Op::Div(a, b) => Op::Div(f(a), f(b)),
+            Op::Atan2(a, b) => Op::Atan2(f(a), f(b)),
+            Op::Powd(a, b) => Op::Powd(f(a), f(b)),
+            Op::Neg(a) => Op::Neg(f(a)),
+            Op::AddC(a, c) => Op::AddC(f(a), c),
+            Op::MulC(a, c) => Op::MulC(f(a), c),
+            Op::DivC(a, c) => Op::DivC(f(a), c),
+            Op::CSub(c, a) => Op::CSub(c, f(a)),
+            Op::CDiv(c, a) => Op::CDiv(c, f(a)),
+            Op::Fun(g, a) => Op::Fun(g, f(a)),
+            Op::Powi(a, n) => Op::Powi(f(a), n),
+            Op::Powf(a, c) => Op::Powf(f(a), c),
+            Op::Log(a, c) => Op::Log(f(a), c),
+        }
+    }
+
+    /// Operands.
+    fn args(self) -> [Option<u32>; 2] {
+        match self {
+            Op::Input(_) | Op::Const(_) => [None, None],
+            Op::Add(a, b)
+            | Op::Sub(a, b)
+            | Op::Mul(a, b)
+            | Op::Div(a, b)
+            | Op::Atan2(a, b)
+            | Op::Powd(a, b) => [Some(a), Some(b)],
+            Op::Neg(a)
+            | Op::AddC(a, _)
+            | Op::MulC(a, _)
+            | Op::DivC(a, _)
+            | Op::CSub(_, a)
+            | Op::CDiv(_, a)
+            | Op::Fun(_, a)
+            | Op::Powi(a, _)
+            | Op::Powf(a, _)
+            | Op::Log(a, _) => [Some(a), None],
+        }
+    }
+
+    /// The operation applied to operand values `a` and `b` (`b` unused by the one-operand
+    /// operations).
+    #[inline]
+    fn apply<S: Real>(self, a: S, b: S) -> S {
+        match self {
+            Op::Input(_) => unreachable_input(),
+            Op::Const(c) => S::from(c),
+            Op::Add(..) => a + b,
+            Op::Sub(..) => a - b,
+            Op::Mul(..) => a * b,
+            Op::Div(..) => a / b,
+            Op::Neg(_) => -a,
+            Op::AddC(_, c) => a + c,
+            Op::MulC(_, c) => a * c,
+            Op::DivC(_, c) => a / c,
+            Op::CSub(c, _) => S::from(c) - a,
+            Op::CDiv(c, _) => S::from(c) / a,
+            Op::Fun(f, _) => f.apply(a),
+            Op::Powi(_, n) => a.powi(n),
+            Op::Powf(_, c) => a.powf(c),
+            Op::Log(_, c) => a.log(c),
+            Op::Atan2(..) => a.atan2(b),
+            Op::Powd(..) => a.powd(b),
+        }
+    }
+
+    /// Value from the operation values `v`.
+    #[inline(always)]
+    fn eval<S: Real>(self, v: &[S]) -> S {
+        let g = |i: u32| v[i as usize];
+        match self {
+            Op::Add(a, b) => g(a) + g(b),
+            Op::Sub(a, b) => g(a) - g(b),
+            Op::Mul(a, b) => g(a) * g(b),
+            Op::Neg(a) => -g(a),
+            Op::AddC(a, c) => g(a) + c,
+            Op::MulC(a, c) => g(a) * c,
+            op => {
+                let [a, b] = op.args();
+                let a = a.map_or(S::from(0.0), |a| v[a as usize]);
+                let b = b.map_or(a, |b| v[b as usize]);
+                op.apply(a, b)
+            }
+        }
+    }
+
+    /// Value and the partial derivatives with respect to each operand, from dual evaluations.
+    fn partials<S: Real>(self, v: &[S]) -> (S, Option<S>, Option<S>) {
+        let [a, b] = self.args();
+        let a = a.map_or(S::from(0.0), |a| v[a as usize]);
+        let one = S::from(1.0);
+        match b {
+            None => {
+                let f = self.apply(Dual::new(a, one), Dual::from_re(a));
+                (f.re, Some(f.eps), None)
+            }
+            Some(b) => {
+                let b = v[b as usize];
+                let fa = self.apply(Dual::new(a, one), Dual::from_re(b));
+                let fb = self.apply(Dual::from_re(a), Dual::new(b, one));
+                (fa.re, Some(fa.eps), Some(fb.eps))
+            }
+        }
+    }
+}
+
+/// Inputs are placed before evaluation; the evaluator never reaches this.
+#[inline]
+fn unreachable_input<S: Real>() -> S {
+    S::from(f64::NAN)
+}
+
+/// A traced scalar: a constant, or the result of recorded operation `index` (with its value at
+/// the tracing point, for [`DualStruct::re`]).
+#[derive(Debug, Clone, Copy)]
+pub enum Var {
+    Const(f64),
+    Node(u32, f64),
+}
+
+impl Var {
+    /// Value at the tracing point.
+    pub fn value(self) -> f64 {
+        match self {
+            Var::Const(c) | Var::Node(_, c) => c,
+        }
+    }
+}
+
+/// The operations recorded so far on this thread.
+#[derive(Default)]
+struct Recorder {
+    ops: Vec<Op>,
+    seen: HashMap<Key, u32>,
+    tainted: bool,
+}
+
+thread_local! {
+    static RECORDER: RefCell<Option<Recorder>> = const { RefCell::new(None) };
+}
+
+/// Records `op` with value `value` (or returns the constant where nothing records).
+fn push(op: Op, value: f64) -> Var {
+    RECORDER.with(|r| match r.borrow_mut().as_mut() {
+        Some(rec) => {
+            let key = op.key();
+            if let Some(&i) = rec.seen.get(&key) {
+                return Var::Node(i, value);
+            }
+            let i = rec.ops.len() as u32;
+            rec.ops.push(op);
+            rec.seen.insert(key, i);
+            Var::Node(i, value)
+        }
+        None => Var::Const(value),
+    })
+}
+
+/// Notes that the traced code looked at a value (a branch the trace cannot follow).
+fn taint() {
+    RECORDER.with(|r| {
+        if let Some(rec) = r.borrow_mut().as_mut() {
+            rec.tainted = true;
+        }
+    });
+}
+
+fn unary(a: Var, f: impl Fn(f64) -> f64, op: impl Fn(u32) -> Op) -> Var {
+    match a {
+        Var::Const(x) => Var::Const(f(x)),
+        Var::Node(i, x) => push(op(i), f(x)),
+    }
+}
+
+impl Add for Var {
+    type Output = Var;
+    fn add(self, b: Var) -> Var {
+        match (self, b) {
+            (Var::Const(x), Var::Const(y)) => Var::Const(x + y),
+            (Var::Node(..), Var::Const(c)) | (Var::Const(c), Var::Node(..)) if c == 0.0 => {
+                if let Var::Node(..) = self {
+                    self
+                } else {
+                    b
+                }
+            }
+            (Var::Node(i, x), Var::Const(c)) | (Var::Const(c), Var::Node(i, x)) => {
+                push(Op::AddC(i, c), x + c)
+            }
+            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Add(i, j), x + y),
+        }
+    }
+}
+
+impl Sub for Var {
+    type Output = Var;
+    fn sub(self, b: Var) -> Var {
+        match (self, b) {
+            (Var::Const(x), Var::Const(y)) => Var::Const(x - y),
+            (Var::Node(..), Var::Const(0.0)) => self,
+            (Var::Node(i, x), Var::Const(c)) => push(Op::AddC(i, -c), x - c),
+            (Var::Const(0.0), Var::Node(..)) => -b,
+            (Var::Const(c), Var::Node(i, y)) => push(Op::CSub(c, i), c - y),
+            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Sub(i, j), x - y),
+        }
+    }
+}
+
+impl Mul for Var {
+    type Output = Var;
+    fn mul(self, b: Var) -> Var {
+        match (self, b) {
+            (Var::Const(x), Var::Const(y)) => Var::Const(x * y),
+            (Var::Node(i, x), Var::Const(c)) | (Var::Const(c), Var::Node(i, x)) => {
+                if c == 0.0 {
+                    Var::Const(0.0)
+                } else if c == 1.0 {
+                    Var::Node(i, x)
+                } else if c == -1.0 {
+                    -Var::Node(i, x)
+                } else {
+                    push(Op::MulC(i, c), x * c)
+                }
+            }
+            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Mul(i, j), x * y),
+        }
+    }
+}
+
+impl Div for Var {
+    type Output = Var;
+    fn div(self, b: Var) -> Var {
+        match (self, b) {
+            (Var::Const(x), Var::Const(y)) => Var::Const(x / y),
+            (Var::Node(..), Var::Const(1.0)) => self,
+            (Var::Node(i, x), Var::Const(c)) => push(Op::DivC(i, c), x / c),
+            (Var::Const(0.0), Var::Node(_, y)) => Var::Const(0.0 / y),
+            (Var::Const(c), Var::Node(i, y)) => push(Op::CDiv(c, i), c / y),
+            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Div(i, j), x / y),
+        }
+    }
+}
+
+impl Neg for Var {
+    type Output = Var;
+    fn neg(self) -> Var {
+        unary(self, |x| -x, Op::Neg)
+    }
+}
+
+impl Rem for Var {
+    type Output = Var;
+    /// Not part of the mechanics; a remainder is a branch the trace cannot follow.
+    fn rem(self, b: Var) -> Var {
+        taint();
+        Var::Const(self.value() % b.value())
+    }
+}
+
+macro_rules! by_ref_and_f64 {
+    ($($tr:ident $f:ident $atr:ident $af:ident),*) => {$(
+        impl<'a> $tr<&'a Var> for Var {
+            type Output = Var;
+            fn $f(self, b: &'a Var) -> Var {
+                $tr::$f(self, *b)
+            }
+        }
+        impl $tr<f64> for Var {
+            type Output = Var;
+            fn $f(self, b: f64) -> Var {
+                $tr::$f(self, Var::Const(b))
+            }
+        }
+        impl $atr for Var {
+            fn $af(&mut self, b: Var) {
+                *self = $tr::$f(*self, b);
+            }
+        }
+        impl $atr<f64> for Var {
+            fn $af(&mut self, b: f64) {
+                *self = $tr::$f(*self, Var::Const(b));
+            }
+        }
+    )*};
+}
+by_ref_and_f64!(
+    Add add AddAssign add_assign,
+    Sub sub SubAssign sub_assign,
+    Mul mul MulAssign mul_assign,
+    Div div DivAssign div_assign,
+    Rem rem RemAssign rem_assign
+);
+
+impl PartialEq for Var {
+    fn eq(&self, other: &Var) -> bool {
+        taint();
+        self.value() == other.value()
+    }
+}
+
+impl PartialOrd for Var {
+    fn partial_cmp(&self, other: &Var) -> Option<std::cmp::Ordering> {
+        taint();
+        self.value().partial_cmp(&other.value())
+    }
+}
+
+impl PartialEq<f64> for Var {
+    fn eq(&self, other: &f64) -> bool {
+        taint();
+        self.value() == *other
+    }
+}
+
+impl PartialOrd<f64> for Var {
+    fn partial_cmp(&self, other: &f64) -> Option<std::cmp::Ordering> {
+        taint();
+        self.value().partial_cmp(other)
+    }
+}
+
+impl fmt::Display for Var {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.value())
+    }
+}
+
+impl From<f64> for Var {
+    fn from(c: f64) -> Var {
+        Var::Const(c)
+    }
+}
+
+impl Zero for Var {
+    fn zero() -> Var {
+        Var::Const(0.0)
+    }
+    fn is_zero(&self) -> bool {
+        match self {
+            Var::Const(c) => *c == 0.0,
+            Var::Node(..) => {
+                taint();
+                self.value() == 0.0
+            }
+        }
+    }
+}
+
+impl One for Var {
+    fn one() -> Var {
+        Var::Const(1.0)
+    }
+}
+
+impl Num for Var {
+    type FromStrRadixErr = <f64 as Num>::FromStrRadixErr;
+    fn from_str_radix(s: &str, radix: u32) -> Result<Var, Self::FromStrRadixErr> {
+        f64::from_str_radix(s, radix).map(Var::Const)
+    }
+}
+
+impl Signed for Var {
+    fn abs(&self) -> Var {
+        unary(*self, f64::abs, |i| Op::Fun(Fun::Abs, i))
+    }
+    fn abs_sub(&self, other: &Var) -> Var {
+        taint();
+        Var::Const((self.value() - other.value()).max(0.0))
+    }
+    fn signum(&self) -> Var {
+        if let Var::Node(..) = self {
+            taint();
+        }
+        Var::Const(self.value().signum())
+    }
+    fn is_positive(&self) -> bool {
+        if let Var::Node(..) = self {
+            taint();
+        }
+        self.value().is_sign_positive()
+    }
+    fn is_negative(&self) -> bool {
+        if let Var::Node(..) = self {
+            taint();
+        }
+        self.value().is_sign_negative()
+    }
+}
+
+impl Inv for Var {
+    type Output = Var;
+    fn inv(self) -> Var {
+        self.recip()
+    }
+}
+
+impl std::iter::Sum for Var {
+    fn sum<I: Iterator<Item = Var>>(iter: I) -> Var {
+        iter.fold(Var::Const(0.0), |a, b| a + b)
+    }
+}
+
+impl std::iter::Product for Var {
+    fn product<I: Iterator<Item = Var>>(iter: I) -> Var {
+        iter.fold(Var::Const(1.0), |a, b| a * b)
+    }
+}
+
+impl FromPrimitive for Var {
+    fn from_i64(n: i64) -> Option<Var> {
+        Some(Var::Const(n as f64))
+    }
+    fn from_u64(n: u64) -> Option<Var> {
+        Some(Var::Const(n as f64))
+    }
+    fn from_f64(n: f64) -> Option<Var> {
+        Some(Var::Const(n))
+    }
+}
+
+impl DualStruct for Var {
+    type Real = f64;
+    type Inner = f64;
+    fn re(&self) -> f64 {
+        self.value()
+    }
+    fn from_inner(inner: &f64) -> Var {
+        Var::Const(*inner)
+    }
+}
+
+impl Mappable<Var> for Var {
+    type Output<O> = O;
+    fn map_dual<M: Fn(Var) -> O, O>(self, f: M) -> O {
+        f(self)
+    }
+}
+
+macro_rules! funs {
+    ($($name:ident $fun:ident),*) => {$(
+        fn $name(&self) -> Var {
+            unary(*self, f64::$name, |i| Op::Fun(Fun::$fun, i))
+        }
+    )*};
+}
+
+impl DualNum for Var {
+    type Primitive = f64;
+    const NDERIV: usize = 0;
+    type InnerDual = f64;
+
+    fn from_re(re: f64) -> Var {
+        Var::Const(re)
+    }
+    fn scale(self, factor: &f64) -> Var {
+        self * *factor
+    }
+    fn powi(&self, n: i32) -> Var {
+        match n {
+            0 => Var::Const(1.0),
+            1 => *self,
+            _ => unary(*self, |x| x.powi(n), |i| Op::Powi(i, n)),
+        }
+    }
+    fn powf(&self, n: f64) -> Var {
+        unary(*self, |x| x.powf(n), |i| Op::Powf(i, n))
+    }
+    fn log(&self, base: f64) -> Var {
+        unary(*self, |x| x.log(base), |i| Op::Log(i, base))
+    }
+    fn sin_cos(&self) -> (Var, Var) {
+        (self.sin(), self.cos())
+    }
+    fn atan2(&self, other: Var) -> Var {
+        match (*self, other) {
+            (Var::Const(y), Var::Const(x)) => Var::Const(y.atan2(x)),
+            (a, b) => {
+                let (i, j) = (node(a), node(b));
+                push(Op::Atan2(i, j), a.value().atan2(b.value()))
+            }
+        }
+    }
+    fn powd(&self, exp: Var) -> Var {
+        match (*self, exp) {
+            (Var::Const(x), Var::Const(y)) => Var::Const(x.powf(y)),
+            (a, b) => {
+                let (i, j) = (node(a), node(b));
+                push(Op::Powd(i, j), a.value().powf(b.value()))
+            }
+        }
+    }
+    fn recip(&self) -> Var {
+        unary(*self, f64::recip, |i| Op::Fun(Fun::Recip, i))
+    }
+    fn sph_j0(&self) -> Var {
+        unary(*self, |x| x.sph_j0(), |i| Op::Fun(Fun::SphJ0, i))
+    }
+    fn sph_j1(&self) -> Var {
+        unary(*self, |x| x.sph_j1(), |i| Op::Fun(Fun::SphJ1, i))
+    }
+    fn sph_j2(&self) -> Var {
+        unary(*self, |x| x.sph_j2(), |i| Op::Fun(Fun::SphJ2, i))
+    }
+    funs!(
+        sqrt Sqrt, cbrt Cbrt, exp Exp, exp2 Exp2, exp_m1 ExpM1, ln Ln, log2 Log2, log10 Log10,
+        ln_1p Ln1p, sin Sin, cos Cos, tan Tan, asin Asin, acos Acos, atan Atan, sinh Sinh,
+        cosh Cosh, tanh Tanh, asinh Asinh, acosh Acosh, atanh Atanh
+    );
+}
+
+/// The index of `v` as an operand (a constant gets a node of its own; only the rare
+/// two-argument functions with one constant argument need that).
+fn node(v: Var) -> u32 {
+    match v {
+        Var::Node(i, _) => i,
+        Var::Const(c) => match push(Op::Const(c), c) {
+            Var::Node(i, _) => i,
+            Var::Const(_) => 0,
+        },
+    }
+}
+
+/// A recorded straight-line program with inputs and outputs.
+#[derive(Debug, Clone)]
+pub struct Tape {
+    ops: Vec<Op>,
+    outputs: Vec<Var>,
+    /// The first `n_static` operations depend on the static inputs only (see
+    /// [`Tape::split`]).
+    n_static: usize,
+}
+
+/// Traces `f` at the input values `x`: returns the program, or `None` when `f` failed or the
+/// trace branched on a value (then it is not valid away from `x`).
+pub fn record(x: &[f64], f: impl FnOnce(&[Var]) -> Option<Vec<Var>>) -> Option<Tape> {
+    RECORDER.with(|r| {
+        *r.borrow_mut() = Some(Recorder::default());
+    });
+    let vars: Vec<Var> = x
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| push(Op::Input(k as u32), v))
+        .collect();
+    let outputs = f(&vars);
+    let rec = RECORDER.with(|r| r.borrow_mut().take())?;
+    let outputs = outputs?;
+    if rec.tainted {
+        return None;
+    }
+    let tape = Tape {
+        ops: rec.ops,
+        outputs,
+        n_static: 0,
+    };
+    Some(tape.prune(&(0..tape.outputs.len()).collect::<Vec<_>>()))
+}
+
+impl Tape {
+    /// Number of recorded operations (inputs included).
+    pub fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// Is the program empty?
+    pub fn is_empty(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// Number of outputs.
+    pub fn outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
+    /// The program restricted to the outputs `keep` (in that order), without the operations
+    /// they do not need.
+    pub fn prune(&self, keep: &[usize]) -> Tape {
+        let mut live = vec![false; self.ops.len()];
+        for &o in keep {
+            if let Var::Node(i, _) = self.outputs[o] {
+                live[i as usize] = true;
+            }
+        }
+        for i in (0..self.ops.len()).rev() {
+            if live[i] {
+                for a in self.ops[i].args().into_iter().flatten() {
+                    live[a as usize] = true;
+                }
+            }
+        }
+        let mut new_index = vec![u32::MAX; self.ops.len()];
+        let mut ops = Vec::new();
+        for (i, op) in self.ops.iter().enumerate() {
+            if live[i] {
+                new_index[i] = ops.len() as u32;
+                ops.push(op.map(|a| new_index[a as usize]));
+            }
+        }
+        let outputs = keep
+            .iter()
+            .map(|&o| match self.outputs[o] {
+                Var::Node(i, v) => Var::Node(new_index[i as usize], v),
+                c => c,
+            })
+            .collect();
+        Tape {
+            ops,
+            outputs,
+            n_static: 0,
+        }
+    }
+
+    /// The same program with the operations that depend on the inputs `fixed` only (and on
+    /// constants) placed first: [`Tape::eval_static`] computes them once, and every later
+    /// evaluation at new values of the other inputs starts from there. Topological order is
+    /// kept, as static operations never depend on the others.
+    pub fn split(&self, fixed: &[usize]) -> Tape {
+        let mut is_static = vec![false; self.ops.len()];
+        for (i, op) in self.ops.iter().enumerate() {
+            is_static[i] = match *op {
+                Op::Input(k) => fixed.contains(&(k as usize)),
+                op => op
+                    .args()
+                    .into_iter()
+                    .flatten()
+                    .all(|a| is_static[a as usize]),
+            };
+        }
+        let order: Vec<usize> = (0..self.ops.len())
+            .filter(|&i| is_static[i])
+            .chain((0..self.ops.len()).filter(|&i| !is_static[i]))
+            .collect();
+        let mut new_index = vec![0u32; self.ops.len()];
+        for (k, &i) in order.iter().enumerate() {
+            new_index[i] = k as u32;
+        }
+        Tape {
+            ops: order
+                .iter()
+                .map(|&i| self.ops[i].map(|a| new_index[a as usize]))
+                .collect(),
+            outputs: self
+                .outputs
+                .iter()
+                .map(|o| match *o {
+                    Var::Node(i, v) => Var::Node(new_index[i as usize], v),
+                    c => c,
+                })
+                .collect(),
+            n_static: is_static.iter().filter(|&&s| s).count(),
+        }
+    }
+
+    /// Number of static operations.
+    pub fn static_len(&self) -> usize {
+        self.n_static
+    }
+
+    /// Values of the static operations at `x` (only the static inputs of `x` are read).
+    pub fn eval_static<S: Real>(&self, x: &[S]) -> Vec<S> {
+        let mut work = Vec::with_capacity(self.n_static);
+        for op in &self.ops[..self.n_static] {
+            let v = match *op {
+                Op::Input(k) => x[k as usize],
+                op => op.eval(&work),
+            };
+            work.push(v);
+        }
+        work
+    }
+
+    /// Evaluates the program at `x` over any [`Real`], with the static values `fixed` from
+    /// [`Tape::eval_static`] (at the same static inputs); `work` is scratch space reused
+    /// between calls.
+    pub fn eval<S: Real>(&self, fixed: &[S], x: &[S], work: &mut Vec<S>) -> Vec<S> {
+        let ns = self.n_static;
+        work.clear();
+        work.resize(self.ops.len(), S::from(0.0));
+        work[..ns].copy_from_slice(&fixed[..ns]);
+        for (i, op) in self.ops.iter().enumerate().skip(ns) {
+            work[i] = match *op {
+                Op::Input(k) => x[k as usize],
+                op => op.eval(work),
+            };
+        }
+        self.outputs
+            .iter()
+            .map(|o| match *o {
+                Var::Const(c) => S::from(c),
+                Var::Node(i, _) => work[i as usize],
+            })
+            .collect()
+    }
+
+    /// Which lanes of [`Tape::forward`] each operation can move: input `k` moves along lane
+    /// `l` for each `(k, l)` in `seeds` (static inputs must not be seeded). Computed once per
+    /// choice of seeds; an operation's derivative is only propagated over its lane range.
+    pub fn seeding(&self, seeds: &[(usize, usize)], lanes: usize) -> Seeding {
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
+        let mut range = vec![(0u32, 0u32); self.ops.len()];
+        for (i, op) in self.ops.iter().enumerate().skip(self.n_static) {
+            range[i] = match *op {
+                Op::Input(k) => seeds
+                    .iter()
+                    .filter(|s| s.0 == k as usize)
+                    .fold((u32::MAX, 0), |(lo, hi), &(_, l)| {
+                        (lo.min(l as u32), hi.max(l as u32 + 1))
+                    }),
+                op => op
+                    .args()
+                    .into_iter()
+                    .flatten()
+                    .fold((u32::MAX, 0), |(lo, hi), a| {
+                        let (l, h) = range[a as usize];
+                        if l >= h {
+                            (lo, hi)
+                        } else {
+                            (lo.min(l), hi.max(h))
+                        }
+                    }),
+            };
+            if range[i].0 >= range[i].1 {
+                range[i] = (0, 0);
+            }
+        }
+        Seeding {
+            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            seeds: seeds.to_vec(),
+            lanes,
+            range,
+        }
+    }
+
+    /// Forward mode with several directions (lanes) at once: values and first derivatives of
+    /// every output along the directions of `seeding`. Returns the outputs' values and their
+    /// derivatives (`outputs × lanes`, row-major). The local derivative of each elementary
+    /// function comes from evaluating it over a dual number; the lanes carry the chain rule.
+    pub fn forward<S: Real>(
+        &self,
+        fixed: &[S],
+        x: &[S],
+        seeding: &Seeding,
+        work: &mut Forward<S>,
+    ) -> (Vec<S>, Vec<S>) {
+        let (seeds, lanes) = (&seeding.seeds[..], seeding.lanes);
+        let ns = self.n_static;
+        let zero = S::from(0.0);
+        work.val.clear();
+        work.val.resize(self.ops.len(), zero);
+        work.val[..ns].copy_from_slice(&fixed[..ns]);
+        // Lanes outside an operation's range are never written, so they stay zero as long as
+        // the buffer serves one seeding.
+        if work.seeding != seeding.id || work.tan.len() != self.ops.len() * lanes {
+            work.tan.clear();
+            work.tan.resize(self.ops.len() * lanes, zero);
+            work.seeding = seeding.id;
+        }
+        let (val, tan) = (&mut work.val, &mut work.tan);
+        for (i, op) in self.ops.iter().enumerate().skip(ns) {
+            let (lo, hi) = seeding.range[i];
+            let (lo, hi) = (lo as usize, hi as usize);
+            let (head, rest) = tan.split_at_mut(i * lanes);
+            let out = &mut rest[lo..hi];
+            let t = |a: u32| &head[a as usize * lanes + lo..a as usize * lanes + hi];
+            let v = match *op {
+                Op::Input(k) => {
+                    out.fill(zero);
+                    for &(_, l) in seeds.iter().filter(|s| s.0 == k as usize) {
+                        out[l - lo] = S::from(1.0);
+                    }
+                    x[k as usize]
+                }
+                Op::Const(c) => {
+                    out.fill(zero);
+                    S::from(c)
+                }
+                Op::Add(a, b) => {
+                    for ((o, &x), &y) in out.iter_mut().zip(t(a)).zip(t(b)) {
+                        *o = x + y;
+                    }
+                    val[a as usize] + val[b as usize]
+                }
+                Op::Sub(a, b) => {
+                    for ((o, &x), &y) in out.iter_mut().zip(t(a)).zip(t(b)) {
+                        *o = x - y;
+                    }
+                    val[a as usize] - val[b as usize]
+                }
+                Op::Mul(a, b) => {
+                    let (va, vb) = (val[a as usize], val[b as usize]);
+                    for ((o, &x), &y) in out.iter_mut().zip(t(a)).zip(t(b)) {
+                        *o = x * vb + va * y;
+                    }
+                    va * vb
+                }
+                Op::Neg(a) => {
+                    for (o, &x) in out.iter_mut().zip(t(a)) {
+                        *o = -x;
+                    }
+                    -val[a as usize]
+                }
+                Op::AddC(a, c) => {
+                    out.copy_from_slice(t(a));
+                    val[a as usize] + c
+                }
+                Op::MulC(a, c) => {
+                    for (o, &x) in out.iter_mut().zip(t(a)) {
+                        *o = x * c;
+                    }
+                    val[a as usize] * c
+                }
+                op => {
+                    // Division and the functions: local partials from a dual evaluation.
+                    let (v, da, db) = op.partials(val);
+                    match (op.args(), da, db) {
+                        ([Some(a), Some(b)], Some(da), Some(db)) => {
+                            for ((o, &x), &y) in out.iter_mut().zip(t(a)).zip(t(b)) {
+                                *o = da * x + db * y;
+                            }
+                        }
+                        ([Some(a), _], Some(da), _) => {
+                            for (o, &x) in out.iter_mut().zip(t(a)) {
+                                *o = da * x;
+                            }
+                        }
+                        _ => out.fill(zero),
+                    }
+                    v
+                }
+            };
+            val[i] = v;
+        }
+        let mut values = Vec::with_capacity(self.outputs.len());
+        let mut derivs = Vec::with_capacity(self.outputs.len() * lanes);
+        for o in &self.outputs {
+            match *o {
+                Var::Const(c) => {
+                    values.push(S::from(c));
+                    derivs.extend(std::iter::repeat_n(zero, lanes));
+                }
+                Var::Node(i, _) => {
+                    let i = i as usize;
+                    values.push(val[i]);
+                    derivs.extend_from_slice(&tan[i * lanes..(i + 1) * lanes]);
+                }
+            }
+        }
+        (values, derivs)
+    }
+}
+
+/// Scratch space of [`Tape::forward`].
+#[derive(Debug, Clone, Default)]
+pub struct Forward<S> {
+    val: Vec<S>,
+    tan: Vec<S>,
+    /// The [`Seeding`] the buffer was last used with.
+    seeding: usize,
+}
+
+/// Seeds of [`Tape::forward`] with the lane range of every operation.
+#[derive(Debug, Clone)]
+pub struct Seeding {
+    id: usize,
+    seeds: Vec<(usize, usize)>,
+    lanes: usize,
+    range: Vec<(u32, u32)>,
+}

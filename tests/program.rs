@@ -1,0 +1,211 @@
+//! The recorded program (`tape`, `program`) against the direct route it is traced from: same
+//! residual, Jacobian, damping and mass matrices, and the same sweeps.
+
+mod common;
+
+use common::example;
+use modaltol::equilibrium::{Problem, equations};
+use modaltol::linearize::{choose_independent, linearize};
+use modaltol::mechanics::System;
+use modaltol::mechanics::dynamics::Lifted;
+use modaltol::sweep::{Options, Sweep, initial_guess};
+use modaltol::tape::{Forward, Var, record};
+use nalgebra::DMatrix;
+use num_dual::{Dual64, DualNum};
+use num_traits::Signed;
+
+const EXAMPLES: [&str; 4] = [
+    "rotating_pendulum.toml",
+    "governor.toml",
+    "spinning_universal_pendulum.toml",
+    "multi_arm_governor.toml",
+];
+
+fn close(a: f64, b: f64, scale: f64) -> bool {
+    (a - b).abs() <= 1e-11 * scale.max(1.0)
+}
+
+#[test]
+fn a_trace_folds_constants_shares_operations_and_differentiates() {
+    // f(x, y) = x·y + sin(x)·1 + 0·y + x·y, g = (x·y)/y + c: x·y is recorded once, 0·y and ·1
+    // vanish.
+    let f = |v: &[Var]| {
+        let (x, y) = (v[0], v[1]);
+        let one = Var::from(1.0);
+        let zero = Var::from(0.0);
+        Some(vec![
+            x * y + x.sin() * one + zero * y + x * y,
+            (x * y) / y + Var::from(2.5),
+        ])
+    };
+    let tape = record(&[0.7, 1.3], f).expect("no branch");
+    // Inputs 2, x·y, sin x, two additions, the division and the constant addition.
+    assert_eq!(tape.len(), 8, "{tape:?}");
+    let at = [1.1, -0.4];
+    let mut work = Vec::new();
+    let y = tape.eval(&[], &at, &mut work);
+    let (x0, y0) = (at[0], at[1]);
+    assert_eq!(y[0], x0 * y0 + x0.sin() + x0 * y0);
+    assert_eq!(y[1], (x0 * y0) / y0 + 2.5);
+    // Forward lanes against dual numbers.
+    let seeding = tape.seeding(&[(0, 0), (1, 1)], 2);
+    let (v, d) = tape.forward(&[], &at, &seeding, &mut Forward::default());
+    assert_eq!(v, y);
+    for lane in 0..2 {
+        let xd = Dual64::new(x0, if lane == 0 { 1.0 } else { 0.0 });
+        let yd = Dual64::new(y0, if lane == 1 { 1.0 } else { 0.0 });
+        let f0 = xd * yd + xd.sin() + xd * yd;
+        let f1 = (xd * yd) / yd + 2.5;
+        assert!((d[lane] - f0.eps).abs() < 1e-15);
+        assert!((d[2 + lane] - f1.eps).abs() < 1e-15);
+    }
+    // Over dual numbers the program gives the same derivatives (second route).
+    let xd = [Dual64::new(x0, 1.0), Dual64::from_re(y0)];
+    let yd = tape.eval(&[], &xd, &mut Vec::new());
+    assert!((yd[0].eps - d[0]).abs() < 1e-15);
+}
+
+#[test]
+fn a_trace_that_branches_on_a_value_is_refused() {
+    let branching = |v: &[Var]| Some(vec![if v[0] > Var::from(0.0) { v[0] } else { -v[0] }]);
+    assert!(record(&[1.0], branching).is_none());
+    // |x| recorded as an operation is fine, and right on both sides.
+    let tape = record(&[1.0], |v| Some(vec![v[0].abs()])).unwrap();
+    assert_eq!(tape.eval(&[], &[-3.0], &mut Vec::new())[0], 3.0);
+    // A failing function gives no program and leaves no recording behind.
+    assert!(record(&[1.0], |_| None).is_none());
+    let v = Var::from(2.0) * Var::from(3.0);
+    assert_eq!(v.value(), 6.0);
+}
+
+/// Parameters, speed, coordinates and multipliers.
+type State = (Vec<f64>, f64, Vec<f64>, Vec<f64>);
+
+/// States to compare at: the nominal equilibrium's neighbourhood at a few speeds and
+/// parameter values off nominal.
+fn states(name: &str) -> Vec<State> {
+    let model = example(name);
+    let p0 = model.nominal();
+    let mut out = Vec::new();
+    for (k, speed) in [0.3, 1.7, 4.2].into_iter().enumerate() {
+        let p: Vec<f64> = p0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v * (1.0 + 0.02 * ((i + k) % 3) as f64 - 0.02))
+            .collect();
+        let q: Vec<f64> = initial_guess(&model, &p, speed)
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.05 * ((i * 7 + k) % 5) as f64 - 0.1)
+            .collect();
+        let lambda = (0..model.n_constraints())
+            .map(|j| 3.0 - 1.3 * j as f64 + k as f64)
+            .collect();
+        out.push((p, speed, q, lambda));
+    }
+    out
+}
+
+#[test]
+fn the_program_reproduces_the_direct_route_on_every_example() {
+    for name in EXAMPLES {
+        let model = example(name);
+        let p0 = model.nominal();
+        let q0 = initial_guess(&model, &p0, 1.0).unwrap();
+        let program = model
+            .program(&p0, 1.0, &q0)
+            .unwrap_or_else(|| panic!("{name}: the recording was refused"));
+        let free = model.free();
+        let nf = free.len();
+        for (p, speed, q, lambda) in states(name) {
+            let sys = System::new(&model, &p, speed).unwrap();
+            let direct = Problem::new(&sys, free.clone(), model.driven(), Vec::new());
+            let inst = program.at(&p, speed);
+            let qd = sys.steady_speeds();
+            let f = equations(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
+            let scale = f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            for (a, b) in inst.residual(&q, &lambda).iter().zip(&f) {
+                assert!(close(*a, *b, scale), "{name}: residual {a} vs {b}");
+            }
+            let (_, j_direct) = direct.residual_and_jacobian(&q, &lambda);
+            let (_, j_tape) = inst.residual_and_jacobian(&q, &lambda);
+            let lin = inst.linear(&q, &lambda);
+            let js = j_direct.amax();
+            for (a, b) in j_tape.iter().zip(j_direct.iter()) {
+                assert!(close(*a, *b, js), "{name}: Jacobian {a} vs {b}");
+            }
+            for (a, b) in lin.jacobian.iter().zip(j_direct.iter()) {
+                assert!(close(*a, *b, js), "{name}: Jacobian (full pass) {a} vs {b}");
+            }
+            // C and M against the direct linearisation.
+            let m = model.n_constraints();
+            let phi_r = DMatrix::from_fn(m, nf, |k, j| j_direct[(j, nf + k)]);
+            let independent = if m == 0 {
+                free.clone()
+            } else {
+                choose_independent(&phi_r, &free, None).unwrap()
+            };
+            let l = linearize(direct.dual(), &free, &q, &qd, &lambda, &independent, None).unwrap();
+            for (a, b) in lin.damping.iter().zip(l.c_full.iter()) {
+                assert!(close(*a, *b, l.c_full.amax()), "{name}: C {a} vs {b}");
+            }
+            for (a, b) in lin.mass.iter().zip(l.m_full.iter()) {
+                assert!(close(*a, *b, l.m_full.amax()), "{name}: M {a} vs {b}");
+            }
+            for (a, b) in lin
+                .jacobian
+                .view((0, 0), (nf, nf))
+                .iter()
+                .zip(l.k_full.iter())
+            {
+                assert!(close(*a, *b, l.k_full.amax()), "{name}: K {a} vs {b}");
+            }
+        }
+    }
+}
+
+#[test]
+fn sweeps_agree_with_and_without_the_program() {
+    for name in EXAMPLES {
+        let model = example(name);
+        let p = model.nominal();
+        let run = |direct: bool| {
+            let mut s = Sweep::new(
+                &model,
+                p.clone(),
+                Options {
+                    direct,
+                    ..Default::default()
+                },
+            );
+            (0..=40)
+                .map(|i| s.step(0.125 * i as f64))
+                .collect::<Vec<_>>()
+        };
+        for (a, b) in run(false).iter().zip(run(true)) {
+            match (a, b) {
+                (Ok(a), Ok(b)) => {
+                    for (x, y) in a.equilibrium.q.iter().zip(&b.equilibrium.q) {
+                        assert!((x - y).abs() < 1e-10, "{name}: q {x} vs {y}");
+                    }
+                    assert_eq!(a.modes.len(), b.modes.len());
+                    for (x, y) in a.modes.iter().zip(&b.modes) {
+                        let d = (x.root.lambda - y.root.lambda).norm();
+                        assert!(d < 1e-8 * (1.0 + y.root.lambda.norm()), "{name}: {d}");
+                    }
+                    for (x, y) in a
+                        .equilibrium
+                        .drive_force
+                        .iter()
+                        .zip(&b.equilibrium.drive_force)
+                    {
+                        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{name}: drive");
+                    }
+                }
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (a, b) => panic!("{name}: {:?} vs {:?}", a.is_ok(), b.is_ok()),
+            }
+        }
+    }
+}
