@@ -425,10 +425,24 @@ impl<'a> Problem<'a> {
         if m == 0 {
             return Vec::new();
         }
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
-        let a = DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]);
-        let b = DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i]));
+        let (a, b) = match &self.compiled {
+            // F(q, 0) = [r_R; Φ]; the λ columns of its Jacobian are [Φ_Rᵀ; 0].
+            Some(c) => {
+                let (f, j) = c.residual_and_jacobian(q, &vec![0.0; m]);
+                (
+                    j.view((0, nf), (nf, m)).into_owned(),
+                    DVector::from_iterator(nf, f[..nf].iter().map(|v| -v)),
+                )
+            }
+            None => {
+                let zero = vec![0.0; q.len()];
+                let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
+                (
+                    DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]),
+                    DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i])),
+                )
+            }
+        };
         match a.svd(true, true).solve(&b, 1e-12) {
             Ok(l) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
             _ => vec![0.0; m],
@@ -449,15 +463,21 @@ impl<'a> Problem<'a> {
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
-        for &c in &self.driven {
-            let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-            qq[c] = Dual64::new(q[c], 1.0);
-            let f = equations(self.dual(), &self.free, &qq, &qd, &ld);
-            let mut change = f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()));
+        let slopes = self.compiled.as_ref().map(|c| c.driven_slopes(q, lambda));
+        for (k, &c) in self.driven.iter().enumerate() {
+            let mut change = match &slopes {
+                Some(s) => s[k],
+                None => {
+                    let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
+                    qq[c] = Dual64::new(q[c], 1.0);
+                    let f = equations(self.dual(), &self.free, &qq, &qd, &ld);
+                    f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()))
+                }
+            };
             for offset in [1.0, 2.5] {
                 let mut qo = q.to_vec();
                 qo[c] += offset;
-                let f = equations(self.value(), &self.free, &qo, &self.qd, lambda);
+                let f = self.residual(&qo, lambda);
                 change = f.iter().fold(change, |a, v| a.max(v.abs()));
             }
             if change > tol {

@@ -32,14 +32,11 @@
 //! calculations*, AIAA 2011-886; Griewank & Walther, *Evaluating Derivatives* (2008), §15
 //! (derivatives of iterative solvers).
 
-use crate::equilibrium::equations;
 use crate::frf::transfer;
-use crate::linearize::linearize;
-use crate::mechanics::System;
-use crate::mechanics::dynamics::Lifted;
 use crate::modal::{C64, Root};
 use crate::model::Model;
-use crate::real::{Real, lift1};
+use crate::program::Equations;
+use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::{Output, Quantity};
@@ -171,14 +168,12 @@ fn expand<J: Jet>(
     let free = &pt.linear.free;
     let nf = free.len();
     let lu = eq.jacobian.clone().lu();
-    let sys = System::new(model, seeded, J::from(pt.speed))?;
-    let lifted = Lifted::new(sys.clone());
-    let qd = sys.steady_speeds();
+    let equations = Equations::new(model, seeded, J::from(pt.speed), &eq.q)?;
     let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
     let mut lambda: Vec<J> = eq.lambda.iter().map(|&v| J::from(v)).collect();
     // Equilibrium expansion: two chord iterations with Newton's Jacobian.
     for _ in 0..2 {
-        let f = equations(&lifted, free, &q, &qd, &lambda);
+        let f = equations.residual(free, &q, &lambda);
         for pk in 1..J::PARTS {
             let rhs = DVector::from_iterator(f.len(), f.iter().map(|v| v.part(pk)));
             let d = lu.solve(&rhs).ok_or(PointError::Equilibrium(
@@ -194,15 +189,7 @@ fn expand<J: Jet>(
             }
         }
     }
-    let lin = linearize(
-        &Lifted::new(sys.map(lift1)),
-        free,
-        &q,
-        &qd,
-        &lambda,
-        &pt.linear.independent,
-        None,
-    )?;
+    let lin = equations.linearize(free, &q, &lambda, &pt.linear.independent)?;
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
     // Per mode: ω_d, ζ and D (ω_d and ζ not where the roots coalesce, as in

@@ -16,9 +16,11 @@
 //! direct route, which is always available.
 
 use crate::equilibrium::equations;
+use crate::linearize::{Linearization, LinearizeError, linearize, reduce};
 use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, evaluate_rows};
-use crate::model::Model;
+use crate::model::{FieldError, Model};
+use crate::real::{Real, lift1};
 use crate::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::DMatrix;
 use std::cell::RefCell;
@@ -37,6 +39,8 @@ pub struct Program {
     jacobian: Seeding,
     /// Lanes `[q_R, λ, q̇_R, q̈_R]` on `full`.
     linear: Seeding,
+    /// One lane per driven coordinate on `residual` (the steady-state check).
+    steady: Seeding,
 }
 
 /// What the recorded function returns: the rows `rows` of `r + Φ_qᵀλ`, then `Φ`.
@@ -95,6 +99,12 @@ impl Program {
             seeds.push((np + 1 + n + nf + k, 2 * nf + m + k));
         }
         let linear = full.seeding(&seeds, 3 * nf + m);
+        let steady_seeds: Vec<(usize, usize)> = driven
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| (np + 1 + i, k))
+            .collect();
+        let steady = residual.seeding(&steady_seeds, driven.len());
         let program = Program {
             np,
             n,
@@ -105,6 +115,7 @@ impl Program {
             drive,
             jacobian,
             linear,
+            steady,
         };
         program.reproduces(model, p, speed, q).then_some(program)
     }
@@ -187,12 +198,12 @@ impl Drop for Instance<'_> {
 }
 
 /// The input vector `[p, speed, q, q̇_R = 0, q̈_R = 0, λ]`.
-fn inputs(p: &[f64], speed: f64, q: &[f64], lambda: &[f64], nf: usize) -> Vec<f64> {
+fn inputs<S: Real>(p: &[S], speed: S, q: &[S], lambda: &[S], nf: usize) -> Vec<S> {
     let mut x = Vec::with_capacity(p.len() + 1 + q.len() + 2 * nf + lambda.len());
     x.extend_from_slice(p);
     x.push(speed);
     x.extend_from_slice(q);
-    x.extend(std::iter::repeat_n(0.0, 2 * nf));
+    x.extend(std::iter::repeat_n(S::from(0.0), 2 * nf));
     x.extend_from_slice(lambda);
     x
 }
@@ -211,15 +222,41 @@ pub struct Instance<'a> {
 
 /// Newton's Jacobian with the linearisation's damping and mass matrices, at one state.
 #[derive(Debug, Clone)]
-pub struct Linear {
+pub struct Linear<S: Real = f64> {
     /// `F`.
-    pub residual: Vec<f64>,
+    pub residual: Vec<S>,
     /// `∂F/∂[q_R; λ]`.
-    pub jacobian: DMatrix<f64>,
+    pub jacobian: DMatrix<S>,
     /// `∂r_R/∂q̇_R`.
-    pub damping: DMatrix<f64>,
+    pub damping: DMatrix<S>,
     /// `∂r_R/∂q̈_R`.
-    pub mass: DMatrix<f64>,
+    pub mass: DMatrix<S>,
+}
+
+impl<S: Real> Linear<S> {
+    fn from_forward(f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
+        let lanes = 3 * nf + m;
+        let at = |r: usize, l: usize| d[r * lanes + l];
+        Linear {
+            residual: f,
+            jacobian: DMatrix::from_fn(nf + m, nf + m, at),
+            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, nf + m + c)),
+            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 2 * nf + m + c)),
+        }
+    }
+
+    /// The linearisation (`K` is the `q_R` block of the Jacobian, `Φ_R` its `λ` columns).
+    pub fn reduce(
+        self,
+        free: &[usize],
+        independent: &[usize],
+    ) -> Result<Linearization<S>, LinearizeError> {
+        let nf = free.len();
+        let m = self.jacobian.nrows() - nf;
+        let phi_r = DMatrix::from_fn(m, nf, |k, j| self.jacobian[(j, nf + k)]);
+        let k = self.jacobian.view((0, 0), (nf, nf)).into_owned();
+        reduce(free, independent, &phi_r, self.mass, self.damping, k)
+    }
 }
 
 impl Instance<'_> {
@@ -262,22 +299,126 @@ impl Instance<'_> {
         (f, DMatrix::from_row_slice(nx, nx, &d))
     }
 
+    /// The largest `|∂F/∂q_c|` over `F`'s entries for each driven coordinate `c` (zero at a
+    /// steady state).
+    pub fn driven_slopes(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
+        self.set(q, lambda);
+        let pr = self.program;
+        let lanes = pr.steady.lanes();
+        let (_, d) = pr.residual.forward(
+            &self.residual,
+            &self.x.borrow(),
+            &pr.steady,
+            &mut Forward::default(),
+        );
+        (0..lanes)
+            .map(|l| {
+                d.iter()
+                    .skip(l)
+                    .step_by(lanes.max(1))
+                    .fold(0.0f64, |a, v| a.max(v.abs()))
+            })
+            .collect()
+    }
+
     /// `F`, its Jacobian, `C` and `M` in one forward pass.
     pub fn linear(&self, q: &[f64], lambda: &[f64]) -> Linear {
         self.set(q, lambda);
         let pr = self.program;
-        let (nf, m) = (pr.free.len(), pr.m);
-        let lanes = 3 * nf + m;
         let mut work = self.work.borrow_mut();
         let (f, d) = pr
             .full
             .forward(&self.full, &self.x.borrow(), &pr.linear, &mut work.2);
-        let at = |r: usize, l: usize| d[r * lanes + l];
-        Linear {
-            residual: f,
-            jacobian: DMatrix::from_fn(nf + m, nf + m, at),
-            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, nf + m + c)),
-            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 2 * nf + m + c)),
+        Linear::from_forward(f, &d, pr.free.len(), pr.m)
+    }
+}
+
+impl Program {
+    /// `F` at parameters, speed, coordinates and multipliers over any [`Real`] (dual numbers
+    /// seeded in the parameters give the equations' derivatives with respect to them).
+    pub fn residual_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Vec<S> {
+        let x = inputs(p, speed, q, lambda, self.free.len());
+        let fixed = self.residual.eval_static(&x);
+        self.residual.eval(&fixed, &x, &mut Vec::new())
+    }
+
+    /// `F`, its Jacobian, `C` and `M` over any [`Real`].
+    pub fn linear_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Linear<S> {
+        let x = inputs(p, speed, q, lambda, self.free.len());
+        let fixed = self.full.eval_static(&x);
+        let (f, d) = self
+            .full
+            .forward(&fixed, &x, &self.linear, &mut Forward::default());
+        Linear::from_forward(f, &d, self.free.len(), self.m)
+    }
+}
+
+/// The equilibrium equations and the linearisation of a model at parameters `p` over any
+/// [`Real`]: through the recorded program when the model has one, else directly. The
+/// sensitivities and the Hessians evaluate them over dual numbers.
+pub enum Equations<'a, S: Real> {
+    Recorded {
+        program: &'a Program,
+        p: Vec<S>,
+        speed: S,
+    },
+    Direct {
+        lifted: Box<Lifted<S>>,
+        qd: Vec<S>,
+    },
+}
+
+impl<'a, S: Real> Equations<'a, S> {
+    /// The equations at parameters `p` and `speed`, near the coordinates `q`.
+    pub fn new(model: &'a Model, p: &[S], speed: S, q: &[f64]) -> Result<Self, FieldError> {
+        let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
+        match model.program(&p0, speed.re(), q) {
+            Some(program) => Ok(Equations::Recorded {
+                program,
+                p: p.to_vec(),
+                speed,
+            }),
+            None => {
+                let sys = System::new(model, p, speed)?;
+                Ok(Equations::Direct {
+                    qd: sys.steady_speeds(),
+                    lifted: Box::new(Lifted::new(sys)),
+                })
+            }
+        }
+    }
+
+    /// `F(q_R, λ)` for the free coordinates `free`.
+    pub fn residual(&self, free: &[usize], q: &[S], lambda: &[S]) -> Vec<S> {
+        match self {
+            Equations::Recorded { program, p, speed } => {
+                program.residual_over(p, *speed, q, lambda)
+            }
+            Equations::Direct { lifted, qd, .. } => equations(lifted, free, q, qd, lambda),
+        }
+    }
+
+    /// The linearisation at `(q, λ)` with the given independent coordinates.
+    pub fn linearize(
+        &self,
+        free: &[usize],
+        q: &[S],
+        lambda: &[S],
+        independent: &[usize],
+    ) -> Result<Linearization<S>, LinearizeError> {
+        match self {
+            Equations::Recorded { program, p, speed } => program
+                .linear_over(p, *speed, q, lambda)
+                .reduce(free, independent),
+            Equations::Direct { lifted, qd } => linearize(
+                &Lifted::new(lifted.base.map(lift1)),
+                free,
+                q,
+                qd,
+                lambda,
+                independent,
+                None,
+            ),
         }
     }
 }

@@ -26,14 +26,11 @@
 //! Kim, Yoo (2007) eq. 24; Adhikari, *Rates of change of eigenvalues and eigenvectors in damped
 //! dynamic systems*, AIAA J. 37 (1999).
 
-use crate::equilibrium::equations;
 use crate::frf::{Complex, transfer};
-use crate::linearize::{Linearization, linearize};
-use crate::mechanics::System;
-use crate::mechanics::dynamics::Lifted;
+use crate::linearize::Linearization;
 use crate::modal::{C64, Mode, similarity};
 use crate::model::{Model, Transfer};
-use crate::real::lift1;
+use crate::program::Equations;
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -188,12 +185,10 @@ pub fn dual_linearizations(
             .enumerate()
             .map(|(i, &v)| Dual64::new(v, if i == b { 1.0 } else { 0.0 }))
             .collect();
-        let sysd = System::new(model, &pd, Dual64::from_re(speed))?;
-        let lifted = Lifted::new(sysd.clone());
-        let qd = sysd.steady_speeds();
+        let equations = Equations::new(model, &pd, Dual64::from_re(speed), &eq.q)?;
         let q0: Vec<Dual64> = eq.q.iter().map(|&v| Dual64::from_re(v)).collect();
         let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
-        let fb = equations(&lifted, free, &q0, &qd, &l0);
+        let fb = equations.residual(free, &q0, &l0);
         let rhs = DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps));
         let dx = lu.solve(&rhs).ok_or(PointError::Equilibrium(
             crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
@@ -207,15 +202,7 @@ pub fn dual_linearizations(
         let lambda: Vec<Dual64> = (0..eq.lambda.len())
             .map(|k| Dual64::new(eq.lambda[k], dx[free.len() + k]))
             .collect();
-        let linear = linearize(
-            &Lifted::new(sysd.map(lift1)),
-            free,
-            &q,
-            &qd,
-            &lambda,
-            &pt.linear.independent,
-            None,
-        )?;
+        let linear = equations.linearize(free, &q, &lambda, &pt.linear.independent)?;
         out.push(DualLinearization {
             param: b,
             linear,

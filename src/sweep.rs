@@ -243,6 +243,8 @@ pub struct Sweep<'a> {
     last: Option<Solved>,
     /// The solution before `last`, for the secant predictor.
     before: Option<Solved>,
+    /// The solution before `before`, for the quadratic predictor.
+    earlier: Option<Solved>,
     /// Newton's Jacobian at `last`, for chord steps at the next speed.
     last_jacobian: Option<DMatrix<f64>>,
     /// The steady-state check passed at an earlier speed (the parameters do not change).
@@ -259,6 +261,7 @@ impl<'a> Sweep<'a> {
             options,
             last: None,
             before: None,
+            earlier: None,
             last_jacobian: None,
             steady_known: false,
             last_shapes: None,
@@ -276,6 +279,7 @@ impl<'a> Sweep<'a> {
             lambda: pt.equilibrium.lambda.clone(),
         });
         self.before = None;
+        self.earlier = None;
         self.last_jacobian = Some(pt.equilibrium.jacobian.clone());
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
@@ -291,13 +295,37 @@ impl<'a> Sweep<'a> {
         let guess = initial_guess(self.model, &self.params, speed)?;
         let mut starts: Vec<(Vec<f64>, Option<Vec<f64>>)> = Vec::new();
         if let (Some(s1), Some(s0)) = (&self.last, &self.before) {
-            let dw = s1.speed - s0.speed;
-            if dw.abs() > 0.0 {
-                let t = (speed - s1.speed) / dw;
-                let secant =
-                    |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x + t * (x - y)).collect();
-                if t.abs() <= 2.0 {
-                    starts.push((secant(&s1.q, &s0.q), Some(secant(&s1.lambda, &s0.lambda))));
+            let predict = |solved: &[&Solved], field: fn(&Solved) -> &Vec<f64>| {
+                let weights = extrapolation(speed, solved)?;
+                let mut out = vec![0.0; field(s1).len()];
+                for (w, s) in weights.iter().zip(solved) {
+                    for (o, v) in out.iter_mut().zip(field(s)) {
+                        *o += w * v;
+                    }
+                }
+                Some(out)
+            };
+            let secant = [s1, s0];
+            let q_sec = predict(&secant, |s| &s.q);
+            // The quadratic where its correction to the secant is small against the step
+            // (a smooth branch); the secant where it is not (say just past a bifurcation,
+            // where the branch has a kink).
+            let q_quad = self.earlier.as_ref().and_then(|s_1| {
+                let q = predict(&[s1, s0, s_1], |s| &s.q)?;
+                let sec = q_sec.as_ref()?;
+                let diff = |a: &[f64], b: &[f64]| {
+                    a.iter()
+                        .zip(b)
+                        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+                };
+                (diff(&q, sec) <= 0.1 * diff(sec, &s1.q)).then_some((q, [s1, s0, s_1]))
+            });
+            match q_quad {
+                Some((q, nodes)) => starts.push((q, predict(&nodes, |s| &s.lambda))),
+                None => {
+                    if let Some(q) = q_sec {
+                        starts.push((q, predict(&secant, |s| &s.lambda)));
+                    }
                 }
             }
         }
@@ -337,6 +365,7 @@ impl<'a> Sweep<'a> {
                 "stability regained since the previous speed".into()
             });
         }
+        self.earlier = self.before.take();
         self.before = self.last.take();
         self.last = Some(Solved {
             speed,
@@ -349,6 +378,31 @@ impl<'a> Sweep<'a> {
         self.last_stable = Some(pt.stable());
         Ok(pt)
     }
+}
+
+/// Weights of the solutions `solved` (newest first) that extrapolate them to `speed`:
+/// Lagrange through their speeds. `None` when the speed is more than two steps beyond the
+/// newest or two speeds coincide.
+fn extrapolation(speed: f64, solved: &[&Solved]) -> Option<Vec<f64>> {
+    let nodes: Vec<f64> = solved.iter().map(|s| s.speed).collect();
+    let dw = nodes[0] - nodes[1];
+    let distinct = nodes
+        .iter()
+        .enumerate()
+        .all(|(i, a)| nodes[..i].iter().all(|b| (a - b).abs() > 1e-12 * a.abs()));
+    if !distinct || ((speed - nodes[0]) / dw).abs() > 2.0 {
+        return None;
+    }
+    Some(
+        (0..nodes.len())
+            .map(|i| {
+                (0..nodes.len())
+                    .filter(|&j| j != i)
+                    .map(|j| (speed - nodes[j]) / (nodes[i] - nodes[j]))
+                    .product()
+            })
+            .collect(),
+    )
 }
 
 /// For each previous mode, the index of the most similar current mode (greedy on the largest

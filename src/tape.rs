@@ -1019,12 +1019,29 @@ impl Tape {
 }
 
 /// Scratch space of [`Tape::forward`].
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Forward<S> {
     val: Vec<S>,
     tan: Vec<S>,
     /// The [`Seeding`] the buffer was last used with.
     seeding: usize,
+}
+
+impl Seeding {
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.lanes
+    }
+}
+
+impl<S> Default for Forward<S> {
+    fn default() -> Self {
+        Forward {
+            val: Vec::new(),
+            tan: Vec::new(),
+            seeding: 0,
+        }
+    }
 }
 
 /// Seeds of [`Tape::forward`] with the lane range of every operation.

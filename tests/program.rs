@@ -209,3 +209,52 @@ fn sweeps_agree_with_and_without_the_program() {
         }
     }
 }
+
+/// The governor with a stiffness term `(100 (attach − 0.08))^1.5` that vanishes at the nominal
+/// attachment: the expression takes its special case for a zero base there, so a recording
+/// made at nominal would hold a constant where the direct route has a function of `attach`.
+fn governor_with_a_kinked_spring() -> modaltol::model::Model {
+    let text = common::example_text("governor.toml").replace(
+        "stiffness = \"spring_k\"",
+        "stiffness = \"spring_k * (1 + (100*(attach - 0.08))^1.5)\"",
+    );
+    modaltol::model::Model::from_str(&text, "kinked.toml").unwrap()
+}
+
+#[test]
+fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_route_serves() {
+    use modaltol::sensitivity::{analytic, finite_difference};
+    let model = governor_with_a_kinked_spring();
+    let p = model.nominal();
+    let speed = 2.0;
+    let q0 = initial_guess(&model, &p, speed).unwrap();
+    assert!(model.program(&p, speed, &q0).is_none());
+    // Everything still runs, directly: the sweep and the sensitivities (off the kink, where the
+    // finite differences are meaningful).
+    let mut p1 = p.clone();
+    let attach = model
+        .parameters
+        .iter()
+        .position(|x| x.name == "attach")
+        .unwrap();
+    p1[attach] *= 1.05;
+    // Recorded off the kink, the same model is traced fine (so the refusal above is the check
+    // against the direct route at a perturbed point, not a failure to record).
+    assert!(
+        governor_with_a_kinked_spring()
+            .program(&p1, speed, &q0)
+            .is_some()
+    );
+    let mut sweep = Sweep::new(&model, p1.clone(), Options::default());
+    let pt = (1..=16)
+        .map(|i| sweep.step(0.125 * i as f64).unwrap())
+        .next_back()
+        .unwrap();
+    let wrt = model.toleranced();
+    let a = analytic(&model, &p1, &pt, &wrt, None).unwrap();
+    let f = finite_difference(&model, &p1, &pt, &wrt, None).unwrap();
+    for (x, y) in a.variables.iter().zip(&f.variables) {
+        let (dx, dy) = (x.modes[0].d_damped_frequency, y.modes[0].d_damped_frequency);
+        assert!((dx - dy).abs() < 1e-4 * (1.0 + dy.abs()), "{dx} vs {dy}");
+    }
+}
