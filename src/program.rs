@@ -176,6 +176,31 @@ impl Program {
     }
 }
 
+thread_local! {
+    /// Forward-mode scratch buffers of any scalar type, kept for the next pass on this thread
+    /// (a buffer over hyper-dual numbers is hundreds of kilobytes).
+    static BUFFERS: RefCell<Vec<Box<dyn std::any::Any>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` with a forward-mode buffer over `S` from this thread's pool.
+fn with_buffer<S: Real, R>(f: impl FnOnce(&mut Forward<S>) -> R) -> R {
+    let mut work = BUFFERS
+        .with(|b| {
+            let mut b = b.borrow_mut();
+            let i = b.iter().position(|x| x.is::<Forward<S>>())?;
+            b.swap_remove(i).downcast::<Forward<S>>().ok()
+        })
+        .unwrap_or_default();
+    let out = f(&mut work);
+    BUFFERS.with(|b| {
+        let mut b = b.borrow_mut();
+        if b.len() < 8 {
+            b.push(work);
+        }
+    });
+    out
+}
+
 /// Scratch space of an [`Instance`]: values, and one forward buffer per seeding.
 type Work = (Vec<f64>, Forward<f64>, Forward<f64>);
 
@@ -305,12 +330,10 @@ impl Instance<'_> {
         self.set(q, lambda);
         let pr = self.program;
         let lanes = pr.steady.lanes();
-        let (_, d) = pr.residual.forward(
-            &self.residual,
-            &self.x.borrow(),
-            &pr.steady,
-            &mut Forward::default(),
-        );
+        let (_, d) = with_buffer(|work| {
+            pr.residual
+                .forward(&self.residual, &self.x.borrow(), &pr.steady, work)
+        });
         (0..lanes)
             .map(|l| {
                 d.iter()
@@ -346,9 +369,7 @@ impl Program {
     pub fn linear_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Linear<S> {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let fixed = self.full.eval_static(&x);
-        let (f, d) = self
-            .full
-            .forward(&fixed, &x, &self.linear, &mut Forward::default());
+        let (f, d) = with_buffer(|work| self.full.forward(&fixed, &x, &self.linear, work));
         Linear::from_forward(f, &d, self.free.len(), self.m)
     }
 }

@@ -125,6 +125,13 @@ pub enum Op {
     Log(u32, f64),
     Atan2(u32, u32),
     Powd(u32, u32),
+    /// `a · b + c` (a product used once, fused with its sum by [`Tape::fuse`]; rounded as
+    /// the two operations it replaces).
+    MulAdd(u32, u32, u32),
+    /// `a · b − c`.
+    MulSub(u32, u32, u32),
+    /// `c − a · b`.
+    SubMul(u32, u32, u32),
 }
 
 /// Hash key of an operation (constants by their bits).
@@ -158,6 +165,9 @@ impl Op {
             Op::Powf(a, c) => Key::Const(6, a, c.to_bits()),
             Op::Log(a, c) => Key::Const(7, a, c.to_bits()),
             Op::Fun(f, a) => Key::Fun(f, a),
+            Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
+                Key::Const(9, a, ((b as u64) << 32) | c as u64)
+            }
         }
     }
 
@@ -182,19 +192,25 @@ impl Op {
             Op::Powi(a, n) => Op::Powi(f(a), n),
             Op::Powf(a, c) => Op::Powf(f(a), c),
             Op::Log(a, c) => Op::Log(f(a), c),
+            Op::MulAdd(a, b, c) => Op::MulAdd(f(a), f(b), f(c)),
+            Op::MulSub(a, b, c) => Op::MulSub(f(a), f(b), f(c)),
+            Op::SubMul(a, b, c) => Op::SubMul(f(a), f(b), f(c)),
         }
     }
 
     /// Operands.
-    fn args(self) -> [Option<u32>; 2] {
+    fn args(self) -> [Option<u32>; 3] {
         match self {
-            Op::Input(_) | Op::Const(_) => [None, None],
+            Op::Input(_) | Op::Const(_) => [None, None, None],
+            Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
+                [Some(a), Some(b), Some(c)]
+            }
             Op::Add(a, b)
             | Op::Sub(a, b)
             | Op::Mul(a, b)
             | Op::Div(a, b)
             | Op::Atan2(a, b)
-            | Op::Powd(a, b) => [Some(a), Some(b)],
+            | Op::Powd(a, b) => [Some(a), Some(b), None],
             Op::Neg(a)
             | Op::AddC(a, _)
             | Op::MulC(a, _)
@@ -204,7 +220,7 @@ impl Op {
             | Op::Fun(_, a)
             | Op::Powi(a, _)
             | Op::Powf(a, _)
-            | Op::Log(a, _) => [Some(a), None],
+            | Op::Log(a, _) => [Some(a), None, None],
         }
     }
 
@@ -231,6 +247,8 @@ impl Op {
             Op::Log(_, c) => a.log(c),
             Op::Atan2(..) => a.atan2(b),
             Op::Powd(..) => a.powd(b),
+            // Three operands: evaluated in [`Op::eval`] and [`Tape::forward`] directly.
+            Op::MulAdd(..) | Op::MulSub(..) | Op::SubMul(..) => unreachable_input(),
         }
     }
 
@@ -245,8 +263,11 @@ impl Op {
             Op::Neg(a) => -g(a),
             Op::AddC(a, c) => g(a) + c,
             Op::MulC(a, c) => g(a) * c,
+            Op::MulAdd(a, b, c) => g(a) * g(b) + g(c),
+            Op::MulSub(a, b, c) => g(a) * g(b) - g(c),
+            Op::SubMul(a, b, c) => g(c) - g(a) * g(b),
             op => {
-                let [a, b] = op.args();
+                let [a, b, _] = op.args();
                 let a = a.map_or(S::from(0.0), |a| v[a as usize]);
                 let b = b.map_or(a, |b| v[b as usize]);
                 op.apply(a, b)
@@ -256,7 +277,7 @@ impl Op {
 
     /// Value and the partial derivatives with respect to each operand, from dual evaluations.
     fn partials<S: Real>(self, v: &[S]) -> (S, Option<S>, Option<S>) {
-        let [a, b] = self.args();
+        let [a, b, _] = self.args();
         let a = a.map_or(S::from(0.0), |a| v[a as usize]);
         let one = S::from(1.0);
         match b {
@@ -722,7 +743,10 @@ pub fn record(x: &[f64], f: impl FnOnce(&[Var]) -> Option<Vec<Var>>) -> Option<T
         outputs,
         n_static: 0,
     };
-    Some(tape.prune(&(0..tape.outputs.len()).collect::<Vec<_>>()))
+    Some(
+        tape.prune(&(0..tape.outputs.len()).collect::<Vec<_>>())
+            .fuse(),
+    )
 }
 
 impl Tape {
@@ -777,6 +801,48 @@ impl Tape {
             outputs,
             n_static: 0,
         }
+    }
+
+    /// The same program with each product that is used once, by a sum or a difference, fused
+    /// into it (one operation instead of two; the same rounding).
+    fn fuse(&self) -> Tape {
+        let mut uses = vec![0u32; self.ops.len()];
+        for op in &self.ops {
+            for a in op.args().into_iter().flatten() {
+                uses[a as usize] += 1;
+            }
+        }
+        for o in &self.outputs {
+            if let Var::Node(i, _) = *o {
+                uses[i as usize] += 1;
+            }
+        }
+        let mut ops = self.ops.clone();
+        for i in 0..ops.len() {
+            let product = |a: u32| match ops[a as usize] {
+                Op::Mul(x, y) if uses[a as usize] == 1 => Some((x, y, a)),
+                _ => None,
+            };
+            let fused = match ops[i] {
+                Op::Add(a, b) => product(a)
+                    .map(|(x, y, m)| (Op::MulAdd(x, y, b), m))
+                    .or_else(|| product(b).map(|(x, y, m)| (Op::MulAdd(x, y, a), m))),
+                Op::Sub(a, b) => product(a)
+                    .map(|(x, y, m)| (Op::MulSub(x, y, b), m))
+                    .or_else(|| product(b).map(|(x, y, m)| (Op::SubMul(x, y, a), m))),
+                _ => None,
+            };
+            if let Some((op, m)) = fused {
+                ops[i] = op;
+                uses[m as usize] = 0;
+            }
+        }
+        Tape {
+            ops,
+            outputs: self.outputs.clone(),
+            n_static: self.n_static,
+        }
+        .prune(&(0..self.outputs.len()).collect::<Vec<_>>())
     }
 
     /// The same program with the operations that depend on the inputs `fixed` only (and on
@@ -978,16 +1044,37 @@ impl Tape {
                     }
                     val[a as usize] * c
                 }
+                Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
+                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    let (ta, tb, tc) = (t(a), t(b), t(c));
+                    let sub = matches!(op, Op::MulSub(..));
+                    let neg = matches!(op, Op::SubMul(..));
+                    for (l, o) in out.iter_mut().enumerate() {
+                        let p = ta[l] * vb + va * tb[l];
+                        *o = if neg {
+                            tc[l] - p
+                        } else if sub {
+                            p - tc[l]
+                        } else {
+                            p + tc[l]
+                        };
+                    }
+                    match op {
+                        Op::MulAdd(..) => va * vb + vc,
+                        Op::MulSub(..) => va * vb - vc,
+                        _ => vc - va * vb,
+                    }
+                }
                 op => {
                     // Division and the functions: local partials from a dual evaluation.
                     let (v, da, db) = op.partials(val);
                     match (op.args(), da, db) {
-                        ([Some(a), Some(b)], Some(da), Some(db)) => {
+                        ([Some(a), Some(b), _], Some(da), Some(db)) => {
                             for ((o, &x), &y) in out.iter_mut().zip(t(a)).zip(t(b)) {
                                 *o = da * x + db * y;
                             }
                         }
-                        ([Some(a), _], Some(da), _) => {
+                        ([Some(a), _, _], Some(da), _) => {
                             for (o, &x) in out.iter_mut().zip(t(a)) {
                                 *o = da * x;
                             }
