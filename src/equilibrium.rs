@@ -129,7 +129,8 @@ pub struct Start<'a> {
 pub struct Problem<'a> {
     pub free: Vec<usize>,
     pub driven: Vec<usize>,
-    pub names: Vec<String>,
+    /// Coordinate names, for messages.
+    pub names: Vec<&'a str>,
     sys: System<f64>,
     /// The system lifted for the direct route, made on first use (with a recorded program
     /// only the rare paths need it).
@@ -146,10 +147,10 @@ pub struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// Prepares the solve for `sys`; `free`/`driven` partition the coordinates.
     pub fn new(
-        sys: &System<f64>,
+        sys: System<f64>,
         free: Vec<usize>,
         driven: Vec<usize>,
-        names: Vec<String>,
+        names: Vec<&'a str>,
     ) -> Self {
         Problem {
             free,
@@ -157,7 +158,7 @@ impl<'a> Problem<'a> {
             names,
             qd: sys.steady_speeds(),
             m: sys.m,
-            sys: sys.clone(),
+            sys,
             value: OnceCell::new(),
             dual: OnceCell::new(),
             compiled: None,
@@ -482,7 +483,7 @@ impl<'a> Problem<'a> {
             }
             if change > tol {
                 return Err(EquilibriumError::NoSteadyState {
-                    coordinate: self.names[c].clone(),
+                    coordinate: self.names[c].to_string(),
                     sensitivity: change,
                 });
             }

@@ -91,13 +91,13 @@ pub fn point_from(
     opt: &Options,
 ) -> Result<Point, PointError> {
     let sys = System::new(model, p, speed)?;
-    let names = model.coordinates.iter().map(|c| c.name.clone()).collect();
+    let names = model.coordinates.iter().map(|c| c.name.as_str()).collect();
     let program = if opt.direct {
         None
     } else {
         model.program(p, speed, q0)
     };
-    let problem = Problem::new(&sys, model.free(), model.driven(), names)
+    let problem = Problem::new(sys, model.free(), model.driven(), names)
         .with_program(program.map(|pr| pr.at(p, speed)));
     let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.

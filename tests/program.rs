@@ -120,7 +120,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
         let nf = free.len();
         for (p, speed, q, lambda) in states(name) {
             let sys = System::new(&model, &p, speed).unwrap();
-            let direct = Problem::new(&sys, free.clone(), model.driven(), Vec::new());
+            let direct = Problem::new(sys.clone(), free.clone(), model.driven(), Vec::new());
             let inst = program.at(&p, speed);
             let qd = sys.steady_speeds();
             let f = equations(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
