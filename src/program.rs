@@ -7,7 +7,9 @@
 //!
 //! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in);
 //! * `full`: the same rows with `q̇_R` and `q̈_R` as inputs, so that one forward pass with the
-//!   lanes `[q_R, λ, q̇_R, q̈_R]` gives Newton's Jacobian (whose `q_R` block is `K`), `C` and `M`;
+//!   lanes `[q_R, q̇_R, q̈_R]` gives Newton's Jacobian (whose `q_R` block is `K`), `C` and `M`;
+//!   `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`, read off the
+//!   derivatives of the `Φ` rows along the `q_R` lanes;
 //! * `drive`: the driven coordinates' rows, for the drive forces.
 //!
 //! Everything that depends on the parameters and the speed only is evaluated once per point
@@ -35,9 +37,9 @@ pub struct Program {
     residual: Tape,
     full: Tape,
     drive: Tape,
-    /// Lanes `[q_R, λ]` on `residual`.
+    /// Lanes `q_R` on `residual`.
     jacobian: Seeding,
-    /// Lanes `[q_R, λ, q̇_R, q̈_R]` on `full`.
+    /// Lanes `[q_R, q̇_R, q̈_R]` on `full`.
     linear: Seeding,
     /// One lane per driven coordinate on `residual` (the steady-state check).
     steady: Seeding,
@@ -86,19 +88,17 @@ impl Program {
         let drive = drive
             .prune(&(0..driven.len()).collect::<Vec<_>>())
             .split(&fixed);
-        let o_lambda = np + 1 + n + 2 * nf;
         let mut seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
             .map(|(k, &i)| (np + 1 + i, k))
-            .chain((0..m).map(|k| (o_lambda + k, nf + k)))
             .collect();
-        let jacobian = residual.seeding(&seeds, nf + m);
+        let jacobian = residual.seeding(&seeds, nf);
         for k in 0..nf {
-            seeds.push((np + 1 + n + k, nf + m + k));
-            seeds.push((np + 1 + n + nf + k, 2 * nf + m + k));
+            seeds.push((np + 1 + n + k, nf + k));
+            seeds.push((np + 1 + n + nf + k, 2 * nf + k));
         }
-        let linear = full.seeding(&seeds, 3 * nf + m);
+        let linear = full.seeding(&seeds, 3 * nf);
         let steady_seeds: Vec<(usize, usize)> = driven
             .iter()
             .enumerate()
@@ -245,6 +245,18 @@ pub struct Instance<'a> {
     work: RefCell<Work>,
 }
 
+/// Newton's Jacobian `∂F/∂[q_R; λ]` from the derivatives `d` (rows of `F`, `lanes` each) whose
+/// first `nf` lanes are along `q_R`: the `λ` columns are `[Φ_Rᵀ; 0]`, `Φ_R` being the `q_R`
+/// derivatives of the `Φ` rows.
+fn jacobian<S: Real>(d: &[S], lanes: usize, nf: usize, m: usize) -> DMatrix<S> {
+    let zero = S::from(0.0);
+    DMatrix::from_fn(nf + m, nf + m, |r, c| match (r < nf, c < nf) {
+        (_, true) => d[r * lanes + c],
+        (true, false) => d[c * lanes + r],
+        (false, false) => zero,
+    })
+}
+
 /// Newton's Jacobian with the linearisation's damping and mass matrices, at one state.
 #[derive(Debug, Clone)]
 pub struct Linear<S: Real = f64> {
@@ -260,13 +272,13 @@ pub struct Linear<S: Real = f64> {
 
 impl<S: Real> Linear<S> {
     fn from_forward(f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
-        let lanes = 3 * nf + m;
+        let lanes = 3 * nf;
         let at = |r: usize, l: usize| d[r * lanes + l];
         Linear {
             residual: f,
-            jacobian: DMatrix::from_fn(nf + m, nf + m, at),
-            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, nf + m + c)),
-            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 2 * nf + m + c)),
+            jacobian: jacobian(d, lanes, nf, m),
+            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, nf + c)),
+            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 2 * nf + c)),
         }
     }
 
@@ -316,12 +328,11 @@ impl Instance<'_> {
     pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
         self.set(q, lambda);
         let pr = self.program;
-        let nx = pr.free.len() + pr.m;
         let mut work = self.work.borrow_mut();
         let (f, d) =
             pr.residual
                 .forward(&self.residual, &self.x.borrow(), &pr.jacobian, &mut work.1);
-        (f, DMatrix::from_row_slice(nx, nx, &d))
+        (f, jacobian(&d, pr.free.len(), pr.free.len(), pr.m))
     }
 
     /// The largest `|∂F/∂q_c|` over `F`'s entries for each driven coordinate `c` (zero at a
