@@ -4,7 +4,9 @@
 //! Data flows one way: [`model`] (file format, validation) → [`mechanics`] (kinematics,
 //! equations of motion, constraints) → [`equilibrium`] → [`linearize`] → [`modal`] → [`sweep`]
 //! → [`report`]. The mechanics is generic over the scalar type ([`real::Real`]) so automatic
-//! differentiation gives exact derivatives everywhere.
+//! differentiation gives exact derivatives everywhere; [`program`] traces that generic code once
+//! per model ([`tape`]) so that the thousands of operating points of a sweep or a Monte Carlo run
+//! evaluate a flat recorded program instead of nested dual numbers.
 #![deny(clippy::float_cmp)]
 
 pub mod analyze;
