@@ -60,7 +60,8 @@ pub struct Equilibrium {
     pub qd: Vec<f64>,
     /// Lagrange multipliers of the constraint equations.
     pub lambda: Vec<f64>,
-    /// Generalised drive force on each coordinate (N·m or N; zero on free coordinates).
+    /// Generalised drive force on each coordinate (N·m or N; zero on free coordinates; empty
+    /// when [`Settings::drive_force`] is off).
     pub drive_force: Vec<f64>,
     /// Newton iterations used.
     pub iterations: usize,
@@ -96,12 +97,14 @@ pub fn equations<T: Real>(
         .collect()
 }
 
-/// Newton settings.
+/// Settings of the equilibrium solve.
 #[derive(Debug, Clone, Copy)]
 pub struct Settings {
     pub max_iterations: usize,
     /// Relative step size at which the solve has converged.
     pub step_tolerance: f64,
+    /// Compute the drive forces (else `Equilibrium::drive_force` is empty).
+    pub drive_force: bool,
 }
 
 impl Default for Settings {
@@ -109,6 +112,7 @@ impl Default for Settings {
         Settings {
             max_iterations: 60,
             step_tolerance: 1e-12,
+            drive_force: true,
         }
     }
 }
@@ -389,8 +393,9 @@ impl<'a> Problem<'a> {
         if !start.steady_known {
             self.check_steady(&q, &lambda, &jac)?;
         }
-        let mut drive_force = vec![0.0; q.len()];
+        let mut drive_force = vec![0.0; if settings.drive_force { q.len() } else { 0 }];
         match &self.compiled {
+            _ if !settings.drive_force => {}
             Some(c) => {
                 for (&i, v) in self.driven.iter().zip(c.drive_rows(&q, &lambda)) {
                     drive_force[i] = v;

@@ -16,6 +16,7 @@
 //! heavy-tailed outputs (|H| at a stationary point is χ²-like, κ ≈ 15), where the χ² interval,
 //! valid for normal outputs only, would be several times too narrow.
 
+use crate::equilibrium::Settings;
 use crate::model::{Distribution, Model, Sampling, Transfer};
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
@@ -266,7 +267,15 @@ fn run_sample(
     outs: &[Output],
     transfer: Option<&Transfer>,
 ) -> SampleResult {
-    let mut sweep = Sweep::new(model, p, Options::default());
+    // Samples do not report drive forces.
+    let options = Options {
+        newton: Settings {
+            drive_force: false,
+            ..Settings::default()
+        },
+        ..Options::default()
+    };
+    let mut sweep = Sweep::new(model, p, options);
     let mut started = false;
     speeds
         .iter()
