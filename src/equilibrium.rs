@@ -129,27 +129,45 @@ pub struct Start<'a> {
     pub steady_known: bool,
 }
 
+/// The system lifted for the direct route's values, made on first use.
+fn lift_value<'c>(sys: &System<f64>, cell: &'c OnceCell<Box<Lifted<f64>>>) -> &'c Lifted<f64> {
+    cell.get_or_init(|| Box::new(Lifted::new(sys.clone())))
+}
+
+/// The system lifted for the direct route's first derivatives, made on first use.
+fn lift_dual<'c>(sys: &System<f64>, cell: &'c OnceCell<Box<Lifted<Dual64>>>) -> &'c Lifted<Dual64> {
+    cell.get_or_init(|| Box::new(Lifted::new(sys.map(lift1))))
+}
+
+/// How a [`Problem`] evaluates its equations.
+enum Route<'a> {
+    /// The model's recorded program at the problem's parameters and speed (same numbers as
+    /// the direct route, less work).
+    Recorded(Box<Instance<'a>>),
+    /// The generic code over dual numbers, with the system lifted on first use.
+    Direct {
+        sys: Box<System<f64>>,
+        value: OnceCell<Box<Lifted<f64>>>,
+        dual: OnceCell<Box<Lifted<Dual64>>>,
+    },
+}
+
 /// Everything needed to solve for the equilibrium of one instantiated system.
 pub struct Problem<'a> {
     pub free: Vec<usize>,
     pub driven: Vec<usize>,
     /// Coordinate names, for messages.
     pub names: Vec<&'a str>,
-    sys: System<f64>,
-    /// The system lifted for the direct route, made on first use (with a recorded program
-    /// only the rare paths need it).
-    value: OnceCell<Lifted<f64>>,
-    dual: OnceCell<Lifted<Dual64>>,
+    route: Route<'a>,
+    /// Coordinate speeds at steady state.
     pub qd: Vec<f64>,
     /// Number of constraint equations.
     m: usize,
-    /// The model's recorded program at this system's parameters and speed: the residual, the
-    /// Jacobian and the drive forces come from it when present (same numbers, less work).
-    pub compiled: Option<Instance<'a>>,
 }
 
 impl<'a> Problem<'a> {
-    /// Prepares the solve for `sys`; `free`/`driven` partition the coordinates.
+    /// Prepares the solve for `sys`, evaluated directly; `free`/`driven` partition the
+    /// coordinates.
     pub fn new(
         sys: System<f64>,
         free: Vec<usize>,
@@ -162,26 +180,40 @@ impl<'a> Problem<'a> {
             names,
             qd: sys.steady_speeds(),
             m: sys.m,
-            sys,
-            value: OnceCell::new(),
-            dual: OnceCell::new(),
-            compiled: None,
+            route: Route::Direct {
+                sys: Box::new(sys),
+                value: OnceCell::new(),
+                dual: OnceCell::new(),
+            },
         }
     }
 
-    /// The system lifted for the direct route's values.
-    fn value(&self) -> &Lifted<f64> {
-        self.value.get_or_init(|| Lifted::new(self.sys.clone()))
+    /// Prepares the solve through the model's recorded program at the problem's parameters
+    /// and speed; `qd` are the steady-state coordinate speeds.
+    pub fn recorded(
+        program: Instance<'a>,
+        qd: Vec<f64>,
+        free: Vec<usize>,
+        driven: Vec<usize>,
+        names: Vec<&'a str>,
+    ) -> Self {
+        Problem {
+            m: program.constraints(),
+            free,
+            driven,
+            names,
+            qd,
+            route: Route::Recorded(Box::new(program)),
+        }
     }
 
-    /// The system lifted for the direct route's first derivatives (also the linearisation's).
-    pub fn dual(&self) -> &Lifted<Dual64> {
-        self.dual.get_or_init(|| Lifted::new(self.sys.map(lift1)))
-    }
-
-    /// Uses the recorded program `compiled` (at the same parameters and speed).
-    pub fn with_program(self, compiled: Option<Instance<'a>>) -> Self {
-        Problem { compiled, ..self }
+    /// The system lifted for the direct route's first derivatives, also the linearisation's
+    /// (`None` on the recorded route).
+    pub fn dual(&self) -> Option<&Lifted<Dual64>> {
+        match &self.route {
+            Route::Direct { sys, dual, .. } => Some(lift_dual(sys, dual)),
+            Route::Recorded(_) => None,
+        }
     }
 
     fn n_unknowns(&self) -> usize {
@@ -193,9 +225,10 @@ impl<'a> Problem<'a> {
     /// One dual pass per free coordinate; `F` is linear in `λ`, so the `λ` columns are
     /// `[Φ_Rᵀ; 0]`, read off `Φ_q` from those same passes.
     pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-        if let Some(c) = &self.compiled {
-            return c.residual_and_jacobian(q, lambda);
-        }
+        let dual = match &self.route {
+            Route::Recorded(c) => return c.residual_and_jacobian(q, lambda),
+            Route::Direct { sys, dual, .. } => lift_dual(sys, dual),
+        };
         let nf = self.free.len();
         let m = lambda.len();
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
@@ -207,7 +240,7 @@ impl<'a> Problem<'a> {
         for (k, &i) in self.free.iter().enumerate() {
             let mut qq = base.clone();
             qq[i] = Dual64::new(q[i], 1.0);
-            let d = evaluate_rows(self.dual(), &qq, &qd, &zero, &self.free);
+            let d = evaluate_rows(dual, &qq, &qd, &zero, &self.free);
             let g = d.with_multipliers(&ld);
             let f: Vec<D1<f64>> = self
                 .free
@@ -233,10 +266,12 @@ impl<'a> Problem<'a> {
     /// `F` alone, in `f64` (one partial-velocity pass per free coordinate, no derivatives of
     /// them).
     pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
-        if let Some(c) = &self.compiled {
-            return c.residual(q, lambda);
+        match &self.route {
+            Route::Recorded(c) => c.residual(q, lambda),
+            Route::Direct { sys, value, .. } => {
+                equations(lift_value(sys, value), &self.free, q, &self.qd, lambda)
+            }
         }
-        equations(self.value(), &self.free, q, &self.qd, lambda)
     }
 
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
@@ -382,28 +417,28 @@ impl<'a> Problem<'a> {
         }
         // The linearisation and the sensitivities need the Jacobian at the solution itself.
         let mut rates = None;
-        match &self.compiled {
-            Some(c) => {
+        match &self.route {
+            Route::Recorded(c) => {
                 let lin = c.linear(&q, &lambda);
                 (f, jac) = (lin.residual, lin.jacobian);
                 rates = Some((lin.damping, lin.mass));
             }
-            None => (f, jac) = self.residual_and_jacobian(&q, &lambda),
+            Route::Direct { .. } => (f, jac) = self.residual_and_jacobian(&q, &lambda),
         }
         if !start.steady_known {
             self.check_steady(&q, &lambda, &jac)?;
         }
         let mut drive_force = vec![0.0; if settings.drive_force { q.len() } else { 0 }];
-        match &self.compiled {
+        match &self.route {
             _ if !settings.drive_force => {}
-            Some(c) => {
+            Route::Recorded(c) => {
                 for (&i, v) in self.driven.iter().zip(c.drive_rows(&q, &lambda)) {
                     drive_force[i] = v;
                 }
             }
-            None => {
+            Route::Direct { sys, value, .. } => {
                 let zero = vec![0.0; q.len()];
-                let d = evaluate_rows(self.value(), &q, &self.qd, &zero, &self.driven);
+                let d = evaluate_rows(lift_value(sys, value), &q, &self.qd, &zero, &self.driven);
                 let g = d.with_multipliers(&lambda);
                 for &i in &self.driven {
                     drive_force[i] = g[i];
@@ -431,18 +466,18 @@ impl<'a> Problem<'a> {
         if m == 0 {
             return Vec::new();
         }
-        let (a, b) = match &self.compiled {
+        let (a, b) = match &self.route {
             // F(q, 0) = [r_R; Φ]; the λ columns of its Jacobian are [Φ_Rᵀ; 0].
-            Some(c) => {
+            Route::Recorded(c) => {
                 let (f, j) = c.residual_and_jacobian(q, &vec![0.0; m]);
                 (
                     j.view((0, nf), (nf, m)).into_owned(),
                     DVector::from_iterator(nf, f[..nf].iter().map(|v| -v)),
                 )
             }
-            None => {
+            Route::Direct { sys, value, .. } => {
                 let zero = vec![0.0; q.len()];
-                let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
+                let d = evaluate_rows(lift_value(sys, value), q, &self.qd, &zero, &self.free);
                 (
                     DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]),
                     DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i])),
@@ -469,17 +504,21 @@ impl<'a> Problem<'a> {
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
-        let slopes = self.compiled.as_ref().map(|c| c.driven_slopes(q, lambda));
-        for (k, &c) in self.driven.iter().enumerate() {
-            let mut change = match &slopes {
-                Some(s) => s[k],
-                None => {
+        let slopes = match &self.route {
+            Route::Recorded(c) => c.driven_slopes(q, lambda),
+            Route::Direct { sys, dual, .. } => self
+                .driven
+                .iter()
+                .map(|&c| {
                     let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
                     qq[c] = Dual64::new(q[c], 1.0);
-                    let f = equations(self.dual(), &self.free, &qq, &qd, &ld);
+                    let f = equations(lift_dual(sys, dual), &self.free, &qq, &qd, &ld);
                     f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()))
-                }
-            };
+                })
+                .collect(),
+        };
+        for (k, &c) in self.driven.iter().enumerate() {
+            let mut change = slopes[k];
             for offset in [1.0, 2.5] {
                 let mut qo = q.to_vec();
                 qo[c] += offset;
@@ -502,9 +541,19 @@ impl<'a> Problem<'a> {
         if self.m == 0 {
             return Vec::new();
         }
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(self.value(), q, &self.qd, &zero, &self.free);
-        let phi_r = DMatrix::from_fn(self.m, self.free.len(), |k, j| d.phi_q[(k, self.free[j])]);
+        let nf = self.free.len();
+        let phi_r = match &self.route {
+            // The λ columns of the Jacobian are [Φ_Rᵀ; 0].
+            Route::Recorded(c) => {
+                let (_, j) = c.residual_and_jacobian(q, &vec![0.0; self.m]);
+                j.view((0, nf), (nf, self.m)).transpose()
+            }
+            Route::Direct { sys, value, .. } => {
+                let zero = vec![0.0; q.len()];
+                let d = evaluate_rows(lift_value(sys, value), q, &self.qd, &zero, &self.free);
+                DMatrix::from_fn(self.m, nf, |k, j| d.phi_q[(k, self.free[j])])
+            }
+        };
         crate::linalg::dependent_rows(&phi_r)
     }
 

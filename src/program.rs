@@ -146,7 +146,9 @@ impl Program {
             };
             let qd = sys.steady_speeds();
             let direct = equations(&Lifted::new(sys), &self.free, q, &qd, l);
-            let here = self.at(p, w).residual(q, l);
+            let Some(here) = self.at(p, w).map(|i| i.residual(q, l)) else {
+                return false;
+            };
             let scale = direct.iter().fold(1.0f64, |s, v| s.max(v.abs()));
             here.len() == direct.len()
                 && here
@@ -156,8 +158,10 @@ impl Program {
         })
     }
 
-    /// The program at parameters `p` and `speed`: the static parts evaluated.
-    pub fn at(&self, p: &[f64], speed: f64) -> Instance<'_> {
+    /// The program at parameters `p` and `speed`: the parts that depend on them alone
+    /// evaluated. `None` where one of those is not finite: a field of the model does not
+    /// evaluate there (the direct route names it).
+    pub fn at(&self, p: &[f64], speed: f64) -> Option<Instance<'_>> {
         let x = inputs(
             p,
             speed,
@@ -165,14 +169,18 @@ impl Program {
             &vec![0.0; self.m],
             self.free.len(),
         );
-        Instance {
+        let residual = self.residual.eval_static(&x);
+        let full = self.full.eval_static(&x);
+        let drive = self.drive.eval_static(&x);
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        (finite(&residual) && finite(&full) && finite(&drive)).then(|| Instance {
             program: self,
-            residual: self.residual.eval_static(&x),
-            full: self.full.eval_static(&x),
-            drive: self.drive.eval_static(&x),
+            residual,
+            full,
+            drive,
             x: RefCell::new(x),
             work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
-        }
+        })
     }
 }
 
@@ -297,6 +305,11 @@ impl<S: Real> Linear<S> {
 }
 
 impl Instance<'_> {
+    /// Number of constraint equations.
+    pub fn constraints(&self) -> usize {
+        self.program.m
+    }
+
     fn set(&self, q: &[f64], lambda: &[f64]) {
         let pr = self.program;
         let mut x = self.x.borrow_mut();

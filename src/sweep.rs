@@ -9,9 +9,11 @@
 
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize, reduce};
-use crate::mechanics::System;
+use crate::mechanics::dynamics::Lifted;
+use crate::mechanics::{System, steady_speeds};
 use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
 use crate::model::{FieldError, Model};
+use crate::real::lift1;
 use nalgebra::{DMatrix, DVector};
 
 /// Why a speed produced no result.
@@ -90,15 +92,31 @@ pub fn point_from(
     start: Start,
     opt: &Options,
 ) -> Result<Point, PointError> {
-    let sys = System::new(model, p, speed)?;
     let names = model.coordinates.iter().map(|c| c.name.as_str()).collect();
-    let program = if opt.direct {
+    let recorded = if opt.direct {
         None
     } else {
-        model.program(p, speed, q0)
+        model
+            .program(p, speed, q0)
+            .and_then(|program| program.at(p, speed))
     };
-    let problem = Problem::new(sys, model.free(), model.driven(), names)
-        .with_program(program.map(|pr| pr.at(p, speed)));
+    // Through the recorded program when there is one (the system's numbers are part of it),
+    // else directly.
+    let problem = match recorded {
+        Some(program) => Problem::recorded(
+            program,
+            steady_speeds(model, p, speed)?,
+            model.free(),
+            model.driven(),
+            names,
+        ),
+        None => Problem::new(
+            System::new(model, p, speed)?,
+            model.free(),
+            model.driven(),
+            names,
+        ),
+    };
     let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);
@@ -118,7 +136,7 @@ pub fn point_from(
             equations: model.n_constraints(),
         }
     })?;
-    let first = analyse(model, &problem, eq, opt)?;
+    let first = analyse(model, p, &problem, eq, opt)?;
     if first.stable() || opt.no_branch_switch {
         return Ok(first);
     }
@@ -164,7 +182,7 @@ pub fn point_from(
             if moved < 1e-7 {
                 continue;
             }
-            if let Ok(pt) = analyse(model, &problem, eq, opt)
+            if let Ok(pt) = analyse(model, p, &problem, eq, opt)
                 && pt.stable()
             {
                 return Ok(Point {
@@ -180,6 +198,7 @@ pub fn point_from(
 /// Linearises and solves the modes at a converged equilibrium.
 fn analyse(
     model: &Model,
+    p: &[f64],
     problem: &Problem,
     eq: Equilibrium,
     opt: &Options,
@@ -196,8 +215,8 @@ fn analyse(
         choose_independent(&phi_r, &free, user)?
     };
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
-    let linear = match &eq.rates {
-        Some((damping, mass)) => reduce(
+    let linear = match (&eq.rates, problem.dual()) {
+        (Some((damping, mass)), _) => reduce(
             &free,
             &independent,
             &phi_r,
@@ -205,8 +224,18 @@ fn analyse(
             damping.clone(),
             stiffness,
         )?,
-        None => linearize(
-            problem.dual(),
+        (None, Some(dual)) => linearize(
+            dual,
+            &free,
+            &eq.q,
+            &eq.qd,
+            &eq.lambda,
+            &independent,
+            Some(&stiffness),
+        )?,
+        // The recorded route always gives the rates; directly otherwise.
+        (None, None) => linearize(
+            &Lifted::new(System::new(model, p, eq.speed)?.map(lift1)),
             &free,
             &eq.q,
             &eq.qd,

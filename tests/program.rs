@@ -121,7 +121,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
         for (p, speed, q, lambda) in states(name) {
             let sys = System::new(&model, &p, speed).unwrap();
             let direct = Problem::new(sys.clone(), free.clone(), model.driven(), Vec::new());
-            let inst = program.at(&p, speed);
+            let inst = program.at(&p, speed).unwrap();
             let qd = sys.steady_speeds();
             let f = equations(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
             let scale = f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
@@ -146,7 +146,16 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             } else {
                 choose_independent(&phi_r, &free, None).unwrap()
             };
-            let l = linearize(direct.dual(), &free, &q, &qd, &lambda, &independent, None).unwrap();
+            let l = linearize(
+                direct.dual().unwrap(),
+                &free,
+                &q,
+                &qd,
+                &lambda,
+                &independent,
+                None,
+            )
+            .unwrap();
             for (a, b) in lin.damping.iter().zip(l.c_full.iter()) {
                 assert!(close(*a, *b, l.c_full.amax()), "{name}: C {a} vs {b}");
             }
@@ -256,5 +265,52 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
     for (x, y) in a.variables.iter().zip(&f.variables) {
         let (dx, dy) = (x.modes[0].d_damped_frequency, y.modes[0].d_damped_frequency);
         assert!((dx - dy).abs() < 1e-4 * (1.0 + dy.abs()), "{dx} vs {dy}");
+    }
+}
+
+#[test]
+fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
+    // The spring rate needs Ω ≥ 0.5 rad/s; the sweep starts above that, so the program is
+    // recorded, then meets speeds where the field does not evaluate. Both routes give the same
+    // results and the same errors (a soft spring also locks the links at some speeds).
+    let text = common::example_text("governor.toml").replace(
+        "stiffness = \"spring_k\"",
+        "stiffness = \"spring_k * sqrt(speed - 0.5)\"",
+    );
+    let model = modaltol::model::Model::from_str(&text, "sqrt_speed.toml").unwrap();
+    let run = |direct: bool| {
+        let mut s = Sweep::new(
+            &model,
+            model.nominal(),
+            Options {
+                direct,
+                ..Default::default()
+            },
+        );
+        [2.0, 1.5, 1.0, 0.4, 0.3, 0.75, 1.25]
+            .into_iter()
+            .map(|w| s.step(w).map_err(|e| e.to_string()))
+            .collect::<Vec<_>>()
+    };
+    let (recorded, direct) = (run(false), run(true));
+    let p0 = model.nominal();
+    assert!(
+        model
+            .program(&p0, 2.0, &initial_guess(&model, &p0, 2.0).unwrap())
+            .is_some()
+    );
+    for (a, b) in recorded.iter().zip(&direct) {
+        match (a, b) {
+            (Ok(a), Ok(b)) => {
+                let (x, y) = (a.modes[0].root.lambda, b.modes[0].root.lambda);
+                assert!((x - y).norm() < 1e-8 * (1.0 + y.norm()));
+            }
+            (Err(a), Err(b)) => assert_eq!(a, b),
+            (a, b) => panic!("{a:?} vs {b:?}"),
+        }
+    }
+    for k in [3, 4] {
+        let e = recorded[k].as_ref().unwrap_err();
+        assert!(e.contains("sqrt_speed.toml") && e.contains("sqrt"), "{e}");
     }
 }

@@ -299,6 +299,19 @@ impl<T: Real> System<T> {
     }
 }
 
+/// Coordinate speeds at steady state for the model at parameters `p` and `speed`: drive speeds
+/// on driven coordinates, zero elsewhere (as [`System::steady_speeds`], without the rest of the
+/// system).
+pub fn steady_speeds(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
+    let mut qd = vec![0.0; model.coordinates.len()];
+    for j in &model.joints {
+        if let (Some(c), Some(d)) = (j.coord, &j.drive) {
+            qd[c] = d.eval(p, speed)?;
+        }
+    }
+    Ok(qd)
+}
+
 /// The joints below each coordinate's joint (see [`System::subtree`]).
 fn subtrees<T: Real>(joints: &[JointData<T>], n: usize) -> Vec<Vec<usize>> {
     let mut out = vec![Vec::new(); n];
