@@ -125,7 +125,7 @@ pub enum Op {
     Log(u32, f64),
     Atan2(u32, u32),
     Powd(u32, u32),
-    /// `a · b + c` (a product used once, fused with its sum by [`Tape::fuse`]; rounded as
+    /// `a · b + c` (a product used once, fused with its sum when the program is recorded; rounded as
     /// the two operations it replaces).
     MulAdd(u32, u32, u32),
     /// `a · b − c`.
