@@ -1044,26 +1044,26 @@ impl Tape {
                     }
                     val[a as usize] * c
                 }
-                Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
+                Op::MulAdd(a, b, c) => {
                     let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
-                    let (ta, tb, tc) = (t(a), t(b), t(c));
-                    let sub = matches!(op, Op::MulSub(..));
-                    let neg = matches!(op, Op::SubMul(..));
-                    for (l, o) in out.iter_mut().enumerate() {
-                        let p = ta[l] * vb + va * tb[l];
-                        *o = if neg {
-                            tc[l] - p
-                        } else if sub {
-                            p - tc[l]
-                        } else {
-                            p + tc[l]
-                        };
+                    for (((o, &x), &y), &z) in out.iter_mut().zip(t(a)).zip(t(b)).zip(t(c)) {
+                        *o = x * vb + va * y + z;
                     }
-                    match op {
-                        Op::MulAdd(..) => va * vb + vc,
-                        Op::MulSub(..) => va * vb - vc,
-                        _ => vc - va * vb,
+                    va * vb + vc
+                }
+                Op::MulSub(a, b, c) => {
+                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    for (((o, &x), &y), &z) in out.iter_mut().zip(t(a)).zip(t(b)).zip(t(c)) {
+                        *o = x * vb + va * y - z;
                     }
+                    va * vb - vc
+                }
+                Op::SubMul(a, b, c) => {
+                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    for (((o, &x), &y), &z) in out.iter_mut().zip(t(a)).zip(t(b)).zip(t(c)) {
+                        *o = z - (x * vb + va * y);
+                    }
+                    vc - va * vb
                 }
                 op => {
                     // Division and the functions: local partials from a dual evaluation.
