@@ -224,25 +224,26 @@ fn analyse(
             damping.clone(),
             stiffness,
         )?,
-        (None, Some(dual)) => linearize(
-            dual,
-            &free,
-            &eq.q,
-            &eq.qd,
-            &eq.lambda,
-            &independent,
-            Some(&stiffness),
-        )?,
-        // The recorded route always gives the rates; directly otherwise.
-        (None, None) => linearize(
-            &Lifted::new(System::new(model, p, eq.speed)?.map(lift1)),
-            &free,
-            &eq.q,
-            &eq.qd,
-            &eq.lambda,
-            &independent,
-            Some(&stiffness),
-        )?,
+        (None, dual) => {
+            // The recorded route always gives the rates; directly otherwise.
+            let fresh;
+            let dual = match dual {
+                Some(dual) => dual,
+                None => {
+                    fresh = Lifted::new(System::new(model, p, eq.speed)?.map(lift1));
+                    &fresh
+                }
+            };
+            linearize(
+                dual,
+                &free,
+                &eq.q,
+                &eq.qd,
+                &eq.lambda,
+                &independent,
+                Some(&stiffness),
+            )?
+        }
     };
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));

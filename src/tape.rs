@@ -760,11 +760,6 @@ impl Tape {
         self.ops.is_empty()
     }
 
-    /// Number of outputs.
-    pub fn outputs(&self) -> usize {
-        self.outputs.len()
-    }
-
     /// The program restricted to the outputs `keep` (in that order), without the operations
     /// they do not need.
     pub fn prune(&self, keep: &[usize]) -> Tape {
@@ -884,11 +879,6 @@ impl Tape {
                 .collect(),
             n_static: is_static.iter().filter(|&&s| s).count(),
         }
-    }
-
-    /// Number of static operations.
-    pub fn static_len(&self) -> usize {
-        self.n_static
     }
 
     /// Values of the static operations at `x` (only the static inputs of `x` are read).
