@@ -49,6 +49,10 @@ pub enum EquilibriumError {
     },
 }
 
+/// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` (the linearisation's damping and mass matrices before
+/// reduction).
+pub type Rates = (DMatrix<f64>, DMatrix<f64>);
+
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Equilibrium {
@@ -77,7 +81,7 @@ pub struct Equilibrium {
     /// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at the solution, when the recorded program computed
     /// them with the Jacobian (the linearisation then does not compute them again).
     #[serde(skip)]
-    pub rates: Option<(DMatrix<f64>, DMatrix<f64>)>,
+    pub rates: Option<Rates>,
 }
 
 /// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
@@ -274,14 +278,35 @@ impl<'a> Problem<'a> {
         }
     }
 
+    /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`, at
+    /// `(q, λ)`: everything the linearisation needs, so that a solve whose last Newton step
+    /// is below the tolerance needs no further evaluation.
+    fn evaluate(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>, Option<Rates>) {
+        match &self.route {
+            Route::Recorded(c) => {
+                let lin = c.linear(q, lambda);
+                (lin.residual, lin.jacobian, Some((lin.damping, lin.mass)))
+            }
+            Route::Direct { .. } => {
+                let (f, j) = self.residual_and_jacobian(q, lambda);
+                (f, j, None)
+            }
+        }
+    }
+
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
     ///
     /// Newton–chord: a Jacobian is kept while the steps it gives shrink at least twofold
     /// (each step then costs one `f64` residual instead of a Jacobian), and re-evaluated when
     /// they do not, or when the line search fails with it. `start` may supply the multipliers
-    /// and the Jacobian of a nearby solution (the previous speed of a sweep). The returned
-    /// Jacobian is always evaluated at the solution (to the step tolerance): the linearisation
-    /// and the sensitivities use it.
+    /// and the Jacobian of a nearby solution (the previous speed of a sweep).
+    ///
+    /// Converged means: the Newton step with the exact Jacobian *at the returned point* is
+    /// below the step tolerance. When chord steps predict that (their contraction rate ρ
+    /// bounds the error left after a step by ρ/(1−ρ) times its size), the Jacobian is
+    /// evaluated there, with the linearisation's other matrices, and its step confirms it;
+    /// so the returned Jacobian, and the rates, are those of the returned point, which the
+    /// linearisation and the sensitivities use.
     pub fn solve(
         &self,
         speed: f64,
@@ -292,19 +317,20 @@ impl<'a> Problem<'a> {
         let nf = self.free.len();
         let m = self.m;
         let nx = nf + m;
+        let tol = settings.step_tolerance;
         let mut q = q0.to_vec();
         let mut lambda = match start.lambda {
             Some(l) if l.len() == m => l.to_vec(),
             _ => self.least_squares_multipliers(&q),
         };
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        let (mut f, mut jac, mut fresh) = match start.jacobian {
+        let (mut f, mut jac, mut rates, mut fresh) = match start.jacobian {
             Some(j) if j.nrows() == nx && j.ncols() == nx => {
-                (self.residual(&q, &lambda), j.clone(), false)
+                (self.residual(&q, &lambda), j.clone(), None, false)
             }
             _ => {
-                let (f, j) = self.residual_and_jacobian(&q, &lambda);
-                (f, j, true)
+                let (f, j, r) = self.evaluate(&q, &lambda);
+                (f, j, r, true)
             }
         };
         let mut lu = jac.clone().lu();
@@ -324,7 +350,7 @@ impl<'a> Problem<'a> {
                 if fresh {
                     return Err(EquilibriumError::SingularJacobian { iterations });
                 }
-                (f, jac) = self.residual_and_jacobian(&q, &lambda);
+                (f, jac, rates) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             };
@@ -333,62 +359,52 @@ impl<'a> Problem<'a> {
             let dq = (0..nf).fold(0.0f64, |s, k| s.max(step[k].abs()));
             let dl = (0..m).fold(0.0f64, |s, k| s.max(step[nf + k].abs()));
             let size = (dq / q_scale).max(dl / (1e3 * l_scale));
-            // Converged when the step is at the step tolerance with a fresh Jacobian; with a
-            // stale one (a chord step contracting by ρ leaves an error of about ρ/(1−ρ) times
-            // its size) when that error is a thousandth of the tolerance, or where the steps
-            // stop contracting (rounding).
-            let small = size <= settings.step_tolerance;
-            let rho = if last_step.is_finite() {
-                size / last_step
-            } else {
-                1.0
-            };
-            let left = if rho < 1.0 {
-                size * rho / (1.0 - rho)
-            } else {
-                size
-            };
-            if small && (fresh || left <= 1e-3 * settings.step_tolerance || rho > 0.5) {
+            let apply = |q: &mut [f64], lambda: &mut [f64], alpha: f64| {
                 for (k, &i) in self.free.iter().enumerate() {
-                    q[i] -= step[k];
+                    q[i] -= alpha * step[k];
                 }
                 for (k, l) in lambda.iter_mut().enumerate() {
-                    *l -= step[nf + k];
+                    *l -= alpha * step[nf + k];
                 }
+            };
+            if fresh && size <= tol {
                 converged = true;
                 break;
             }
-            if small {
-                // A contracting chord step at rounding level: no line search can judge it.
-                for (k, &i) in self.free.iter().enumerate() {
-                    q[i] -= step[k];
+            if !fresh {
+                // The error left after a chord step contracting by ρ is about ρ/(1−ρ) times
+                // its size; where the steps stop contracting at the tolerance, it is rounding.
+                let rho = if last_step.is_finite() {
+                    size / last_step
+                } else {
+                    1.0
+                };
+                let left = if rho < 1.0 {
+                    size * rho / (1.0 - rho)
+                } else {
+                    size
+                };
+                if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
+                    apply(&mut q, &mut lambda, 1.0);
+                    (f, jac, rates) = self.evaluate(&q, &lambda);
+                    (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                    continue;
                 }
-                for (k, l) in lambda.iter_mut().enumerate() {
-                    *l -= step[nf + k];
+                // Steps that do not contract fast: evaluate the Jacobian here.
+                if size > 0.5 * last_step {
+                    (f, jac, rates) = self.evaluate(&q, &lambda);
+                    (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                    continue;
                 }
-                f = self.residual(&q, &lambda);
-                last_step = size;
-                continue;
             }
-            // A stale Jacobian whose steps do not contract fast: evaluate it here.
-            if !fresh && size > 0.5 * last_step {
-                (f, jac) = self.residual_and_jacobian(&q, &lambda);
-                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
-                continue;
-            }
-            // Otherwise backtrack on ‖F‖₂.
+            // Backtrack on ‖F‖₂.
             let f0 = f.iter().map(|v| v * v).sum::<f64>().sqrt();
             let mut alpha = 1.0;
             let (mut q_new, mut l_new, mut f_new);
             let mut decreased;
             loop {
-                q_new = q.clone();
-                for (k, &i) in self.free.iter().enumerate() {
-                    q_new[i] -= alpha * step[k];
-                }
-                l_new = (0..m)
-                    .map(|k| lambda[k] - alpha * step[nf + k])
-                    .collect::<Vec<_>>();
+                (q_new, l_new) = (q.clone(), lambda.clone());
+                apply(&mut q_new, &mut l_new, alpha);
                 f_new = self.residual(&q_new, &l_new);
                 let f1 = f_new.iter().map(|v| v * v).sum::<f64>().sqrt();
                 decreased = f1.is_finite() && f1 <= (1.0 - 1e-4 * alpha) * f0;
@@ -398,12 +414,12 @@ impl<'a> Problem<'a> {
                 alpha *= 0.5;
             }
             if !decreased && !fresh {
-                (f, jac) = self.residual_and_jacobian(&q, &lambda);
+                (f, jac, rates) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             }
             (q, lambda, f) = (q_new, l_new, f_new);
-            fresh = false;
+            (fresh, rates) = (false, None);
             last_step = alpha * size;
         }
         if f.iter().any(|v| !v.is_finite()) {
@@ -414,16 +430,6 @@ impl<'a> Problem<'a> {
                 iterations,
                 residual: norm(&f),
             });
-        }
-        // The linearisation and the sensitivities need the Jacobian at the solution itself.
-        let mut rates = None;
-        match &self.route {
-            Route::Recorded(c) => {
-                let lin = c.linear(&q, &lambda);
-                (f, jac) = (lin.residual, lin.jacobian);
-                rates = Some((lin.damping, lin.mass));
-            }
-            Route::Direct { .. } => (f, jac) = self.residual_and_jacobian(&q, &lambda),
         }
         if !start.steady_known {
             self.check_steady(&q, &lambda, &jac)?;

@@ -7,7 +7,7 @@
 //!
 //! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in);
 //! * `full`: the same rows with `q̇_R` and `q̈_R` as inputs, so that one forward pass with the
-//!   lanes `[q_R, q̇_R, q̈_R]` gives Newton's Jacobian (whose `q_R` block is `K`), `C` and `M`;
+//!   lanes `(q_k, q̇_k, q̈_k)` of each free coordinate gives Newton's Jacobian (whose `q_R` block is `K`), `C` and `M`;
 //!   `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`, read off the
 //!   derivatives of the `Φ` rows along the `q_R` lanes;
 //! * `drive`: the driven coordinates' rows, for the drive forces.
@@ -39,7 +39,7 @@ pub struct Program {
     drive: Tape,
     /// Lanes `q_R` on `residual`.
     jacobian: Seeding,
-    /// Lanes `[q_R, q̇_R, q̈_R]` on `full`.
+    /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
     /// One lane per driven coordinate on `residual` (the steady-state check).
     steady: Seeding,
@@ -88,16 +88,27 @@ impl Program {
         let drive = drive
             .prune(&(0..driven.len()).collect::<Vec<_>>())
             .split(&fixed);
-        let mut seeds: Vec<(usize, usize)> = free
+        let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
             .map(|(k, &i)| (np + 1 + i, k))
             .collect();
         let jacobian = residual.seeding(&seeds, nf);
-        for k in 0..nf {
-            seeds.push((np + 1 + n + k, nf + k));
-            seeds.push((np + 1 + n + nf + k, 2 * nf + k));
-        }
+        // A coordinate's three lanes side by side: an operation depends on the rates of the
+        // coordinates whose positions it depends on, so its lane range stays narrow (the
+        // governor's pass is 43 % fewer lane operations than with `[q_R, q̇_R, q̈_R]` in blocks,
+        // the 12-arm governor's 80 %).
+        let seeds: Vec<(usize, usize)> = free
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &i)| {
+                [
+                    (np + 1 + i, 3 * k),
+                    (np + 1 + n + k, 3 * k + 1),
+                    (np + 1 + n + nf + k, 3 * k + 2),
+                ]
+            })
+            .collect();
         let linear = full.seeding(&seeds, 3 * nf);
         let steady_seeds: Vec<(usize, usize)> = driven
             .iter()
@@ -254,13 +265,13 @@ pub struct Instance<'a> {
 }
 
 /// Newton's Jacobian `∂F/∂[q_R; λ]` from the derivatives `d` (rows of `F`, `lanes` each) whose
-/// first `nf` lanes are along `q_R`: the `λ` columns are `[Φ_Rᵀ; 0]`, `Φ_R` being the `q_R`
-/// derivatives of the `Φ` rows.
-fn jacobian<S: Real>(d: &[S], lanes: usize, nf: usize, m: usize) -> DMatrix<S> {
+/// lane `stride · k` is along the free coordinate `k`: the `λ` columns are `[Φ_Rᵀ; 0]`, `Φ_R`
+/// being the `q_R` derivatives of the `Φ` rows.
+fn jacobian<S: Real>(d: &[S], lanes: usize, stride: usize, nf: usize, m: usize) -> DMatrix<S> {
     let zero = S::from(0.0);
     DMatrix::from_fn(nf + m, nf + m, |r, c| match (r < nf, c < nf) {
-        (_, true) => d[r * lanes + c],
-        (true, false) => d[c * lanes + r],
+        (_, true) => d[r * lanes + stride * c],
+        (true, false) => d[c * lanes + stride * r],
         (false, false) => zero,
     })
 }
@@ -279,14 +290,15 @@ pub struct Linear<S: Real = f64> {
 }
 
 impl<S: Real> Linear<S> {
+    /// From a forward pass with [`Program::linear`]'s lanes.
     fn from_forward(f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
         let lanes = 3 * nf;
         let at = |r: usize, l: usize| d[r * lanes + l];
         Linear {
             residual: f,
-            jacobian: jacobian(d, lanes, nf, m),
-            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, nf + c)),
-            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 2 * nf + c)),
+            jacobian: jacobian(d, lanes, 3, nf, m),
+            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 1)),
+            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 2)),
         }
     }
 
@@ -345,7 +357,7 @@ impl Instance<'_> {
         let (f, d) =
             pr.residual
                 .forward(&self.residual, &self.x.borrow(), &pr.jacobian, &mut work.1);
-        (f, jacobian(&d, pr.free.len(), pr.free.len(), pr.m))
+        (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
     }
 
     /// The largest `|∂F/∂q_c|` over `F`'s entries for each driven coordinate `c` (zero at a

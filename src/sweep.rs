@@ -258,11 +258,31 @@ fn analyse(
     })
 }
 
+/// A Newton start: coordinates, and the multipliers and a Jacobian for chord steps where known.
+struct Guess {
+    q: Vec<f64>,
+    lambda: Option<Vec<f64>>,
+    jacobian: Option<DMatrix<f64>>,
+}
+
 /// A converged state kept for continuation.
 struct Solved {
     speed: f64,
     q: Vec<f64>,
     lambda: Vec<f64>,
+    /// Newton's Jacobian there.
+    jacobian: DMatrix<f64>,
+}
+
+impl Solved {
+    fn from(pt: &Point) -> Self {
+        Solved {
+            speed: pt.speed,
+            q: pt.equilibrium.q.clone(),
+            lambda: pt.equilibrium.lambda.clone(),
+            jacobian: pt.equilibrium.jacobian.clone(),
+        }
+    }
 }
 
 /// A sweep over speeds with continuation of the equilibrium and tracking of the modes.
@@ -275,8 +295,6 @@ pub struct Sweep<'a> {
     before: Option<Solved>,
     /// The solution before `before`, for the quadratic predictor.
     earlier: Option<Solved>,
-    /// Newton's Jacobian at `last`, for chord steps at the next speed.
-    last_jacobian: Option<DMatrix<f64>>,
     /// The steady-state check passed at an earlier speed (the parameters do not change).
     steady_known: bool,
     last_shapes: Option<Vec<DVector<C64>>>,
@@ -292,7 +310,6 @@ impl<'a> Sweep<'a> {
             last: None,
             before: None,
             earlier: None,
-            last_jacobian: None,
             steady_known: false,
             last_shapes: None,
             last_stable: None,
@@ -303,29 +320,25 @@ impl<'a> Sweep<'a> {
     /// shapes): a Monte Carlo sample starts from the nominal point at its first speed instead of
     /// the model's initial guess.
     pub fn warm_start(&mut self, pt: &Point) {
-        self.last = Some(Solved {
-            speed: pt.speed,
-            q: pt.equilibrium.q.clone(),
-            lambda: pt.equilibrium.lambda.clone(),
-        });
+        self.last = Some(Solved::from(pt));
         self.before = None;
         self.earlier = None;
-        self.last_jacobian = Some(pt.equilibrium.jacobian.clone());
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
     }
 
     /// Solves the next speed. Failures leave the continuation state as it was.
     ///
-    /// The Newton start is the secant extrapolation of the last two solutions (coordinates and
-    /// multipliers; so a branch that has just bent away from a bifurcation is followed, not
-    /// jumped over) with the last Jacobian for chord steps, then the last solution, then the
-    /// model's initial guess.
+    /// The Newton start is the extrapolation of the last solutions (coordinates and
+    /// multipliers: quadratic on a smooth branch, else the secant, so that a branch that has
+    /// just bent away from a bifurcation is followed, not jumped over) with the secant
+    /// extrapolation of their Jacobians for chord steps; then the last solution with its
+    /// Jacobian; then the model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
         let guess = initial_guess(self.model, &self.params, speed)?;
-        let mut starts: Vec<(Vec<f64>, Option<Vec<f64>>)> = Vec::new();
+        let mut starts: Vec<Guess> = Vec::new();
         if let (Some(s1), Some(s0)) = (&self.last, &self.before) {
-            let predict = |solved: &[&Solved], field: fn(&Solved) -> &Vec<f64>| {
+            let predict = |solved: &[&Solved], field: fn(&Solved) -> &[f64]| {
                 let weights = extrapolation(speed, solved)?;
                 let mut out = vec![0.0; field(s1).len()];
                 for (w, s) in weights.iter().zip(solved) {
@@ -350,28 +363,46 @@ impl<'a> Sweep<'a> {
                 };
                 (diff(&q, sec) <= 0.1 * diff(sec, &s1.q)).then_some((q, [s1, s0, s_1]))
             });
-            match q_quad {
-                Some((q, nodes)) => starts.push((q, predict(&nodes, |s| &s.lambda))),
-                None => {
-                    if let Some(q) = q_sec {
-                        starts.push((q, predict(&secant, |s| &s.lambda)));
-                    }
-                }
+            let (q, lambda) = match q_quad {
+                Some((q, nodes)) => (Some(q), predict(&nodes, |s| &s.lambda)),
+                None => (q_sec, predict(&secant, |s| &s.lambda)),
+            };
+            // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²)
+            // rather than O(Δspeed), so that a point usually takes two residuals, not three.
+            let n = s1.jacobian.nrows();
+            let jacobian = predict(&secant, |s| s.jacobian.as_slice())
+                .filter(|_| s0.jacobian.shape() == s1.jacobian.shape())
+                .map(|j| DMatrix::from_vec(n, n, j));
+            if let Some(q) = q {
+                starts.push(Guess {
+                    q,
+                    lambda,
+                    jacobian,
+                });
             }
         }
         if let Some(s1) = &self.last {
-            starts.push((s1.q.clone(), Some(s1.lambda.clone())));
+            starts.push(Guess {
+                q: s1.q.clone(),
+                lambda: Some(s1.lambda.clone()),
+                jacobian: Some(s1.jacobian.clone()),
+            });
         }
-        starts.push((guess, None));
+        starts.push(Guess {
+            q: guess,
+            lambda: None,
+            jacobian: None,
+        });
         let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
             iterations: 0,
         }));
-        for (q0, lambda) in &starts {
+        for guess in &starts {
             let start = Start {
-                lambda: lambda.as_deref(),
-                jacobian: lambda.as_ref().and(self.last_jacobian.as_ref()),
+                lambda: guess.lambda.as_deref(),
+                jacobian: guess.jacobian.as_ref(),
                 steady_known: self.steady_known,
             };
+            let q0 = &guess.q;
             result = point_from(self.model, &self.params, speed, q0, start, &self.options);
             if result.is_ok() {
                 break;
@@ -397,12 +428,7 @@ impl<'a> Sweep<'a> {
         }
         self.earlier = self.before.take();
         self.before = self.last.take();
-        self.last = Some(Solved {
-            speed,
-            q: pt.equilibrium.q.clone(),
-            lambda: pt.equilibrium.lambda.clone(),
-        });
-        self.last_jacobian = Some(pt.equilibrium.jacobian.clone());
+        self.last = Some(Solved::from(&pt));
         self.steady_known = true;
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());

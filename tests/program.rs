@@ -219,6 +219,45 @@ fn sweeps_agree_with_and_without_the_program() {
     }
 }
 
+/// Every point of a fine sweep (where the chord steps run on extrapolated Jacobians and stop
+/// without a last residual) is certified by the direct route: its Jacobian is the exact one
+/// at the returned state, and the Newton step from there is below the step tolerance.
+#[test]
+fn every_swept_point_is_certified_by_an_exact_newton_step() {
+    for name in EXAMPLES {
+        let model = example(name);
+        let p = model.nominal();
+        let free = model.free();
+        let nf = free.len();
+        let options = Options::default();
+        let tol = options.newton.step_tolerance;
+        let mut sweep = Sweep::new(&model, p.clone(), options);
+        let mut checked = 0;
+        for i in 0..=300 {
+            let speed = 0.02 * i as f64;
+            let Ok(pt) = sweep.step(speed) else { continue };
+            let eq = &pt.equilibrium;
+            let sys = System::new(&model, &p, speed).unwrap();
+            let direct = Problem::new(sys, free.clone(), model.driven(), Vec::new());
+            let (f, j) = direct.residual_and_jacobian(&eq.q, &eq.lambda);
+            for (a, b) in eq.jacobian.iter().zip(j.iter()) {
+                assert!(
+                    close(*a, *b, j.amax()),
+                    "{name} at {speed}: Jacobian {a} vs {b}"
+                );
+            }
+            let step = j.lu().solve(&nalgebra::DVector::from_vec(f)).unwrap();
+            let q_scale = 1.0 + free.iter().fold(0.0f64, |s, &i| s.max(eq.q[i].abs()));
+            let l_scale = 1.0 + eq.lambda.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            let dq = step.rows(0, nf).amax() / q_scale;
+            let dl = step.rows(nf, step.len() - nf).amax() / (1e3 * l_scale);
+            assert!(dq.max(dl) <= tol, "{name} at {speed}: step {dq:e}, {dl:e}");
+            checked += 1;
+        }
+        assert!(checked > 250, "{name}: {checked}");
+    }
+}
+
 /// The governor with a stiffness term `(100 (attach − 0.08))^1.5` that vanishes at the nominal
 /// attachment: the expression takes its special case for a zero base there, so a recording
 /// made at nominal would hold a constant where the direct route has a function of `attach`.
