@@ -258,6 +258,9 @@ fn analyse(
     })
 }
 
+/// Solutions the predictor extrapolates from (up to a cubic).
+const PREDICTOR_NODES: usize = 4;
+
 /// A Newton start: coordinates, and the multipliers and a Jacobian for chord steps where known.
 struct Guess {
     q: Vec<f64>,
@@ -290,11 +293,8 @@ pub struct Sweep<'a> {
     model: &'a Model,
     params: Vec<f64>,
     options: Options,
-    last: Option<Solved>,
-    /// The solution before `last`, for the secant predictor.
-    before: Option<Solved>,
-    /// The solution before `before`, for the quadratic predictor.
-    earlier: Option<Solved>,
+    /// The last solutions, newest first (at most [`PREDICTOR_NODES`]), for the predictor.
+    history: Vec<Solved>,
     /// The steady-state check passed at an earlier speed (the parameters do not change).
     steady_known: bool,
     last_shapes: Option<Vec<DVector<C64>>>,
@@ -307,9 +307,7 @@ impl<'a> Sweep<'a> {
             model,
             params,
             options,
-            last: None,
-            before: None,
-            earlier: None,
+            history: Vec::new(),
             steady_known: false,
             last_shapes: None,
             last_stable: None,
@@ -320,9 +318,7 @@ impl<'a> Sweep<'a> {
     /// shapes): a Monte Carlo sample starts from the nominal point at its first speed instead of
     /// the model's initial guess.
     pub fn warm_start(&mut self, pt: &Point) {
-        self.last = Some(Solved::from(pt));
-        self.before = None;
-        self.earlier = None;
+        self.history = vec![Solved::from(pt)];
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
     }
@@ -330,58 +326,62 @@ impl<'a> Sweep<'a> {
     /// Solves the next speed. Failures leave the continuation state as it was.
     ///
     /// The Newton start is the extrapolation of the last solutions (coordinates and
-    /// multipliers: quadratic on a smooth branch, else the secant, so that a branch that has
-    /// just bent away from a bifurcation is followed, not jumped over) with the secant
+    /// multipliers: up to a cubic on a smooth branch, down to the secant where the higher
+    /// orders do not settle, so that a branch that has just bent away from a bifurcation is
+    /// followed, not jumped over) with the secant
     /// extrapolation of their Jacobians for chord steps; then the last solution with its
     /// Jacobian; then the model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
         let guess = initial_guess(self.model, &self.params, speed)?;
         let mut starts: Vec<Guess> = Vec::new();
-        if let (Some(s1), Some(s0)) = (&self.last, &self.before) {
-            let predict = |solved: &[&Solved], field: fn(&Solved) -> &[f64]| {
-                let weights = extrapolation(speed, solved)?;
-                let mut out = vec![0.0; field(s1).len()];
-                for (w, s) in weights.iter().zip(solved) {
+        let nodes: Vec<&Solved> = self.history.iter().collect();
+        if nodes.len() >= 2 {
+            let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
+                let weights = extrapolation(speed, nodes)?;
+                let mut out = vec![0.0; field(nodes[0]).len()];
+                for (w, s) in weights.iter().zip(nodes) {
                     for (o, v) in out.iter_mut().zip(field(s)) {
                         *o += w * v;
                     }
                 }
                 Some(out)
             };
-            let secant = [s1, s0];
-            let q_sec = predict(&secant, |s| &s.q);
-            // The quadratic where its correction to the secant is small against the step
-            // (a smooth branch); the secant where it is not (say just past a bifurcation,
-            // where the branch has a kink).
-            let q_quad = self.earlier.as_ref().and_then(|s_1| {
-                let q = predict(&[s1, s0, s_1], |s| &s.q)?;
-                let sec = q_sec.as_ref()?;
-                let diff = |a: &[f64], b: &[f64]| {
-                    a.iter()
-                        .zip(b)
-                        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-                };
-                (diff(&q, sec) <= 0.1 * diff(sec, &s1.q)).then_some((q, [s1, s0, s_1]))
-            });
-            let (q, lambda) = match q_quad {
-                Some((q, nodes)) => (Some(q), predict(&nodes, |s| &s.lambda)),
-                None => (q_sec, predict(&secant, |s| &s.lambda)),
+            let diff = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
             };
-            // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²)
-            // rather than O(Δspeed), so that a point usually takes two residuals, not three.
-            let n = s1.jacobian.nrows();
-            let jacobian = predict(&secant, |s| s.jacobian.as_slice())
-                .filter(|_| s0.jacobian.shape() == s1.jacobian.shape())
-                .map(|j| DMatrix::from_vec(n, n, j));
+            // Each higher order where its correction to the one below is small against that
+            // one's own correction (a smooth branch); not past the first that is not (say
+            // just past a bifurcation, where the branch has a kink).
+            let mut order = 0;
+            let mut q: Option<Vec<f64>> = None;
+            let mut correction = f64::INFINITY;
+            for k in 1..nodes.len() {
+                let Some(next) = predict(&nodes[..=k], |s| &s.q) else {
+                    break;
+                };
+                let c = diff(&next, q.as_deref().unwrap_or(&nodes[0].q));
+                if k > 1 && c > 0.1 * correction {
+                    break;
+                }
+                (order, q, correction) = (k, Some(next), c);
+            }
             if let Some(q) = q {
+                // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²)
+                // rather than O(Δspeed), so that a point usually takes two residuals, not three.
+                let n = nodes[0].jacobian.nrows();
+                let jacobian = predict(&nodes[..2], |s| s.jacobian.as_slice())
+                    .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
+                    .map(|j| DMatrix::from_vec(n, n, j));
                 starts.push(Guess {
                     q,
-                    lambda,
+                    lambda: predict(&nodes[..=order], |s| &s.lambda),
                     jacobian,
                 });
             }
         }
-        if let Some(s1) = &self.last {
+        if let Some(s1) = nodes.first() {
             starts.push(Guess {
                 q: s1.q.clone(),
                 lambda: Some(s1.lambda.clone()),
@@ -426,9 +426,8 @@ impl<'a> Sweep<'a> {
                 "stability regained since the previous speed".into()
             });
         }
-        self.earlier = self.before.take();
-        self.before = self.last.take();
-        self.last = Some(Solved::from(&pt));
+        self.history.truncate(PREDICTOR_NODES - 1);
+        self.history.insert(0, Solved::from(&pt));
         self.steady_known = true;
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
