@@ -252,3 +252,35 @@ fn normalize(v: DVector<C64>) -> DVector<C64> {
     let n = w.norm();
     if n > 0.0 { w / C64::new(n, 0.0) } else { w }
 }
+
+/// `items` in the order `order` (a permutation of their indices).
+pub fn permute<T>(items: Vec<T>, order: &[usize]) -> Vec<T> {
+    let mut items: Vec<Option<T>> = items.into_iter().map(Some).collect();
+    order
+        .iter()
+        .map(|&i| items[i].take().expect("a permutation"))
+        .collect()
+}
+
+/// For each reference mode shape, the index of the most similar shape of `cur` (as many; greedy on the
+/// largest similarity first): tracks modes across speeds and matches a sample's modes to the
+/// nominal ones.
+pub fn match_shapes(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
+    let n = prev.len();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * n);
+    for (i, p) in prev.iter().enumerate() {
+        for (j, c) in cur.iter().enumerate() {
+            pairs.push((similarity(p, c), i, j));
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut out = vec![usize::MAX; n];
+    let mut used = vec![false; n];
+    for (_, i, j) in pairs {
+        if out[i] == usize::MAX && !used[j] {
+            out[i] = j;
+            used[j] = true;
+        }
+    }
+    out
+}

@@ -255,9 +255,10 @@ impl Sampler {
     }
 }
 
-/// One sample's outputs at every speed: `None` where the point failed; else values and
-/// whether each output's mode changed class.
-type SampleResult = Vec<Option<Vec<(f64, bool)>>>;
+/// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
+/// the thread that folds it): the value, NaN where the output or the whole point failed, and
+/// whether the output's mode changed class.
+type SampleResult = Vec<(f64, bool)>;
 
 fn run_sample(
     model: &Model,
@@ -277,29 +278,29 @@ fn run_sample(
     };
     let mut sweep = Sweep::new(model, p, options);
     let mut started = false;
-    speeds
-        .iter()
-        .zip(nominal)
-        .map(|(&w, nom)| {
-            let nom = nom.as_ref()?;
+    let mut out = Vec::with_capacity(speeds.len() * outs.len());
+    for (&w, nom) in speeds.iter().zip(nominal) {
+        let pt = nom.as_ref().and_then(|nom| {
             if !started {
                 sweep.warm_start(nom);
             }
             let pt = match_modes(nom, sweep.step(w).ok()?);
             started = true;
-            let tf = transfer.map(|t| TransferAt::at_speed(t, w));
-            Some(
-                outs.iter()
-                    .map(|o| {
-                        let changed = o.mode.is_some_and(|m| {
-                            pt.modes.get(m).map(|x| x.class) != nom.modes.get(m).map(|x| x.class)
-                        });
-                        (value(&pt, o, tf).unwrap_or(f64::NAN), changed)
-                    })
-                    .collect(),
-            )
-        })
-        .collect()
+            Some((nom, pt))
+        });
+        let Some((nom, pt)) = pt else {
+            out.extend(std::iter::repeat_n((f64::NAN, false), outs.len()));
+            continue;
+        };
+        let tf = transfer.map(|t| TransferAt::at_speed(t, w));
+        out.extend(outs.iter().map(|o| {
+            let changed = o.mode.is_some_and(|m| {
+                pt.modes.get(m).map(|x| x.class) != nom.modes.get(m).map(|x| x.class)
+            });
+            (value(&pt, o, tf).unwrap_or(f64::NAN), changed)
+        }));
+    }
+    out
 }
 
 /// Samples per chunk: the unit of parallel work, of interruption and of sharding.
@@ -361,21 +362,14 @@ pub fn run_chunks(
         });
         let mut acc = vec![vec![Moments::default(); outs.len()]; speeds.len()];
         for r in results {
-            for (s, at) in r.iter().enumerate() {
-                match at {
-                    None => acc[s].iter_mut().for_each(|w| w.failed += 1),
-                    Some(vals) => {
-                        for (o, &(v, changed)) in vals.iter().enumerate() {
-                            if v.is_finite() {
-                                acc[s][o].add(v);
-                            } else {
-                                acc[s][o].failed += 1;
-                            }
-                            if changed {
-                                acc[s][o].class_changed += 1;
-                            }
-                        }
-                    }
+            for (m, &(v, changed)) in acc.iter_mut().flatten().zip(&r) {
+                if v.is_finite() {
+                    m.add(v);
+                } else {
+                    m.failed += 1;
+                }
+                if changed {
+                    m.class_changed += 1;
                 }
             }
         }

@@ -11,7 +11,7 @@ use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start
 use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize, reduce};
 use crate::mechanics::dynamics::Lifted;
 use crate::mechanics::{System, steady_speeds};
-use crate::modal::{C64, ModalError, Mode, ModeClass, modes, similarity};
+use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
 use crate::model::{FieldError, Model};
 use crate::real::lift1;
 use nalgebra::{DMatrix, DVector};
@@ -332,7 +332,6 @@ impl<'a> Sweep<'a> {
     /// extrapolation of their Jacobians for chord steps; then the last solution with its
     /// Jacobian; then the model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
-        let guess = initial_guess(self.model, &self.params, speed)?;
         let mut starts: Vec<Guess> = Vec::new();
         let nodes: Vec<&Solved> = self.history.iter().collect();
         if nodes.len() >= 2 {
@@ -388,15 +387,19 @@ impl<'a> Sweep<'a> {
                 jacobian: Some(s1.jacobian.clone()),
             });
         }
-        starts.push(Guess {
-            q: guess,
-            lambda: None,
-            jacobian: None,
-        });
         let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
             iterations: 0,
         }));
-        for guess in &starts {
+        // The model's initial guess last, evaluated only when needed.
+        let fallback = std::iter::once_with(|| {
+            initial_guess(self.model, &self.params, speed).map(|q| Guess {
+                q,
+                lambda: None,
+                jacobian: None,
+            })
+        });
+        for guess in starts.into_iter().map(Ok).chain(fallback) {
+            let guess = guess?;
             let start = Start {
                 lambda: guess.lambda.as_deref(),
                 jacobian: guess.jacobian.as_ref(),
@@ -412,9 +415,9 @@ impl<'a> Sweep<'a> {
         if let Some(prev) = &self.last_shapes
             && prev.len() == pt.modes.len()
         {
-            let order = track(prev, &pt.shapes);
-            pt.modes = order.iter().map(|&i| pt.modes[i].clone()).collect();
-            pt.shapes = order.iter().map(|&i| pt.shapes[i].clone()).collect();
+            let order = match_shapes(prev, &pt.shapes);
+            pt.modes = permute(std::mem::take(&mut pt.modes), &order);
+            pt.shapes = permute(std::mem::take(&mut pt.shapes), &order);
         }
         if let Some(was) = self.last_stable
             && was != pt.stable()
@@ -458,26 +461,4 @@ fn extrapolation(speed: f64, solved: &[&Solved]) -> Option<Vec<f64>> {
             })
             .collect(),
     )
-}
-
-/// For each previous mode, the index of the most similar current mode (greedy on the largest
-/// similarity first).
-fn track(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
-    let n = prev.len();
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * n);
-    for (i, p) in prev.iter().enumerate() {
-        for (j, c) in cur.iter().enumerate() {
-            pairs.push((similarity(p, c), i, j));
-        }
-    }
-    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut out = vec![usize::MAX; n];
-    let mut used = vec![false; n];
-    for (_, i, j) in pairs {
-        if out[i] == usize::MAX && !used[j] {
-            out[i] = j;
-            used[j] = true;
-        }
-    }
-    out
 }

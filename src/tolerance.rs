@@ -170,24 +170,9 @@ pub fn match_modes(reference: &Point, mut q: Point) -> Point {
     if q.modes.len() != reference.modes.len() {
         return q;
     }
-    let n = q.modes.len();
-    let mut order = vec![usize::MAX; n];
-    let mut used = vec![false; n];
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    for (i, a) in reference.shapes.iter().enumerate() {
-        for (j, b) in q.shapes.iter().enumerate() {
-            pairs.push((crate::modal::similarity(a, b), i, j));
-        }
-    }
-    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
-    for (_, i, j) in pairs {
-        if order[i] == usize::MAX && !used[j] {
-            order[i] = j;
-            used[j] = true;
-        }
-    }
-    q.modes = order.iter().map(|&j| q.modes[j].clone()).collect();
-    q.shapes = order.iter().map(|&j| q.shapes[j].clone()).collect();
+    let order = crate::modal::match_shapes(&reference.shapes, &q.shapes);
+    q.modes = crate::modal::permute(std::mem::take(&mut q.modes), &order);
+    q.shapes = crate::modal::permute(std::mem::take(&mut q.shapes), &order);
     q
 }
 
