@@ -79,7 +79,8 @@ pub struct Equilibrium {
     #[serde(skip)]
     pub jacobian: DMatrix<f64>,
     /// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at the solution, when the recorded program computed
-    /// them with the Jacobian (the linearisation then does not compute them again).
+    /// them with the Jacobian (the linearisation takes them from here rather than computing
+    /// them again; a [`crate::sweep::Point`]'s are in its linearisation).
     #[serde(skip)]
     pub rates: Option<Rates>,
 }

@@ -200,7 +200,7 @@ fn analyse(
     model: &Model,
     p: &[f64],
     problem: &Problem,
-    eq: Equilibrium,
+    mut eq: Equilibrium,
     opt: &Options,
 ) -> Result<Point, PointError> {
     let free = model.free();
@@ -215,15 +215,10 @@ fn analyse(
         choose_independent(&phi_r, &free, user)?
     };
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
-    let linear = match (&eq.rates, problem.dual()) {
-        (Some((damping, mass)), _) => reduce(
-            &free,
-            &independent,
-            &phi_r,
-            mass.clone(),
-            damping.clone(),
-            stiffness,
-        )?,
+    let linear = match (eq.rates.take(), problem.dual()) {
+        (Some((damping, mass)), _) => {
+            reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
+        }
         (None, dual) => {
             // The recorded route always gives the rates; directly otherwise.
             let fresh;

@@ -899,7 +899,7 @@ impl Tape {
     /// between calls.
     pub fn eval<S: Real>(&self, fixed: &[S], x: &[S], work: &mut Vec<S>) -> Vec<S> {
         let ns = self.n_static;
-        work.clear();
+        // Every entry is written below, in order, before it is read.
         work.resize(self.ops.len(), S::from(0.0));
         work[..ns].copy_from_slice(&fixed[..ns]);
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
