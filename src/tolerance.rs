@@ -385,7 +385,8 @@ pub const KINK_SIGMAS: f64 = 4.0;
 const SERIES_FROM: f64 = 30.0;
 
 /// Mean and σ of `√max(0, D)` for `D ~ N(μ, σ²)`: `E[max(0, D)] = μΦ(μ/σ) + σφ(μ/σ)` and
-/// `E[√max(0, D)] = ∫₀^∞ 2u² φ((u² − μ)/σ)/σ du` (substitution `D = u²`, composite Simpson), or
+/// `E[√max(0, D)] = ∫₀^∞ 2u² φ((u² − μ)/σ)/σ du` (substitution `D = u²`, composite
+/// Gauss–Legendre), or
 /// its series in `σ/μ` far from zero.
 pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
     if sigma <= 0.0 || !sigma.is_finite() {
@@ -416,22 +417,37 @@ pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
             std: 0.0,
         };
     }
-    // [lower, upper] spans at most 20σ of D: 400 Simpson panels resolve it to ~1e-10. Where
-    // the whole range is away from zero (z > 10) the integrand decays smoothly at both ends,
-    // the rule converges geometrically and a quarter of that is as accurate.
-    let n = if z > 10.0 { 100 } else { 400 };
-    let h = (upper - lower) / n as f64;
+    // [lower, upper] spans at most 20σ of D, and the integrand is smooth (entire) on it:
+    // composite 8-point Gauss–Legendre converges geometrically. With 16 panels (128
+    // evaluations) it is accurate to ~1e-12, worst near μ = 10σ where the lower limit reaches
+    // zero (tested against a 200 000-panel Simpson reference).
+    let h = (upper - lower) / PANELS as f64;
     let f = |u: f64| 2.0 * u * u * phi((u * u - mu) / sigma) / sigma;
-    let mut sum = f(lower) + f(upper);
-    for k in 1..n {
-        sum += f(lower + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    let mut sum = 0.0;
+    for k in 0..PANELS {
+        let centre = lower + (k as f64 + 0.5) * h;
+        for (x, w) in GAUSS_LEGENDRE_8 {
+            sum += w * (f(centre - 0.5 * h * x) + f(centre + 0.5 * h * x));
+        }
     }
-    let mean = sum * h / 3.0;
+    let mean = 0.5 * h * sum;
     Stat {
         mean,
         std: (second - mean * mean).max(0.0).sqrt(),
     }
 }
+
+/// Panels of [`sqrt_positive_part`]'s quadrature.
+const PANELS: usize = 16;
+
+/// The 8-point Gauss–Legendre rule on [−1, 1]: the positive nodes and their weights
+/// (Abramowitz & Stegun, table 25.4).
+const GAUSS_LEGENDRE_8: [(f64, f64); 4] = [
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (0.796_666_477_413_626_7, 0.222_381_034_453_374_5),
+    (0.960_289_856_497_536_3, 0.101_228_536_290_376_3),
+];
 
 /// Complementary error function (statrs).
 fn libm_erfc(x: f64) -> f64 {
@@ -480,13 +496,14 @@ mod tests {
             sum * h / 3.0
         };
         for z in [
-            -3.0, -0.5, 0.0, 0.7, 3.0, 9.99, 10.01, 12.0, 20.0, 29.99, 30.0, 45.0, 1000.0,
+            -3.0, -0.5, 0.0, 0.7, 1.5, 3.0, 5.0, 8.0, 9.99, 10.01, 12.0, 20.0, 29.99, 30.0, 45.0,
+            1000.0,
         ] {
             let sigma = 2.5e-3;
             let s = sqrt_positive_part(z * sigma, sigma);
             let r = reference(z * sigma, sigma);
             assert!(
-                (s.mean - r).abs() <= 1e-9 * r,
+                (s.mean - r).abs() <= 1e-11 * r,
                 "μ/σ = {z}: {} vs {r}",
                 s.mean
             );
