@@ -53,9 +53,6 @@ pub enum EquilibriumError {
 /// reduction).
 pub type Rates = (DMatrix<f64>, DMatrix<f64>);
 
-/// `F`, its exact Jacobian, the [`Rates`] and the driven slopes where computed with them.
-type Exact = (Vec<f64>, DMatrix<f64>, Option<Rates>, Option<Vec<f64>>);
-
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Equilibrium {
@@ -282,29 +279,18 @@ impl<'a> Problem<'a> {
         }
     }
 
-    /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at
+    /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`, at
     /// `(q, λ)`: everything the linearisation needs, so that a solve whose last Newton step
-    /// is below the tolerance needs no further evaluation. With `steady` (the steady-state
-    /// check is due), also the driven slopes of [`Problem::check_steady`] from the same pass.
-    fn evaluate(&self, q: &[f64], lambda: &[f64], steady: bool) -> Exact {
+    /// is below the tolerance needs no further evaluation.
+    fn evaluate(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>, Option<Rates>) {
         match &self.route {
             Route::Recorded(c) => {
-                let (lin, slopes) = if steady {
-                    let (lin, slopes) = c.linear_and_driven_slopes(q, lambda);
-                    (lin, Some(slopes))
-                } else {
-                    (c.linear(q, lambda), None)
-                };
-                (
-                    lin.residual,
-                    lin.jacobian,
-                    Some((lin.damping, lin.mass)),
-                    slopes,
-                )
+                let lin = c.linear(q, lambda);
+                (lin.residual, lin.jacobian, Some((lin.damping, lin.mass)))
             }
             Route::Direct { .. } => {
                 let (f, j) = self.residual_and_jacobian(q, lambda);
-                (f, j, None, None)
+                (f, j, None)
             }
         }
     }
@@ -339,14 +325,13 @@ impl<'a> Problem<'a> {
             _ => self.least_squares_multipliers(&q),
         };
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        let steady = !start.steady_known;
-        let (mut f, mut jac, mut rates, mut slopes, mut fresh) = match start.jacobian {
+        let (mut f, mut jac, mut rates, mut fresh) = match start.jacobian {
             Some(j) if j.nrows() == nx && j.ncols() == nx => {
-                (self.residual(&q, &lambda), j.clone(), None, None, false)
+                (self.residual(&q, &lambda), j.clone(), None, false)
             }
             _ => {
-                let (f, j, r, s) = self.evaluate(&q, &lambda, steady);
-                (f, j, r, s, true)
+                let (f, j, r) = self.evaluate(&q, &lambda);
+                (f, j, r, true)
             }
         };
         let mut lu = jac.clone().lu();
@@ -366,7 +351,7 @@ impl<'a> Problem<'a> {
                 if fresh {
                     return Err(EquilibriumError::SingularJacobian { iterations });
                 }
-                (f, jac, rates, slopes) = self.evaluate(&q, &lambda, steady);
+                (f, jac, rates) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             };
@@ -402,13 +387,13 @@ impl<'a> Problem<'a> {
                 };
                 if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
                     apply(&mut q, &mut lambda, 1.0);
-                    (f, jac, rates, slopes) = self.evaluate(&q, &lambda, steady);
+                    (f, jac, rates) = self.evaluate(&q, &lambda);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
                 // Steps that do not contract fast: evaluate the Jacobian here.
                 if size > 0.5 * last_step {
-                    (f, jac, rates, slopes) = self.evaluate(&q, &lambda, steady);
+                    (f, jac, rates) = self.evaluate(&q, &lambda);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
@@ -430,12 +415,12 @@ impl<'a> Problem<'a> {
                 alpha *= 0.5;
             }
             if !decreased && !fresh {
-                (f, jac, rates, slopes) = self.evaluate(&q, &lambda, steady);
+                (f, jac, rates) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             }
             (q, lambda, f) = (q_new, l_new, f_new);
-            (fresh, rates, slopes) = (false, None, None);
+            (fresh, rates) = (false, None);
             last_step = alpha * size;
         }
         if f.iter().any(|v| !v.is_finite()) {
@@ -448,7 +433,7 @@ impl<'a> Problem<'a> {
             });
         }
         if !start.steady_known {
-            self.check_steady(&q, &lambda, &jac, slopes)?;
+            self.check_steady(&q, &lambda, &jac)?;
         }
         let mut drive_force = vec![0.0; if settings.drive_force { q.len() } else { 0 }];
         match &self.route {
@@ -521,16 +506,14 @@ impl<'a> Problem<'a> {
         q: &[f64],
         lambda: &[f64],
         jac: &DMatrix<f64>,
-        slopes: Option<Vec<f64>>,
     ) -> Result<(), EquilibriumError> {
         let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
-        let slopes = match (&self.route, slopes) {
-            (_, Some(slopes)) => slopes,
-            (Route::Recorded(c), None) => c.linear_and_driven_slopes(q, lambda).1,
-            (Route::Direct { sys, dual, .. }, None) => self
+        let slopes = match &self.route {
+            Route::Recorded(c) => c.driven_slopes(q, lambda),
+            Route::Direct { sys, dual, .. } => self
                 .driven
                 .iter()
                 .map(|&c| {

@@ -41,8 +41,7 @@ pub struct Program {
     jacobian: Seeding,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
-    /// `linear`'s lanes and then one per driven coordinate (the steady-state check), on
-    /// `full`.
+    /// One lane per driven coordinate on `residual` (the steady-state check).
     steady: Seeding,
 }
 
@@ -111,17 +110,12 @@ impl Program {
             })
             .collect();
         let linear = full.seeding(&seeds, 3 * nf);
-        let steady_seeds: Vec<(usize, usize)> = seeds
+        let steady_seeds: Vec<(usize, usize)> = driven
             .iter()
-            .copied()
-            .chain(
-                driven
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &i)| (np + 1 + i, 3 * nf + k)),
-            )
+            .enumerate()
+            .map(|(k, &i)| (np + 1 + i, k))
             .collect();
-        let steady = full.seeding(&steady_seeds, 3 * nf + driven.len());
+        let steady = residual.seeding(&steady_seeds, driven.len());
         let program = Program {
             np,
             n,
@@ -297,7 +291,8 @@ pub struct Linear<S: Real = f64> {
 
 impl<S: Real> Linear<S> {
     /// From a forward pass with [`Program::linear`]'s lanes.
-    fn from_forward(f: Vec<S>, d: &[S], lanes: usize, nf: usize, m: usize) -> Self {
+    fn from_forward(f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
+        let lanes = 3 * nf;
         let at = |r: usize, l: usize| d[r * lanes + l];
         Linear {
             residual: f,
@@ -365,6 +360,26 @@ impl Instance<'_> {
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
     }
 
+    /// The largest `|∂F/∂q_c|` over `F`'s entries for each driven coordinate `c` (zero at a
+    /// steady state).
+    pub fn driven_slopes(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
+        self.set(q, lambda);
+        let pr = self.program;
+        let lanes = pr.steady.lanes();
+        let (_, d) = with_buffer(|work| {
+            pr.residual
+                .forward(&self.residual, &self.x.borrow(), &pr.steady, work)
+        });
+        (0..lanes)
+            .map(|l| {
+                d.iter()
+                    .skip(l)
+                    .step_by(lanes.max(1))
+                    .fold(0.0f64, |a, v| a.max(v.abs()))
+            })
+            .collect()
+    }
+
     /// `F`, its Jacobian, `C` and `M` in one forward pass.
     pub fn linear(&self, q: &[f64], lambda: &[f64]) -> Linear {
         self.set(q, lambda);
@@ -373,29 +388,7 @@ impl Instance<'_> {
         let (f, d) = pr
             .full
             .forward(&self.full, &self.x.borrow(), &pr.linear, &mut work.2);
-        Linear::from_forward(f, &d, pr.linear.lanes(), pr.free.len(), pr.m)
-    }
-
-    /// As [`Instance::linear`], with the largest `|∂F/∂q_c|` over `F`'s entries for each
-    /// driven coordinate `c` (zero at a steady state) from the same pass.
-    pub fn linear_and_driven_slopes(&self, q: &[f64], lambda: &[f64]) -> (Linear, Vec<f64>) {
-        self.set(q, lambda);
-        let pr = self.program;
-        let mut work = self.work.borrow_mut();
-        let (f, d) = pr
-            .full
-            .forward(&self.full, &self.x.borrow(), &pr.steady, &mut work.2);
-        let (lanes, first) = (pr.steady.lanes(), pr.linear.lanes());
-        let slopes = (first..lanes)
-            .map(|l| {
-                d.iter()
-                    .skip(l)
-                    .step_by(lanes)
-                    .fold(0.0f64, |a, v| a.max(v.abs()))
-            })
-            .collect();
-        let linear = Linear::from_forward(f, &d, lanes, pr.free.len(), pr.m);
-        (linear, slopes)
+        Linear::from_forward(f, &d, pr.free.len(), pr.m)
     }
 }
 
@@ -413,7 +406,7 @@ impl Program {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let fixed = self.full.eval_static(&x);
         let (f, d) = with_buffer(|work| self.full.forward(&fixed, &x, &self.linear, work));
-        Linear::from_forward(f, &d, self.linear.lanes(), self.free.len(), self.m)
+        Linear::from_forward(f, &d, self.free.len(), self.m)
     }
 }
 
