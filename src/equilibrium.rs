@@ -303,10 +303,11 @@ impl<'a> Problem<'a> {
     /// and the Jacobian of a nearby solution (the previous speed of a sweep).
     ///
     /// Converged means: the Newton step with the exact Jacobian *at the returned point* is
-    /// below the step tolerance. When chord steps predict that (their contraction rate ρ
-    /// bounds the error left after a step by ρ/(1−ρ) times its size), the Jacobian is
-    /// evaluated there, with the linearisation's other matrices, and its step confirms it;
-    /// so the returned Jacobian, and the rates, are those of the returned point, which the
+    /// below the step tolerance. When chord steps estimate the error left at a thousandth of
+    /// the tolerance (ρ/(1−ρ) times the last step, for a contraction rate ρ; rounding where
+    /// the steps stop contracting), the Jacobian is evaluated there, with the linearisation's
+    /// other matrices, and its step confirms it (else Newton goes on from there). So the
+    /// returned Jacobian, and the rates, are those of the returned point, which the
     /// linearisation and the sensitivities use.
     pub fn solve(
         &self,
