@@ -327,7 +327,8 @@ impl<'a> Sweep<'a> {
     /// extrapolation of their Jacobians for chord steps; then the last solution with its
     /// Jacobian; then the model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
-        let mut starts: Vec<Guess> = Vec::new();
+        // The extrapolated start first.
+        let mut predicted: Option<Guess> = None;
         let nodes: Vec<&Solved> = self.history.iter().collect();
         if nodes.len() >= 2 {
             let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
@@ -368,24 +369,26 @@ impl<'a> Sweep<'a> {
                 let jacobian = predict(&nodes[..2], |s| s.jacobian.as_slice())
                     .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
                     .map(|j| DMatrix::from_vec(n, n, j));
-                starts.push(Guess {
+                predicted = Some(Guess {
                     q,
                     lambda: predict(&nodes[..=order], |s| &s.lambda),
                     jacobian,
                 });
             }
         }
-        if let Some(s1) = nodes.first() {
-            starts.push(Guess {
-                q: s1.q.clone(),
-                lambda: Some(s1.lambda.clone()),
-                jacobian: Some(s1.jacobian.clone()),
-            });
-        }
         let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
             iterations: 0,
         }));
-        // The model's initial guess last, evaluated only when needed.
+        // Then the last solution with its Jacobian, then the model's initial guess, each made
+        // only when the starts before it failed.
+        let last = std::iter::once_with(|| {
+            nodes.first().map(|s1| Guess {
+                q: s1.q.clone(),
+                lambda: Some(s1.lambda.clone()),
+                jacobian: Some(s1.jacobian.clone()),
+            })
+        })
+        .flatten();
         let fallback = std::iter::once_with(|| {
             initial_guess(self.model, &self.params, speed).map(|q| Guess {
                 q,
@@ -393,7 +396,7 @@ impl<'a> Sweep<'a> {
                 jacobian: None,
             })
         });
-        for guess in starts.into_iter().map(Ok).chain(fallback) {
+        for guess in predicted.into_iter().chain(last).map(Ok).chain(fallback) {
             let guess = guess?;
             let start = Start {
                 lambda: guess.lambda.as_deref(),
