@@ -1,4 +1,5 @@
-//! One modal point (equilibrium + linearisation + modes) and a 501-point sweep of each example.
+//! One modal point (equilibrium + linearisation + modes), the recorded program's passes there
+//! and a 501-point sweep of each example.
 //! Run with `cargo bench --bench engine`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -36,6 +37,26 @@ fn bench(c: &mut Criterion) {
         .unwrap()
         .equilibrium
         .q;
+        // The recorded program's passes at that point: the residual, Newton's Jacobian, and
+        // the exact evaluation (Jacobian, C and M in one pass).
+        if let Some(inst) = model
+            .program(&p, speed, &q0)
+            .and_then(|program| program.at(&p, speed))
+        {
+            let lambda = point(&model, &p, speed, &q0, &Options::default())
+                .unwrap()
+                .equilibrium
+                .lambda;
+            c.bench_function(&format!("{name}/pass/residual"), |b| {
+                b.iter(|| inst.residual(black_box(&q0), &lambda))
+            });
+            c.bench_function(&format!("{name}/pass/jacobian"), |b| {
+                b.iter(|| inst.residual_and_jacobian(black_box(&q0), &lambda))
+            });
+            c.bench_function(&format!("{name}/pass/linear"), |b| {
+                b.iter(|| inst.linear(black_box(&q0), &lambda))
+            });
+        }
         c.bench_function(&format!("{name}/modal_point"), |b| {
             b.iter(|| point(&model, &p, black_box(speed), &q0, &Options::default()).unwrap())
         });
