@@ -53,6 +53,9 @@ pub enum EquilibriumError {
 /// reduction).
 pub type Rates = (DMatrix<f64>, DMatrix<f64>);
 
+/// `F`, its Jacobian and, on the recorded route, the [`Rates`], at one point.
+type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>);
+
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Equilibrium {
@@ -132,6 +135,19 @@ pub struct Start<'a> {
     /// The steady-state check has passed for this model and these parameters (at the previous
     /// speed of a sweep); it is not repeated.
     pub steady_known: bool,
+}
+
+/// The least-squares solution of `a λ = b` (zero if that fails; empty when `a` has no
+/// columns).
+fn least_squares(a: DMatrix<f64>, b: DVector<f64>) -> Vec<f64> {
+    let m = a.ncols();
+    if m == 0 {
+        return Vec::new();
+    }
+    match a.svd(true, true).solve(&b, 1e-12) {
+        Ok(l) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
+        _ => vec![0.0; m],
+    }
 }
 
 /// The system lifted for the direct route's values, made on first use.
@@ -282,7 +298,7 @@ impl<'a> Problem<'a> {
     /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`, at
     /// `(q, λ)`: everything the linearisation needs, so that a solve whose last Newton step
     /// is below the tolerance needs no further evaluation.
-    fn evaluate(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>, Option<Rates>) {
+    fn evaluate(&self, q: &[f64], lambda: &[f64]) -> Evaluation {
         match &self.route {
             Route::Recorded(c) => {
                 let lin = c.linear(q, lambda);
@@ -321,18 +337,16 @@ impl<'a> Problem<'a> {
         let nx = nf + m;
         let tol = settings.step_tolerance;
         let mut q = q0.to_vec();
-        let mut lambda = match start.lambda {
-            Some(l) if l.len() == m => l.to_vec(),
-            _ => self.least_squares_multipliers(&q),
-        };
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        let (mut f, mut jac, mut rates, mut fresh) = match start.jacobian {
-            Some(j) if j.nrows() == nx && j.ncols() == nx => {
-                (self.residual(&q, &lambda), j.clone(), None, false)
+        let given = start.lambda.filter(|l| l.len() == m);
+        let (mut lambda, (mut f, mut jac, mut rates), mut fresh) = match (given, start.jacobian) {
+            (Some(l), Some(j)) if j.nrows() == nx && j.ncols() == nx => {
+                (l.to_vec(), (self.residual(&q, l), j.clone(), None), false)
             }
-            _ => {
-                let (f, j, r) = self.evaluate(&q, &lambda);
-                (f, j, r, true)
+            (Some(l), _) => (l.to_vec(), self.evaluate(&q, l), true),
+            (None, _) => {
+                let (l, e) = self.evaluate_fitted(&q);
+                (l, e, true)
             }
         };
         let mut lu = jac.clone().lu();
@@ -468,40 +482,43 @@ impl<'a> Problem<'a> {
         })
     }
 
-    /// Least-squares multipliers at `q`: `Φ_Rᵀ λ ≈ −r_R` (zero if that fails).
-    fn least_squares_multipliers(&self, q: &[f64]) -> Vec<f64> {
+    /// [`Problem::evaluate`] at `q` with the least-squares multipliers there (`Φ_Rᵀ λ ≈
+    /// −r_R`), and those multipliers. On the recorded route this is one pass: the pass at
+    /// `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the multipliers
+    /// ([`crate::program::Linear::shift_multipliers`]).
+    fn evaluate_fitted(&self, q: &[f64]) -> (Vec<f64>, Evaluation) {
         let (nf, m) = (self.free.len(), self.m);
-        if m == 0 {
-            return Vec::new();
-        }
-        let (a, b) = match &self.route {
-            // F(q, 0) = [r_R; Φ]; the λ columns of its Jacobian are [Φ_Rᵀ; 0].
+        match &self.route {
             Route::Recorded(c) => {
-                let (f, j) = c.residual_and_jacobian(q, &vec![0.0; m]);
+                let mut lin = c.linear(q, &vec![0.0; m]);
+                let lambda = least_squares(
+                    lin.jacobian.view((0, nf), (nf, m)).into_owned(),
+                    DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
+                );
+                lin.shift_multipliers(&lambda);
                 (
-                    j.view((0, nf), (nf, m)).into_owned(),
-                    DVector::from_iterator(nf, f[..nf].iter().map(|v| -v)),
+                    lambda,
+                    (lin.residual, lin.jacobian, Some((lin.damping, lin.mass))),
                 )
             }
             Route::Direct { sys, value, .. } => {
                 let zero = vec![0.0; q.len()];
                 let d = evaluate_rows(lift_value(sys, value), q, &self.qd, &zero, &self.free);
-                (
+                let lambda = least_squares(
                     DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]),
                     DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i])),
-                )
+                );
+                let e = self.evaluate(q, &lambda);
+                (lambda, e)
             }
-        };
-        match a.svd(true, true).solve(&b, 1e-12) {
-            Ok(l) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
-            _ => vec![0.0; m],
         }
     }
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
-    /// equilibrium drift and there is no steady state. Checked by the derivative at the solution
-    /// and by `F` itself at two other values of each driven coordinate (the derivative alone
-    /// vanishes where the dependence is stationary, e.g. `cos q_D` at `q_D = 0`).
+    /// equilibrium drift and there is no steady state. Checked by `F` itself at three other
+    /// values of each driven coordinate. With `F = 0` at the solution, that is four conditions:
+    /// a dependence through one revolution's sine and cosine (gravity off a spin axis) cannot
+    /// vanish at all four, wherever it is stationary.
     fn check_steady(
         &self,
         q: &[f64],
@@ -510,29 +527,15 @@ impl<'a> Problem<'a> {
     ) -> Result<(), EquilibriumError> {
         let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
-        let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
-        let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
-        let slopes = match &self.route {
-            Route::Recorded(c) => c.driven_slopes(q, lambda),
-            Route::Direct { sys, dual, .. } => self
-                .driven
-                .iter()
-                .map(|&c| {
-                    let mut qq: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-                    qq[c] = Dual64::new(q[c], 1.0);
-                    let f = equations(lift_dual(sys, dual), &self.free, &qq, &qd, &ld);
-                    f.iter().fold(0.0f64, |a, v| a.max(v.eps.abs()))
-                })
-                .collect(),
-        };
-        for (k, &c) in self.driven.iter().enumerate() {
-            let mut change = slopes[k];
-            for offset in [1.0, 2.5] {
-                let mut qo = q.to_vec();
-                qo[c] += offset;
+        let mut qo = q.to_vec();
+        for &c in &self.driven {
+            let mut change = 0.0f64;
+            for offset in [1.0, 2.5, -2.0] {
+                qo[c] = q[c] + offset;
                 let f = self.residual(&qo, lambda);
                 change = f.iter().fold(change, |a, v| a.max(v.abs()));
             }
+            qo[c] = q[c];
             if change > tol {
                 return Err(EquilibriumError::NoSteadyState {
                     coordinate: self.names[c].to_string(),

@@ -41,12 +41,18 @@ pub struct Program {
     jacobian: Seeding,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
-    /// One lane per driven coordinate on `residual` (the steady-state check).
-    steady: Seeding,
 }
 
-/// What the recorded function returns: the rows `rows` of `r + Φ_qᵀλ`, then `Φ`.
-fn trace(model: &Model, x: &[Var], rates: bool, rows: &[usize]) -> Option<Vec<Var>> {
+/// What the recorded function returns: the rows `rows` of `r + Φ_qᵀλ`, then `Φ`, then, with
+/// `curvature`, the entries of `Φ_R` (constraint by constraint), whose derivatives along `q_R`
+/// are the constraints' second derivatives.
+fn trace(
+    model: &Model,
+    x: &[Var],
+    rates: bool,
+    rows: &[usize],
+    curvature: bool,
+) -> Option<Vec<Var>> {
     let (np, n, m) = (
         model.parameters.len(),
         model.coordinates.len(),
@@ -68,7 +74,16 @@ fn trace(model: &Model, x: &[Var], rates: bool, rows: &[usize]) -> Option<Vec<Va
     let l = Lifted::new(sys);
     let d = evaluate_rows(&l, q, &qd, &qdd, rows);
     let g = d.with_multipliers(lambda);
-    Some(rows.iter().map(|&i| g[i]).chain(d.phi).collect())
+    let phi_r = (0..if curvature { m } else { 0 })
+        .flat_map(|k| free.iter().map(move |&i| (k, i)))
+        .map(|(k, i)| d.phi_q[(k, i)]);
+    Some(
+        rows.iter()
+            .map(|&i| g[i])
+            .chain(d.phi.iter().copied())
+            .chain(phi_r)
+            .collect(),
+    )
 }
 
 impl Program {
@@ -82,9 +97,9 @@ impl Program {
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        let residual = record(&x, |v| trace(model, v, false, &free))?.split(&fixed);
-        let full = record(&x, |v| trace(model, v, true, &free))?.split(&fixed);
-        let drive = record(&x, |v| trace(model, v, false, &driven))?;
+        let residual = record(&x, |v| trace(model, v, false, &free, false))?.split(&fixed);
+        let full = record(&x, |v| trace(model, v, true, &free, true))?.split(&fixed);
+        let drive = record(&x, |v| trace(model, v, false, &driven, false))?;
         let drive = drive
             .prune(&(0..driven.len()).collect::<Vec<_>>())
             .split(&fixed);
@@ -110,12 +125,6 @@ impl Program {
             })
             .collect();
         let linear = full.seeding(&seeds, 3 * nf);
-        let steady_seeds: Vec<(usize, usize)> = driven
-            .iter()
-            .enumerate()
-            .map(|(k, &i)| (np + 1 + i, k))
-            .collect();
-        let steady = residual.seeding(&steady_seeds, driven.len());
         let program = Program {
             np,
             n,
@@ -126,7 +135,6 @@ impl Program {
             drive,
             jacobian,
             linear,
-            steady,
         };
         program.reproduces(model, p, speed, q).then_some(program)
     }
@@ -287,18 +295,26 @@ pub struct Linear<S: Real = f64> {
     pub damping: DMatrix<S>,
     /// `∂r_R/∂q̈_R`.
     pub mass: DMatrix<S>,
+    /// `∂²Φ_k/∂q_R²` for each constraint equation `k`: how the Jacobian's `q_R` block changes
+    /// with `λ_k` (see [`Linear::shift_multipliers`]).
+    pub curvature: Vec<DMatrix<S>>,
 }
 
 impl<S: Real> Linear<S> {
-    /// From a forward pass with [`Program::linear`]'s lanes.
-    fn from_forward(f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
+    /// From a forward pass with [`Program::linear`]'s lanes over the `full` program's outputs
+    /// (`F`, then the entries of `Φ_R`).
+    fn from_forward(mut f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
         let lanes = 3 * nf;
         let at = |r: usize, l: usize| d[r * lanes + l];
+        f.truncate(nf + m);
         Linear {
             residual: f,
             jacobian: jacobian(d, lanes, 3, nf, m),
             damping: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 1)),
             mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 2)),
+            curvature: (0..m)
+                .map(|k| DMatrix::from_fn(nf, nf, |j, i| at(nf + m + k * nf + j, 3 * i)))
+                .collect(),
         }
     }
 
@@ -313,6 +329,25 @@ impl<S: Real> Linear<S> {
         let phi_r = DMatrix::from_fn(m, nf, |k, j| self.jacobian[(j, nf + k)]);
         let k = self.jacobian.view((0, 0), (nf, nf)).into_owned();
         reduce(free, independent, &phi_r, self.mass, self.damping, k)
+    }
+}
+
+impl Linear {
+    /// The same at the multipliers `λ + δ`: `F` and the Jacobian are affine in `λ` (by `Φ_Rᵀ`
+    /// and by the constraints' curvature), and `Φ`, `Φ_R`, `C` and `M` do not depend on it.
+    /// So one pass at any multipliers serves every multiplier at that `q`.
+    pub fn shift_multipliers(&mut self, delta: &[f64]) {
+        let nf = self.mass.nrows();
+        for (k, (&dk, h)) in delta.iter().zip(&self.curvature).enumerate() {
+            for j in 0..nf {
+                self.residual[j] += self.jacobian[(j, nf + k)] * dk;
+            }
+            for i in 0..nf {
+                for j in 0..nf {
+                    self.jacobian[(j, i)] += h[(j, i)] * dk;
+                }
+            }
+        }
     }
 }
 
@@ -358,26 +393,6 @@ impl Instance<'_> {
             pr.residual
                 .forward(&self.residual, &self.x.borrow(), &pr.jacobian, &mut work.1);
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
-    }
-
-    /// The largest `|∂F/∂q_c|` over `F`'s entries for each driven coordinate `c` (zero at a
-    /// steady state).
-    pub fn driven_slopes(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
-        self.set(q, lambda);
-        let pr = self.program;
-        let lanes = pr.steady.lanes();
-        let (_, d) = with_buffer(|work| {
-            pr.residual
-                .forward(&self.residual, &self.x.borrow(), &pr.steady, work)
-        });
-        (0..lanes)
-            .map(|l| {
-                d.iter()
-                    .skip(l)
-                    .step_by(lanes.max(1))
-                    .fold(0.0f64, |a, v| a.max(v.abs()))
-            })
-            .collect()
     }
 
     /// `F`, its Jacobian, `C` and `M` in one forward pass.

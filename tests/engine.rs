@@ -13,6 +13,7 @@ use modaltol::model::Model;
 use modaltol::sweep::{Options, Sweep, point};
 use nalgebra::DMatrix;
 use num_dual::{Dual2, Dual64};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 const G: f64 = 9.80665;
 
@@ -434,9 +435,13 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
     let text = text.replace("gravity = [0, -9.80665, 0]", "gravity = [-3, -9, 0]");
     let model = Model::from_str(&text, "tilted.toml").unwrap();
     let p = model.nominal();
-    let err =
-        point(&model, &p, 2.0, &[0.0, 0.5], &Options::default()).expect_err("no steady state");
-    assert!(err.to_string().contains("no steady state"), "{err}");
+    // Wherever the spin angle starts, including where the residual is stationary in it
+    // (cos q_D at 0 and π) and where the tilt lies across the swing plane (π/2).
+    for spin in [0.0, FRAC_PI_2, 1.0, PI, -2.2] {
+        let err =
+            point(&model, &p, 2.0, &[spin, 0.5], &Options::default()).expect_err("no steady state");
+        assert!(err.to_string().contains("no steady state"), "{spin}: {err}");
+    }
     // A sweep reports it per speed and goes on.
     let mut sweep = Sweep::new(&model, p, Options::default());
     assert!(sweep.step(1.0).is_err() && sweep.step(2.0).is_err());

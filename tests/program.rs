@@ -138,6 +138,25 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             for (a, b) in lin.jacobian.iter().zip(j_direct.iter()) {
                 assert!(close(*a, *b, js), "{name}: Jacobian (full pass) {a} vs {b}");
             }
+            // The pass at other multipliers, shifted to these (F and the Jacobian are affine
+            // in λ through Φ_R and the constraints' curvature).
+            let other: Vec<f64> = lambda.iter().map(|l| 0.3 - 2.0 * l).collect();
+            let mut shifted = inst.linear(&q, &other);
+            let delta: Vec<f64> = lambda.iter().zip(&other).map(|(a, b)| a - b).collect();
+            shifted.shift_multipliers(&delta);
+            for (a, b) in shifted.residual.iter().zip(&f) {
+                assert!(close(*a, *b, scale), "{name}: shifted residual {a} vs {b}");
+            }
+            for (a, b) in shifted.jacobian.iter().zip(j_direct.iter()) {
+                assert!(close(*a, *b, js), "{name}: shifted Jacobian {a} vs {b}");
+            }
+            for (k, h) in shifted.curvature.iter().enumerate() {
+                let asym = (h - h.transpose()).amax();
+                assert!(
+                    asym <= 1e-12 * h.amax().max(1.0),
+                    "{name}: ∂²Φ_{k} not symmetric"
+                );
+            }
             // C and M against the direct linearisation.
             let m = model.n_constraints();
             let phi_r = DMatrix::from_fn(m, nf, |k, j| j_direct[(j, nf + k)]);
