@@ -53,8 +53,9 @@ pub enum EquilibriumError {
 /// reduction).
 pub type Rates = (DMatrix<f64>, DMatrix<f64>);
 
-/// `F`, its Jacobian and, on the recorded route, the [`Rates`], at one point.
-type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>);
+/// `F`, its Jacobian and, on the recorded route, the [`Rates`] and the driven coordinates'
+/// rows of `r + Φ_qᵀλ`, at one point.
+type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>, Option<Vec<f64>>);
 
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -302,11 +303,16 @@ impl<'a> Problem<'a> {
         match &self.route {
             Route::Recorded(c) => {
                 let lin = c.linear(q, lambda);
-                (lin.residual, lin.jacobian, Some((lin.damping, lin.mass)))
+                (
+                    lin.residual,
+                    lin.jacobian,
+                    Some((lin.damping, lin.mass)),
+                    Some(lin.drive),
+                )
             }
             Route::Direct { .. } => {
                 let (f, j) = self.residual_and_jacobian(q, lambda);
-                (f, j, None)
+                (f, j, None, None)
             }
         }
     }
@@ -339,16 +345,19 @@ impl<'a> Problem<'a> {
         let mut q = q0.to_vec();
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let given = start.lambda.filter(|l| l.len() == m);
-        let (mut lambda, (mut f, mut jac, mut rates), mut fresh) = match (given, start.jacobian) {
-            (Some(l), Some(j)) if j.nrows() == nx && j.ncols() == nx => {
-                (l.to_vec(), (self.residual(&q, l), j.clone(), None), false)
-            }
-            (Some(l), _) => (l.to_vec(), self.evaluate(&q, l), true),
-            (None, _) => {
-                let (l, e) = self.evaluate_fitted(&q);
-                (l, e, true)
-            }
-        };
+        let (mut lambda, (mut f, mut jac, mut rates, mut drive), mut fresh) =
+            match (given, start.jacobian) {
+                (Some(l), Some(j)) if j.nrows() == nx && j.ncols() == nx => (
+                    l.to_vec(),
+                    (self.residual(&q, l), j.clone(), None, None),
+                    false,
+                ),
+                (Some(l), _) => (l.to_vec(), self.evaluate(&q, l), true),
+                (None, _) => {
+                    let (l, e) = self.evaluate_fitted(&q);
+                    (l, e, true)
+                }
+            };
         let mut lu = jac.clone().lu();
         // Size of the last step (relative), for the contraction test.
         let mut last_step = f64::INFINITY;
@@ -366,7 +375,7 @@ impl<'a> Problem<'a> {
                 if fresh {
                     return Err(EquilibriumError::SingularJacobian { iterations });
                 }
-                (f, jac, rates) = self.evaluate(&q, &lambda);
+                (f, jac, rates, drive) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             };
@@ -402,13 +411,13 @@ impl<'a> Problem<'a> {
                 };
                 if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
                     apply(&mut q, &mut lambda, 1.0);
-                    (f, jac, rates) = self.evaluate(&q, &lambda);
+                    (f, jac, rates, drive) = self.evaluate(&q, &lambda);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
                 // Steps that do not contract fast: evaluate the Jacobian here.
                 if size > 0.5 * last_step {
-                    (f, jac, rates) = self.evaluate(&q, &lambda);
+                    (f, jac, rates, drive) = self.evaluate(&q, &lambda);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
@@ -430,12 +439,12 @@ impl<'a> Problem<'a> {
                 alpha *= 0.5;
             }
             if !decreased && !fresh {
-                (f, jac, rates) = self.evaluate(&q, &lambda);
+                (f, jac, rates, drive) = self.evaluate(&q, &lambda);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             }
             (q, lambda, f) = (q_new, l_new, f_new);
-            (fresh, rates) = (false, None);
+            (fresh, rates, drive) = (false, None, None);
             last_step = alpha * size;
         }
         if f.iter().any(|v| !v.is_finite()) {
@@ -451,14 +460,16 @@ impl<'a> Problem<'a> {
             self.check_steady(&q, &lambda, &jac)?;
         }
         let mut drive_force = vec![0.0; if settings.drive_force { q.len() } else { 0 }];
-        match &self.route {
+        match (&self.route, drive) {
             _ if !settings.drive_force => {}
-            Route::Recorded(c) => {
-                for (&i, v) in self.driven.iter().zip(c.drive_rows(&q, &lambda)) {
+            // From the evaluation at the returned point (a converged solve ends on one).
+            (Route::Recorded(c), rows) => {
+                let rows = rows.unwrap_or_else(|| c.linear(&q, &lambda).drive);
+                for (&i, v) in self.driven.iter().zip(rows) {
                     drive_force[i] = v;
                 }
             }
-            Route::Direct { sys, value, .. } => {
+            (Route::Direct { sys, value, .. }, _) => {
                 let zero = vec![0.0; q.len()];
                 let d = evaluate_rows(lift_value(sys, value), &q, &self.qd, &zero, &self.driven);
                 let g = d.with_multipliers(&lambda);
@@ -498,7 +509,12 @@ impl<'a> Problem<'a> {
                 lin.shift_multipliers(&lambda);
                 (
                     lambda,
-                    (lin.residual, lin.jacobian, Some((lin.damping, lin.mass))),
+                    (
+                        lin.residual,
+                        lin.jacobian,
+                        Some((lin.damping, lin.mass)),
+                        Some(lin.drive),
+                    ),
                 )
             }
             Route::Direct { sys, value, .. } => {

@@ -7,10 +7,11 @@
 //!
 //! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in);
 //! * `full`: the same rows with `q̇_R` and `q̈_R` as inputs, so that one forward pass with the
-//!   lanes `(q_k, q̇_k, q̈_k)` of each free coordinate gives Newton's Jacobian (whose `q_R` block is `K`), `C` and `M`;
-//!   `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`, read off the
-//!   derivatives of the `Φ` rows along the `q_R` lanes;
-//! * `drive`: the driven coordinates' rows, for the drive forces.
+//!   lanes `(q_k, q̇_k, q̈_k)` of each free coordinate gives Newton's Jacobian (whose `q_R` block
+//!   is `K`), `C` and `M`; `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`,
+//!   read off the derivatives of the `Φ` rows along the `q_R` lanes. Its further outputs, `Φ_R`
+//!   (whose derivatives give the change of `K` with `λ`) and the driven coordinates' rows (the
+//!   drive forces, values only), make that one pass everything a converged point needs.
 //!
 //! Everything that depends on the parameters and the speed only is evaluated once per point
 //! ([`Program::at`]). A recording that branched on a value, or that does not reproduce the direct
@@ -36,54 +37,59 @@ pub struct Program {
     m: usize,
     residual: Tape,
     full: Tape,
-    drive: Tape,
     /// Lanes `q_R` on `residual`.
     jacobian: Seeding,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
 }
 
-/// What the recorded function returns: the rows `rows` of `r + Φ_qᵀλ`, then `Φ`, then, with
-/// `curvature`, the entries of `Φ_R` (constraint by constraint), whose derivatives along `q_R`
-/// are the constraints' second derivatives.
-fn trace(
-    model: &Model,
-    x: &[Var],
-    rates: bool,
-    rows: &[usize],
-    curvature: bool,
-) -> Option<Vec<Var>> {
+/// What the recorded function returns: `F`, that is the free coordinates' rows of
+/// `r + Φ_qᵀλ` and then `Φ`; with `full`, `F` depends on the free coordinates' rates too, and
+/// is followed by the entries of `Φ_R` (constraint by constraint; their derivatives along `q_R`
+/// are the constraints' second derivatives), the driven coordinates' rows of `r + Φ_qᵀλ` (the
+/// drive forces at zero rates) and the entries of `Φ_D`.
+fn trace(model: &Model, x: &[Var], full: bool) -> Option<Vec<Var>> {
     let (np, n, m) = (
         model.parameters.len(),
         model.coordinates.len(),
         model.n_constraints(),
     );
-    let free = model.free();
+    let (free, driven) = (model.free(), model.driven());
     let nf = free.len();
     let sys = System::new(model, &x[..np], x[np]).ok()?;
     let q = &x[np + 1..np + 1 + n];
     let mut qd = sys.steady_speeds();
     let mut qdd = vec![Var::Const(0.0); n];
-    if rates {
+    let mut rows = free.clone();
+    if full {
         for (k, &i) in free.iter().enumerate() {
             qd[i] = x[np + 1 + n + k];
             qdd[i] = x[np + 1 + n + nf + k];
         }
+        rows.extend(&driven);
+        rows.sort_unstable();
     }
     let lambda = &x[np + 1 + n + 2 * nf..np + 1 + n + 2 * nf + m];
     let l = Lifted::new(sys);
-    let d = evaluate_rows(&l, q, &qd, &qdd, rows);
+    let d = evaluate_rows(&l, q, &qd, &qdd, &rows);
     let g = d.with_multipliers(lambda);
-    let phi_r = (0..if curvature { m } else { 0 })
-        .flat_map(|k| free.iter().map(move |&i| (k, i)))
-        .map(|(k, i)| d.phi_q[(k, i)]);
-    Some(
-        rows.iter()
-            .map(|&i| g[i])
-            .chain(d.phi.iter().copied())
-            .chain(phi_r)
-            .collect(),
-    )
+    let phi = |coords: &[usize]| {
+        (0..m)
+            .flat_map(|k| coords.iter().map(move |&i| (k, i)))
+            .map(|(k, i)| d.phi_q[(k, i)])
+            .collect::<Vec<_>>()
+    };
+    let mut out: Vec<Var> = free
+        .iter()
+        .map(|&i| g[i])
+        .chain(d.phi.iter().copied())
+        .collect();
+    if full {
+        out.extend(phi(&free));
+        out.extend(driven.iter().map(|&i| g[i]));
+        out.extend(phi(&driven));
+    }
+    Some(out)
 }
 
 impl Program {
@@ -93,22 +99,17 @@ impl Program {
     pub fn record(model: &Model, p: &[f64], speed: f64, q: &[f64]) -> Option<Program> {
         let (np, n, m) = (p.len(), q.len(), model.n_constraints());
         let free = model.free();
-        let driven = model.driven();
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        let residual = record(&x, |v| trace(model, v, false, &free, false))?.split(&fixed);
-        let full = record(&x, |v| trace(model, v, true, &free, true))?.split(&fixed);
-        let drive = record(&x, |v| trace(model, v, false, &driven, false))?;
-        let drive = drive
-            .prune(&(0..driven.len()).collect::<Vec<_>>())
-            .split(&fixed);
+        let residual = record(&x, |v| trace(model, v, false))?.split(&fixed);
+        let full = record(&x, |v| trace(model, v, true))?.split(&fixed);
         let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
             .map(|(k, &i)| (np + 1 + i, k))
             .collect();
-        let jacobian = residual.seeding(&seeds, nf);
+        let jacobian = residual.seeding(&seeds, nf, nf + m);
         // A coordinate's three lanes side by side: an operation depends on the rates of the
         // coordinates whose positions it depends on, so its lane range stays narrow (the
         // governor's pass is 43 % fewer lane operations than with `[q_R, q̇_R, q̈_R]` in blocks,
@@ -124,7 +125,20 @@ impl Program {
                 ]
             })
             .collect();
-        let linear = full.seeding(&seeds, 3 * nf);
+        // Derivatives of F and Φ_R; the drive rows are values only.
+        let linear = full.seeding(&seeds, 3 * nf, nf + m + m * nf);
+        if std::env::var("TAPE_DEBUG").is_ok() {
+            let w = |sd: &Seeding| sd.range_debug();
+            eprintln!(
+                "residual {} full {} static r {} f {} lanes(full) {:?} lanes(jac) {:?}",
+                residual.len(),
+                full.len(),
+                residual.n_static_debug(),
+                full.n_static_debug(),
+                w(&linear),
+                w(&jacobian)
+            );
+        }
         let program = Program {
             np,
             n,
@@ -132,7 +146,6 @@ impl Program {
             m,
             residual,
             full,
-            drive,
             jacobian,
             linear,
         };
@@ -190,13 +203,11 @@ impl Program {
         );
         let residual = self.residual.eval_static(&x);
         let full = self.full.eval_static(&x);
-        let drive = self.drive.eval_static(&x);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        (finite(&residual) && finite(&full) && finite(&drive)).then(|| Instance {
+        (finite(&residual) && finite(&full)).then(|| Instance {
             program: self,
             residual,
             full,
-            drive,
             x: RefCell::new(x),
             work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
         })
@@ -266,7 +277,6 @@ pub struct Instance<'a> {
     program: &'a Program,
     residual: Vec<f64>,
     full: Vec<f64>,
-    drive: Vec<f64>,
     /// The input vector, with the parameters and the speed in place.
     x: RefCell<Vec<f64>>,
     work: RefCell<Work>,
@@ -298,6 +308,10 @@ pub struct Linear<S: Real = f64> {
     /// `∂²Φ_k/∂q_R²` for each constraint equation `k`: how the Jacobian's `q_R` block changes
     /// with `λ_k` (see [`Linear::shift_multipliers`]).
     pub curvature: Vec<DMatrix<S>>,
+    /// The driven coordinates' rows of `r + Φ_qᵀλ`: the drive forces at a steady state.
+    pub drive: Vec<S>,
+    /// `Φ_D`, constraint equations × driven coordinates (how `drive` changes with `λ`).
+    phi_d: DMatrix<S>,
 }
 
 impl<S: Real> Linear<S> {
@@ -306,8 +320,13 @@ impl<S: Real> Linear<S> {
     fn from_forward(mut f: Vec<S>, d: &[S], nf: usize, m: usize) -> Self {
         let lanes = 3 * nf;
         let at = |r: usize, l: usize| d[r * lanes + l];
+        let nd = (f.len() - nf - m - m * nf) / (1 + m);
+        let phi_d = DMatrix::from_row_slice(m, nd, &f[f.len() - m * nd..]);
+        let drive = f[nf + m + m * nf..nf + m + m * nf + nd].to_vec();
         f.truncate(nf + m);
         Linear {
+            drive,
+            phi_d,
             residual: f,
             jacobian: jacobian(d, lanes, 3, nf, m),
             damping: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 1)),
@@ -333,14 +352,18 @@ impl<S: Real> Linear<S> {
 }
 
 impl Linear {
-    /// The same at the multipliers `λ + δ`: `F` and the Jacobian are affine in `λ` (by `Φ_Rᵀ`
-    /// and by the constraints' curvature), and `Φ`, `Φ_R`, `C` and `M` do not depend on it.
+    /// The same at the multipliers `λ + δ`: `F`, the Jacobian and the drive rows are affine in
+    /// `λ` (by `Φ_Rᵀ`, the constraints' curvature and `Φ_Dᵀ`), and `Φ`, `Φ_R`, `C` and `M` do not
+    /// depend on it.
     /// So one pass at any multipliers serves every multiplier at that `q`.
     pub fn shift_multipliers(&mut self, delta: &[f64]) {
         let nf = self.mass.nrows();
         for (k, (&dk, h)) in delta.iter().zip(&self.curvature).enumerate() {
             for j in 0..nf {
                 self.residual[j] += self.jacobian[(j, nf + k)] * dk;
+            }
+            for (j, v) in self.drive.iter_mut().enumerate() {
+                *v += self.phi_d[(k, j)] * dk;
             }
             for i in 0..nf {
                 for j in 0..nf {
@@ -373,15 +396,6 @@ impl Instance<'_> {
         self.program
             .residual
             .eval(&self.residual, &self.x.borrow(), &mut work.0)
-    }
-
-    /// The driven coordinates' rows of `r + Φ_qᵀλ` (the drive forces).
-    pub fn drive_rows(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
-        self.set(q, lambda);
-        let mut work = self.work.borrow_mut();
-        self.program
-            .drive
-            .eval(&self.drive, &self.x.borrow(), &mut work.0)
     }
 
     /// `F` and its Jacobian with respect to `[q_R; λ]`.

@@ -755,6 +755,9 @@ impl Tape {
         self.ops.len()
     }
 
+    pub fn n_static_debug(&self) -> usize {
+        self.n_static
+    }
     /// Is the program empty?
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
@@ -920,7 +923,14 @@ impl Tape {
     /// Which lanes of [`Tape::forward`] each operation can move: input `k` moves along lane
     /// `l` for each `(k, l)` in `seeds` (static inputs must not be seeded). Computed once per
     /// choice of seeds; an operation's derivative is only propagated over its lane range.
-    pub fn seeding(&self, seeds: &[(usize, usize)], lanes: usize) -> Seeding {
+    /// Derivatives are wanted for the first `differentiated` outputs only: the operations that
+    /// only the others need are evaluated without them.
+    pub fn seeding(
+        &self,
+        seeds: &[(usize, usize)],
+        lanes: usize,
+        differentiated: usize,
+    ) -> Seeding {
         static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
         let mut range = vec![(0u32, 0u32); self.ops.len()];
         for (i, op) in self.ops.iter().enumerate().skip(self.n_static) {
@@ -948,21 +958,36 @@ impl Tape {
                 range[i] = (0, 0);
             }
         }
+        // The operations the differentiated outputs need.
+        let mut live = vec![false; self.ops.len()];
+        for o in &self.outputs[..differentiated] {
+            if let Var::Node(i, _) = *o {
+                live[i as usize] = true;
+            }
+        }
+        for i in (0..self.ops.len()).rev() {
+            if live[i] {
+                for a in self.ops[i].args().into_iter().flatten() {
+                    live[a as usize] = true;
+                }
+            }
+        }
         // As (first lane, width).
-        for r in &mut range {
-            *r = (r.0, r.1 - r.0);
+        for (r, &live) in range.iter_mut().zip(&live) {
+            *r = if live { (r.0, r.1 - r.0) } else { (0, 0) };
         }
         Seeding {
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             seeds: seeds.to_vec(),
             lanes,
             range,
+            differentiated,
         }
     }
 
-    /// Forward mode with several directions (lanes) at once: values and first derivatives of
-    /// every output along the directions of `seeding`. Returns the outputs' values and their
-    /// derivatives (`outputs × lanes`, row-major). The local derivative of each elementary
+    /// Forward mode with several directions (lanes) at once: values of every output and first
+    /// derivatives of the seeding's differentiated outputs along its directions. Returns the
+    /// outputs' values and those derivatives (`differentiated × lanes`, row-major). The local derivative of each elementary
     /// function comes from evaluating it over a dual number; the lanes carry the chain rule.
     pub fn forward<S: Real>(
         &self,
@@ -1061,18 +1086,23 @@ impl Tape {
             };
             val[i] = v;
         }
+        let nd = seeding.differentiated;
         let mut values = Vec::with_capacity(self.outputs.len());
-        let mut derivs = Vec::with_capacity(self.outputs.len() * lanes);
-        for o in &self.outputs {
+        let mut derivs = Vec::with_capacity(nd * lanes);
+        for (k, o) in self.outputs.iter().enumerate() {
             match *o {
                 Var::Const(c) => {
                     values.push(S::from(c));
-                    derivs.extend(std::iter::repeat_n(zero, lanes));
+                    if k < nd {
+                        derivs.extend(std::iter::repeat_n(zero, lanes));
+                    }
                 }
                 Var::Node(i, _) => {
                     let i = i as usize;
                     values.push(val[i]);
-                    derivs.extend_from_slice(&tan[i * stride..i * stride + lanes]);
+                    if k < nd {
+                        derivs.extend_from_slice(&tan[i * stride..i * stride + lanes]);
+                    }
                 }
             }
         }
@@ -1132,6 +1162,22 @@ pub struct Forward<S> {
 }
 
 impl Seeding {
+    pub fn range_debug(&self) -> (usize, usize, usize) {
+        let live = self.range.iter().filter(|r| r.1 > 0).count();
+        let lane_ops: usize = self.range.iter().map(|r| r.1 as usize).sum();
+        let chunks: usize = self
+            .range
+            .iter()
+            .map(|r| {
+                if r.1 == 1 {
+                    1
+                } else {
+                    (r.1 as usize).div_ceil(4)
+                }
+            })
+            .sum();
+        (live, lane_ops, chunks)
+    }
     /// Number of lanes.
     pub fn lanes(&self) -> usize {
         self.lanes
@@ -1156,4 +1202,6 @@ pub struct Seeding {
     lanes: usize,
     /// First lane and number of lanes of each operation.
     range: Vec<(u32, u32)>,
+    /// Outputs with derivatives (the first ones).
+    differentiated: usize,
 }

@@ -7,7 +7,7 @@ use common::example;
 use modaltol::equilibrium::{Problem, equations};
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
-use modaltol::mechanics::dynamics::Lifted;
+use modaltol::mechanics::dynamics::{Lifted, evaluate_rows};
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Var, record};
 use nalgebra::DMatrix;
@@ -48,7 +48,7 @@ fn a_trace_folds_constants_shares_operations_and_differentiates() {
     assert_eq!(y[0], x0 * y0 + x0.sin() + x0 * y0);
     assert_eq!(y[1], (x0 * y0) / y0 + 2.5);
     // Forward lanes against dual numbers.
-    let seeding = tape.seeding(&[(0, 0), (1, 1)], 2);
+    let seeding = tape.seeding(&[(0, 0), (1, 1)], 2, 2);
     let (v, d) = tape.forward(&[], &at, &seeding, &mut Forward::default());
     assert_eq!(v, y);
     for lane in 0..2 {
@@ -63,6 +63,11 @@ fn a_trace_folds_constants_shares_operations_and_differentiates() {
     let xd = [Dual64::new(x0, 1.0), Dual64::from_re(y0)];
     let yd = tape.eval(&[], &xd, &mut Vec::new());
     assert!((yd[0].eps - d[0]).abs() < 1e-15);
+    // Derivatives of the first output only: both values, the first's derivatives unchanged.
+    let first = tape.seeding(&[(0, 0), (1, 1)], 2, 1);
+    let (v1, d1) = tape.forward(&[], &at, &first, &mut Forward::default());
+    assert_eq!(v1, y);
+    assert_eq!(d1, d[..2]);
 }
 
 #[test]
@@ -149,6 +154,18 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             }
             for (a, b) in shifted.jacobian.iter().zip(j_direct.iter()) {
                 assert!(close(*a, *b, js), "{name}: shifted Jacobian {a} vs {b}");
+            }
+            // The drive rows (values only in the pass), shifted too, against the direct route.
+            let driven = model.driven();
+            let zero = vec![0.0; q.len()];
+            let g = evaluate_rows(&Lifted::new(sys.clone()), &q, &qd, &zero, &driven)
+                .with_multipliers(&lambda);
+            assert_eq!(shifted.drive.len(), driven.len());
+            let ds = g
+                .iter()
+                .fold(0.0f64, |s, v| if v.is_nan() { s } else { s.max(v.abs()) });
+            for (a, &i) in shifted.drive.iter().zip(&driven) {
+                assert!(close(*a, g[i], ds), "{name}: drive row {a} vs {}", g[i]);
             }
             for (k, h) in shifted.curvature.iter().enumerate() {
                 let asym = (h - h.transpose()).amax();
