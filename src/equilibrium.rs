@@ -543,15 +543,19 @@ impl<'a> Problem<'a> {
     ) -> Result<(), EquilibriumError> {
         let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
+        const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
         let mut qo = q.to_vec();
-        for &c in &self.driven {
-            let mut change = 0.0f64;
-            for offset in [1.0, 2.5, -2.0] {
-                qo[c] = q[c] + offset;
-                let f = self.residual(&qo, lambda);
-                change = f.iter().fold(change, |a, v| a.max(v.abs()));
-            }
-            qo[c] = q[c];
+        for (d, &c) in self.driven.iter().enumerate() {
+            let change = match &self.route {
+                Route::Recorded(p) => p.residual_at_drive_offsets(q, lambda, d, OFFSETS),
+                Route::Direct { .. } => OFFSETS.map(|offset| {
+                    qo[c] = q[c] + offset;
+                    let f = self.residual(&qo, lambda);
+                    qo[c] = q[c];
+                    f.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+                }),
+            };
+            let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
             if change > tol {
                 return Err(EquilibriumError::NoSteadyState {
                     coordinate: self.names[c].to_string(),

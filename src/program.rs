@@ -41,6 +41,8 @@ pub struct Program {
     jacobian: Seeding,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
+    /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
+    driven: Vec<Seeding>,
 }
 
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
@@ -127,19 +129,13 @@ impl Program {
             .collect();
         // Derivatives of F and Φ_R; the drive rows are values only.
         let linear = full.seeding(&seeds, 3 * nf, nf + m + m * nf);
-        if std::env::var("TAPE_DEBUG").is_ok() {
-            let w = |sd: &Seeding| sd.range_debug();
-            eprintln!(
-                "residual {} full {} static r {} f {} lanes(full) {:?} lanes(jac) {:?}",
-                residual.len(),
-                full.len(),
-                residual.n_static_debug(),
-                full.n_static_debug(),
-                w(&linear),
-                w(&jacobian)
-            );
-        }
+        let driven = model
+            .driven()
+            .iter()
+            .map(|&i| residual.seeding(&[(np + 1 + i, 0)], 1, nf + m))
+            .collect();
         let program = Program {
+            driven,
             np,
             n,
             free,
@@ -239,8 +235,9 @@ fn with_buffer<S: Real, R>(f: impl FnOnce(&mut Forward<S>) -> R) -> R {
     out
 }
 
-/// Scratch space of an [`Instance`]: values, and one forward buffer per seeding.
-type Work = (Vec<f64>, Forward<f64>, Forward<f64>);
+/// Scratch space of an [`Instance`]: values, one forward buffer per seeding, and values at
+/// three points.
+type Work = (Vec<f64>, Forward<f64>, Forward<f64>, Vec<[f64; 3]>);
 
 thread_local! {
     /// Scratch spaces of finished instances on this thread, reused by the next ones (a sweep
@@ -396,6 +393,31 @@ impl Instance<'_> {
         self.program
             .residual
             .eval(&self.residual, &self.x.borrow(), &mut work.0)
+    }
+
+    /// `F` at the values `q_c + offsets[l]` of the `d`-th driven coordinate `c` (the other
+    /// coordinates and the multipliers as given), in one pass: the largest `|F|` at each.
+    pub fn residual_at_drive_offsets(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        d: usize,
+        offsets: [f64; 3],
+    ) -> [f64; 3] {
+        self.set(q, lambda);
+        let pr = self.program;
+        let seeding = &pr.driven[d];
+        let c = seeding.seeds()[0].0 - pr.np - 1;
+        let values = offsets.map(|o| q[c] + o);
+        let mut work = self.work.borrow_mut();
+        let f = pr.residual.eval_varied(
+            &self.residual,
+            &self.x.borrow(),
+            seeding,
+            values,
+            &mut work.3,
+        );
+        std::array::from_fn(|l| f.iter().fold(0.0f64, |a, v| a.max(v[l].abs())))
     }
 
     /// `F` and its Jacobian with respect to `[q_R; λ]`.

@@ -255,7 +255,12 @@ impl Op {
     /// Value from the operation values `v`.
     #[inline(always)]
     fn eval<S: Real>(self, v: &[S]) -> S {
-        let g = |i: u32| v[i as usize];
+        self.eval_with(|i| v[i as usize])
+    }
+
+    /// Value from the operand values `g(index)`.
+    #[inline(always)]
+    fn eval_with<S: Real>(self, g: impl Fn(u32) -> S) -> S {
         match self {
             Op::Add(a, b) => g(a) + g(b),
             Op::Sub(a, b) => g(a) - g(b),
@@ -268,8 +273,8 @@ impl Op {
             Op::SubMul(a, b, c) => g(c) - g(a) * g(b),
             op => {
                 let [a, b, _] = op.args();
-                let a = a.map_or(S::from(0.0), |a| v[a as usize]);
-                let b = b.map_or(a, |b| v[b as usize]);
+                let a = a.map_or(S::from(0.0), &g);
+                let b = b.map_or(a, &g);
                 op.apply(a, b)
             }
         }
@@ -755,9 +760,6 @@ impl Tape {
         self.ops.len()
     }
 
-    pub fn n_static_debug(&self) -> usize {
-        self.n_static
-    }
     /// Is the program empty?
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
@@ -915,6 +917,66 @@ impl Tape {
             .iter()
             .map(|o| match *o {
                 Var::Const(c) => S::from(c),
+                Var::Node(i, _) => work[i as usize],
+            })
+            .collect()
+    }
+
+    /// The program's outputs at `L` points that differ in the inputs seeded by `varied` only
+    /// (each of its seeds, any lane, takes the values `values`, one per point), in one pass:
+    /// an operation that does not depend on those inputs is evaluated once for all points, the
+    /// others once per point with a single dispatch. Returns each output at each point.
+    pub fn eval_varied<const L: usize>(
+        &self,
+        fixed: &[f64],
+        x: &[f64],
+        varied: &Seeding,
+        values: [f64; L],
+        work: &mut Vec<[f64; L]>,
+    ) -> Vec<[f64; L]> {
+        let ns = self.n_static;
+        work.clear();
+        work.extend(fixed[..ns].iter().map(|&v| [v; L]));
+        for (i, op) in self.ops.iter().enumerate().skip(ns) {
+            let w = &work[..];
+            let g = |a: u32| w[a as usize];
+            let v = match *op {
+                Op::Input(k) if varied.seeds.iter().any(|s| s.0 == k as usize) => values,
+                Op::Input(k) => [x[k as usize]; L],
+                // Not moved by the varied inputs: once, from the first point's operands.
+                _ if varied.range[i].1 == 0 => [op.eval_with(|a| w[a as usize][0]); L],
+                Op::Add(a, b) => {
+                    let (a, b) = (g(a), g(b));
+                    std::array::from_fn(|l| a[l] + b[l])
+                }
+                Op::Sub(a, b) => {
+                    let (a, b) = (g(a), g(b));
+                    std::array::from_fn(|l| a[l] - b[l])
+                }
+                Op::Mul(a, b) => {
+                    let (a, b) = (g(a), g(b));
+                    std::array::from_fn(|l| a[l] * b[l])
+                }
+                Op::MulAdd(a, b, c) => {
+                    let (a, b, c) = (g(a), g(b), g(c));
+                    std::array::from_fn(|l| a[l] * b[l] + c[l])
+                }
+                Op::MulSub(a, b, c) => {
+                    let (a, b, c) = (g(a), g(b), g(c));
+                    std::array::from_fn(|l| a[l] * b[l] - c[l])
+                }
+                Op::SubMul(a, b, c) => {
+                    let (a, b, c) = (g(a), g(b), g(c));
+                    std::array::from_fn(|l| c[l] - a[l] * b[l])
+                }
+                op => std::array::from_fn(|l| op.eval_with(|a| w[a as usize][l])),
+            };
+            work.push(v);
+        }
+        self.outputs
+            .iter()
+            .map(|o| match *o {
+                Var::Const(c) => [c; L],
                 Var::Node(i, _) => work[i as usize],
             })
             .collect()
@@ -1162,25 +1224,14 @@ pub struct Forward<S> {
 }
 
 impl Seeding {
-    pub fn range_debug(&self) -> (usize, usize, usize) {
-        let live = self.range.iter().filter(|r| r.1 > 0).count();
-        let lane_ops: usize = self.range.iter().map(|r| r.1 as usize).sum();
-        let chunks: usize = self
-            .range
-            .iter()
-            .map(|r| {
-                if r.1 == 1 {
-                    1
-                } else {
-                    (r.1 as usize).div_ceil(4)
-                }
-            })
-            .sum();
-        (live, lane_ops, chunks)
-    }
     /// Number of lanes.
     pub fn lanes(&self) -> usize {
         self.lanes
+    }
+
+    /// The seeds `(input, lane)`.
+    pub fn seeds(&self) -> &[(usize, usize)] {
+        &self.seeds
     }
 }
 

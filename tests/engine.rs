@@ -437,10 +437,16 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
     let p = model.nominal();
     // Wherever the spin angle starts, including where the residual is stationary in it
     // (cos q_D at 0 and π) and where the tilt lies across the swing plane (π/2).
-    for spin in [0.0, FRAC_PI_2, 1.0, PI, -2.2] {
-        let err =
-            point(&model, &p, 2.0, &[spin, 0.5], &Options::default()).expect_err("no steady state");
-        assert!(err.to_string().contains("no steady state"), "{spin}: {err}");
+    // Both routes (recorded program, direct evaluation).
+    let direct = Options {
+        direct: true,
+        ..Options::default()
+    };
+    for opt in [Options::default(), direct] {
+        for spin in [0.0, FRAC_PI_2, 1.0, PI, -2.2] {
+            let err = point(&model, &p, 2.0, &[spin, 0.5], &opt).expect_err("no steady state");
+            assert!(err.to_string().contains("no steady state"), "{spin}: {err}");
+        }
     }
     // A sweep reports it per speed and goes on.
     let mut sweep = Sweep::new(&model, p, Options::default());

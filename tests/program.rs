@@ -63,6 +63,16 @@ fn a_trace_folds_constants_shares_operations_and_differentiates() {
     let xd = [Dual64::new(x0, 1.0), Dual64::from_re(y0)];
     let yd = tape.eval(&[], &xd, &mut Vec::new());
     assert!((yd[0].eps - d[0]).abs() < 1e-15);
+    // At three values of x in one pass, as three evaluations (y does not move).
+    let vary_x = tape.seeding(&[(0, 0)], 1, 2);
+    let xs = [0.3, -1.7, 2.0];
+    let batch = tape.eval_varied(&[], &at, &vary_x, xs, &mut Vec::new());
+    for (l, &xv) in xs.iter().enumerate() {
+        let one = tape.eval(&[], &[xv, at[1]], &mut Vec::new());
+        for (o, b) in one.iter().zip(&batch) {
+            assert_eq!(*o, b[l], "x = {xv}");
+        }
+    }
     // Derivatives of the first output only: both values, the first's derivatives unchanged.
     let first = tape.seeding(&[(0, 0), (1, 1)], 2, 1);
     let (v1, d1) = tape.forward(&[], &at, &first, &mut Forward::default());
