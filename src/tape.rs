@@ -969,7 +969,12 @@ impl Tape {
                     let (a, b, c) = (g(a), g(b), g(c));
                     std::array::from_fn(|l| c[l] - a[l] * b[l])
                 }
-                op => std::array::from_fn(|l| op.eval_with(|a| w[a as usize][l])),
+                op => {
+                    let [a, b, _] = op.args();
+                    let a = a.map_or([0.0; L], g);
+                    let b = b.map_or(a, g);
+                    std::array::from_fn(|l| op.apply(a[l], b[l]))
+                }
             };
             work.push(v);
         }
