@@ -969,6 +969,13 @@ impl Tape {
                     let (a, b, c) = (g(a), g(b), g(c));
                     std::array::from_fn(|l| c[l] - a[l] * b[l])
                 }
+                Op::Neg(a) => g(a).map(|x| -x),
+                Op::AddC(a, c) => g(a).map(|x| x + c),
+                Op::MulC(a, c) => g(a).map(|x| x * c),
+                Op::Div(a, b) => {
+                    let (a, b) = (g(a), g(b));
+                    std::array::from_fn(|l| a[l] / b[l])
+                }
                 op => {
                     let [a, b, _] = op.args();
                     let a = a.map_or([0.0; L], g);
