@@ -313,15 +313,15 @@ impl<'a> Problem<'a> {
     /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`, at
     /// `(q, λ)`: everything the linearisation needs, so that a solve whose last Newton step
     /// is below the tolerance needs no further evaluation.
-    fn evaluate(&self, q: &[f64], lambda: &[f64]) -> Evaluation {
+    fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
         match &self.route {
             Route::Recorded(c) => {
-                let lin = c.linear(q, lambda);
+                let lin = c.linear(q, lambda, drive);
                 (
                     lin.residual,
                     lin.jacobian,
                     Some((lin.damping, lin.mass)),
-                    Some(lin.drive),
+                    drive.then_some(lin.drive),
                 )
             }
             Route::Direct { .. } => {
@@ -356,6 +356,7 @@ impl<'a> Problem<'a> {
         let m = self.m;
         let nx = nf + m;
         let tol = settings.step_tolerance;
+        let drive_wanted = settings.drive_force;
         let mut q = q0.to_vec();
         let norm = |f: &[f64]| f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let given = start.lambda.filter(|l| l.len() == m);
@@ -366,9 +367,9 @@ impl<'a> Problem<'a> {
                     (self.residual(&q, l), j.clone(), None, None),
                     false,
                 ),
-                (Some(l), _) => (l.to_vec(), self.evaluate(&q, l), true),
+                (Some(l), _) => (l.to_vec(), self.evaluate(&q, l, drive_wanted), true),
                 (None, _) => {
-                    let (l, e) = self.evaluate_fitted(&q);
+                    let (l, e) = self.evaluate_fitted(&q, drive_wanted);
                     (l, e, true)
                 }
             };
@@ -389,7 +390,7 @@ impl<'a> Problem<'a> {
                 if fresh {
                     return Err(EquilibriumError::SingularJacobian { iterations });
                 }
-                (f, jac, rates, drive) = self.evaluate(&q, &lambda);
+                (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             };
@@ -425,13 +426,13 @@ impl<'a> Problem<'a> {
                 };
                 if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
                     apply(&mut q, &mut lambda, 1.0);
-                    (f, jac, rates, drive) = self.evaluate(&q, &lambda);
+                    (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
                 // Steps that do not contract fast: evaluate the Jacobian here.
                 if size > 0.5 * last_step {
-                    (f, jac, rates, drive) = self.evaluate(&q, &lambda);
+                    (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
                     (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                     continue;
                 }
@@ -453,7 +454,7 @@ impl<'a> Problem<'a> {
                 alpha *= 0.5;
             }
             if !decreased && !fresh {
-                (f, jac, rates, drive) = self.evaluate(&q, &lambda);
+                (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
                 (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
                 continue;
             }
@@ -478,7 +479,7 @@ impl<'a> Problem<'a> {
             _ if !settings.drive_force => {}
             // From the evaluation at the returned point (a converged solve ends on one).
             (Route::Recorded(c), rows) => {
-                let rows = rows.unwrap_or_else(|| c.linear(&q, &lambda).drive);
+                let rows = rows.unwrap_or_else(|| c.linear(&q, &lambda, true).drive);
                 for (&i, v) in self.driven.iter().zip(rows) {
                     drive_force[i] = v;
                 }
@@ -511,11 +512,11 @@ impl<'a> Problem<'a> {
     /// −r_R`), and those multipliers. On the recorded route this is one pass: the pass at
     /// `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the multipliers
     /// ([`crate::program::Linear::shift_multipliers`]).
-    fn evaluate_fitted(&self, q: &[f64]) -> (Vec<f64>, Evaluation) {
+    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
         let (nf, m) = (self.free.len(), self.m);
         match &self.route {
             Route::Recorded(c) => {
-                let mut lin = c.linear(q, &vec![0.0; m]);
+                let mut lin = c.linear(q, &vec![0.0; m], drive);
                 let lambda = least_squares(
                     lin.jacobian.view((0, nf), (nf, m)).into_owned(),
                     DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
@@ -527,7 +528,7 @@ impl<'a> Problem<'a> {
                         lin.residual,
                         lin.jacobian,
                         Some((lin.damping, lin.mass)),
-                        Some(lin.drive),
+                        drive.then_some(lin.drive),
                     ),
                 )
             }
@@ -538,7 +539,7 @@ impl<'a> Problem<'a> {
                     DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]),
                     DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i])),
                 );
-                let e = self.evaluate(q, &lambda);
+                let e = self.evaluate(q, &lambda, drive);
                 (lambda, e)
             }
         }

@@ -36,11 +36,16 @@ pub struct Program {
     free: Vec<usize>,
     m: usize,
     residual: Tape,
+    /// `full` with the drive rows.
+    full_drive: Tape,
+    /// `full` without them (the sweeps that do not report drive forces, Monte Carlo, and the
+    /// sensitivities' passes).
     full: Tape,
     /// Lanes `q_R` on `residual`.
     jacobian: Seeding,
-    /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
+    /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full` and on `full_drive`.
     linear: Seeding,
+    linear_drive: Seeding,
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
     driven: Vec<Seeding>,
 }
@@ -105,7 +110,11 @@ impl Program {
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
         let residual = record(&x, |v| trace(model, v, false))?.split(&fixed);
-        let full = record(&x, |v| trace(model, v, true))?.split(&fixed);
+        let full_drive = record(&x, |v| trace(model, v, true))?.split(&fixed);
+        let differentiated = nf + m + m * nf;
+        let full = full_drive
+            .prune(&(0..differentiated).collect::<Vec<_>>())
+            .split(&fixed);
         let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
@@ -128,7 +137,8 @@ impl Program {
             })
             .collect();
         // Derivatives of F and Φ_R; the drive rows are values only.
-        let linear = full.seeding(&seeds, 3 * nf, nf + m + m * nf);
+        let linear = full.seeding(&seeds, 3 * nf, differentiated);
+        let linear_drive = full_drive.seeding(&seeds, 3 * nf, differentiated);
         let driven = model
             .driven()
             .iter()
@@ -142,8 +152,10 @@ impl Program {
             m,
             residual,
             full,
+            full_drive,
             jacobian,
             linear,
+            linear_drive,
         };
         program.reproduces(model, p, speed, q).then_some(program)
     }
@@ -199,11 +211,13 @@ impl Program {
         );
         let residual = self.residual.eval_static(&x);
         let full = self.full.eval_static(&x);
+        let full_drive = self.full_drive.eval_static(&x);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        (finite(&residual) && finite(&full)).then(|| Instance {
+        (finite(&residual) && finite(&full_drive)).then(|| Instance {
             program: self,
             residual,
             full,
+            full_drive,
             x: RefCell::new(x),
             work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
         })
@@ -235,9 +249,16 @@ fn with_buffer<S: Real, R>(f: impl FnOnce(&mut Forward<S>) -> R) -> R {
     out
 }
 
-/// Scratch space of an [`Instance`]: values, one forward buffer per seeding, and values at
-/// three points.
-type Work = (Vec<f64>, Forward<f64>, Forward<f64>, Vec<[f64; 3]>);
+/// Scratch space of an [`Instance`]: values, one forward buffer per seeding (kept, as switching
+/// a buffer's seeding clears it), and values at three points.
+#[derive(Debug, Default)]
+struct Work {
+    values: Vec<f64>,
+    jacobian: Forward<f64>,
+    linear: Forward<f64>,
+    linear_drive: Forward<f64>,
+    varied: Vec<[f64; 3]>,
+}
 
 thread_local! {
     /// Scratch spaces of finished instances on this thread, reused by the next ones (a sweep
@@ -274,6 +295,7 @@ pub struct Instance<'a> {
     program: &'a Program,
     residual: Vec<f64>,
     full: Vec<f64>,
+    full_drive: Vec<f64>,
     /// The input vector, with the parameters and the speed in place.
     x: RefCell<Vec<f64>>,
     work: RefCell<Work>,
@@ -392,7 +414,7 @@ impl Instance<'_> {
         let mut work = self.work.borrow_mut();
         self.program
             .residual
-            .eval(&self.residual, &self.x.borrow(), &mut work.0)
+            .eval(&self.residual, &self.x.borrow(), &mut work.values)
     }
 
     /// `F` at the values `q_c + offsets[l]` of the `d`-th driven coordinate `c` (the other
@@ -415,7 +437,7 @@ impl Instance<'_> {
             &self.x.borrow(),
             seeding,
             values,
-            &mut work.3,
+            &mut work.varied,
         );
         std::array::from_fn(|l| f.iter().fold(0.0f64, |a, v| a.max(v[l].abs())))
     }
@@ -425,20 +447,30 @@ impl Instance<'_> {
         self.set(q, lambda);
         let pr = self.program;
         let mut work = self.work.borrow_mut();
-        let (f, d) =
-            pr.residual
-                .forward(&self.residual, &self.x.borrow(), &pr.jacobian, &mut work.1);
+        let (f, d) = pr.residual.forward(
+            &self.residual,
+            &self.x.borrow(),
+            &pr.jacobian,
+            &mut work.jacobian,
+        );
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
     }
 
-    /// `F`, its Jacobian, `C` and `M` in one forward pass.
-    pub fn linear(&self, q: &[f64], lambda: &[f64]) -> Linear {
+    /// `F`, its Jacobian, `C` and `M` in one forward pass, and with `drive` the drive rows
+    /// ([`Linear::drive`] is empty without).
+    pub fn linear(&self, q: &[f64], lambda: &[f64], drive: bool) -> Linear {
         self.set(q, lambda);
         let pr = self.program;
         let mut work = self.work.borrow_mut();
-        let (f, d) = pr
-            .full
-            .forward(&self.full, &self.x.borrow(), &pr.linear, &mut work.2);
+        let x = self.x.borrow();
+        let (f, d) = if drive {
+            let w = &mut work.linear_drive;
+            pr.full_drive
+                .forward(&self.full_drive, &x, &pr.linear_drive, w)
+        } else {
+            pr.full
+                .forward(&self.full, &x, &pr.linear, &mut work.linear)
+        };
         Linear::from_forward(f, &d, pr.free.len(), pr.m)
     }
 }
