@@ -1,0 +1,51 @@
+//! Timing for A/B comparisons on a noisy machine: the best of 15 rounds (not criterion's
+//! mean) for the exact evaluation with drive rows, the residual and a cold modal point of a
+//! model at 1.595 rad/s, in µs.
+//! `cargo run --release --example time_point -- [examples/governor.toml]`.
+use modaltol::model::Model;
+use modaltol::sweep::{Options, initial_guess, point};
+use std::hint::black_box;
+use std::time::Instant;
+
+/// Best time per call of `f` over 15 rounds of `n` calls (s).
+fn best(n: usize, mut f: impl FnMut()) -> f64 {
+    (0..15)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..n {
+                f();
+            }
+            t.elapsed().as_secs_f64() / n as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() {
+    let file = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "examples/governor.toml".into());
+    let model = Model::from_file(std::path::Path::new(&file)).unwrap();
+    let p = model.nominal();
+    let speed = 1.595;
+    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let eq = point(&model, &p, speed, &q0, &Options::default())
+        .unwrap()
+        .equilibrium;
+    let (q, l) = (eq.q, eq.lambda);
+    let inst = model.program(&p, speed, &q).unwrap().at(&p, speed).unwrap();
+    let linear = best(20000, || {
+        black_box(inst.linear(black_box(&q), &l, true));
+    });
+    let residual = best(20000, || {
+        black_box(inst.residual(black_box(&q), &l));
+    });
+    let cold = best(5000, || {
+        black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
+    });
+    println!(
+        "exact evaluation {:.2} µs, residual {:.2} µs, modal point {:.2} µs",
+        linear * 1e6,
+        residual * 1e6,
+        cold * 1e6
+    );
+}
