@@ -53,9 +53,11 @@ pub struct Program {
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
 /// `r + Φ_qᵀλ` and then `Φ`; with `full`, `F` depends on the free coordinates' rates too, and
 /// is followed by the entries of `Φ_R` (constraint by constraint; their derivatives along `q_R`
-/// are the constraints' second derivatives), the driven coordinates' rows of `r + Φ_qᵀλ` (the
-/// drive forces at zero rates) and the entries of `Φ_D`.
-fn trace(model: &Model, x: &[Var], full: bool) -> Option<Vec<Var>> {
+/// are the constraints' second derivatives); with `drive` as well, by the driven coordinates'
+/// rows of `r + Φ_qᵀλ` (the drive forces at zero rates) and the entries of `Φ_D`. (Recording
+/// without the drive rows, rather than pruning them away, keeps the fusion of products that
+/// only they share with `F`.)
+fn trace(model: &Model, x: &[Var], full: bool, drive: bool) -> Option<Vec<Var>> {
     let (np, n, m) = (
         model.parameters.len(),
         model.coordinates.len(),
@@ -73,6 +75,8 @@ fn trace(model: &Model, x: &[Var], full: bool) -> Option<Vec<Var>> {
             qd[i] = x[np + 1 + n + k];
             qdd[i] = x[np + 1 + n + nf + k];
         }
+    }
+    if drive {
         rows.extend(&driven);
         rows.sort_unstable();
     }
@@ -93,6 +97,8 @@ fn trace(model: &Model, x: &[Var], full: bool) -> Option<Vec<Var>> {
         .collect();
     if full {
         out.extend(phi(&free));
+    }
+    if drive {
         out.extend(driven.iter().map(|&i| g[i]));
         out.extend(phi(&driven));
     }
@@ -109,12 +115,10 @@ impl Program {
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        let residual = record(&x, |v| trace(model, v, false))?.split(&fixed);
-        let full_drive = record(&x, |v| trace(model, v, true))?.split(&fixed);
+        let residual = record(&x, |v| trace(model, v, false, false))?.split(&fixed);
+        let full = record(&x, |v| trace(model, v, true, false))?.split(&fixed);
+        let full_drive = record(&x, |v| trace(model, v, true, true))?.split(&fixed);
         let differentiated = nf + m + m * nf;
-        let full = full_drive
-            .prune(&(0..differentiated).collect::<Vec<_>>())
-            .split(&fixed);
         let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
