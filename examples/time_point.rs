@@ -1,8 +1,10 @@
 //! Timing for A/B comparisons on a noisy machine: the best of 15 rounds (not criterion's
-//! mean) for the exact evaluation with drive rows, the residual and a cold modal point of a
-//! model at 1.595 rad/s, in µs.
+//! mean) for the exact evaluation with drive rows, the residual, a cold modal point of a model
+//! at 1.595 rad/s and all its sensitivities there, in µs (the last two in the same rounds'
+//! conditions, so their ratio is not skewed by the machine's phases).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::model::Model;
+use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
 use std::time::Instant;
@@ -28,10 +30,8 @@ fn main() {
     let p = model.nominal();
     let speed = 1.595;
     let q0 = initial_guess(&model, &p, speed).unwrap();
-    let eq = point(&model, &p, speed, &q0, &Options::default())
-        .unwrap()
-        .equilibrium;
-    let (q, l) = (eq.q, eq.lambda);
+    let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+    let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let inst = model.program(&p, speed, &q).unwrap().at(&p, speed).unwrap();
     let linear = best(20000, || {
         black_box(inst.linear(black_box(&q), &l, true));
@@ -42,10 +42,22 @@ fn main() {
     let cold = best(5000, || {
         black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
     });
+    let tf = model
+        .analysis
+        .transfer
+        .map(|t| TransferAt::at_speed(&t, speed));
+    let wrt = model.toleranced();
+    let sens = best(2000, || {
+        black_box(analytic(&model, &p, &pt, &wrt, tf).unwrap());
+    });
     println!(
-        "exact evaluation {:.2} µs, residual {:.2} µs, modal point {:.2} µs",
+        "exact evaluation {:.2} µs, residual {:.2} µs, modal point {:.2} µs, sensitivities \
+         ({} variables) {:.2} µs = {:.2} points",
         linear * 1e6,
         residual * 1e6,
-        cold * 1e6
+        cold * 1e6,
+        wrt.len(),
+        sens * 1e6,
+        sens / cold
     );
 }
