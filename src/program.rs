@@ -48,6 +48,10 @@ pub struct Program {
     linear_drive: Seeding,
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
     driven: Vec<Seeding>,
+    /// `residual` with only the speed static, and its lanes along each parameter (the
+    /// sensitivities' `∂F/∂p`).
+    parametric: Tape,
+    parameters: Seeding,
 }
 
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
@@ -115,7 +119,12 @@ impl Program {
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        let residual = record(&x, |v| trace(model, v, false, false))?.split(&fixed);
+        let recorded = record(&x, |v| trace(model, v, false, false))?;
+        let residual = recorded.split(&fixed);
+        // The parameters as inputs that move: one lane each.
+        let parametric = recorded.split(&[np]);
+        let parameters =
+            parametric.seeding(&(0..np).map(|k| (k, k)).collect::<Vec<_>>(), np, nf + m);
         let full = record(&x, |v| trace(model, v, true, false))?.split(&fixed);
         let full_drive = record(&x, |v| trace(model, v, true, true))?.split(&fixed);
         let differentiated = nf + m + m * nf;
@@ -150,6 +159,8 @@ impl Program {
             .collect();
         let program = Program {
             driven,
+            parametric,
+            parameters,
             np,
             n,
             free,
@@ -486,6 +497,25 @@ impl Program {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let fixed = self.residual.eval_static(&x);
         self.residual.eval(&fixed, &x, &mut Vec::new())
+    }
+
+    /// `∂F/∂p` at parameters `p`, `speed`, `q` and `λ`: one forward pass along every parameter
+    /// (rows of `F` × parameters, row-major), where one dual-number residual per parameter
+    /// would give one column each.
+    pub fn parameter_derivatives(
+        &self,
+        p: &[f64],
+        speed: f64,
+        q: &[f64],
+        lambda: &[f64],
+    ) -> Vec<f64> {
+        let x = inputs(p, speed, q, lambda, self.free.len());
+        let fixed = self.parametric.eval_static(&x);
+        with_buffer(|work| {
+            self.parametric
+                .forward(&fixed, &x, &self.parameters, work)
+                .1
+        })
     }
 
     /// `F`, its Jacobian, `C` and `M` over any [`Real`].

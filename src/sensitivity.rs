@@ -178,6 +178,11 @@ pub fn dual_linearizations(
     let jac = eq.jacobian.clone();
     let lu = jac.lu();
     let free = &pt.linear.free;
+    // ∂F/∂p for all parameters in one pass where the model has a recorded program.
+    let np = p.len();
+    let dp = model
+        .program(p, speed, &eq.q)
+        .map(|program| program.parameter_derivatives(p, speed, &eq.q, &eq.lambda));
     let mut out = Vec::with_capacity(wrt.len());
     for &b in wrt {
         let pd: Vec<Dual64> = p
@@ -188,8 +193,15 @@ pub fn dual_linearizations(
         let equations = Equations::new(model, &pd, Dual64::from_re(speed), &eq.q)?;
         let q0: Vec<Dual64> = eq.q.iter().map(|&v| Dual64::from_re(v)).collect();
         let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
-        let fb = equations.residual(free, &q0, &l0);
-        let rhs = DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps));
+        let rhs = match &dp {
+            Some(dp) => {
+                DVector::from_iterator(dp.len() / np, (0..dp.len() / np).map(|r| -dp[r * np + b]))
+            }
+            None => {
+                let fb = equations.residual(free, &q0, &l0);
+                DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps))
+            }
+        };
         let dx = lu.solve(&rhs).ok_or(PointError::Equilibrium(
             crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
         ))?;

@@ -137,6 +137,28 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             let sys = System::new(&model, &p, speed).unwrap();
             let direct = Problem::new(sys.clone(), free.clone(), model.driven(), Vec::new());
             let inst = program.at(&p, speed).unwrap();
+            // ∂F/∂p in one pass against one dual-number residual per parameter.
+            let np = p.len();
+            let dp = program.parameter_derivatives(&p, speed, &q, &lambda);
+            for b in 0..np {
+                let pd: Vec<Dual64> = p
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| Dual64::new(v, if i == b { 1.0 } else { 0.0 }))
+                    .collect();
+                let lift = |v: &[f64]| v.iter().map(|&x| Dual64::from_re(x)).collect::<Vec<_>>();
+                let f =
+                    program.residual_over(&pd, Dual64::from_re(speed), &lift(&q), &lift(&lambda));
+                let fs = f.iter().fold(0.0f64, |s, v| s.max(v.eps.abs()));
+                for (r, v) in f.iter().enumerate() {
+                    let a = dp[r * np + b];
+                    assert!(
+                        close(a, v.eps, fs),
+                        "{name}: ∂F_{r}/∂p_{b} {a} vs {}",
+                        v.eps
+                    );
+                }
+            }
             let qd = sys.steady_speeds();
             let f = equations(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
             let scale = f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
