@@ -228,7 +228,7 @@ impl Program {
         let full = self.full.eval_static(&x);
         let full_drive = self.full_drive.eval_static(&x);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        (finite(&residual) && finite(&full_drive)).then(|| Instance {
+        (finite(&residual) && finite(&full) && finite(&full_drive)).then(|| Instance {
             program: self,
             residual,
             full,

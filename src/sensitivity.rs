@@ -192,12 +192,12 @@ pub fn dual_linearizations(
             .collect();
         let equations = Equations::new(model, &pd, Dual64::from_re(speed), &eq.q)?;
         let q0: Vec<Dual64> = eq.q.iter().map(|&v| Dual64::from_re(v)).collect();
-        let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
         let rhs = match &dp {
             Some(dp) => {
                 DVector::from_iterator(dp.len() / np, (0..dp.len() / np).map(|r| -dp[r * np + b]))
             }
             None => {
+                let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
                 let fb = equations.residual(free, &q0, &l0);
                 DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps))
             }
