@@ -3,11 +3,14 @@
 //!
 //! One nominal sweep; at each speed (in parallel) one [`LocalModel`] for the union of the cases' variables
 //! (derivatives do not depend on the tolerances, so cases share them); then per case the
-//! first-order, second-order and invariant statistics, and optionally the Monte Carlo. Wall times
-//! of the analytic part and of the Monte Carlo are measured for the summary.
+//! first-order, second-order and invariant statistics; then per case the `quadrature`
+//! ([`crate::quadrature`]: the whole pipeline integrated over the distribution, the answer the
+//! `analytic` row takes) and optionally the Monte Carlo. Wall times of the Taylor methods, the
+//! quadrature and the Monte Carlo are measured for the summary.
 
 use crate::model::{Case, Model};
 use crate::montecarlo::{self, ChunkState, McOptions, McStat};
+use crate::quadrature::{self, Event, QuadOptions, QuadStat};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{
     KINK_SIGMAS, LocalModel, Output, Quantity, Spread, discriminant, first_order, invariant,
@@ -25,9 +28,12 @@ pub enum Method {
     /// ω_d from the pair invariants (see [`crate::tolerance`]).
     Invariant,
     MonteCarlo,
-    /// The automatic choice among the analytic methods: for ω_d the invariant method within
-    /// [`crate::tolerance::KINK_SIGMAS`] σ of a change of class, otherwise second order where it
-    /// exists, else first order. The row's `basis` says which.
+    /// The whole pipeline integrated over the distribution ([`crate::quadrature`]).
+    Quadrature,
+    /// The answer to read: [`Method::Quadrature`] where it ran and gave a value; otherwise
+    /// the automatic choice among the Taylor methods (for ω_d the invariant method within
+    /// [`crate::tolerance::KINK_SIGMAS`] σ of a change of class, otherwise second order where
+    /// it exists, else first order). The row's `basis` says which.
     Analytic,
 }
 
@@ -38,6 +44,7 @@ impl Method {
             Method::SecondOrder => "second_order",
             Method::Invariant => "invariant",
             Method::MonteCarlo => "monte_carlo",
+            Method::Quadrature => "quadrature",
             Method::Analytic => "analytic",
         }
     }
@@ -60,6 +67,26 @@ pub struct Row {
     pub shares: Option<Vec<f64>>,
     /// For [`Method::Analytic`]: the method its mean and σ come from.
     pub basis: Option<Method>,
+    /// The 5, 50 and 95 % quantiles (quadrature, Monte Carlo).
+    pub quantiles: Option<[f64; 3]>,
+    /// Error estimates of the mean and σ (quadrature).
+    pub errors: Option<(f64, f64)>,
+}
+
+/// Probability of a change of character at one speed, by one method.
+#[derive(Debug, Clone)]
+pub struct ProbabilityRow {
+    pub speed: f64,
+    pub case: usize,
+    /// [`Method::Quadrature`] or [`Method::MonteCarlo`].
+    pub method: Method,
+    pub event: Event,
+    /// 0-based mode (overdamped only).
+    pub mode: Option<usize>,
+    pub probability: f64,
+    /// Quadrature: probability ± its error estimate (clamped to [0, 1]); Monte Carlo: the
+    /// 95 % Wilson score interval.
+    pub ci: (f64, f64),
 }
 
 /// How the Monte Carlo samples are split across runs.
@@ -76,15 +103,30 @@ pub enum Split {
 }
 
 /// What to analyse.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct AnalyzeOptions {
     pub speeds: Vec<f64>,
     pub cases: Vec<Case>,
+    /// The quadrature (on by default).
+    pub quadrature: Option<QuadOptions>,
     pub monte_carlo: Option<McOptions>,
     pub split: Split,
     /// Worker threads for the derivatives (`None`: rayon's default); the Monte Carlo uses its
     /// own setting.
     pub threads: Option<usize>,
+}
+
+impl Default for AnalyzeOptions {
+    fn default() -> Self {
+        AnalyzeOptions {
+            speeds: Vec::new(),
+            cases: Vec::new(),
+            quadrature: Some(QuadOptions::default()),
+            monte_carlo: None,
+            split: Split::default(),
+            threads: None,
+        }
+    }
 }
 
 /// Result of [`analyze`].
@@ -94,7 +136,13 @@ pub struct Analysis {
     pub vars: Vec<usize>,
     pub cases: Vec<Case>,
     pub rows: Vec<Row>,
+    /// Probabilities of character per speed, case and method.
+    pub probabilities: Vec<ProbabilityRow>,
+    /// The Taylor methods (nominal sweep, derivatives, first/second order, invariant).
     pub analytic_seconds: f64,
+    pub quadrature_seconds: Option<f64>,
+    /// Per case: the quadrature's rule in words and its number of swept nodes.
+    pub quadrature_rules: Vec<(String, usize)>,
     pub monte_carlo_seconds: Option<f64>,
     /// Speeds whose nominal point or local model failed, with the reason.
     pub failures: Vec<(f64, String)>,
@@ -186,26 +234,77 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         .iter()
         .map(|c| Spread::new(model, c, &vars))
         .collect();
+    let taylor_seconds = t0.elapsed().as_secs_f64();
+    let modes = nominal
+        .iter()
+        .flatten()
+        .map(|p| p.modes.len())
+        .next()
+        .unwrap_or(0);
+    let outs = outputs(modes, transfer.is_some());
+    let mut probabilities = Vec::new();
+    let mut quadrature_rules = Vec::new();
+    let tq = Instant::now();
+    let quad: Vec<Option<quadrature::QuadResult>> = spreads
+        .iter()
+        .enumerate()
+        .map(|(ci, s)| {
+            let q = opt.quadrature?;
+            let name = format!("quadrature {}", opt.cases[ci].name);
+            let r = quadrature::integrate(
+                model,
+                &vars,
+                s,
+                &opt.speeds,
+                &nominal,
+                &locals,
+                &outs,
+                transfer.as_ref(),
+                QuadOptions {
+                    threads: q.threads.or(opt.threads),
+                    ..q
+                },
+                &|d, n| progress(&name, d, n),
+            );
+            quadrature_rules.push((r.rule.clone(), r.nodes));
+            Some(r)
+        })
+        .collect();
+    let quadrature_seconds = opt.quadrature.map(|_| tq.elapsed().as_secs_f64());
+    let t2 = Instant::now();
     let mut rows = Vec::new();
     for (ci, s) in spreads.iter().enumerate() {
         for (si, lm) in locals.iter().enumerate() {
             let Some(lm) = lm else { continue };
-            rows.extend(analytic_rows(opt.speeds[si], ci, lm, s));
+            let q = quad[ci].as_ref().map(|q| q.stats[si].as_slice());
+            rows.extend(analytic_rows(opt.speeds[si], ci, lm, s, q));
+        }
+        if let Some(q) = &quad[ci] {
+            for (si, ps) in q.probabilities.iter().enumerate() {
+                if nominal[si].is_none() {
+                    continue;
+                }
+                probabilities.extend(ps.iter().map(|p| ProbabilityRow {
+                    speed: opt.speeds[si],
+                    case: ci,
+                    method: Method::Quadrature,
+                    event: p.event,
+                    mode: p.mode,
+                    probability: p.probability,
+                    ci: (
+                        (p.probability - p.error).max(0.0),
+                        (p.probability + p.error).min(1.0),
+                    ),
+                }));
+            }
         }
     }
-    let analytic_seconds = t0.elapsed().as_secs_f64();
+    let analytic_seconds = taylor_seconds + t2.elapsed().as_secs_f64();
 
     let mut samples_done = Vec::new();
     let mut shard_states = Vec::new();
     let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
         let t1 = Instant::now();
-        let modes = nominal
-            .iter()
-            .flatten()
-            .map(|p| p.modes.len())
-            .next()
-            .unwrap_or(0);
-        let outs = outputs(modes, transfer.is_some());
         for (ci, s) in spreads.iter().enumerate() {
             let name = format!("monte carlo {}", opt.cases[ci].name);
             let (stats, done) = match &opt.split {
@@ -229,6 +328,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                         mc,
                         range,
                         &|d| progress(&name, d, mc.samples),
+                        None,
                     );
                     shard_states.push(states);
                     continue;
@@ -256,6 +356,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                 if nominal[si].is_none() || done < 2 {
                     continue;
                 }
+                probabilities.extend(monte_carlo_probabilities(opt.speeds[si], ci, &outs, row));
                 for (o, st) in outs.iter().zip(row) {
                     rows.push(Row {
                         speed: opt.speeds[si],
@@ -268,6 +369,8 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                         mc: Some(*st),
                         shares: None,
                         basis: None,
+                        quantiles: st.quantiles,
+                        errors: None,
                     });
                 }
             }
@@ -278,7 +381,10 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         vars,
         cases: opt.cases.clone(),
         rows,
+        probabilities,
         analytic_seconds,
+        quadrature_seconds,
+        quadrature_rules,
         monte_carlo_seconds,
         failures,
         nominal,
@@ -287,9 +393,15 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     }
 }
 
-/// First-order, second-order, (for ω_d) invariant and the automatic `analytic` rows of one
+/// First-order, second-order, (for ω_d) invariant, quadrature and the `analytic` rows of one
 /// speed and case.
-fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Row> {
+fn analytic_rows(
+    speed: f64,
+    case: usize,
+    lm: &LocalModel,
+    s: &Spread,
+    quad: Option<&[Option<QuadStat>]>,
+) -> Vec<Row> {
     let mut rows = Vec::new();
     let row = |o: &Output, method, mean: f64, std: f64, shares, basis| Row {
         speed,
@@ -302,6 +414,8 @@ fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Ro
         mc: None,
         shares,
         basis,
+        quantiles: None,
+        errors: None,
     };
     for (k, o) in lm.outputs.iter().enumerate() {
         let v = lm.value[k];
@@ -343,10 +457,81 @@ fn analytic_rows(speed: f64, case: usize, lm: &LocalModel, s: &Spread) -> Vec<Ro
                 choice = Some((Method::Invariant, st));
             }
         }
-        let (basis, mean, std) = choice.map_or((None, f64::NAN, f64::NAN), |(m, st)| {
-            (Some(m), st.mean, st.std)
-        });
-        rows.push(row(o, Method::Analytic, mean, std, None, basis));
+        let q = quad.and_then(|q| q.get(k).copied().flatten());
+        if let Some(q) = q {
+            rows.push(Row {
+                quantiles: Some(q.quantiles),
+                errors: Some((q.mean_error, q.std_error)),
+                ..row(o, Method::Quadrature, q.mean, q.std, None, None)
+            });
+        }
+        let answer = match q {
+            Some(q) => Row {
+                quantiles: Some(q.quantiles),
+                errors: Some((q.mean_error, q.std_error)),
+                ..row(
+                    o,
+                    Method::Analytic,
+                    q.mean,
+                    q.std,
+                    None,
+                    Some(Method::Quadrature),
+                )
+            },
+            None => {
+                let (basis, mean, std) = choice.map_or((None, f64::NAN, f64::NAN), |(m, st)| {
+                    (Some(m), st.mean, st.std)
+                });
+                row(o, Method::Analytic, mean, std, None, basis)
+            }
+        };
+        rows.push(answer);
     }
     rows
+}
+
+/// Monte Carlo probabilities of character at one speed from the event counts of its
+/// statistics, with 95 % Wilson score intervals.
+fn monte_carlo_probabilities(
+    speed: f64,
+    case: usize,
+    outs: &[Output],
+    stats: &[McStat],
+) -> Vec<ProbabilityRow> {
+    let mut v = Vec::new();
+    let mut push = |event, mode, count: usize, st: &McStat| {
+        let n = st.n + st.failed;
+        if n == 0 {
+            return;
+        }
+        let p = count as f64 / n as f64;
+        v.push(ProbabilityRow {
+            speed,
+            case,
+            method: Method::MonteCarlo,
+            event,
+            mode,
+            probability: p,
+            ci: wilson(count, n),
+        });
+    };
+    for (o, st) in outs.iter().zip(stats) {
+        if o.quantity == Quantity::DampedFrequency {
+            push(Event::Overdamped, o.mode, st.overdamped, st);
+        }
+    }
+    if let Some(st) = stats.first() {
+        push(Event::Unstable, None, st.unstable, st);
+        push(Event::OtherBranch, None, st.other_branch, st);
+    }
+    v
+}
+
+/// The 95 % Wilson score interval of `k` successes in `n` trials.
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    let z = 1.959_963_984_540_054;
+    let (n, p) = (n as f64, k as f64 / n as f64);
+    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    ((centre - half).max(0.0), (centre + half).min(1.0))
 }

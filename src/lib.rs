@@ -21,6 +21,7 @@ pub mod model;
 pub mod montecarlo;
 pub mod plots;
 pub mod program;
+pub mod quadrature;
 pub mod real;
 pub mod report;
 pub mod sensitivity;

@@ -8,6 +8,7 @@ use modaltol::frf::transfer;
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::{ChunkState, McOptions};
+use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns, SweepExtras};
 use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
@@ -175,6 +176,14 @@ enum Command {
         /// Skip the Monte Carlo.
         #[arg(long)]
         no_monte_carlo: bool,
+        /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
+        /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
+        /// line is refined until its error estimate meets it or the largest grid is reached.
+        #[arg(long, default_value_t = 1e-3, value_name = "REL")]
+        quadrature_tolerance: f64,
+        /// Skip the quadrature (the "analytic" rows then take the automatic Taylor choice).
+        #[arg(long)]
+        no_quadrature: bool,
         /// Sampling of the design variables; default: the model's.
         #[arg(long, value_enum)]
         sampling: Option<SamplingArg>,
@@ -456,6 +465,12 @@ fn write_outputs(
         csv.write_record(&row)?;
     }
     csv.flush()?;
+    let mut csv = csv::Writer::from_path(output.join("probabilities.csv"))?;
+    csv.write_record(report::PROBABILITY_HEADER)?;
+    for row in report::probability_rows(a) {
+        csv.write_record(&row)?;
+    }
+    csv.flush()?;
     let (plots, critical) = modaltol::plots::plots(m, a);
     let fonts = modaltol::plots::fonts();
     let mut files = Vec::new();
@@ -478,8 +493,10 @@ fn write_outputs(
         serde_json::to_string_pretty(&report::summary_json(m, a, mc, used))?,
     )?;
     eprintln!(
-        "modaltol: analytic {:.3} s{}; wrote {}",
+        "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
         a.analytic_seconds,
+        a.quadrature_seconds
+            .map_or(String::new(), |t| format!(", quadrature {t:.3} s")),
         a.monte_carlo_seconds.map_or(String::new(), |t| format!(
             ", Monte Carlo {t:.3} s (ratio {:.0})",
             t / a.analytic_seconds
@@ -681,10 +698,18 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             threads,
             no_monte_carlo,
+            quadrature_tolerance,
+            no_quadrature,
             sampling,
             shard,
             cases: only,
         } => {
+            if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
+                return Err(InputError(
+                    "--quadrature-tolerance must be a relative error in (0, 1), e.g. 1e-3".into(),
+                )
+                .into());
+            }
             let m = model_or_governor(&model)?;
             let range = match &speed {
                 Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
@@ -732,9 +757,16 @@ fn run(cli: Cli) -> Result<()> {
             };
             std::fs::create_dir_all(&output)
                 .with_context(|| format!("cannot create {}", output.display()))?;
+            // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
+            let quadrature =
+                (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
+                    tolerance: quadrature_tolerance,
+                    threads,
+                });
             let opt = AnalyzeOptions {
                 speeds: range.speeds().collect(),
                 cases,
+                quadrature,
                 monte_carlo: mc,
                 split,
                 threads,
@@ -844,6 +876,7 @@ fn run(cli: Cli) -> Result<()> {
             let opt = AnalyzeOptions {
                 speeds: range.speeds().collect(),
                 cases,
+                quadrature: Some(QuadOptions::default()),
                 monte_carlo: Some(mc),
                 split: Split::Merged(states),
                 threads: None,

@@ -17,6 +17,7 @@
 //! valid for normal outputs only, would be several times too narrow.
 
 use crate::equilibrium::Settings;
+use crate::modal::ModeClass;
 use crate::model::{Distribution, Model, Sampling, Transfer};
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
@@ -59,6 +60,16 @@ pub struct McStat {
     pub failed: usize,
     /// Samples whose mode had another class than the nominal one.
     pub class_changed: usize,
+    /// Samples whose output's mode was overdamped (ω_d and ζ rows; 0 for the transfer).
+    pub overdamped: usize,
+    /// Samples whose equilibrium was unstable.
+    pub unstable: usize,
+    /// Samples on another equilibrium branch than the nominal design (another number of
+    /// branch switches since the lowest speed).
+    pub other_branch: usize,
+    /// The 5, 50 and 95 % sample quantiles (linear interpolation between order statistics),
+    /// where the run kept the values (see [`run`]).
+    pub quantiles: Option<[f64; 3]>,
 }
 
 /// One-pass central moments (Welford, extended to the fourth moment by Terriberry), with the
@@ -72,6 +83,12 @@ pub struct Moments {
     m4: f64,
     failed: usize,
     class_changed: usize,
+    #[serde(default)]
+    overdamped: usize,
+    #[serde(default)]
+    unstable: usize,
+    #[serde(default)]
+    other_branch: usize,
 }
 
 /// Moments of one chunk of samples: `[speed][output]`.
@@ -81,6 +98,11 @@ impl Moments {
     /// Merges `b` (later samples) into `self` (Pébay 2008, eqs. 2.1–2.4).
     pub fn combine(&mut self, b: &Moments) {
         let (fa, fb) = (self.failed + b.failed, self.class_changed + b.class_changed);
+        let events = (
+            self.overdamped + b.overdamped,
+            self.unstable + b.unstable,
+            self.other_branch + b.other_branch,
+        );
         if b.n == 0 {
         } else if self.n == 0 {
             *self = *b;
@@ -107,6 +129,7 @@ impl Moments {
         }
         self.failed = fa;
         self.class_changed = fb;
+        (self.overdamped, self.unstable, self.other_branch) = events;
     }
 
     fn add(&mut self, x: f64) {
@@ -157,6 +180,45 @@ impl Moments {
             std_ci,
             failed: self.failed,
             class_changed: self.class_changed,
+            overdamped: self.overdamped,
+            unstable: self.unstable,
+            other_branch: self.other_branch,
+            quantiles: None,
+        }
+    }
+
+    /// Counts one sample's events.
+    fn count(&mut self, e: Events) {
+        self.class_changed += usize::from(e.class_changed);
+        self.overdamped += usize::from(e.overdamped);
+        self.unstable += usize::from(e.unstable);
+        self.other_branch += usize::from(e.other_branch);
+    }
+}
+
+/// What happened to one sample at one speed, for one output.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Events {
+    /// The output's mode has another class than the nominal one.
+    pub class_changed: bool,
+    /// The output's mode is overdamped.
+    pub overdamped: bool,
+    /// The sample's equilibrium is unstable.
+    pub unstable: bool,
+    /// The sample is on another branch than the nominal design.
+    pub other_branch: bool,
+}
+
+/// Sample quantile of sorted values (linear interpolation between order statistics,
+/// Hyndman & Fan's type 7).
+pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
+    match sorted.len() {
+        0 => f64::NAN,
+        n => {
+            let h = (n - 1) as f64 * q;
+            let (lo, frac) = (h.floor() as usize, h - h.floor());
+            let hi = (lo + 1).min(n - 1);
+            sorted[lo] + frac * (sorted[hi] - sorted[lo])
         }
     }
 }
@@ -176,11 +238,7 @@ pub struct Sampler {
 impl Sampler {
     pub fn new(model: &Model, vars: &[usize], spread: &Spread, opt: McOptions) -> Sampler {
         let n = vars.len();
-        let chol = spread
-            .correlation
-            .clone()
-            .cholesky()
-            .map_or_else(|| nalgebra::DMatrix::identity(n, n), |c| c.l());
+        let chol = correlation_factor(&spread.correlation);
         let strata = if opt.sampling == Sampling::Lhs {
             (0..n)
                 .map(|v| {
@@ -242,32 +300,60 @@ impl Sampler {
         let u = self.uniforms(index);
         let normal = Normal::standard();
         let z: Vec<f64> = u.iter().map(|&x| normal.inverse_cdf(x)).collect();
-        let zc = &self.chol * nalgebra::DVector::from_vec(z);
-        let mut p = self.nominal.clone();
-        for (k, &b) in self.vars.iter().enumerate() {
-            p[b] += match self.spread.distribution[k] {
-                Distribution::Normal => self.spread.sigma[k] * zc[k],
-                // Uniform on ±T: σ = T/√3 (correlations are not applied to uniform variables).
-                Distribution::Uniform => self.spread.sigma[k] * 3f64.sqrt() * (2.0 * u[k] - 1.0),
-            };
-        }
-        p
+        parameters_at(&self.nominal, &self.vars, &self.spread, &self.chol, &z, &u)
     }
 }
 
-/// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
-/// the thread that folds it): the value, NaN where the output or the whole point failed, and
-/// whether the output's mode changed class.
-type SampleResult = Vec<(f64, bool)>;
+/// Parameter values at independent standard normals `z` (and their uniforms `u = Φ(z)`), one
+/// per design variable: a normal variable is `b₀ + σ (L z)ₖ` with `L` the Cholesky factor of
+/// the correlation, a uniform one `b₀ + √3 σ (2uₖ − 1)` (uniform on ±T; correlations are not
+/// applied to uniform variables). Monte Carlo samples and quadrature nodes both come from here.
+pub fn parameters_at(
+    nominal: &[f64],
+    vars: &[usize],
+    spread: &Spread,
+    chol: &nalgebra::DMatrix<f64>,
+    z: &[f64],
+    u: &[f64],
+) -> Vec<f64> {
+    let zc = chol * nalgebra::DVector::from_column_slice(z);
+    let mut p = nominal.to_vec();
+    for (k, &b) in vars.iter().enumerate() {
+        p[b] += match spread.distribution[k] {
+            Distribution::Normal => spread.sigma[k] * zc[k],
+            Distribution::Uniform => spread.sigma[k] * 3f64.sqrt() * (2.0 * u[k] - 1.0),
+        };
+    }
+    p
+}
 
-fn run_sample(
+/// Cholesky factor of a correlation matrix (the identity where it is not positive definite;
+/// the model's validation rejects such matrices).
+pub fn correlation_factor(c: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+    let n = c.nrows();
+    c.clone()
+        .cholesky()
+        .map_or_else(|| nalgebra::DMatrix::identity(n, n), |c| c.l())
+}
+
+/// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
+/// the thread that folds it): the value (NaN where the output or the whole point failed) and
+/// what happened to the sample there.
+type SampleResult = Vec<(f64, Events)>;
+
+/// Sweeps the design `p` across `speeds` as a Monte Carlo sample or a quadrature node does:
+/// warm-started from the nominal point at the first speed, continued from speed to speed (so
+/// that it follows the branch a sweep from the lowest speed follows), its modes matched to the
+/// nominal ones by shape. `visit(i, point)` gets, per speed, the nominal point and the sample's
+/// with the number of branch switches the sample's sweep made up to there, or `None` where
+/// either failed or the sample has another number of modes.
+pub fn sample_sweep(
     model: &Model,
     p: Vec<f64>,
     speeds: &[f64],
     nominal: &[Option<Point>],
-    outs: &[Output],
-    transfer: Option<&Transfer>,
-) -> SampleResult {
+    mut visit: impl FnMut(usize, Option<(&Point, &Point, usize)>),
+) {
     // Samples do not report drive forces.
     let options = Options {
         newton: Settings {
@@ -278,28 +364,66 @@ fn run_sample(
     };
     let mut sweep = Sweep::new(model, p, options);
     let mut started = false;
-    let mut out = Vec::with_capacity(speeds.len() * outs.len());
-    for (&w, nom) in speeds.iter().zip(nominal) {
+    let mut switches = 0;
+    for (i, (&w, nom)) in speeds.iter().zip(nominal).enumerate() {
         let pt = nom.as_ref().and_then(|nom| {
             if !started {
                 sweep.warm_start(nom);
             }
-            let pt = match_modes(nom, sweep.step(w).ok()?);
+            let pt = sweep.step(w).ok()?;
             started = true;
-            Some((nom, pt))
+            switches += usize::from(pt.new_branch);
+            (pt.modes.len() == nom.modes.len()).then(|| (nom, match_modes(nom, pt)))
         });
-        let Some((nom, pt)) = pt else {
-            out.extend(std::iter::repeat_n((f64::NAN, false), outs.len()));
-            continue;
-        };
-        let tf = transfer.map(|t| TransferAt::at_speed(t, w));
-        out.extend(outs.iter().map(|o| {
-            let changed = o.mode.is_some_and(|m| {
-                pt.modes.get(m).map(|x| x.class) != nom.modes.get(m).map(|x| x.class)
-            });
-            (value(&pt, o, tf).unwrap_or(f64::NAN), changed)
-        }));
+        visit(i, pt.as_ref().map(|(nom, pt)| (*nom, pt, switches)));
     }
+}
+
+/// Number of branch switches of the nominal sweep up to each speed.
+pub fn branch_counts(nominal: &[Option<Point>]) -> Vec<usize> {
+    nominal
+        .iter()
+        .scan(0, |n, p| {
+            *n += usize::from(p.as_ref().is_some_and(|p| p.new_branch));
+            Some(*n)
+        })
+        .collect()
+}
+
+fn run_sample(
+    model: &Model,
+    p: Vec<f64>,
+    speeds: &[f64],
+    nominal: &[Option<Point>],
+    outs: &[Output],
+    transfer: Option<&Transfer>,
+) -> SampleResult {
+    let branches = branch_counts(nominal);
+    let mut out = Vec::with_capacity(speeds.len() * outs.len());
+    sample_sweep(model, p, speeds, nominal, |i, pts| {
+        let Some((nom, pt, switches)) = pts else {
+            out.extend(std::iter::repeat_n(
+                (f64::NAN, Events::default()),
+                outs.len(),
+            ));
+            return;
+        };
+        let tf = transfer.map(|t| TransferAt::at_speed(t, speeds[i]));
+        let unstable = !pt.stable();
+        let other_branch = switches != branches[i];
+        out.extend(outs.iter().map(|o| {
+            let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
+            let events = Events {
+                class_changed: o
+                    .mode
+                    .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
+                overdamped: class == Some(ModeClass::Overdamped),
+                unstable,
+                other_branch,
+            };
+            (value(pt, o, tf).unwrap_or(f64::NAN), events)
+        }));
+    });
     out
 }
 
@@ -319,7 +443,9 @@ pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize
 
 /// Evaluates the chunks `range` (samples `CHUNK·i .. CHUNK·(i+1)` of chunk `i`) and returns each
 /// chunk's moments `[chunk][speed][output]`, in chunk order. Stops early (fewer chunks) when
-/// [`request_stop`] is called. `progress` gets the number of samples done in this call.
+/// [`request_stop`] is called. `progress` gets the number of samples done in this call. With
+/// `values`, also keeps every finite value per `[speed · outputs + output]`, in sample order
+/// (for quantiles).
 #[allow(clippy::too_many_arguments)]
 pub fn run_chunks(
     model: &Model,
@@ -332,6 +458,7 @@ pub fn run_chunks(
     opt: McOptions,
     range: std::ops::Range<usize>,
     progress: &(dyn Fn(usize) + Sync),
+    mut values: Option<&mut Vec<Vec<f32>>>,
 ) -> Vec<ChunkState> {
     let sampler = Sampler::new(model, vars, spread, opt);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -340,6 +467,9 @@ pub fn run_chunks(
         .expect("thread pool");
     let mut out = Vec::with_capacity(range.len());
     let mut done = 0;
+    if let Some(v) = values.as_deref_mut() {
+        v.resize(speeds.len() * outs.len(), Vec::new());
+    }
     for chunk in range {
         if STOP.load(std::sync::atomic::Ordering::SeqCst) {
             break;
@@ -362,15 +492,16 @@ pub fn run_chunks(
         });
         let mut acc = vec![vec![Moments::default(); outs.len()]; speeds.len()];
         for r in results {
-            for (m, &(v, changed)) in acc.iter_mut().flatten().zip(&r) {
+            for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
                 if v.is_finite() {
                     m.add(v);
+                    if let Some(vals) = values.as_deref_mut() {
+                        vals[k].push(v as f32);
+                    }
                 } else {
                     m.failed += 1;
                 }
-                if changed {
-                    m.class_changed += 1;
-                }
+                m.count(events);
             }
         }
         out.push(acc);
@@ -409,7 +540,12 @@ pub fn fold<'a>(
     )
 }
 
-/// Runs the whole Monte Carlo: all chunks, folded. Returns `stats[speed][output]` and the
+/// At most this many values (`samples × speeds × outputs`) are kept for the quantiles of a
+/// whole run (4 bytes each); a larger run reports no quantiles.
+pub const MAX_KEPT_VALUES: usize = 100_000_000;
+
+/// Runs the whole Monte Carlo: all chunks, folded. Returns `stats[speed][output]` (with the
+/// 5/50/95 % quantiles unless more than [`MAX_KEPT_VALUES`] values would be kept) and the
 /// number of samples evaluated (fewer than asked when [`request_stop`] interrupted the run).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
@@ -423,6 +559,8 @@ pub fn run(
     opt: McOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> (Vec<Vec<McStat>>, usize) {
+    let keep = opt.samples.saturating_mul(speeds.len() * outs.len()) <= MAX_KEPT_VALUES;
+    let mut values = Vec::new();
     let states = run_chunks(
         model,
         vars,
@@ -434,8 +572,18 @@ pub fn run(
         opt,
         0..chunks(opt.samples),
         progress,
+        keep.then_some(&mut values),
     );
-    let (stats, _) = fold(&states, speeds.len(), outs.len());
+    let (mut stats, _) = fold(&states, speeds.len(), outs.len());
+    if keep {
+        for (st, vals) in stats.iter_mut().flatten().zip(values) {
+            let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
+            v.sort_by(f64::total_cmp);
+            if !v.is_empty() {
+                st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
+            }
+        }
+    }
     let done = (states.len() * CHUNK).min(opt.samples);
     (stats, done)
 }

@@ -520,6 +520,11 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
         "failed",
         "class_changed",
         "basis",
+        "q05",
+        "q50",
+        "q95",
+        "mean_error",
+        "std_error",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -560,6 +565,14 @@ pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
                 None => v.extend(std::iter::repeat_n(String::new(), 7)),
             }
             v.push(r.basis.map_or(String::new(), |m| m.as_str().to_string()));
+            match r.quantiles {
+                Some(q) => v.extend(q.map(|x| opt(Some(x)))),
+                None => v.extend(std::iter::repeat_n(String::new(), 3)),
+            }
+            match r.errors {
+                Some((em, es)) => v.extend([opt(Some(em)), opt(Some(es))]),
+                None => v.extend(std::iter::repeat_n(String::new(), 2)),
+            }
             match &r.shares {
                 Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
@@ -567,6 +580,74 @@ pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
             v
         })
         .collect()
+}
+
+/// Header of `probabilities.csv`.
+pub const PROBABILITY_HEADER: [&str; 8] = [
+    "speed",
+    "case",
+    "method",
+    "event",
+    "mode",
+    "probability",
+    "ci_low",
+    "ci_high",
+];
+
+/// Rows of `probabilities.csv`: one per (speed, case, method, event, mode); `mode` (1-based)
+/// for `overdamped` only. The interval is the quadrature's probability ± its error estimate,
+/// or the Monte Carlo's 95 % Wilson score interval.
+pub fn probability_rows(a: &Analysis) -> Vec<Vec<String>> {
+    a.probabilities
+        .iter()
+        .map(|p| {
+            vec![
+                p.speed.to_string(),
+                a.cases[p.case].name.clone(),
+                p.method.as_str().to_string(),
+                p.event.as_str().to_string(),
+                p.mode.map_or(String::new(), |m| (m + 1).to_string()),
+                p.probability.to_string(),
+                p.ci.0.to_string(),
+                p.ci.1.to_string(),
+            ]
+        })
+        .collect()
+}
+
+/// Per case, method, event and mode: the largest probability over the speeds and where it is.
+fn probability_summary(a: &Analysis) -> Vec<Value> {
+    let mut out: Vec<Value> = Vec::new();
+    let mut keys: Vec<(usize, &str, &str, Option<usize>)> = a
+        .probabilities
+        .iter()
+        .map(|p| (p.case, p.method.as_str(), p.event.as_str(), p.mode))
+        .collect();
+    keys.sort();
+    keys.dedup();
+    for (case, method, event, mode) in keys {
+        let rows = a.probabilities.iter().filter(|p| {
+            p.case == case
+                && p.method.as_str() == method
+                && p.event.as_str() == event
+                && p.mode == mode
+        });
+        let (mut best, mut at, mut any) = (0.0f64, None, 0usize);
+        for p in rows {
+            if p.probability > 0.0 {
+                any += 1;
+            }
+            if p.probability > best {
+                (best, at) = (p.probability, Some(p.speed));
+            }
+        }
+        out.push(
+            json!({"case": a.cases[case].name, "method": method, "event": event,
+                        "mode": mode.map(|m| m + 1), "max_probability": best, "at_speed": at,
+                        "speeds_with_nonzero_probability": any}),
+        );
+    }
+    out
 }
 
 /// `summary.json` of an analysis: model, cases, timings beside the paper's, failures.
@@ -595,13 +676,19 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "speeds": {"count": a.nominal.len(), "from": speeds.first(), "to": speeds.last()},
         "design_variables": a.vars.iter().map(|&b| model.parameters[b].name.clone()).collect::<Vec<_>>(),
         "cases": cases,
-        "methods": ["first_order", "second_order", "invariant", "analytic", "monte_carlo"],
+        "methods": ["first_order", "second_order", "invariant", "quadrature", "analytic", "monte_carlo"],
         "analytic_seconds": a.analytic_seconds,
+        "quadrature_seconds": a.quadrature_seconds,
+        "quadrature": a.quadrature_seconds.map(|t| json!({"seconds": t,
+            "cases": a.cases.iter().zip(&a.quadrature_rules).map(|(c, (rule, nodes))|
+                json!({"case": c.name, "rule": rule, "nodes_swept": nodes})).collect::<Vec<_>>()})),
+        "probabilities": probability_summary(a),
         "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
                                           "samples_done": a.samples_done, "partial": a.interrupted(m.samples)})),
         "partial": mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
+        "ratio_monte_carlo_to_quadrature": a.monte_carlo_seconds.zip(a.quadrature_seconds).map(|(m, q)| m / q),
         "paper": {"note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
                   "pendulum": {"analytic_seconds": 0.703, "monte_carlo_seconds": 448.281, "ratio": 638},
                   "governor": {"analytic_seconds": 2.188, "monte_carlo_seconds": 2525.375, "ratio": 1154}},

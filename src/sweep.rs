@@ -40,6 +40,12 @@ pub struct Point {
     pub shapes: Vec<DVector<C64>>,
     /// Remarks, e.g. a switch to the stable branch.
     pub note: Option<String>,
+    /// The equilibrium continued from the previous speed was unstable and this point is on
+    /// the stable branch found instead: the coordinates of that unstable equilibrium.
+    pub switched_from: Option<Vec<f64>>,
+    /// This point is on another branch than the previous speed's: the branch followed lost
+    /// its stability and the sweep switched (see [`Sweep::step`]).
+    pub new_branch: bool,
 }
 
 impl Point {
@@ -155,18 +161,27 @@ pub fn point_from(
     }
     let dir: Vec<f64> = shape.iter().map(|v| v / smax).collect();
     let free = &first.linear.free;
-    // Prefer the side the model's initial guess lies on (then the positive side).
-    let guess = initial_guess(model, p, speed)?;
-    let lean: f64 = free
-        .iter()
-        .enumerate()
-        .map(|(k, &i)| dir[k] * (guess[i] - first.equilibrium.q[i]))
-        .sum();
+    // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep that
+    // fell onto the unstable equilibrium returns to its own branch), else the side of the
+    // model's initial guess (then the positive side).
+    let side = |q: &[f64]| -> f64 {
+        free.iter()
+            .enumerate()
+            .map(|(k, &i)| dir[k] * (q[i] - first.equilibrium.q[i]))
+            .sum()
+    };
+    let mut lean = side(q0);
+    if lean.abs() <= 1e-9 {
+        lean = side(&initial_guess(model, p, speed)?);
+    }
     let signs = if lean < -1e-9 {
         [-1.0, 1.0]
     } else {
         [1.0, -1.0]
     };
+    // A stable equilibrium on the side stepped to is taken at once; one that Newton reached
+    // across the unstable equilibrium only if no step finds one on its own side.
+    let mut across = None;
     for amp in [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0] {
         for s in signs {
             let mut q = first.equilibrium.q.clone();
@@ -182,17 +197,24 @@ pub fn point_from(
             if moved < 1e-7 {
                 continue;
             }
+            let own_side = side(&eq.q) * s > 0.0;
             if let Ok(pt) = analyse(model, p, &problem, eq, opt)
                 && pt.stable()
             {
-                return Ok(Point {
-                        note: Some("the equilibrium continued from the previous speed is unstable (static divergence); switched to the stable branch".into()),
-                        ..pt
-                    });
+                let pt = Point {
+                    switched_from: Some(first.equilibrium.q.clone()),
+                    new_branch: true,
+                    note: Some("the equilibrium continued from the previous speed is unstable (static divergence); switched to the stable branch".into()),
+                    ..pt
+                };
+                if own_side {
+                    return Ok(pt);
+                }
+                across.get_or_insert(pt);
             }
         }
     }
-    Ok(first)
+    Ok(across.unwrap_or(first))
 }
 
 /// Linearises and solves the modes at a converged equilibrium.
@@ -250,8 +272,14 @@ fn analyse(
         modes,
         shapes,
         note: None,
+        switched_from: None,
+        new_branch: false,
     })
 }
+
+/// Fraction of the way from the unstable equilibrium to the stable one found beyond which the
+/// previous solution shows that the sweep was not on the unstable branch (see [`Sweep::step`]).
+const RETURN_FRACTION: f64 = 0.1;
 
 /// Solutions the predictor extrapolates from (up to a cubic).
 const PREDICTOR_NODES: usize = 4;
@@ -270,6 +298,8 @@ struct Solved {
     lambda: Vec<f64>,
     /// Newton's Jacobian there.
     jacobian: DMatrix<f64>,
+    /// The point was found by a switch of branch.
+    switched: bool,
 }
 
 impl Solved {
@@ -279,6 +309,7 @@ impl Solved {
             q: pt.equilibrium.q.clone(),
             lambda: pt.equilibrium.lambda.clone(),
             jacobian: pt.equilibrium.jacobian.clone(),
+            switched: pt.switched_from.is_some(),
         }
     }
 }
@@ -410,6 +441,29 @@ impl<'a> Sweep<'a> {
             }
         }
         let mut pt = result?;
+        if let Some(unstable) = &pt.switched_from {
+            // Did the branch followed lose its stability, or did Newton from the previous
+            // solution fall onto an unstable equilibrium nearby (near a pitchfork the stable
+            // branch moves like √Δspeed) and the switch return to the branch followed (the
+            // search leans towards the start, see `point_from`)? With u the unstable
+            // equilibrium and f the stable one found, the previous solution p lies near u in
+            // the first case (it drifts by O(Δspeed) while f − u is O(√Δspeed) or O(1)) and on
+            // f's side of u in the second.
+            if let Some(prev) = self.history.first() {
+                let (mut pf, mut ff) = (0.0, 0.0);
+                for ((p, f), u) in prev.q.iter().zip(&pt.equilibrium.q).zip(unstable) {
+                    pf += (p - u) * (f - u);
+                    ff += (f - u) * (f - u);
+                }
+                // Right after a switch the predictor has a single solution to go on, and a
+                // return to the same side is a return to the branch just switched to.
+                pt.new_branch =
+                    !(ff > 0.0 && pf > 0.0 && (prev.switched || pf > RETURN_FRACTION * ff));
+            }
+            // A switch starts the predictor's history anew: extrapolating through solutions of
+            // another branch leads Newton back onto it.
+            self.history.clear();
+        }
         if let Some(prev) = &self.last_shapes
             && prev.len() == pt.modes.len()
         {

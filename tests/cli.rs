@@ -357,15 +357,70 @@ fn analyze_writes_tables_plots_and_report() {
             "first_order",
             "invariant",
             "monte_carlo",
+            "quadrature",
             "second_order"
         ]
     );
-    // 7 speeds × 3 cases × (ω_d: 5 methods, ζ: 4, |H|: 4).
-    assert_eq!(rows.len(), 7 * 3 * 13);
+    // 7 speeds × 3 cases × (ω_d: 6 methods, ζ: 5, |H|: 5).
+    assert_eq!(rows.len(), 7 * 3 * 16);
+    // Quadrature and Monte Carlo rows carry quantiles, the quadrature error estimates, and the
+    // analytic rows take the quadrature.
+    let col = |c: &str| header.iter().position(|h| h == c).unwrap();
+    for r in &rows {
+        let has = |c: &str| !r.get(col(c)).unwrap().is_empty();
+        match r.get(4).unwrap() {
+            "quadrature" | "analytic" => {
+                assert!(has("q05") && has("q95") && has("mean_error") && has("std_error"));
+            }
+            "monte_carlo" => assert!(has("q50") && !has("mean_error")),
+            _ => assert!(!has("q50") && !has("std_error")),
+        }
+        if r.get(4) == Some("analytic") {
+            assert_eq!(r.get(col("basis")), Some("quadrature"));
+        }
+    }
+    let mut p = csv::Reader::from_path(out.join("probabilities.csv")).unwrap();
+    assert_eq!(
+        p.headers().unwrap().iter().collect::<Vec<_>>(),
+        [
+            "speed",
+            "case",
+            "method",
+            "event",
+            "mode",
+            "probability",
+            "ci_low",
+            "ci_high"
+        ]
+    );
+    let events: std::collections::BTreeSet<(String, String)> = p
+        .records()
+        .map(|x| {
+            let x = x.unwrap();
+            let (lo, prob, hi): (f64, f64, f64) = (
+                x[6].parse().unwrap(),
+                x[5].parse().unwrap(),
+                x[7].parse().unwrap(),
+            );
+            assert!((0.0..=1.0).contains(&prob) && lo <= prob && prob <= hi);
+            (x[2].to_string(), x[3].to_string())
+        })
+        .collect();
+    for m in ["quadrature", "monte_carlo"] {
+        for e in ["overdamped", "unstable", "other_branch"] {
+            assert!(events.contains(&(m.to_string(), e.to_string())), "{m} {e}");
+        }
+    }
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["monte_carlo"]["samples"], 40);
     assert!(summary["analytic_seconds"].as_f64().unwrap() > 0.0);
+    assert!(summary["quadrature_seconds"].as_f64().unwrap() > 0.0);
+    assert!(
+        summary["probabilities"]
+            .as_array()
+            .is_some_and(|a| !a.is_empty())
+    );
     assert_eq!(summary["paper"]["governor"]["ratio"], 1154);
     // Every image the report shows exists, as SVG and PNG.
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
@@ -542,9 +597,34 @@ fn merged_shards_equal_one_run_exactly() {
         "{}",
         stderr(&o)
     );
-    let a = std::fs::read(dir.path().join("whole/tolerance.csv")).unwrap();
-    let b = std::fs::read(dir.path().join("merged/tolerance.csv")).unwrap();
-    assert!(a == b, "merged shards differ from one run");
+    // The same numbers, except the Monte Carlo quantiles, which need every sample's value and
+    // which a merge leaves empty.
+    let without_mc_quantiles = |name: &str| {
+        let mut r = csv::Reader::from_path(dir.path().join(name)).unwrap();
+        let h = r.headers().unwrap().clone();
+        let (method, q) = (
+            h.iter().position(|c| c == "method").unwrap(),
+            h.iter().position(|c| c == "q05").unwrap(),
+        );
+        r.records()
+            .map(|x| {
+                let x = x.unwrap();
+                let mut v: Vec<String> = x.iter().map(String::from).collect();
+                if v[method] == "monte_carlo" {
+                    assert!(name.starts_with("merged") || !v[q].is_empty());
+                    v[q..q + 3].iter_mut().for_each(String::clear);
+                }
+                v
+            })
+            .collect::<Vec<_>>()
+    };
+    assert!(
+        without_mc_quantiles("whole/tolerance.csv") == without_mc_quantiles("merged/tolerance.csv"),
+        "merged shards differ from one run"
+    );
+    let a = std::fs::read(dir.path().join("whole/probabilities.csv")).unwrap();
+    let b = std::fs::read(dir.path().join("merged/probabilities.csv")).unwrap();
+    assert!(a == b, "merged probabilities differ from one run");
     // A missing shard, or a shard of another model, is refused.
     let o = run(&[
         "merge",

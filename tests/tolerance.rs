@@ -32,9 +32,12 @@ fn run(
     threads: Option<usize>,
     sampling: Sampling,
 ) -> Analysis {
+    // The Taylor methods and Monte Carlo; without the quadrature, the "analytic" rows take
+    // the automatic Taylor choice (tests/quadrature.rs covers the quadrature).
     let opt = AnalyzeOptions {
         speeds: speeds.to_vec(),
         cases: vec![case],
+        quadrature: None,
         monte_carlo: (samples > 0).then_some(McOptions {
             samples,
             seed: 1,
