@@ -178,7 +178,9 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
             let label = mode.map_or(q.as_str().to_string(), |m| {
                 format!("{} of mode {}", q.as_str(), m + 1)
             });
+            // The answer to read first, then the paper's method beside it.
             let methods: Vec<Method> = [
+                Method::Quadrature,
                 Method::FirstOrder,
                 Method::SecondOrder,
                 Method::Invariant,
@@ -191,7 +193,7 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
             let mut lines = Vec::new();
             let mut bands = Vec::new();
             for (k, &m) in methods.iter().enumerate() {
-                if m == Method::SecondOrder {
+                if m == Method::SecondOrder || m == Method::Invariant {
                     continue;
                 }
                 let rows = series(a, ci, q, mode, m);
@@ -214,6 +216,15 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
                         .collect(),
                     upper: rows.iter().map(|r| (r.speed, r.mean + r.std)).collect(),
                     color,
+                });
+            }
+            // The speeds where first order's σ is more than 10 % off the quadrature's.
+            let off = first_order_off(a, ci, q, mode);
+            if off.iter().any(|p| p.1.is_finite()) {
+                lines.push(Line {
+                    name: "first order > 10 % off".into(),
+                    pts: off,
+                    color: RED,
                 });
             }
             let title = format!("{}: {label}, mean ± σ, case {}", model.name, case.name);
@@ -245,6 +256,9 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
                     svg,
                 });
             }
+        }
+        if let Some(p) = probabilities(model, a, ci, modes) {
+            out.push(p);
         }
         // Shares of the first-order variance (cases with several variables).
         if case.tolerances.len() > 1 && modes > 0 {
@@ -290,6 +304,88 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
     let (campbell, critical) = campbell(model, a, modes);
     out.extend(campbell);
     (out, critical)
+}
+
+/// Speeds where first order's σ is more than 10 % off the quadrature's (the quadrature's σ
+/// at least 2 % of its largest): `(speed, first-order mean)` there, NaN elsewhere.
+pub fn first_order_off(
+    a: &Analysis,
+    case: usize,
+    q: Quantity,
+    mode: Option<usize>,
+) -> Vec<(f64, f64)> {
+    let quad = series(a, case, q, mode, Method::Quadrature);
+    let first = series(a, case, q, mode, Method::FirstOrder);
+    let largest = quad.iter().map(|r| r.std).fold(0.0f64, f64::max);
+    quad.iter()
+        .map(|r| {
+            let f = first
+                .iter()
+                .find(|f| f.speed.to_bits() == r.speed.to_bits());
+            let off = f.is_some_and(|f| {
+                r.std >= 0.02 * largest && ((f.std - r.std).abs() > 0.1 * r.std || f.std.is_nan())
+            });
+            (
+                r.speed,
+                if off {
+                    f.map_or(f64::NAN, |f| f.mean)
+                } else {
+                    f64::NAN
+                },
+            )
+        })
+        .collect()
+}
+
+/// Probabilities of character of one case against speed, quadrature (solid) and Monte Carlo
+/// (its own colour per event); `None` when every probability is zero.
+fn probabilities(model: &Model, a: &Analysis, case: usize, modes: usize) -> Option<Plot> {
+    use crate::quadrature::Event;
+    let mut events: Vec<(Event, Option<usize>)> =
+        (0..modes).map(|m| (Event::Overdamped, Some(m))).collect();
+    events.extend([(Event::Unstable, None), (Event::OtherBranch, None)]);
+    let mut lines = Vec::new();
+    for (k, &(event, mode)) in events.iter().enumerate() {
+        for (j, method) in [Method::Quadrature, Method::MonteCarlo]
+            .into_iter()
+            .enumerate()
+        {
+            let pts: Vec<(f64, f64)> = a
+                .probabilities
+                .iter()
+                .filter(|p| {
+                    p.case == case && p.event == event && p.mode == mode && p.method == method
+                })
+                .map(|p| (p.speed, 100.0 * p.probability))
+                .collect();
+            if pts.iter().all(|p| p.1 < 1e-4) {
+                continue;
+            }
+            let name = match mode {
+                Some(m) => format!("{} mode {}, {}", event.as_str(), m + 1, method.as_str()),
+                None => format!("{}, {}", event.as_str(), method.as_str()),
+            };
+            lines.push(Line {
+                name,
+                pts,
+                color: COLORS[(2 * k + j) % COLORS.len()],
+            });
+        }
+    }
+    if lines.is_empty() {
+        return None;
+    }
+    let title = format!(
+        "{}: probability of a change of character, case {}",
+        model.name, a.cases[case].name
+    );
+    draw(&title, "probability (%)", &lines, &[])
+        .ok()
+        .map(|svg| Plot {
+            stem: format!("probability_{}", a.cases[case].name),
+            title,
+            svg,
+        })
 }
 
 /// Campbell diagram: nominal ω_d of every mode with ±3σ (first case, the automatic `analytic`

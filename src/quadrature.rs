@@ -526,7 +526,7 @@ fn design(d: usize) -> (Transverse, Vec<Line>, Levels) {
                 false,
             );
             lines.extend(tensor(d - 1, &[-1.0, 1.0], &[0.5, 0.5], true));
-            (Transverse::Tensor, lines, Levels { first: 4, last: 6 })
+            (Transverse::Tensor, lines, Levels { first: 4, last: 5 })
         }
         _ => {
             let (replicates, per) = (8, 16);
@@ -1105,6 +1105,13 @@ const SCAN: usize = 8;
 /// The roots of `f` in `(a, b)`: sign changes on a scan of [`SCAN`] sub-intervals, refined by
 /// bisection to rounding.
 fn roots_in(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64) -> Vec<f64> {
+    // Far from zero at both ends and the middle against the curvature there: no root (the
+    // interpolants are low-degree polynomials over one node interval).
+    let (fa, fm, fb) = (f(a), f(0.5 * (a + b)), f(b));
+    let same = (fa < 0.0) == (fm < 0.0) && (fm < 0.0) == (fb < 0.0);
+    if same && fa.abs().min(fm.abs()).min(fb.abs()) > 2.0 * (fa - 2.0 * fm + fb).abs() {
+        return Vec::new();
+    }
     let mut out = Vec::new();
     let mut x0 = a;
     let mut f0 = f(a);

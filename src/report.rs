@@ -4,12 +4,13 @@
 //! Units: speeds and frequencies in rad/s, angles in rad, translations in m, drive forces in
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
-use crate::analyze::Analysis;
+use crate::analyze::{Analysis, Method};
 use crate::frf::Complex;
 use crate::model::{JointKind, Model};
 use crate::montecarlo::McOptions;
 use crate::sensitivity::{Sensitivity, Status as SensStatus};
 use crate::sweep::{Point, PointError};
+use crate::tolerance::Quantity;
 use nalgebra::DMatrix;
 use serde_json::{Value, json};
 use std::fmt::Write;
@@ -696,6 +697,89 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
     })
 }
 
+/// Per case and output: the speeds where first order's σ is more than 10 % off the
+/// quadrature's (where the quadrature's σ is at least 2 % of its largest), as ranges.
+fn first_order_table(a: &Analysis) -> String {
+    let mut h = String::from(
+        "<h2>Where the paper's first-order method is off</h2><table><tr><th>case</th><th>output</th><th>speeds (rad/s) where first order's σ is &gt; 10 % off the quadrature's</th><th>worst</th></tr>",
+    );
+    let mut outputs: Vec<(Quantity, Option<usize>)> = a
+        .rows
+        .iter()
+        .filter(|r| r.method == Method::Quadrature && r.quantity != Quantity::DampingRatio)
+        .map(|r| (r.quantity, r.mode))
+        .collect();
+    outputs.sort_by_key(|o| (o.0 as u8, o.1));
+    outputs.dedup();
+    let mut any = false;
+    for (ci, c) in a.cases.iter().enumerate() {
+        for &(q, mode) in &outputs {
+            let off = crate::plots::first_order_off(a, ci, q, mode);
+            let mut ranges: Vec<(f64, f64)> = Vec::new();
+            let mut open = false;
+            for &(w, v) in &off {
+                if v.is_finite() {
+                    match (open, ranges.last_mut()) {
+                        (true, Some(r)) => r.1 = w,
+                        _ => ranges.push((w, w)),
+                    }
+                }
+                open = v.is_finite();
+            }
+            if ranges.is_empty() {
+                continue;
+            }
+            any = true;
+            let worst = a
+                .rows
+                .iter()
+                .filter(|r| r.case == ci && r.quantity == q && r.mode == mode)
+                .filter(|r| r.method == Method::Quadrature && r.std > 0.0)
+                .filter_map(|r| {
+                    a.rows
+                        .iter()
+                        .find(|f| {
+                            f.case == ci
+                                && f.quantity == q
+                                && f.mode == mode
+                                && f.method == Method::FirstOrder
+                                && f.speed.to_bits() == r.speed.to_bits()
+                        })
+                        .map(|f| ((f.std - r.std).abs() / r.std, r.speed))
+                })
+                .filter(|x| x.0.is_finite())
+                .fold((0.0f64, f64::NAN), |m, x| if x.0 > m.0 { x } else { m });
+            let label = mode.map_or(q.as_str().to_string(), |m| {
+                format!("{} mode {}", q.as_str(), m + 1)
+            });
+            let text: Vec<String> = ranges
+                .iter()
+                .map(|(a, b)| {
+                    if a.to_bits() == b.to_bits() {
+                        format!("{a:.3}")
+                    } else {
+                        format!("{a:.3}–{b:.3}")
+                    }
+                })
+                .collect();
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td style=\"text-align:left\">{}</td><td>{:.0} % at {:.3}</td></tr>",
+                esc(&c.name),
+                label,
+                text.join(", "),
+                100.0 * worst.0,
+                worst.1
+            );
+        }
+    }
+    if !any {
+        h.push_str("<tr><td colspan=\"4\">first order is within 10 % of the quadrature's σ at every speed</td></tr>");
+    }
+    h.push_str("</table>");
+    h
+}
+
 /// Escapes text for HTML.
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -753,22 +837,22 @@ pub fn report_html(
     let _ = writeln!(h, "</table>");
     let _ = writeln!(
         h,
-        "<h2>Timing</h2><table><tr><th></th><th>analytic (s)</th><th>Monte Carlo (s)</th><th>ratio</th></tr>"
+        "<h2>Timing</h2><table><tr><th></th><th>analytic, Taylor methods (s)</th><th>quadrature (s)</th><th>Monte Carlo (s)</th><th>ratio Monte Carlo / analytic</th><th>ratio Monte Carlo / quadrature</th></tr>"
     );
     let _ = writeln!(
         h,
-        "<tr><td>paper, pendulum (2007, 3000 samples)</td><td>0.703</td><td>448.281</td><td>638</td></tr>"
+        "<tr><td>paper, pendulum (2007, 3000 samples)</td><td>0.703</td><td>–</td><td>448.281</td><td>638</td><td>–</td></tr>"
     );
     let _ = writeln!(
         h,
-        "<tr><td>paper, governor (2007, 3000 samples)</td><td>2.188</td><td>2525.375</td><td>1154</td></tr>"
+        "<tr><td>paper, governor (2007, 3000 samples)</td><td>2.188</td><td>–</td><td>2525.375</td><td>1154</td><td>–</td></tr>"
     );
-    let mcs = a
-        .monte_carlo_seconds
-        .map_or("not run".to_string(), |t| format!("{t:.3}"));
-    let ratio = a.monte_carlo_seconds.map_or("–".to_string(), |t| {
-        format!("{:.0}", t / a.analytic_seconds)
-    });
+    let secs = |t: Option<f64>| t.map_or("not run".to_string(), |t| format!("{t:.3}"));
+    let ratio = |b: Option<f64>| {
+        a.monte_carlo_seconds
+            .zip(b)
+            .map_or("–".to_string(), |(m, b)| format!("{:.0}", m / b))
+    };
     let samples = mc.map_or(String::new(), |m| {
         format!(
             ", {} samples, {:?} sampling, seed {}",
@@ -777,15 +861,26 @@ pub fn report_html(
     });
     let _ = writeln!(
         h,
-        "<tr><td>this run ({} case(s), {} speeds{samples})</td><td>{:.3}</td><td>{mcs}</td><td>{ratio}</td></tr></table>",
+        "<tr><td>this run ({} case(s), {} speeds{samples})</td><td>{:.3}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
         a.cases.len(),
         a.nominal.len(),
-        a.analytic_seconds
+        a.analytic_seconds,
+        secs(a.quadrature_seconds),
+        secs(a.monte_carlo_seconds),
+        ratio(Some(a.analytic_seconds)),
+        ratio(a.quadrature_seconds),
     );
     let _ = writeln!(
         h,
-        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and all analytic methods for all cases; the paper's covers first order only.</p>"
+        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and the Taylor methods for all cases; the paper's covers first order only. The quadrature sweeps its nodes across all speeds like Monte Carlo samples ({}).</p>",
+        a.cases
+            .iter()
+            .zip(&a.quadrature_rules)
+            .map(|(c, (rule, _))| format!("{}: {}", esc(&c.name), esc(rule)))
+            .collect::<Vec<_>>()
+            .join("; ")
     );
+    let _ = writeln!(h, "{}", first_order_table(a));
     if !critical.is_empty() {
         let _ = writeln!(
             h,
@@ -816,8 +911,10 @@ pub fn report_html(
 <li><b>first_order</b> is the paper's method: mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
 <li><b>second_order</b> adds the curvature (Hessians): a mean shift and variance terms. It repairs points where first order gives σ = 0 but the output does vary (|H| at the undamped resonance).</li>\
 <li><b>invariant</b> (ω_d only) propagates the pair discriminant D = λ₁λ₂ − (λ₁+λ₂)²/4, which stays smooth where a mode turns overdamped, and maps it through ω_d = √max(0, D). Use it near class changes, where first and second order fail.</li>\
-<li><b>analytic</b> is that choice made for you, per speed: the invariant method for ω_d where the change of class lies within 4 σ of D, otherwise second order (first order where no Hessian exists). The <code>basis</code> column of <code>tolerance.csv</code> names the method taken.</li>\
-<li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample; it is the reference, with 95 % confidence intervals in <code>tolerance.csv</code>, and counts of failed samples and of samples whose mode changed class. Where many samples change class or cross a bifurcation, only Monte Carlo is reliable.</li>\
+<li><b>quadrature</b> integrates the whole nonlinear analysis (equilibrium, modes, |H|) over the distribution of the design variables, deterministically: every node is swept from the lowest speed like a Monte Carlo sample, the integral is split where a mode turns overdamped or a design passes its own bifurcation, and every mean and σ comes with an error estimate (<code>mean_error</code>, <code>std_error</code>) and the 5/50/95 % quantiles. It is right at every speed, class changes and branch switches included.</li>\
+<li><b>analytic</b> is the answer to read: the quadrature where it ran (its <code>basis</code> says so), else the automatic Taylor choice (invariant near a change of class, else second order). Red marks in the band plots show the speeds where first order's σ is more than 10 % off.</li>\
+<li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample, with 95 % confidence intervals in <code>tolerance.csv</code> and counts of failed samples and of samples whose mode changed class. Where the distribution is a mixture (most samples overdamped, a few far out), a few thousand samples are far from converged; the quadrature is not.</li>\
+<li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
 <li>Bands are mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case and the order line.</li></ul>"
     );
     let _ = writeln!(h, "<h2>Plots</h2>");
