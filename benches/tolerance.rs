@@ -1,6 +1,8 @@
-//! Issue-4 figures on the governor: analytic propagation over 501 speeds × the three spring
-//! cases (all methods), and Monte Carlo with 100 samples × 501 speeds for one case (extrapolate
-//! ×30 for the paper's 3000 samples). Run with `cargo bench --bench tolerance`.
+//! Figures on the governor: the Taylor methods over 501 speeds × the three spring cases, the
+//! quadrature of the same cases and of the three-variable case, and Monte Carlo with 100
+//! samples × 501 speeds for one case (extrapolate ×30 for the paper's 3000 samples). Run with
+//! `cargo bench --bench tolerance`. The CLI's timers give the quadrature against the 3000-sample
+//! Monte Carlo in one run (`summary.json`, `ratio_monte_carlo_to_quadrature`).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::analyze::{AnalyzeOptions, analyze};
@@ -26,15 +28,38 @@ fn bench(c: &mut Criterion) {
     let analytic = AnalyzeOptions {
         speeds: speeds.clone(),
         cases: springs.clone(),
+        quadrature: None,
         monte_carlo: None,
         ..Default::default()
     };
     g.bench_function("analytic_501_speeds_3_cases", |b| {
         b.iter(|| analyze(&model, &analytic, &|_, _, _| {}))
     });
+    for (name, cases) in [
+        ("quadrature_501_speeds_3_spring_cases", springs.clone()),
+        (
+            "quadrature_501_speeds_all3",
+            model
+                .analysis
+                .cases
+                .iter()
+                .filter(|c| c.name == "all3")
+                .cloned()
+                .collect(),
+        ),
+    ] {
+        let quad = AnalyzeOptions {
+            speeds: speeds.clone(),
+            cases,
+            monte_carlo: None,
+            ..Default::default()
+        };
+        g.bench_function(name, |b| b.iter(|| analyze(&model, &quad, &|_, _, _| {})));
+    }
     let mc = AnalyzeOptions {
         speeds,
         cases: springs[..1].to_vec(),
+        quadrature: None,
         monte_carlo: Some(McOptions {
             samples: 100,
             seed: 1,
