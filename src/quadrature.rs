@@ -1004,7 +1004,7 @@ impl Context<'_> {
                     match f {
                         0 => p - 0.25 * s * s,
                         1 => p,
-                        _ => s,
+                        _ => growth(s, p),
                     }
                 };
                 cuts.extend(roots_in(&mut h, a, b).into_iter().map(|r| (r, f == 0)));
@@ -1021,11 +1021,12 @@ impl Context<'_> {
             let len = x1 - x0;
             // Character on the sub-piece (constant there): from its midpoint.
             st.eval(0.5 * (x0 + x1), &mut c);
-            let unstable = (0..modes).any(|m| c[2 * m] > 0.0 || c[2 * m + 1] < 0.0);
+            let unstable =
+                (0..modes).any(|m| growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0);
             let overdamped: Vec<bool> = (0..modes)
                 .map(|m| {
                     let (s, p) = (c[2 * m], c[2 * m + 1]);
-                    p - 0.25 * s * s <= 0.0 && !(s > 0.0 || p < 0.0)
+                    p - 0.25 * s * s <= 0.0 && !(growth(s, p) > 0.0 || p < 0.0)
                 })
                 .collect();
             for (&x, &wx) in GL_X.iter().zip(&GL_W) {
@@ -1074,6 +1075,16 @@ impl Context<'_> {
             }
         }
     }
+}
+
+/// Relative growth rate below which a pair counts as stable (as in [`crate::modal`]: an
+/// undamped pair has `s` at rounding level around zero).
+const GROWTH_TOL: f64 = 1e-9;
+
+/// The pair's growth rate `Re λ = s/2` less [`GROWTH_TOL`] of its size `√|p|`: positive when
+/// the pair is unstable through a complex pair (flutter) or a positive real root.
+fn growth(s: f64, p: f64) -> f64 {
+    0.5 * s - GROWTH_TOL * p.abs().sqrt()
 }
 
 /// An output from the carriers: ω_d = √max(0, p − s²/4), ζ = −s/(2√|p|), |H| (not below 0).

@@ -496,3 +496,41 @@ fn gyroscopic_quadrature_agrees_with_large_monte_carlo() {
     // Four variables (mass, length and two hinge springs): the Gauss–Hermite tensor across.
     agrees_with_reference("spinning_universal_pendulum.toml", grid(0.0, 6.0, 0.1));
 }
+
+#[test]
+fn undamped_systems_are_not_called_unstable() {
+    // Without damping every pair has λ₁ + λ₂ = 0 up to rounding: the quadrature must not read
+    // that rounding as flutter. The gyroscopic example (two coupled modes) without hinge
+    // damping, and the pendulum without it: nothing is unstable on the branches followed.
+    for (file, from, to, case) in [
+        (
+            "spinning_universal_pendulum.toml",
+            "c = 0.05 ",
+            "c = 0.0 ",
+            "all",
+        ),
+        ("rotating_pendulum.toml", "c = 3.0 ", "c = 0.0 ", "L12"),
+    ] {
+        let text = common::example_text(file).replace(from, to);
+        assert_ne!(text, common::example_text(file));
+        let model = Model::from_str(&text, "undamped.toml").unwrap();
+        let speeds: Vec<f64> = (0..=60).map(|k| k as f64 * 0.1).collect();
+        let a = quadrature_only(&model, cases(&model, &[case]), speeds);
+        let nominal_stable: Vec<bool> = a
+            .nominal
+            .iter()
+            .map(|p| p.as_ref().is_some_and(|p| p.stable()))
+            .collect();
+        for p in &a.probabilities {
+            let k = (p.speed * 10.0).round() as usize;
+            if p.event == Event::Unstable && nominal_stable[k] {
+                assert!(
+                    p.probability < 0.01,
+                    "{file} Ω = {}: P(unstable) = {}",
+                    p.speed,
+                    p.probability
+                );
+            }
+        }
+    }
+}
