@@ -53,8 +53,22 @@ const GL8: [(f64, f64); 8] = [
 ];
 
 fn exact(w: f64, sigma: f64) -> Exact {
-    let (lo, hi) = (1.0 - 9.0 * sigma, 1.0 + 9.0 * sigma);
+    exact_with(w, sigma, false)
+}
+
+/// As [`exact`], for L normal with standard deviation `sigma`, or (`uniform`) uniform on
+/// `1 ± sigma·√3`.
+fn exact_with(w: f64, sigma: f64, uniform: bool) -> Exact {
+    let half = 3f64.sqrt() * sigma;
+    let (lo, hi) = if uniform {
+        (1.0 - half, 1.0 + half)
+    } else {
+        (1.0 - 9.0 * sigma, 1.0 + 9.0 * sigma)
+    };
     let density = |l: f64| {
+        if uniform {
+            return 1.0 / (2.0 * half);
+        }
         let z = (l - 1.0) / sigma;
         (-0.5 * z * z).exp() / (sigma * (2.0 * std::f64::consts::PI).sqrt())
     };
@@ -531,6 +545,45 @@ fn undamped_systems_are_not_called_unstable() {
                     p.probability
                 );
             }
+        }
+    }
+}
+
+#[test]
+fn uniform_tolerance_matches_exact_moments() {
+    // L uniform on ±12 % (the quadrature maps it through Φ of a standard normal): mean and σ of
+    // ω_d and |H| against the exact moments of the uniform distribution, within 1 % of σ.
+    let text = common::example_text("rotating_pendulum.toml").replace(
+        "L = { value = 1.0, tolerance = \"3%\" }",
+        "L = { value = 1.0, tolerance = \"3%\", distribution = \"uniform\" }",
+    );
+    assert_ne!(text, common::example_text("rotating_pendulum.toml"));
+    let model = Model::from_str(&text, "uniform.toml").unwrap();
+    let speeds: Vec<f64> = (0..=120).map(|k| k as f64 * 0.05).collect();
+    let a = quadrature_only(&model, cases(&model, &["L12"]), speeds.clone());
+    let sigma = 0.12 / 3f64.sqrt();
+    let exact: Vec<Exact> = speeds.iter().map(|&w| exact_with(w, sigma, true)).collect();
+    for (q, pick) in [
+        (
+            Quantity::DampedFrequency,
+            (|e: &Exact| e.wd) as fn(&Exact) -> (f64, f64),
+        ),
+        (Quantity::TransferMagnitude, |e: &Exact| e.h),
+    ] {
+        let largest = exact.iter().map(|e| pick(e).1).fold(0.0, f64::max);
+        for (&w, e) in speeds.iter().zip(&exact) {
+            let (mean, std) = pick(e);
+            if std < 0.02 * largest {
+                continue;
+            }
+            let r = find(&a, 0, w, q, Method::Quadrature);
+            assert!(
+                (r.mean - mean).abs() <= 0.01 * std && (r.std - std).abs() <= 0.01 * std,
+                "{} at Ω = {w}: quadrature {}±{}, exact {mean}±{std}",
+                q.as_str(),
+                r.mean,
+                r.std
+            );
         }
     }
 }
