@@ -337,8 +337,8 @@ pub fn first_order_off(
         .collect()
 }
 
-/// Probabilities of character of one case against speed, quadrature (solid) and Monte Carlo
-/// (its own colour per event); `None` when every probability is zero.
+/// Probabilities of character of one case against speed, quadrature and Monte Carlo (a colour
+/// per event and method); `None` when every probability stays below 0.1 %.
 fn probabilities(model: &Model, a: &Analysis, case: usize, modes: usize) -> Option<Plot> {
     use crate::quadrature::Event;
     let mut events: Vec<(Event, Option<usize>)> =
@@ -358,7 +358,8 @@ fn probabilities(model: &Model, a: &Analysis, case: usize, modes: usize) -> Opti
                 })
                 .map(|p| (p.speed, 100.0 * p.probability))
                 .collect();
-            if pts.iter().all(|p| p.1 < 1e-4) {
+            // Below 0.1 % at every speed: left to probabilities.csv (far-tail noise otherwise).
+            if pts.iter().all(|p| p.1 < 0.1) {
                 continue;
             }
             let name = match mode {
