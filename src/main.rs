@@ -145,15 +145,20 @@ enum Command {
     },
     /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
     /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
-    /// paper's method), second order, the invariant-based method for ω_d, the automatic choice
-    /// among them ("analytic": invariant near a change of class, else second order), and Monte
-    /// Carlo.
+    /// paper's method), second order, the invariant-based method for ω_d, the quadrature (the
+    /// whole nonlinear analysis integrated over the distribution of the design variables,
+    /// deterministically, with error estimates: right at class changes and branch switches),
+    /// "analytic" (the answer to read: the quadrature), and Monte Carlo.
     ///
     /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
     /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
-    /// basis (the method an "analytic" row took), share:<parameter>; SI units, rad/s for speeds and frequencies) and DIR/summary.json
-    /// (cases, wall times beside the paper's, failures). Without MODEL, runs the governor example
-    /// built into the binary.
+    /// basis (the method an "analytic" row took), q05, q50, q95 (quantiles: quadrature and
+    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates),
+    /// share:<parameter>; SI units, rad/s for speeds and frequencies), DIR/probabilities.csv
+    /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
+    /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
+    /// quadrature and the Monte Carlo beside the paper's, failures), the plots and
+    /// DIR/report.html. Without MODEL, runs the governor example built into the binary.
     Analyze {
         /// Model file (TOML); default: the built-in governor example.
         model: Option<PathBuf>,
@@ -169,8 +174,8 @@ enum Command {
         /// Random seed; default: the model's.
         #[arg(long)]
         seed: Option<u64>,
-        /// Worker threads for the derivatives and the Monte Carlo (results do not depend on it);
-        /// default: all cores.
+        /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
+        /// not depend on it); default: all cores.
         #[arg(long)]
         threads: Option<usize>,
         /// Skip the Monte Carlo.

@@ -652,3 +652,26 @@ fn merged_shards_equal_one_run_exactly() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("another model"), "{}", stderr(&o));
 }
+
+#[test]
+fn quadrature_tolerance_must_be_a_relative_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("q");
+    let m = common::example_path("rotating_pendulum.toml");
+    for bad in ["0", "nan", "2", "-1e-3", "inf"] {
+        let o = run(&[
+            "analyze",
+            m.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--no-monte-carlo",
+            &format!("--quadrature-tolerance={bad}"),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("--quadrature-tolerance"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
