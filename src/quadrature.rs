@@ -211,12 +211,11 @@ pub fn integrate(
     opt: QuadOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> QuadResult {
-    let modes = nominal
+    // One ω_d output per mode (see `crate::tolerance::outputs`).
+    let modes = outs
         .iter()
-        .flatten()
-        .map(|p| p.modes.len())
-        .next()
-        .unwrap_or(0);
+        .filter(|o| o.quantity == Quantity::DampedFrequency)
+        .count();
     let active: Vec<usize> = (0..vars.len()).filter(|&k| spread.sigma[k] > 0.0).collect();
     let d = active.len();
     let branches = crate::montecarlo::branch_counts(nominal);
