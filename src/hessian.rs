@@ -35,11 +35,11 @@
 use crate::frf::transfer;
 use crate::modal::{C64, Root};
 use crate::model::Model;
+use crate::output::{Output, Quantity};
 use crate::program::Equations;
 use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
-use crate::tolerance::{Output, Quantity};
 use nalgebra::{Complex, DMatrix, DVector};
 use num_dual::{Dual2_64, HyperDual64};
 
@@ -80,7 +80,7 @@ impl Jet for Dual2_64 {
     }
 }
 
-/// First and second derivatives at one point: per output (as [`crate::tolerance::outputs`]
+/// First and second derivatives at one point: per output (as [`crate::output::outputs`]
 /// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; `None` where the
 /// output is not differentiable there (roots coalescing, `H` through zero).
 #[derive(Debug, Clone)]
@@ -245,7 +245,7 @@ fn expand<J: Jet>(
     Ok((outputs, mode_values.iter().map(|x| x.2).collect()))
 }
 
-/// Gradients and Hessians of `outs` (see [`crate::tolerance::outputs`]) and of each mode's
+/// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
 /// discriminant with respect to the parameters `vars`, at the nominal point `pt` of parameters
 /// `p`: one `Dual2` pass per variable (its gradient entry and diagonal Hessian entry), one
 /// hyper-dual pass per pair of variables (the mixed entry).

@@ -19,6 +19,7 @@ pub mod mechanics;
 pub mod modal;
 pub mod model;
 pub mod montecarlo;
+pub mod output;
 pub mod plots;
 pub mod program;
 pub mod quadrature;

@@ -31,52 +31,7 @@ use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 
-/// Output kinds whose spread is propagated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Quantity {
-    DampedFrequency,
-    DampingRatio,
-    TransferMagnitude,
-}
-
-impl Quantity {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Quantity::DampedFrequency => "damped_frequency",
-            Quantity::DampingRatio => "damping_ratio",
-            Quantity::TransferMagnitude => "transfer_magnitude",
-        }
-    }
-}
-
-/// One output: a quantity of a mode (0-based), or the transfer magnitude (`mode = None`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Output {
-    pub quantity: Quantity,
-    pub mode: Option<usize>,
-}
-
-/// The outputs of a system with `modes` modes, with or without a transfer function.
-pub fn outputs(modes: usize, transfer: bool) -> Vec<Output> {
-    let mut out = Vec::new();
-    for m in 0..modes {
-        out.push(Output {
-            quantity: Quantity::DampedFrequency,
-            mode: Some(m),
-        });
-        out.push(Output {
-            quantity: Quantity::DampingRatio,
-            mode: Some(m),
-        });
-    }
-    if transfer {
-        out.push(Output {
-            quantity: Quantity::TransferMagnitude,
-            mode: None,
-        });
-    }
-    out
-}
+pub use crate::output::{Output, Quantity, outputs};
 
 /// Value of an output at a point (modes in the point's order); `None` if not defined.
 pub fn value(pt: &Point, o: &Output, tf: Option<TransferAt>) -> Option<f64> {
