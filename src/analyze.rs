@@ -9,7 +9,7 @@
 //! quadrature and the Monte Carlo are measured for the summary.
 
 use crate::model::{Case, Model};
-use crate::montecarlo::{self, ChunkState, McOptions, McStat};
+use crate::montecarlo::{self, Block, McOptions, McStat, TreeFold};
 use crate::quadrature::{self, Event, QuadOptions, QuadStat};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{
@@ -95,11 +95,11 @@ pub enum Split {
     /// All samples here.
     #[default]
     Whole,
-    /// Only the chunks of shard `k` (0-based) of `n`; no Monte Carlo rows, the chunk moments are
-    /// returned in [`Analysis::shard_states`] for [`Split::Merged`].
+    /// Only the chunks of shard `k` (0-based) of `n`; no Monte Carlo rows, the blocks of chunk
+    /// moments are returned in [`Analysis::shard_states`] for [`Split::Merged`].
     Shard(usize, usize),
-    /// The chunk moments of all shards, per case, in chunk order: folded as a whole run would.
-    Merged(Vec<Vec<ChunkState>>),
+    /// The blocks of all shards, per case, in chunk order: folded as a whole run would.
+    Merged(Vec<Vec<Block>>),
 }
 
 /// What to analyse.
@@ -150,8 +150,11 @@ pub struct Analysis {
     pub nominal: Vec<Option<Point>>,
     /// Monte Carlo samples evaluated per case (fewer than asked if the run was interrupted).
     pub samples_done: Vec<usize>,
+    /// Per case (with a whole or merged Monte Carlo), the samples whose design is not physically
+    /// admissible, by reason: `(reason, count, first value)`; they count as failed at every speed.
+    pub inadmissible: Vec<Vec<(String, usize, f64)>>,
     /// With [`Split::Shard`]: this shard's chunk moments per case, in chunk order.
-    pub shard_states: Vec<Vec<ChunkState>>,
+    pub shard_states: Vec<Vec<Block>>,
 }
 
 impl Analysis {
@@ -302,18 +305,19 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
     let analytic_seconds = taylor_seconds + t2.elapsed().as_secs_f64();
 
     let mut samples_done = Vec::new();
+    let mut inadmissible = Vec::new();
     let mut shard_states = Vec::new();
     let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
         let t1 = Instant::now();
         for (ci, s) in spreads.iter().enumerate() {
             let name = format!("monte carlo {}", opt.cases[ci].name);
             let (stats, done) = match &opt.split {
-                Split::Merged(states) => {
-                    let (stats, _) = montecarlo::fold(&states[ci], opt.speeds.len(), outs.len());
-                    (
-                        stats,
-                        (states[ci].len() * montecarlo::CHUNK).min(mc.samples),
-                    )
+                Split::Merged(blocks) => {
+                    let mut fold = TreeFold::default();
+                    for b in &blocks[ci] {
+                        fold.push(b.clone());
+                    }
+                    montecarlo::statistics(&fold, opt.speeds.len(), outs.len())
                 }
                 Split::Shard(k, n) => {
                     let range = montecarlo::shard_chunks(mc.samples, *k, *n);
@@ -330,7 +334,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                         &|d| progress(&name, d, mc.samples),
                         None,
                     );
-                    shard_states.push(states);
+                    shard_states.push(states.into_blocks());
                     continue;
                 }
                 Split::Whole => {
@@ -352,6 +356,15 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                 }
             };
             samples_done.push(done);
+            inadmissible.push(montecarlo::inadmissible(
+                model,
+                &vars,
+                s,
+                McOptions {
+                    samples: done,
+                    ..mc
+                },
+            ));
             for (si, row) in stats.iter().enumerate() {
                 if nominal[si].is_none() || done < 2 {
                     continue;
@@ -389,6 +402,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
         failures,
         nominal,
         samples_done,
+        inadmissible,
         shard_states,
     }
 }

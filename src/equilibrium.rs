@@ -159,8 +159,8 @@ fn least_squares(a: DMatrix<f64>, b: DVector<f64>) -> Vec<f64> {
             }
         }
     }
-    match a.svd(true, true).solve(&b, 1e-12) {
-        Ok(l) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
+    match crate::linalg::svd(a, true, true).map(|svd| svd.solve(&b, 1e-12)) {
+        Some(Ok(l)) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
         _ => vec![0.0; m],
     }
 }

@@ -11,6 +11,7 @@
 
 pub mod analyze;
 pub mod equilibrium;
+pub mod files;
 pub mod frf;
 pub mod hessian;
 pub mod linalg;
@@ -26,6 +27,7 @@ pub mod quadrature;
 pub mod real;
 pub mod report;
 pub mod sensitivity;
+pub mod shard;
 pub mod sweep;
 pub mod tape;
 pub mod tolerance;

@@ -1,13 +1,100 @@
-//! Small dense helpers over any [`Real`]: forward-mode Jacobians, a pivoted solve, and the
-//! choice of independent columns of a constraint Jacobian.
+//! Small dense helpers over any [`Real`]: forward-mode Jacobians, a pivoted solve, the choice
+//! of independent columns of a constraint Jacobian, and bounded forms of nalgebra's iterative
+//! factorisations.
 //!
 //! nalgebra's factorisations need a `ComplexField`, which nested dual numbers are not, so the
 //! few solves that must carry derivatives (the independent-coordinate basis) use this
 //! elimination, pivoting on real parts.
+//!
+//! **Every iterative factorisation goes through this module** ([`svd`], [`complex_eigenvalues`],
+//! [`symmetric_eigen`]). nalgebra's plain calls iterate without bound and panic on a NaN they
+//! produce themselves: entries near `f64::MAX` overflow inside the QR sweeps, after which the
+//! iteration never converges (a hang) or a singular value is NaN (a panic). Here the input must be
+//! finite, is scaled by a power of two (exact) so that its largest entry lies in `[½, 1)`, and the
+//! iteration count is bounded (LAPACK allows 30 QR sweeps per eigenvalue; we allow
+//! [`SWEEPS_PER_ROW`]). The result is unscaled; a result that overflows on unscaling is not
+//! finite and the caller reports it as a failure.
 
 use crate::real::{D1, Real, cst, lift1};
-use nalgebra::DMatrix;
+use nalgebra::{ComplexField, DMatrix, DVector, Dyn, SVD, Schur, SymmetricEigen};
 use num_dual::Dual;
+
+/// QR or Jacobi sweeps allowed per row of the matrix (LAPACK's `dhseqr` allows 30 per
+/// eigenvalue); beyond that the factorisation is reported as not converged.
+pub const SWEEPS_PER_ROW: usize = 100;
+
+/// Iteration bound of a factorisation of an `n`-row matrix (nalgebra counts all sweeps).
+fn sweeps(n: usize) -> usize {
+    SWEEPS_PER_ROW * n.max(1)
+}
+
+/// Power of two that brings the largest modulus of a finite matrix into `[½, 1)`, or `None`
+/// when an entry is NaN or infinite. The exponent is clamped to ±1000 so that the factor itself
+/// is finite and normal (a matrix of subnormals stays small, which is harmless).
+fn balance<T: ComplexField<RealField = f64>>(a: &DMatrix<T>) -> Option<f64> {
+    let mut amax = 0.0f64;
+    for v in a.iter() {
+        if !v.is_finite() {
+            return None;
+        }
+        // |re| + |im| can overflow for a finite complex number; the larger part cannot.
+        let (re, im) = (v.clone().real().abs(), v.clone().imaginary().abs());
+        amax = amax.max(re.max(im));
+    }
+    if amax == 0.0 {
+        return Some(1.0);
+    }
+    let e = (amax.log2().floor() as i32 + 1).clamp(-1000, 1000);
+    Some(2f64.powi(-e))
+}
+
+/// `a` times the real factor `s`.
+fn scaled<T: ComplexField<RealField = f64>>(mut a: DMatrix<T>, s: f64) -> DMatrix<T> {
+    if s.to_bits() != 1f64.to_bits() {
+        let f = T::from_real(s);
+        a.iter_mut().for_each(|v| *v *= f.clone());
+    }
+    a
+}
+
+/// Singular value decomposition (sorted), or `None` when `a` is not finite or the iteration
+/// does not converge. Singular values that overflow on unscaling are infinite.
+pub fn svd<T: ComplexField<RealField = f64>>(
+    a: DMatrix<T>,
+    compute_u: bool,
+    compute_v: bool,
+) -> Option<SVD<T, Dyn, Dyn>> {
+    let s = balance(&a)?;
+    let n = a.nrows().max(a.ncols());
+    let mut out = SVD::try_new(
+        scaled(a, s),
+        compute_u,
+        compute_v,
+        f64::EPSILON * 5.0,
+        sweeps(n),
+    )?;
+    out.singular_values.unscale_mut(s);
+    Some(out)
+}
+
+/// Eigenvalues of a real square matrix (real Schur form), or `None` when `a` is not finite
+/// or the QR iteration does not converge.
+pub fn complex_eigenvalues(a: DMatrix<f64>) -> Option<DVector<nalgebra::Complex<f64>>> {
+    let s = balance(&a)?;
+    let n = a.nrows();
+    let schur = Schur::try_new(scaled(a, s), f64::EPSILON, sweeps(n))?;
+    Some(schur.complex_eigenvalues().map(|l| l / s))
+}
+
+/// Eigen-decomposition of a real symmetric matrix (eigenvalues unsorted), or `None` when `a`
+/// is not finite or the iteration does not converge.
+pub fn symmetric_eigen(a: DMatrix<f64>) -> Option<SymmetricEigen<f64, Dyn>> {
+    let s = balance(&a)?;
+    let n = a.nrows();
+    let mut out = SymmetricEigen::try_new(scaled(a, s), f64::EPSILON, sweeps(n))?;
+    out.eigenvalues.unscale_mut(s);
+    Some(out)
+}
 
 /// Value and Jacobian of `f` at `x`: one pass of `f` over `Dual<T>` per column.
 pub fn jacobian<T: Real>(x: &[T], f: impl Fn(&[D1<T>]) -> Vec<D1<T>>) -> (Vec<T>, DMatrix<T>) {
@@ -169,6 +256,30 @@ mod tests {
             assert!((x[(i, 0)].re - x0[(i, 0)]).abs() < 1e-15);
             assert!((x[(i, 0)].eps - dx[(i, 0)]).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn factorisations_of_extreme_matrices_end_with_an_answer_or_none() {
+        // Entries near f64::MAX overflow inside nalgebra's unscaled sweeps (a hang in Schur, a
+        // NaN panic in the SVD); balanced, they are ordinary matrices.
+        let big = DMatrix::from_row_slice(2, 2, &[1e308, -1e308, 1e308, 1e308]);
+        let ev = complex_eigenvalues(big.clone()).unwrap();
+        for l in ev.iter() {
+            assert!((l.re / 1e308 - 1.0).abs() < 1e-12 && (l.im.abs() / 1e308 - 1.0).abs() < 1e-12);
+        }
+        let sv = svd(big.clone(), true, true).unwrap().singular_values;
+        assert!(
+            sv.iter()
+                .all(|s| s.is_infinite() || (s / 1e308 - 2f64.sqrt()).abs() < 1e-12)
+        );
+        let c = big.map(|v| nalgebra::Complex::new(v, v));
+        assert!(svd(c, false, true).is_some());
+        let sym = DMatrix::from_row_slice(2, 2, &[1e-320, 5e-321, 5e-321, 1e-320]);
+        assert!(symmetric_eigen(sym).is_some());
+        let nan = DMatrix::from_row_slice(1, 1, &[f64::NAN]);
+        assert!(complex_eigenvalues(nan.clone()).is_none());
+        assert!(svd(nan.clone(), false, false).is_none());
+        assert!(symmetric_eigen(DMatrix::from_element(2, 2, f64::INFINITY)).is_none());
     }
 
     #[test]

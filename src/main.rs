@@ -4,13 +4,15 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::files::{AtomicFile, ResultDir, read_bounded, write_atomically};
 use modaltol::frf::transfer;
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
-use modaltol::montecarlo::{ChunkState, McOptions};
+use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns, SweepExtras};
 use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
+use modaltol::shard::ShardFile;
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -96,7 +98,7 @@ enum Command {
         /// Model file (TOML).
         model: PathBuf,
         /// Speeds FROM:TO:STEP in rad/s (TO included); default: the model's [analysis] speed.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         speed: Option<String>,
         /// Independent coordinates (joint names, comma separated), overriding the model.
         #[arg(long, value_delimiter = ',')]
@@ -166,7 +168,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         speed: Option<String>,
         /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
         #[arg(long)]
@@ -235,7 +237,7 @@ enum Command {
         #[arg(long)]
         output: String,
         /// Excitation frequencies FROM:TO:STEP in rad/s.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         freq: String,
         /// Design variables (parameter names, comma separated); default: those with a tolerance.
         #[arg(long, value_delimiter = ',')]
@@ -253,6 +255,11 @@ const EMBEDDED_GOVERNOR: &str = include_str!("../examples/governor.toml");
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted; the outputs hold a partial result")]
 struct Interrupted;
+
+/// The computation asked for failed (its reason is the message): exit code 1.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct Failed(String);
 
 /// Bad input (model, arguments): exit code 2.
 #[derive(Debug, thiserror::Error)]
@@ -364,37 +371,6 @@ fn sensitivities(
     }
 }
 
-/// Format tag of shard files.
-const SHARD_FORMAT: &str = "modaltol-shard-1";
-
-/// What `analyze --shard K/N` writes: the chunk moments of its share of the samples.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct ShardFile {
-    format: String,
-    /// Identifies the model and its tolerance cases.
-    fingerprint: String,
-    speed: String,
-    samples: usize,
-    seed: u64,
-    sampling: Sampling,
-    shard: usize,
-    of: usize,
-    states: Vec<Vec<ChunkState>>,
-}
-
-/// A fingerprint of the model's numbers and the tolerance cases (shards must match them).
-fn fingerprint(m: &Model, cases: &[modaltol::model::Case]) -> String {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    m.name.hash(&mut h);
-    for p in &m.parameters {
-        p.name.hash(&mut h);
-        p.value.to_bits().hash(&mut h);
-    }
-    format!("{cases:?}").hash(&mut h);
-    format!("{:016x}", h.finish())
-}
-
 fn model_or_governor(model: &Option<PathBuf>) -> Result<Model> {
     match model {
         Some(path) => load(path),
@@ -460,43 +436,50 @@ fn write_outputs(
     a: &modaltol::analyze::Analysis,
     mc: Option<&McOptions>,
     threads: Option<usize>,
+    mut dir: ResultDir,
     output: &std::path::Path,
 ) -> Result<()> {
-    std::fs::create_dir_all(output)
-        .with_context(|| format!("cannot create {}", output.display()))?;
-    let mut csv = csv::Writer::from_path(output.join("tolerance.csv"))?;
+    let partial = mc.is_some_and(|mc| a.interrupted(mc.samples));
+    let mut csv = csv::Writer::from_writer(Vec::new());
     csv.write_record(report::tolerance_header(m, a))?;
-    for row in report::tolerance_rows(a) {
+    for row in report::tolerance_rows(a, partial) {
         csv.write_record(&row)?;
     }
-    csv.flush()?;
-    let mut csv = csv::Writer::from_path(output.join("probabilities.csv"))?;
+    dir.write(
+        "tolerance.csv",
+        &csv.into_inner().map_err(|e| e.into_error())?,
+    )?;
+    let mut csv = csv::Writer::from_writer(Vec::new());
     csv.write_record(report::PROBABILITY_HEADER)?;
     for row in report::probability_rows(a) {
         csv.write_record(&row)?;
     }
-    csv.flush()?;
+    dir.write(
+        "probabilities.csv",
+        &csv.into_inner().map_err(|e| e.into_error())?,
+    )?;
     let (plots, critical) = modaltol::plots::plots(m, a);
     let fonts = modaltol::plots::fonts();
     let mut files = Vec::new();
     for p in &plots {
         let svg = format!("{}.svg", p.stem);
-        std::fs::write(output.join(&svg), &p.svg)?;
+        dir.write(&svg, p.svg.as_bytes())?;
         match modaltol::plots::png(&p.svg, &fonts) {
-            Ok(png) => std::fs::write(output.join(format!("{}.png", p.stem)), png)?,
+            Ok(png) => dir.write(&format!("{}.png", p.stem), &png)?,
             Err(e) => eprintln!("modaltol: no PNG for {}: {e}", p.stem),
         }
         files.push((svg, p.title.clone()));
     }
-    std::fs::write(
-        output.join("report.html"),
-        report::report_html(m, a, &files, &critical, mc),
+    dir.write(
+        "report.html",
+        report::report_html(m, a, &files, &critical, mc).as_bytes(),
     )?;
     let used = threads.unwrap_or_else(rayon::current_num_threads);
-    std::fs::write(
-        output.join("summary.json"),
-        serde_json::to_string_pretty(&report::summary_json(m, a, mc, used))?,
+    dir.write(
+        "summary.json",
+        serde_json::to_string_pretty(&report::summary_json(m, a, mc, used))?.as_bytes(),
     )?;
+    dir.commit(partial)?;
     eprintln!(
         "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
         a.analytic_seconds,
@@ -508,13 +491,16 @@ fn write_outputs(
         )),
         output.display()
     );
+    for w in report::inadmissible_warnings(a) {
+        eprintln!("modaltol: warning: {w}");
+    }
     if !a.failures.is_empty() {
         eprintln!(
             "modaltol: {} speed(s) failed; see summary.json",
             a.failures.len()
         );
     }
-    if mc.is_some_and(|mc| a.interrupted(mc.samples)) {
+    if partial {
         eprintln!(
             "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
             a.samples_done
@@ -524,20 +510,61 @@ fn write_outputs(
     Ok(())
 }
 
-fn writer(output: &Option<PathBuf>) -> Result<Box<dyn Write>> {
-    Ok(match output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    })
+/// Where a command's table goes: a file written beside its target and renamed into place by
+/// [`Sink::finish`] (a failed or killed run leaves the earlier file untouched), or stdout.
+enum Sink {
+    File(std::io::BufWriter<AtomicFile>),
+    Stdout(std::io::BufWriter<std::io::StdoutLock<'static>>),
 }
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Sink::File(w) => w.write(buf),
+            Sink::Stdout(w) => w.write(buf),
+        }
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::File(w) => w.flush(),
+            Sink::Stdout(w) => w.flush(),
+        }
+    }
+}
+
+impl Sink {
+    fn to(output: &Option<PathBuf>) -> Result<Sink> {
+        Ok(match output {
+            Some(p) => Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?)),
+            None => Sink::Stdout(std::io::BufWriter::new(std::io::stdout().lock())),
+        })
+    }
+
+    /// Flushes, and puts a file in place.
+    fn finish(self) -> Result<()> {
+        match self {
+            Sink::File(w) => w.into_inner().map_err(|e| e.into_error())?.commit()?,
+            Sink::Stdout(mut w) => w.flush()?,
+        }
+        Ok(())
+    }
+}
+
+/// The outputs per speed of the model's Monte Carlo (as `analyze` makes them).
+fn output_count(m: &Model) -> usize {
+    modaltol::output::outputs(m.dof(), m.analysis.transfer.is_some()).len()
+}
+
+/// Largest shard file `merge` reads (a shard holds a few blocks of moments per case).
+const MAX_SHARD_BYTES: u64 = 1 << 30;
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Check { model } => {
             let m = load(&model)?;
-            print!("{}", report::check_summary(&m));
+            let mut w = Sink::to(&None)?;
+            write!(w, "{}", report::check_summary(&m))?;
+            w.finish()?;
         }
         Command::Modal {
             model,
@@ -557,7 +584,7 @@ fn run(cli: Cli) -> Result<()> {
             let p = m.nominal();
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let result = point(&m, &p, speed, &q0, &opt);
-            let mut w = writer(&output)?;
+            let mut w = Sink::to(&output)?;
             match format {
                 Format::Json => writeln!(
                     w,
@@ -566,9 +593,9 @@ fn run(cli: Cli) -> Result<()> {
                 )?,
                 Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
             }
-            w.flush()?;
+            w.finish()?;
             if let Err(e) = result {
-                eprintln!("modaltol: speed {speed} rad/s failed: {e}");
+                return Err(Failed(format!("speed {speed:?} rad/s failed: {e}")).into());
             }
         }
         Command::Sweep {
@@ -605,7 +632,7 @@ fn run(cli: Cli) -> Result<()> {
                 ..Default::default()
             };
             let mut sweep = Sweep::new(&m, m.nominal(), opt);
-            let mut csv = csv::Writer::from_writer(writer(&output)?);
+            let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
             csv.write_record(report::sweep_header(&m, &cols))?;
             let n = range.len();
             let progress = std::io::stderr().is_terminal() && n >= 2000;
@@ -633,9 +660,15 @@ fn run(cli: Cli) -> Result<()> {
                     eprint!("\rsweep: {i}/{n} speeds");
                 }
             }
-            csv.flush()?;
+            csv.into_inner().map_err(|e| e.into_error())?.finish()?;
             if progress {
                 eprintln!("\rsweep: {n}/{n} speeds");
+            }
+            if failed == n {
+                return Err(Failed(format!(
+                    "all {n} speeds failed (status 'failed', reason in the message column)"
+                ))
+                .into());
             }
             if failed > 0 {
                 eprintln!(
@@ -664,7 +697,7 @@ fn run(cli: Cli) -> Result<()> {
             let p = m.nominal();
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let pt = point(&m, &p, speed, &q0, &Options::default())
-                .with_context(|| format!("speed {speed} rad/s"))?;
+                .with_context(|| format!("speed {speed:?} rad/s"))?;
             let s = sensitivities(
                 &m,
                 &pt,
@@ -672,13 +705,13 @@ fn run(cli: Cli) -> Result<()> {
                 tf.map(|t| TransferAt::at_speed(&t, speed)),
                 derivatives,
             )
-            .with_context(|| format!("sensitivities at {speed} rad/s"))?;
+            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
             let method = if derivatives == Derivatives::Ad {
                 "ad"
             } else {
                 "fd"
             };
-            let mut w = writer(&output)?;
+            let mut w = Sink::to(&output)?;
             match format {
                 Format::Json => writeln!(
                     w,
@@ -693,7 +726,7 @@ fn run(cli: Cli) -> Result<()> {
                     report::sensitivity_table(&m, speed, method, &pt, &s)
                 )?,
             }
-            w.flush()?;
+            w.finish()?;
         }
         Command::Analyze {
             model,
@@ -723,8 +756,14 @@ fn run(cli: Cli) -> Result<()> {
                 })?,
             };
             let cases = tolerance_cases(&m, &only)?;
-            if samples == Some(0) || samples == Some(1) {
-                return Err(InputError("--samples must be at least 2".into()).into());
+            if let Some(n) = samples
+                && !(2..=modaltol::montecarlo::MAX_SAMPLES).contains(&n)
+            {
+                return Err(InputError(format!(
+                    "--samples must lie in 2..={} (got {n})",
+                    modaltol::montecarlo::MAX_SAMPLES
+                ))
+                .into());
             }
             let mc = (!no_monte_carlo).then(|| McOptions {
                 samples: samples.unwrap_or(m.analysis.samples),
@@ -760,8 +799,16 @@ fn run(cli: Cli) -> Result<()> {
                     Split::Shard(k - 1, n)
                 }
             };
-            std::fs::create_dir_all(&output)
-                .with_context(|| format!("cannot create {}", output.display()))?;
+            // Fail early where the results cannot be written.
+            let dir = match split {
+                Split::Shard(..) => {
+                    std::fs::create_dir_all(&output).with_context(|| {
+                        format!("{}: cannot create the directory", output.display())
+                    })?;
+                    None
+                }
+                _ => Some(ResultDir::create(&output)?),
+            };
             // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
             let quadrature =
                 (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
@@ -779,31 +826,42 @@ fn run(cli: Cli) -> Result<()> {
             install_interrupt_handler();
             let a = analyze(&m, &opt, &progress_printer());
             if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
+                let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+                let expect = modaltol::montecarlo::shard_chunks(mc.samples, *k, *n);
+                let done: Vec<usize> = a
+                    .shard_states
+                    .iter()
+                    .map(|c| c.last().map_or(expect.start, |b| b.chunks().end) - expect.start)
+                    .collect();
+                if done.iter().any(|&d| d < expect.len()) {
+                    eprintln!(
+                        "modaltol: interrupted; {} not written (a shard is complete or absent)",
+                        path.display()
+                    );
+                    return Err(Interrupted.into());
+                }
                 let file = ShardFile {
-                    format: SHARD_FORMAT.into(),
-                    fingerprint: fingerprint(&m, &opt.cases),
+                    format: modaltol::shard::FORMAT.into(),
+                    fingerprint: modaltol::shard::fingerprint(&m, &opt.cases),
                     speed: format!("{}:{}:{}", range.from, range.to, range.step),
                     samples: mc.samples,
                     seed: mc.seed,
                     sampling: mc.sampling,
                     shard: k + 1,
                     of: *n,
-                    states: a.shard_states.clone(),
+                    outputs: output_count(&m),
+                    cases: a.shard_states.clone(),
+                    digest: String::new(),
                 };
-                let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
-                std::fs::write(&path, serde_json::to_string(&file)?)?;
-                let done: Vec<usize> = a.shard_states.iter().map(|c| c.len()).collect();
-                let expect = modaltol::montecarlo::shard_chunks(mc.samples, *k, *n).len();
+                write_atomically(&path, file.to_json().as_bytes())?;
                 eprintln!(
-                    "modaltol: wrote {} (chunks per case {done:?} of {expect}); combine the shards with `modaltol merge`",
+                    "modaltol: wrote {}; combine the shards with `modaltol merge`",
                     path.display()
                 );
-                if done.iter().any(|&d| d < expect) {
-                    return Err(Interrupted.into());
-                }
                 return Ok(());
             }
-            write_outputs(&m, &a, mc.as_ref(), threads, &output)?;
+            let dir = dir.expect("a result directory");
+            write_outputs(&m, &a, mc.as_ref(), threads, dir, &output)?;
         }
         Command::Merge {
             model,
@@ -813,64 +871,24 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let m = model_or_governor(&model)?;
             let cases = tolerance_cases(&m, &only)?;
-            let mut files: Vec<ShardFile> = Vec::new();
+            let fingerprint = modaltol::shard::fingerprint(&m, &cases);
+            let mut files = Vec::new();
             for path in &shards {
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("cannot read {}", path.display()))?;
-                let f: ShardFile = serde_json::from_str(&text).map_err(|e| {
-                    InputError(format!(
-                        "{}: not a modaltol shard file: {e}",
-                        path.display()
-                    ))
+                let name = path.display().to_string();
+                let bytes = read_bounded(path, MAX_SHARD_BYTES)?;
+                let text = String::from_utf8(bytes).map_err(|_| {
+                    InputError(format!("{name}: not a modaltol shard file (not UTF-8)"))
                 })?;
-                if f.format != SHARD_FORMAT {
-                    return Err(InputError(format!(
-                        "{}: unknown shard format '{}'",
-                        path.display(),
-                        f.format
-                    ))
-                    .into());
-                }
-                if f.fingerprint != fingerprint(&m, &cases) {
-                    return Err(InputError(format!(
-                        "{}: made from another model or other tolerance cases",
-                        path.display()
-                    ))
-                    .into());
-                }
-                files.push(f);
+                let f = ShardFile::parse(&text, &name).map_err(|e| InputError(e.to_string()))?;
+                let speeds = SpeedRange::parse(&f.speed)
+                    .map_err(|e| InputError(format!("{name}: speed '{}': {e}", f.speed)))?
+                    .len();
+                f.check(&name, &fingerprint, speeds, output_count(&m), cases.len())
+                    .map_err(|e| InputError(e.to_string()))?;
+                files.push((name, f));
             }
-            files.sort_by_key(|f| f.shard);
-            let Some(first) = files.first() else {
-                return Err(InputError("merge needs at least one shard file".into()).into());
-            };
-            let n = first.of;
-            let same = |f: &ShardFile| {
-                f.of == n
-                    && f.speed == first.speed
-                    && f.samples == first.samples
-                    && f.seed == first.seed
-                    && f.sampling == first.sampling
-            };
-            if let Some(f) = files.iter().find(|f| !same(f)) {
-                return Err(InputError(format!(
-                    "shard {}/{} was run with other settings than shard {}/{}",
-                    f.shard, f.of, first.shard, n
-                ))
-                .into());
-            }
-            let got: Vec<usize> = files.iter().map(|f| f.shard).collect();
-            if got != (1..=n).collect::<Vec<_>>() {
-                return Err(
-                    InputError(format!("need shards 1..={n} once each, got {got:?}")).into(),
-                );
-            }
-            let mut states: Vec<Vec<ChunkState>> = vec![Vec::new(); cases.len()];
-            for f in &files {
-                for (ci, s) in f.states.iter().enumerate() {
-                    states[ci].extend(s.iter().cloned());
-                }
-            }
+            let (first, states) = modaltol::shard::gather(files, &fingerprint)
+                .map_err(|e| InputError(e.to_string()))?;
             let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
             let mc = McOptions {
                 samples: first.samples,
@@ -886,8 +904,9 @@ fn run(cli: Cli) -> Result<()> {
                 split: Split::Merged(states),
                 threads: None,
             };
+            let dir = ResultDir::create(&output)?;
             let a = analyze(&m, &opt, &progress_printer());
-            write_outputs(&m, &a, Some(&mc), None, &output)?;
+            write_outputs(&m, &a, Some(&mc), None, dir, &output)?;
         }
         Command::Frf {
             model,
@@ -905,10 +924,10 @@ fn run(cli: Cli) -> Result<()> {
             let p = m.nominal();
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let pt = point(&m, &p, speed, &q0, &Options::default())
-                .with_context(|| format!("speed {speed} rad/s"))?;
+                .with_context(|| format!("speed {speed:?} rad/s"))?;
             let duals = dual_linearizations(&m, &p, &pt, &wrt)
-                .with_context(|| format!("sensitivities at {speed} rad/s"))?;
-            let mut csv = csv::Writer::from_writer(writer(&out)?);
+                .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+            let mut csv = csv::Writer::from_writer(Sink::to(&out)?);
             let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
                 .iter()
                 .map(|s| s.to_string())
@@ -933,7 +952,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 csv.write_record(&row)?;
             }
-            csv.flush()?;
+            csv.into_inner().map_err(|e| e.into_error())?.finish()?;
         }
     }
     Ok(())
@@ -942,6 +961,19 @@ fn run(cli: Cli) -> Result<()> {
 fn main() {
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
+        // A reader that stopped reading (`… | head`) is not an error of ours.
+        let pipe = |io: &std::io::Error| io.kind() == std::io::ErrorKind::BrokenPipe;
+        let broken_pipe = e.chain().any(|c| {
+            c.downcast_ref::<std::io::Error>().is_some_and(pipe)
+                || c.downcast_ref::<csv::Error>()
+                    .is_some_and(|e| match e.kind() {
+                        csv::ErrorKind::Io(io) => pipe(io),
+                        _ => false,
+                    })
+        });
+        if broken_pipe {
+            std::process::exit(0);
+        }
         eprintln!("modaltol: error: {e:#}");
         let code = if e.downcast_ref::<InputError>().is_some() {
             2

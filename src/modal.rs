@@ -13,6 +13,7 @@
 //! and a class: `unstable` if a root has positive real part, else `underdamped` or
 //! `overdamped`. All frequencies in rad/s.
 
+use crate::linalg;
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// Complex scalar.
@@ -69,8 +70,25 @@ pub enum ModalError {
         "the reduced mass matrix M̂ is singular (condition {condition:.3e}): a coordinate moves no mass or inertia, e.g. a massless body or a rod spinning about its own axis"
     )]
     SingularMass { condition: f64 },
-    #[error("non-finite entries in M̂, Ĉ or K̂")]
+    #[error("non-finite entries in M̂, Ĉ or K̂ (an input value overflows)")]
     NotFinite,
+    #[error(
+        "the eigenvalue solver did not converge ({what}; M̂, Ĉ, K̂ span more than double precision can resolve)"
+    )]
+    NoConvergence { what: &'static str },
+    #[error(
+        "mode {mode}: {what} is not a finite number (λ = {re:e} {im:+e}i): the matrices' scales overflow double precision"
+    )]
+    NotFiniteMode {
+        mode: usize,
+        what: &'static str,
+        re: f64,
+        im: f64,
+    },
+    #[error(
+        "mode {mode} has zero natural frequency (λ₁λ₂ = 0): K̂ is singular, the equilibrium is neutral"
+    )]
+    ZeroFrequency { mode: usize },
 }
 
 /// Relative size below which an imaginary part counts as zero (roots are then real).
@@ -92,7 +110,9 @@ pub fn modes(
     {
         return Err(ModalError::NotFinite);
     }
-    let sv = m.clone().svd(false, false).singular_values;
+    let sv = linalg::svd(m.clone(), false, false)
+        .ok_or(ModalError::NoConvergence { what: "SVD of M̂" })?
+        .singular_values;
     let condition = sv.max() / sv.min().max(f64::MIN_POSITIVE);
     if sv.max() == 0.0 || condition > 1e12 {
         return Err(ModalError::SingularMass { condition });
@@ -108,7 +128,9 @@ pub fn modes(
             a[(n + i, n + j)] = -mc[(i, j)];
         }
     }
-    let eig = a.complex_eigenvalues();
+    let eig = linalg::complex_eigenvalues(a).ok_or(ModalError::NoConvergence {
+        what: "real Schur form",
+    })?;
     let scale = eig
         .iter()
         .fold(0.0f64, |s, l| s.max(l.norm()))
@@ -123,7 +145,7 @@ pub fn modes(
             };
             root(m, c, k, l)
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let mut out = Vec::new();
     let mut real: Vec<Root> = Vec::new();
     for r in roots {
@@ -159,7 +181,46 @@ pub fn modes(
         out.push(make_mode(hi, lo, scale));
     }
     out.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
+    for (i, m) in out.iter().enumerate() {
+        check_mode(i + 1, m)?;
+    }
     Ok(out)
+}
+
+/// A mode is reported only with finite roots, vectors and derived quantities: an overflow
+/// anywhere makes the point fail with the reason, never a NaN or ∞ in a result.
+fn check_mode(mode: usize, m: &Mode) -> Result<(), ModalError> {
+    let l = m.root.lambda;
+    let bad = |what| ModalError::NotFiniteMode {
+        mode,
+        what,
+        re: l.re,
+        im: l.im,
+    };
+    let finite = |z: &C64| z.re.is_finite() && z.im.is_finite();
+    if !finite(&m.root.lambda) || !finite(&m.partner.lambda) {
+        return Err(bad("an eigenvalue"));
+    }
+    if !m.natural_frequency.is_finite() || !m.damped_frequency.is_finite() {
+        return Err(bad("the natural frequency"));
+    }
+    if m.natural_frequency == 0.0 {
+        return Err(ModalError::ZeroFrequency { mode });
+    }
+    if !m.damping_ratio.is_finite() {
+        return Err(bad("the damping ratio"));
+    }
+    for v in [
+        &m.root.right,
+        &m.root.left,
+        &m.partner.right,
+        &m.partner.left,
+    ] {
+        if !v.iter().all(finite) {
+            return Err(bad("a mode shape"));
+        }
+    }
+    Ok(())
 }
 
 /// |aᴴ b| / (|a| |b|): 1 for parallel vectors.
@@ -197,32 +258,39 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
 }
 
 /// Right and left null vectors of `P(λ) = λ²M + λC + K` (unit norm).
-fn root(m: &DMatrix<f64>, c: &DMatrix<f64>, k: &DMatrix<f64>, lambda: C64) -> Root {
+fn root(
+    m: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+    lambda: C64,
+) -> Result<Root, ModalError> {
     let n = m.nrows();
     let p = DMatrix::from_fn(n, n, |i, j| {
         lambda * lambda * m[(i, j)] + lambda * c[(i, j)] + k[(i, j)]
     });
     if n == 1 {
         let one = DVector::from_element(1, C64::new(1.0, 0.0));
-        return Root {
+        return Ok(Root {
             lambda,
             right: one.clone(),
             left: one,
-        };
+        });
     }
-    let right = null_vector(p.clone());
-    let left = null_vector(p.transpose());
-    Root {
+    let right = null_vector(p.clone())?;
+    let left = null_vector(p.transpose())?;
+    Ok(Root {
         lambda,
         right: normalize(right),
         left: normalize(left),
-    }
+    })
 }
 
 /// Right singular vector of the smallest singular value: `a v ≈ 0`.
-fn null_vector(a: DMatrix<C64>) -> DVector<C64> {
+fn null_vector(a: DMatrix<C64>) -> Result<DVector<C64>, ModalError> {
     let n = a.ncols();
-    let svd = a.svd(false, true);
+    let svd = linalg::svd(a, false, true).ok_or(ModalError::NoConvergence {
+        what: "SVD of the pencil at a root",
+    })?;
     let imin = svd
         .singular_values
         .iter()
@@ -234,7 +302,7 @@ fn null_vector(a: DMatrix<C64>) -> DVector<C64> {
         .0;
     let vt = svd.v_t.expect("requested");
     // a = U Σ Vᴴ: the right singular vectors are the conjugated rows of Vᴴ.
-    DVector::from_fn(n, |i, _| vt[(imin, i)].conj())
+    Ok(DVector::from_fn(n, |i, _| vt[(imin, i)].conj()))
 }
 
 /// Scales to unit norm with the largest entry real and positive (a fixed phase).

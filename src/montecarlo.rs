@@ -2,10 +2,12 @@
 //! pipeline (equilibrium sweep, linearisation, modes, transfer function) per sample.
 //!
 //! Reproducibility: sample `i` draws from its own ChaCha8 stream `(seed, i)`; Latin hypercube
-//! strata come from one permutation per variable drawn from a stream reserved for it; scrambled
-//! Sobol points are a function of `(i, dimension, seed)`. Samples are evaluated in parallel
-//! (rayon) in chunks and folded into the statistics in sample order, so the output is
-//! bit-identical for any number of threads, and memory stays bounded by the chunk size.
+//! strata come from one hash permutation per variable ([`permute`]) keyed from a stream reserved
+//! for it; scrambled Sobol points are a function of `(i, dimension, seed)`. Samples are evaluated
+//! in parallel (rayon) in chunks, and the chunks' moments are combined along one fixed binary
+//! tree over the chunk indices ([`TreeFold`]), so the output is bit-identical for any number of
+//! threads or shards, and memory does not grow with the number of samples (at most
+//! [`MAX_SAMPLES`]; the values kept for quantiles are capped by [`MAX_KEPT_VALUES`]).
 //!
 //! Per speed and output: mean and σ (one-pass central moments up to the fourth), their 95 %
 //! confidence intervals, the samples that failed (no equilibrium or no modes) and those whose
@@ -91,8 +93,98 @@ pub struct Moments {
     other_branch: usize,
 }
 
-/// Moments of one chunk of samples: `[speed][output]`.
+/// Moments of one chunk (or block of chunks) of samples: `[speed][output]`.
 pub type ChunkState = Vec<Vec<Moments>>;
+
+/// The moments of the aligned block of chunks `[index·2^level, (index+1)·2^level)`: a node of
+/// the one binary tree over global chunk indices along which every run combines its chunks.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Block {
+    pub level: u32,
+    pub index: usize,
+    pub moments: ChunkState,
+}
+
+impl Block {
+    /// The chunks this block covers.
+    pub fn chunks(&self) -> std::ops::Range<usize> {
+        let w = 1usize.checked_shl(self.level).unwrap_or(usize::MAX);
+        self.index.saturating_mul(w)..(self.index.saturating_add(1)).saturating_mul(w)
+    }
+}
+
+/// The maximal aligned blocks `(level, index)` of the chunks `range`, in order: what a
+/// [`TreeFold`] fed those chunks keeps (the largest aligned block that fits, greedily).
+pub fn block_layout(range: std::ops::Range<usize>) -> Vec<(u32, usize)> {
+    let mut out = Vec::new();
+    let mut x = range.start;
+    while x < range.end {
+        let mut level = 0u32;
+        while level < 62 && x.is_multiple_of(2usize << level) && x + (2usize << level) <= range.end
+        {
+            level += 1;
+        }
+        out.push((level, x >> level));
+        x += 1usize << level;
+    }
+    out
+}
+
+/// Combines chunk moments along a fixed binary tree over the chunk indices, in memory
+/// logarithmic in their number.
+///
+/// Pébay's pairwise combination is exact in arithmetic but not associative in floating point,
+/// so the order of combination must not depend on how the work was split. Here it does not: a
+/// block is only ever combined with its sibling, so a whole run pushing chunk after chunk, and a
+/// merge pushing the blocks its shards kept (each shard keeps the maximal aligned blocks of its
+/// range, at most two per level), build the same tree and give bit-identical statistics. The
+/// stack holds at most one block per level: memory does not grow with the sample count.
+#[derive(Debug, Clone, Default)]
+pub struct TreeFold {
+    stack: Vec<Block>,
+}
+
+impl TreeFold {
+    /// Adds the next block; blocks must come in chunk order without gaps (shards read from
+    /// files are checked against [`block_layout`] first, see [`crate::shard`]).
+    pub fn push(&mut self, mut b: Block) {
+        while let Some(top) = self.stack.last() {
+            if top.level == b.level && top.index % 2 == 0 && top.index + 1 == b.index {
+                let mut left = self.stack.pop().expect("a top");
+                for (ra, rb) in left.moments.iter_mut().zip(&b.moments) {
+                    for (x, y) in ra.iter_mut().zip(rb) {
+                        x.combine(y);
+                    }
+                }
+                left.level += 1;
+                left.index /= 2;
+                b = left;
+            } else {
+                break;
+            }
+        }
+        self.stack.push(b);
+    }
+
+    /// The maximal aligned blocks of the chunks pushed, in chunk order.
+    pub fn into_blocks(self) -> Vec<Block> {
+        self.stack
+    }
+
+    /// All blocks combined from left to right (the same order for a run and a merge).
+    pub fn total(&self) -> Option<ChunkState> {
+        let mut it = self.stack.iter();
+        let mut acc = it.next()?.moments.clone();
+        for b in it {
+            for (ra, rb) in acc.iter_mut().zip(&b.moments) {
+                for (x, y) in ra.iter_mut().zip(rb) {
+                    x.combine(y);
+                }
+            }
+        }
+        Some(acc)
+    }
+}
 
 impl Moments {
     /// Merges `b` (later samples) into `self` (Pébay 2008, eqs. 2.1–2.4).
@@ -187,6 +279,31 @@ impl Moments {
         }
     }
 
+    /// Values folded in.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Samples without a value.
+    pub fn failed(&self) -> usize {
+        self.failed
+    }
+
+    /// The event counts: class changed, overdamped, unstable, other branch.
+    pub fn events(&self) -> [usize; 4] {
+        [
+            self.class_changed,
+            self.overdamped,
+            self.unstable,
+            self.other_branch,
+        ]
+    }
+
+    /// Mean and the sums of the 2nd, 3rd and 4th powers of deviations.
+    pub fn central(&self) -> [f64; 4] {
+        [self.mean, self.m2, self.m3, self.m4]
+    }
+
     /// Counts one sample's events.
     fn count(&mut self, e: Events) {
         self.class_changed += usize::from(e.class_changed);
@@ -223,6 +340,44 @@ pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
     }
 }
 
+/// Element `i` of a pseudo-random permutation of `0..len` chosen by `key` (Kensler 2013,
+/// *Correlated Multi-Jittered Sampling*, Pixar technical memo 13-01, `permute`): a hash that is
+/// a bijection on the next power of two, walked until it lands in range. The Latin hypercube's
+/// strata come from it in constant memory, whatever the number of samples (`len ≤ 2³²`).
+pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    debug_assert!(len > 0 && i < len);
+    let p = key;
+    let mut w = len.wrapping_sub(1);
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dcb303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e501cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            return ((i as u64 + p as u64) % len as u64) as u32;
+        }
+    }
+}
+
 /// Design-variable values of sample `index` (`vars` in the order of `spread`).
 pub struct Sampler {
     vars: Vec<usize>,
@@ -231,30 +386,22 @@ pub struct Sampler {
     /// Cholesky factor of the correlation of the normal variables.
     chol: nalgebra::DMatrix<f64>,
     opt: McOptions,
-    /// Latin hypercube strata: `strata[v][i]` is sample i's stratum for variable v.
-    strata: Vec<Vec<usize>>,
+    /// Latin hypercube: the key of variable v's permutation of the strata ([`permute`]).
+    strata: Vec<u32>,
 }
 
 impl Sampler {
     pub fn new(model: &Model, vars: &[usize], spread: &Spread, opt: McOptions) -> Sampler {
         let n = vars.len();
         let chol = correlation_factor(&spread.correlation);
-        let strata = if opt.sampling == Sampling::Lhs {
-            (0..n)
-                .map(|v| {
-                    let mut rng = ChaCha8Rng::seed_from_u64(opt.seed);
-                    rng.set_stream(u64::MAX - v as u64);
-                    let mut perm: Vec<usize> = (0..opt.samples).collect();
-                    for i in (1..perm.len()).rev() {
-                        let j = rng.random_range(0..=i);
-                        perm.swap(i, j);
-                    }
-                    perm
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
+        // One permutation key per variable, drawn from a stream reserved for it.
+        let strata = (0..n)
+            .map(|v| {
+                let mut rng = ChaCha8Rng::seed_from_u64(opt.seed);
+                rng.set_stream(u64::MAX - v as u64);
+                rng.random::<u32>()
+            })
+            .collect();
         Sampler {
             vars: vars.to_vec(),
             nominal: model.nominal(),
@@ -285,7 +432,9 @@ impl Sampler {
                     .map(|v| {
                         let u: f64 = rng.random();
                         if self.opt.sampling == Sampling::Lhs {
-                            clamp((self.strata[v][index] as f64 + u) / self.opt.samples as f64)
+                            let stratum =
+                                permute(index as u32, self.opt.samples as u32, self.strata[v]);
+                            clamp((stratum as f64 + u) / self.opt.samples as f64)
                         } else {
                             clamp(u)
                         }
@@ -362,6 +511,13 @@ pub fn sample_sweep(
         },
         ..Options::default()
     };
+    // A design that cannot exist (a negative mass, an indefinite inertia) fails at every speed.
+    if model.admissible(&p).is_err() {
+        for i in 0..speeds.len() {
+            visit(i, None);
+        }
+        return;
+    }
     let mut sweep = Sweep::new(model, p, options);
     let mut started = false;
     let mut switches = 0;
@@ -377,6 +533,45 @@ pub fn sample_sweep(
         });
         visit(i, pt.as_ref().map(|(nom, pt)| (*nom, pt, switches)));
     }
+}
+
+/// The samples `0..samples` whose design is not physically admissible
+/// ([`Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
+/// frequent first. They fail at every speed; this says why.
+pub fn inadmissible(
+    model: &Model,
+    vars: &[usize],
+    spread: &Spread,
+    opt: McOptions,
+) -> Vec<(String, usize, f64)> {
+    let sampler = Sampler::new(model, vars, spread, opt);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opt.threads.unwrap_or(0))
+        .build()
+        .expect("thread pool");
+    let mut tally: Vec<(String, usize, f64)> = pool.install(|| {
+        (0..opt.samples)
+            .into_par_iter()
+            .filter_map(|i| model.admissible(&sampler.parameters(i)).err())
+            .fold(Vec::new, |mut t: Vec<(String, usize, f64)>, d| {
+                match t.iter_mut().find(|x| x.0 == d.reason) {
+                    Some(x) => x.1 += 1,
+                    None => t.push((d.reason, 1, d.value)),
+                }
+                t
+            })
+            .reduce(Vec::new, |mut a, b| {
+                for (r, n, v) in b {
+                    match a.iter_mut().find(|x| x.0 == r) {
+                        Some(x) => x.1 += n,
+                        None => a.push((r, n, v)),
+                    }
+                }
+                a
+            })
+    });
+    tally.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    tally
 }
 
 /// Number of branch switches of the nominal sweep up to each speed.
@@ -427,6 +622,10 @@ fn run_sample(
     out
 }
 
+/// Largest number of Monte Carlo samples a run may ask for (beyond that the standard error
+/// is far below any tolerance's meaning, and the sample index must fit the samplers' 32 bits).
+pub const MAX_SAMPLES: usize = 1_000_000_000;
+
 /// Samples per chunk: the unit of parallel work, of interruption and of sharding.
 pub const CHUNK: usize = 64;
 
@@ -459,13 +658,13 @@ pub fn run_chunks(
     range: std::ops::Range<usize>,
     progress: &(dyn Fn(usize) + Sync),
     mut values: Option<&mut Vec<Vec<f32>>>,
-) -> Vec<ChunkState> {
+) -> TreeFold {
     let sampler = Sampler::new(model, vars, spread, opt);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opt.threads.unwrap_or(0))
         .build()
         .expect("thread pool");
-    let mut out = Vec::with_capacity(range.len());
+    let mut out = TreeFold::default();
     let mut done = 0;
     if let Some(v) = values.as_deref_mut() {
         v.resize(speeds.len() * outs.len(), Vec::new());
@@ -504,36 +703,29 @@ pub fn run_chunks(
                 m.count(events);
             }
         }
-        out.push(acc);
+        out.push(Block {
+            level: 0,
+            index: chunk,
+            moments: acc,
+        });
         done += end - start;
         progress(done);
     }
     out
 }
 
-/// Folds chunk moments in order into statistics `[speed][output]` and the number of samples
-/// they cover. A single run and merged shards fold the same chunks in the same order, so their
-/// results are identical.
-pub fn fold<'a>(
-    chunks: impl IntoIterator<Item = &'a ChunkState>,
-    speeds: usize,
-    outs: usize,
-) -> (Vec<Vec<McStat>>, usize) {
-    let mut acc = vec![vec![Moments::default(); outs]; speeds];
-    let mut samples = 0;
-    for c in chunks {
-        for (a, row) in acc.iter_mut().zip(c) {
-            for (x, m) in a.iter_mut().zip(row) {
-                x.combine(m);
-            }
-        }
-        samples += c
-            .first()
-            .and_then(|r| r.first())
-            .map_or(0, |m| m.n + m.failed);
-    }
+/// Statistics `[speed][output]` of the chunks folded, and the number of samples they cover.
+pub fn statistics(fold: &TreeFold, speeds: usize, outs: usize) -> (Vec<Vec<McStat>>, usize) {
+    let total = fold
+        .total()
+        .unwrap_or_else(|| vec![vec![Moments::default(); outs]; speeds]);
+    let samples = total
+        .first()
+        .and_then(|r| r.first())
+        .map_or(0, |m| m.n + m.failed);
     (
-        acc.iter()
+        total
+            .iter()
             .map(|row| row.iter().map(Moments::stat).collect())
             .collect(),
         samples,
@@ -574,7 +766,7 @@ pub fn run(
         progress,
         keep.then_some(&mut values),
     );
-    let (mut stats, _) = fold(&states, speeds.len(), outs.len());
+    let (mut stats, done) = statistics(&states, speeds.len(), outs.len());
     if keep {
         for (st, vals) in stats.iter_mut().flatten().zip(values) {
             let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
@@ -584,7 +776,6 @@ pub fn run(
             }
         }
     }
-    let done = (states.len() * CHUNK).min(opt.samples);
     (stats, done)
 }
 

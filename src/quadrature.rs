@@ -491,7 +491,9 @@ fn directions(
     if c.iter().all(|v| *v == 0.0) {
         c = DMatrix::identity(d, d);
     }
-    let eig = c.symmetric_eigen();
+    let Some(eig) = crate::linalg::symmetric_eigen(c) else {
+        return DMatrix::identity(d, d);
+    };
     let mut order: Vec<usize> = (0..d).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     DMatrix::from_fn(d, d, |i, j| {

@@ -226,7 +226,7 @@ pub fn sensitivity_table(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "model: {}    speed: {speed} rad/s    derivatives: {method}",
+        "model: {}    speed: {speed:?} rad/s    derivatives: {method}",
         model.name
     );
     if let (Some(h), Some(ph)) = (s.transfer_magnitude, s.transfer_phase) {
@@ -365,7 +365,7 @@ fn write_matrix(out: &mut String, name: &str, m: &DMatrix<f64>) {
 /// The `modal` result as a text table.
 pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "model: {}    speed: {speed} rad/s", model.name);
+    let _ = writeln!(s, "model: {}    speed: {speed:?} rad/s", model.name);
     let p = match result {
         Err(e) => {
             let _ = writeln!(s, "FAILED: {e}");
@@ -500,6 +500,12 @@ pub fn check_summary(model: &Model) -> String {
             .collect();
         let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
     }
+    for (case, at, defect) in model.tolerance_limits() {
+        let _ = writeln!(
+            s,
+            "  warning: case '{case}' reaches a physical limit within its tolerances: at {at}, {defect}; Monte Carlo samples beyond it count as failed"
+        );
+    }
     s
 }
 
@@ -526,6 +532,7 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
         "q95",
         "mean_error",
         "std_error",
+        "partial",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -540,7 +547,9 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
 
 /// Rows of `tolerance.csv`: one per (speed, quantity, mode, case, method). Empty cells where a
 /// method gives no answer (an output not differentiable there) or a column does not apply.
-pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
+/// `partial` (a column of every row) says the run was interrupted: the Monte Carlo rows cover
+/// fewer samples than asked.
+pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
     a.rows
         .iter()
         .map(|r| {
@@ -574,6 +583,7 @@ pub fn tolerance_rows(a: &Analysis) -> Vec<Vec<String>> {
                 Some((em, es)) => v.extend([opt(Some(em)), opt(Some(es))]),
                 None => v.extend(std::iter::repeat_n(String::new(), 2)),
             }
+            v.push(partial.to_string());
             match &r.shares {
                 Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
@@ -686,7 +696,8 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "probabilities": probability_summary(a),
         "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
-                                          "samples_done": a.samples_done, "partial": a.interrupted(m.samples)})),
+                                          "samples_done": a.samples_done, "partial": a.interrupted(m.samples),
+                                          "inadmissible_samples": inadmissible_summary(a)})),
         "partial": mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
         "ratio_monte_carlo_to_quadrature": a.monte_carlo_seconds.zip(a.quadrature_seconds).map(|(m, q)| m / q),
@@ -695,6 +706,34 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
                   "governor": {"analytic_seconds": 2.188, "monte_carlo_seconds": 2525.375, "ratio": 1154}},
         "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
     })
+}
+
+/// Per case, the Monte Carlo samples that are not physically admissible, by reason.
+fn inadmissible_summary(a: &Analysis) -> Vec<serde_json::Value> {
+    a.cases
+        .iter()
+        .zip(&a.inadmissible)
+        .map(|(c, t)| {
+            json!({"case": c.name, "samples": t.iter().map(|x| x.1).sum::<usize>(),
+                   "reasons": t.iter().map(|(r, n, v)| json!({"reason": r, "samples": n, "first_value": v})).collect::<Vec<_>>()})
+        })
+        .collect()
+}
+
+/// Warnings of a Monte Carlo whose samples crossed a physical limit, one line per case and
+/// reason (empty when none did).
+pub fn inadmissible_warnings(a: &Analysis) -> Vec<String> {
+    let mut out = Vec::new();
+    for (ci, t) in a.inadmissible.iter().enumerate() {
+        let done = a.samples_done.get(ci).copied().unwrap_or(0);
+        for (reason, n, v) in t {
+            out.push(format!(
+                "case '{}': {n} of {done} Monte Carlo samples are not physically admissible ({reason}, e.g. {v:e}); they count as failed at every speed",
+                a.cases[ci].name
+            ));
+        }
+    }
+    out
 }
 
 /// Per case and output: the speeds where first order's σ is more than 10 % off the
@@ -810,6 +849,9 @@ pub fn report_html(
             "<p><b>Partial result:</b> the Monte Carlo was interrupted; samples done per case {:?} of {} asked.</p>",
             a.samples_done, m.samples
         );
+    }
+    for w in inadmissible_warnings(a) {
+        let _ = writeln!(h, "<p><b>Warning:</b> {}</p>", esc(&w));
     }
     let _ = writeln!(
         h,

@@ -640,7 +640,7 @@ fn merged_shards_equal_one_run_exactly() {
         &shards[1],
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("need shards 1..=3"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("shards 1..=3"), "{}", stderr(&o));
     let o = run(&[
         "merge",
         "-o",

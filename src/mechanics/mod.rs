@@ -124,8 +124,15 @@ impl<T: Real> System<T> {
             let j = &model.joints[ji];
             let mut axis = v3(&j.axis, p, w)?;
             if j.kind != JointKind::Fixed {
+                // Scaled by a power of two (exact, no derivative) before the norm, so that
+                // neither a huge nor a tiny axis over- or underflows in `a·a`.
+                let amax = axis.iter().fold(0.0f64, |m, v| m.max(v.re().abs()));
+                if amax > 0.0 && amax.is_finite() {
+                    let e = (amax.log2().floor() as i32 + 1).clamp(-1000, 1000);
+                    axis *= cst::<T>(2f64.powi(-e));
+                }
                 let n = axis.dot(&axis).sqrt();
-                if n.re() < 1e-12 {
+                if !(n.re() > 0.0 && n.re().is_finite()) {
                     return Err(FieldError {
                         site: j.axis[0].site.clone(),
                         error: crate::model::EvalError::DivisionByZero,

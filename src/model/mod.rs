@@ -5,10 +5,12 @@
 //! fields are parsed [`Expr`]essions with the [`Site`] they came from, so a failure at run time
 //! (say a division by zero at one speed) can still name the file, line and field.
 
+pub mod admissible;
 pub mod expr;
 pub mod schema;
 mod validate;
 
+pub use admissible::Defect;
 pub use expr::{EvalError, Expr};
 
 use std::fmt;
@@ -52,11 +54,15 @@ impl fmt::Display for ModelError {
             _ => write!(f, "{}: {}", self.file, self.message)?,
         }
         if let (Some(s), Some(c)) = (&self.snippet, self.column) {
-            let shown: String = s.chars().take(160).collect();
+            // A window of at most 160 characters around the column (hostile lines are long).
+            let from = c
+                .saturating_sub(80)
+                .min(s.chars().count().saturating_sub(1));
+            let shown: String = s.chars().skip(from).take(160).collect();
             write!(
                 f,
                 "\n    | {shown}\n    | {}^",
-                " ".repeat(c.saturating_sub(1))
+                " ".repeat(c.saturating_sub(1 + from))
             )?;
         }
         Ok(())
@@ -398,28 +404,22 @@ impl Model {
     /// Reads and validates a model file.
     pub fn from_file(path: &Path) -> Result<Model, ModelError> {
         let file = path.display().to_string();
-        if let Ok(meta) = std::fs::metadata(path)
-            && meta.len() > Self::MAX_FILE_BYTES
-        {
-            return Err(ModelError {
-                file,
+        // Bounded whatever the file is: a device or a pipe has no size to check beforehand.
+        let bytes =
+            crate::files::read_bounded(path, Self::MAX_FILE_BYTES).map_err(|e| ModelError {
+                file: file.clone(),
                 line: None,
                 column: None,
-                message: format!(
-                    "the file is {:.1} MB; model files are limited to {} MiB",
-                    meta.len() as f64 / 1e6,
-                    Self::MAX_FILE_BYTES >> 20
-                ),
+                message: match e.source.kind() {
+                    std::io::ErrorKind::InvalidData => format!(
+                        "the file is larger than {} MiB; model files are limited to {} MiB",
+                        Self::MAX_FILE_BYTES >> 20,
+                        Self::MAX_FILE_BYTES >> 20
+                    ),
+                    _ => format!("cannot read the model file: {}", e.source),
+                },
                 snippet: None,
-            });
-        }
-        let bytes = std::fs::read(path).map_err(|e| ModelError {
-            file: file.clone(),
-            line: None,
-            column: None,
-            message: format!("cannot read the model file: {e}"),
-            snippet: None,
-        })?;
+            })?;
         Model::from_bytes(&bytes, &file)
     }
 

@@ -48,8 +48,8 @@ pub type SVec = Spanned<Vec<SNum>>;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FileSchema {
-    pub name: Option<String>,
-    pub description: Option<String>,
+    pub name: Option<Spanned<String>>,
+    pub description: Option<Spanned<String>>,
     pub gravity: Option<SVec>,
     pub independent: Option<Spanned<Vec<Spanned<String>>>>,
     #[serde(default)]

@@ -25,6 +25,35 @@ pub(super) fn error_at(file: &str, text: &str, offset: usize, msg: &str) -> Mode
     }
 }
 
+/// Do two points (known at nominal, not depending on the speed) coincide?
+fn coincident(ctx: &Ctx, a: &[Field; 3], b: &[Field; 3], nominal: &[f64]) -> R<bool> {
+    for (x, y) in a.iter().zip(b) {
+        match (ctx.nominal(x, nominal)?, ctx.nominal(y, nominal)?) {
+            (Some(u), Some(v)) if (u - v).abs() <= 0.0 => {}
+            _ => return Ok(false),
+        }
+    }
+    Ok(true)
+}
+
+/// Byte offset of the start of the line with the most dots and opening brackets (the deepest
+/// nesting of keys, tables and arrays), roughly: quotes are not tracked.
+fn most_nested_line(text: &str) -> usize {
+    let mut best = (0, 0);
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        let depth = line
+            .chars()
+            .filter(|c| matches!(c, '.' | '[' | '{'))
+            .count();
+        if depth > best.0 {
+            best = (depth, start);
+        }
+        start += line.len();
+    }
+    best.1
+}
+
 /// 1-based line and column (in characters) of byte `offset`, and that line's text.
 fn locate(text: &str, offset: usize) -> (usize, usize, String) {
     let mut off = offset.min(text.len());
@@ -159,9 +188,42 @@ fn locate_line(text: &str, line: usize) -> String {
     text.lines().nth(line - 1).unwrap_or("").to_string()
 }
 
-/// Names must be non-empty and not clash with reserved words.
+/// Longest name of a parameter, body, joint, force, constraint or case (characters): names
+/// go into column headers, file names and plot titles.
+const MAX_NAME: usize = 64;
+/// Longest model name and description (characters).
+const MAX_TITLE: usize = 200;
+const MAX_DESCRIPTION: usize = 4000;
+
+/// A free text no longer than `max` characters.
+fn check_text(ctx: &Ctx, text: &Option<Spanned<String>>, what: &str, max: usize) -> R<()> {
+    if let Some(t) = text
+        && t.get_ref().chars().count() > max
+    {
+        return Err(ctx.err(
+            t.span(),
+            format!(
+                "the {what} has {} characters; at most {max} are allowed",
+                t.get_ref().chars().count()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Names must be non-empty, short, and not clash with reserved words.
 fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()> {
     let n = name.get_ref();
+    if n.chars().count() > MAX_NAME {
+        return Err(ctx.err(
+            name.span(),
+            format!(
+                "{kind} name '{}' has {} characters; at most {MAX_NAME} are allowed",
+                abbreviate(n),
+                n.chars().count()
+            ),
+        ));
+    }
     if n.is_empty()
         || !n
             .chars()
@@ -297,16 +359,11 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     let raw: FileSchema = toml::from_str(text).map_err(|e| {
         let off = e.span().map_or(0, |s| s.start);
         let msg = e.message().trim().to_string();
-        if e.span().is_some() {
-            error_at(file, text, off, &msg)
-        } else {
-            ModelError {
-                file: file.to_string(),
-                line: None,
-                column: None,
-                message: msg,
-                snippet: None,
-            }
+        match e.span() {
+            Some(_) => error_at(file, text, off, &msg),
+            // The parser gives no place for some errors (its nesting limit): point at the
+            // most deeply nested line, the likely culprit.
+            None => error_at(file, text, most_nested_line(text), &msg),
         }
     })?;
     let whole = 0..text.len().min(1);
@@ -334,12 +391,17 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         parameters.push(parameter(&ctx, k, v)?);
     }
     ctx.params = parameters.iter().map(|p| p.name.clone()).collect();
+    check_text(&ctx, &raw.name, "model name", MAX_TITLE)?;
+    check_text(&ctx, &raw.description, "description", MAX_DESCRIPTION)?;
     let nominal: Vec<f64> = parameters.iter().map(|p| p.value).collect();
 
     let gravity = match &raw.gravity {
         Some(g) => ctx.vec3(g, "gravity".into())?,
         None => [0, 1, 2].map(|i| ctx.zero(&whole, format!("gravity[{i}]"))),
     };
+    for f in &gravity {
+        ctx.nominal(f, &nominal)?;
+    }
 
     // Bodies.
     let mut body_names: HashMap<String, usize> = HashMap::new();
@@ -484,15 +546,16 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             ctx.nominal(f, &nominal)?;
         }
         if kind != JointKind::Fixed {
-            let mut n2 = 0.0;
+            // Any non-zero direction is an axis (the mechanics scales it before normalising).
+            let mut amax = 0.0f64;
             let mut known = true;
             for f in axis.iter() {
                 match ctx.nominal(f, &nominal)? {
-                    Some(v) => n2 += v * v,
+                    Some(v) => amax = amax.max(v.abs()),
                     None => known = false,
                 }
             }
-            if known && n2.sqrt() < 1e-12 {
+            if known && amax == 0.0 {
                 let span = s.axis.as_ref().map_or(j.span(), |a| a.span());
                 return Err(ctx.err(span, format!("joint '{name}': axis is zero")));
             }
@@ -655,6 +718,15 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         {
             ctx.nominal(x, &nominal)?;
         }
+        if coincident(&ctx, &e.point1, &e.point2, &nominal)? && e.free_length.is_none() {
+            return Err(ctx.err(
+                f.span(),
+                format!(
+                    "force '{}': its two points coincide in the reference configuration, so its free length is zero and its line of action undefined there; give distinct points",
+                    e.name
+                ),
+            ));
+        }
         forces.push(e);
     }
 
@@ -701,6 +773,14 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         } = &kind;
         for x in point1.iter().chain(point2.iter()).chain(length.iter()) {
             ctx.nominal(x, &nominal)?;
+        }
+        if coincident(&ctx, point1, point2, &nominal)? {
+            return Err(ctx.err(
+                c.span(),
+                format!(
+                    "constraint '{name}': its two points coincide in the reference configuration, so the distance has no direction there; give distinct points"
+                ),
+            ));
         }
         constraints.push(Constraint { name, kind });
     }
@@ -763,11 +843,15 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     let analysis = analysis(&ctx, raw.analysis.as_ref(), &coordinates, &parameters)?;
 
     Ok(Model {
-        name: raw.name.clone().unwrap_or_else(|| {
-            std::path::Path::new(file)
-                .file_stem()
-                .map_or("model".into(), |s| s.to_string_lossy().into_owned())
-        }),
+        name: raw
+            .name
+            .as_ref()
+            .map(|n| n.get_ref().clone())
+            .unwrap_or_else(|| {
+                std::path::Path::new(file)
+                    .file_stem()
+                    .map_or("model".into(), |s| s.to_string_lossy().into_owned())
+            }),
         file: file.to_string(),
         parameters,
         gravity,
@@ -844,27 +928,14 @@ fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]
     }))
 }
 
-/// Symmetric and positive semi-definite (eigenvalues ≥ −1e-12·scale).
+/// Symmetric and positive semi-definite (see [`super::admissible::inertia_defect`]).
 fn check_inertia(ctx: &Ctx, i: &[[f64; 3]; 3], span: Range<usize>, name: &str) -> R<()> {
-    let m = nalgebra::Matrix3::from_fn(|r, c| i[r][c]);
-    let scale = m.abs().max().max(1e-300);
-    if (m - m.transpose()).abs().max() > 1e-12 * scale {
-        return Err(ctx.err(
-            span,
-            format!("body '{name}': inertia matrix is not symmetric"),
-        ));
+    match super::admissible::inertia_defect(i) {
+        Some((defect, value)) => {
+            Err(ctx.err(span, format!("body '{name}': {defect}: {value:.6e}")))
+        }
+        None => Ok(()),
     }
-    let ev = m.symmetric_eigenvalues();
-    if ev.min() < -1e-12 * scale {
-        return Err(ctx.err(
-            span,
-            format!(
-                "body '{name}': inertia is not positive semi-definite (eigenvalues {:.6e}, {:.6e}, {:.6e} kg·m²)",
-                ev[0], ev[1], ev[2]
-            ),
-        ));
-    }
-    Ok(())
 }
 
 fn analysis(
@@ -919,8 +990,15 @@ fn analysis(
         });
     }
     if let Some(n) = &s.samples {
-        if *n.get_ref() < 2 {
-            return Err(ctx.err(n.span(), "analysis samples must be at least 2"));
+        if *n.get_ref() < 2 || *n.get_ref() as u128 > crate::montecarlo::MAX_SAMPLES as u128 {
+            return Err(ctx.err(
+                n.span(),
+                format!(
+                    "analysis samples must lie in 2..={} (got {})",
+                    crate::montecarlo::MAX_SAMPLES,
+                    n.get_ref()
+                ),
+            ));
         }
         a.samples = *n.get_ref() as usize;
     }
@@ -998,7 +1076,9 @@ fn analysis(
                 if (&mat - mat.transpose()).amax() > 1e-12 {
                     return Err(bad("the matrix is not symmetric"));
                 }
-                if mat.symmetric_eigenvalues().min() < -1e-12 {
+                if crate::linalg::symmetric_eigen(mat.clone())
+                    .is_none_or(|e| e.eigenvalues.min() < -1e-12)
+                {
                     return Err(bad("the matrix is not positive semi-definite"));
                 }
                 Some(Correlation {

@@ -1,0 +1,210 @@
+//! Physical admissibility of a parameter set: the checks the nominal model passes at load, for
+//! any design (a Monte Carlo sample, a quadrature node, the ends of a tolerance range).
+//!
+//! A design is admissible when every number of the model that does not depend on the speed
+//! evaluates to a finite value, no body has negative mass, and every inertia is symmetric and
+//! positive semi-definite. (Numbers that depend on the speed are checked where they are
+//! evaluated, speed by speed, and a failure there fails that speed with its reason.) A sample
+//! that is not admissible is a sample of a mechanism that cannot exist: it counts as failed, with
+//! the reason, instead of entering the statistics with a negative mass.
+
+use super::{ConstraintKind, Field, Model};
+
+/// Why a design is not admissible: the element and the defect (without the value, so that
+/// reasons can be tallied), and the offending value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Defect {
+    pub reason: String,
+    pub value: f64,
+}
+
+impl std::fmt::Display for Defect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({:e})", self.reason, self.value)
+    }
+}
+
+/// A model element: its kind and name.
+#[derive(Clone, Copy)]
+struct Element<'a>(&'static str, &'a str);
+
+impl std::fmt::Display for Element<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.1 {
+            "" => write!(f, "{}", self.0),
+            name => write!(f, "{} '{name}'", self.0),
+        }
+    }
+}
+
+/// The inertia's defect, if any: not symmetric, or not positive semi-definite (eigenvalues
+/// below `−1e-12 ×` the largest entry), as `(defect, value)`.
+pub fn inertia_defect(i: &[[f64; 3]; 3]) -> Option<(&'static str, f64)> {
+    let m = nalgebra::DMatrix::from_fn(3, 3, |r, c| i[r][c]);
+    let scale = m.amax().max(1e-300);
+    let asym = (&m - m.transpose()).amax();
+    if asym > 1e-12 * scale {
+        return Some(("inertia matrix is not symmetric", asym));
+    }
+    match crate::linalg::symmetric_eigen(m) {
+        None => Some(("inertia eigenvalues could not be computed", scale)),
+        Some(e) if e.eigenvalues.min() < -1e-12 * scale => Some((
+            "inertia is not positive semi-definite (smallest eigenvalue, kg·m²)",
+            e.eigenvalues.min(),
+        )),
+        Some(_) => None,
+    }
+}
+
+impl Model {
+    /// Every field with the element it belongs to, for checks over the whole model.
+    fn fields(&self) -> Vec<(Element<'_>, &Field)> {
+        let mut out: Vec<(Element<'_>, &Field)> = Vec::new();
+        for f in &self.gravity {
+            out.push((Element("gravity", ""), f));
+        }
+        for b in &self.bodies {
+            let e = Element("body", &b.name);
+            out.push((e, &b.mass));
+            out.extend(b.inertia.iter().flatten().map(|f| (e, f)));
+            out.extend(b.cm.iter().map(|f| (e, f)));
+        }
+        for j in &self.joints {
+            let e = Element("joint", &j.name);
+            out.extend(j.at.iter().chain(&j.axis).map(|f| (e, f)));
+            out.push((e, &j.initial));
+            out.push((e, &j.free));
+            out.extend(
+                [&j.drive, &j.stiffness, &j.damping]
+                    .into_iter()
+                    .flatten()
+                    .map(|f| (e, f)),
+            );
+        }
+        for s in &self.forces {
+            let e = Element("spring", &s.name);
+            out.extend(s.point1.iter().chain(&s.point2).map(|f| (e, f)));
+            out.extend(
+                [&s.stiffness, &s.damping, &s.free_length, &s.preload]
+                    .into_iter()
+                    .flatten()
+                    .map(|f| (e, f)),
+            );
+        }
+        for c in &self.constraints {
+            let e = Element("constraint", &c.name);
+            match &c.kind {
+                ConstraintKind::Distance {
+                    point1,
+                    point2,
+                    length,
+                    ..
+                } => {
+                    out.extend(point1.iter().chain(point2).map(|f| (e, f)));
+                    out.extend(length.iter().map(|f| (e, f)));
+                }
+            }
+        }
+        out
+    }
+
+    /// Checks that the design `p` is physically admissible (see the module documentation).
+    pub fn admissible(&self, p: &[f64]) -> Result<(), Defect> {
+        for (element, f) in self.fields() {
+            if f.expr.uses_speed() {
+                continue;
+            }
+            match f.eval(p, 0.0) {
+                Ok(v) if v.is_finite() => {}
+                Ok(v) => {
+                    return Err(Defect {
+                        reason: format!("{element}: {} is not finite", f.site.what),
+                        value: v,
+                    });
+                }
+                Err(e) => {
+                    return Err(Defect {
+                        reason: format!("{element}: {}: {}", f.site.what, e.error),
+                        value: f64::NAN,
+                    });
+                }
+            }
+        }
+        for b in &self.bodies {
+            if !b.mass.expr.uses_speed() {
+                let m = b.mass.eval(p, 0.0).unwrap_or(f64::NAN);
+                if m < 0.0 {
+                    return Err(Defect {
+                        reason: format!("body '{}': negative mass (kg)", b.name),
+                        value: m,
+                    });
+                }
+            }
+            if b.inertia.iter().flatten().all(|f| !f.expr.uses_speed()) {
+                let i: [[f64; 3]; 3] = std::array::from_fn(|r| {
+                    std::array::from_fn(|c| b.inertia[r][c].eval(p, 0.0).unwrap_or(f64::NAN))
+                });
+                if let Some((defect, value)) = inertia_defect(&i) {
+                    return Err(Defect {
+                        reason: format!("body '{}': {defect}", b.name),
+                        value,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// For each tolerance case, a design within its tolerances that is not admissible, if one
+    /// is found among the ends of each variable's range (±3σ of a normal variable, the bounds
+    /// of a uniform one; one at a time, the others nominal) and
+    /// the corners of the range box (up to 10 variables): the tolerance reaches a physical limit,
+    /// and Monte Carlo samples beyond it will count as failed. Cases come from the model's
+    /// `[analysis]`, or one made of the parameters' own tolerances.
+    pub fn tolerance_limits(&self) -> Vec<(String, String, Defect)> {
+        let mut cases = self.analysis.cases.clone();
+        if cases.is_empty() {
+            cases.push(super::Case::from_parameters(self));
+        }
+        let nominal = self.nominal();
+        let mut out = Vec::new();
+        for case in &cases {
+            let ends: Vec<(usize, f64)> = case
+                .tolerances
+                .iter()
+                .map(|(i, t)| (*i, t.absolute(self.parameters[*i].value)))
+                .collect();
+            let describe = |p: &[f64]| {
+                ends.iter()
+                    .filter(|(i, _)| p[*i].to_bits() != nominal[*i].to_bits())
+                    .map(|(i, _)| format!("{} = {}", self.parameters[*i].name, p[*i]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let mut designs: Vec<Vec<f64>> = Vec::new();
+            for &(i, h) in &ends {
+                for s in [-1.0, 1.0] {
+                    let mut p = nominal.clone();
+                    p[i] += s * h;
+                    designs.push(p);
+                }
+            }
+            if ends.len() <= 10 {
+                for mask in 0..(1usize << ends.len()) {
+                    let mut p = nominal.clone();
+                    for (k, &(i, h)) in ends.iter().enumerate() {
+                        p[i] += if mask >> k & 1 == 1 { h } else { -h };
+                    }
+                    designs.push(p);
+                }
+            }
+            if let Some((p, d)) = designs
+                .iter()
+                .find_map(|p| self.admissible(p).err().map(|d| (p, d)))
+            {
+                out.push((case.name.clone(), describe(p), d));
+            }
+        }
+        out
+    }
+}
