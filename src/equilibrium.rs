@@ -32,8 +32,14 @@ pub enum EquilibriumError {
         "singular Jacobian after {iterations} iterations (a bifurcation point or a locked mechanism)"
     )]
     SingularJacobian { iterations: usize },
-    #[error("non-finite residual after {iterations} iterations")]
+    #[error(
+        "non-finite residual after {iterations} iterations (a number of the model overflows at this speed, or two points that define a direction coincide)"
+    )]
     NotFinite { iterations: usize },
+    #[error(
+        "the drive force on '{coordinate}' is not a finite number (it overflows double precision)"
+    )]
+    NotFiniteDrive { coordinate: String },
     #[error("redundant cut joints: {} duplicate(s) the others here (the constraint Jacobian has rank {rank} for {equations} equations); remove it or them", names.join(", "))]
     RedundantConstraints {
         names: Vec<String>,
@@ -492,6 +498,16 @@ impl<'a> Problem<'a> {
                     drive_force[i] = g[i];
                 }
             }
+        }
+        // Every number reported must be finite: a drive force that overflows (a huge inertia
+        // or speed) fails the point with its reason rather than printing ±inf.
+        if let Some(k) = drive_force.iter().position(|v| !v.is_finite()) {
+            return Err(EquilibriumError::NotFiniteDrive {
+                coordinate: self.names.get(k).map_or(String::new(), |n| n.to_string()),
+            });
+        }
+        if q.iter().chain(&lambda).any(|v| !v.is_finite()) {
+            return Err(EquilibriumError::NotFinite { iterations });
         }
         let constraint_violation = norm(&f[nf..]);
         Ok(Equilibrium {
