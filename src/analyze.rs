@@ -317,7 +317,7 @@ pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analy
                     for b in &blocks[ci] {
                         fold.push(b.clone());
                     }
-                    montecarlo::statistics(&fold, opt.speeds.len(), outs.len())
+                    montecarlo::statistics(&fold, opt.speeds.len(), outs.len(), mc.samples)
                 }
                 Split::Shard(k, n) => {
                     let range = montecarlo::shard_chunks(mc.samples, *k, *n);

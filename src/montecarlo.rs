@@ -714,15 +714,26 @@ pub fn run_chunks(
     out
 }
 
-/// Statistics `[speed][output]` of the chunks folded, and the number of samples they cover.
-pub fn statistics(fold: &TreeFold, speeds: usize, outs: usize) -> (Vec<Vec<McStat>>, usize) {
+/// Statistics `[speed][output]` of the chunks folded, and the number of samples (of `asked`)
+/// they cover.
+pub fn statistics(
+    fold: &TreeFold,
+    speeds: usize,
+    outs: usize,
+    asked: usize,
+) -> (Vec<Vec<McStat>>, usize) {
     let total = fold
         .total()
         .unwrap_or_else(|| vec![vec![Moments::default(); outs]; speeds]);
-    let samples = total
-        .first()
-        .and_then(|r| r.first())
-        .map_or(0, |m| m.n + m.failed);
+    // From the chunks covered, not from the moments: a run with no outputs (every nominal
+    // speed failed) still evaluated its samples.
+    let samples = match (fold.stack.first(), fold.stack.last()) {
+        (Some(a), Some(b)) => {
+            (b.chunks().end.saturating_mul(CHUNK)).min(asked)
+                - (a.chunks().start * CHUNK).min(asked)
+        }
+        _ => 0,
+    };
     (
         total
             .iter()
@@ -766,7 +777,7 @@ pub fn run(
         progress,
         keep.then_some(&mut values),
     );
-    let (mut stats, done) = statistics(&states, speeds.len(), outs.len());
+    let (mut stats, done) = statistics(&states, speeds.len(), outs.len(), opt.samples);
     if keep {
         for (st, vals) in stats.iter_mut().flatten().zip(values) {
             let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
