@@ -18,7 +18,6 @@
 use crate::model::{Model, Sampling};
 use crate::montecarlo::{self, Block, Moments};
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
 /// Format tag of shard files (2: aligned blocks, digest).
 pub const FORMAT: &str = "modaltol-shard-2";
@@ -54,23 +53,19 @@ pub struct ShardError {
     pub message: String,
 }
 
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
-}
-
 /// A SHA-256 fingerprint of the model's parameters and the tolerance cases: shards made from
 /// another model or other cases are refused by `merge`.
 pub fn fingerprint(model: &Model, cases: &[crate::model::Case]) -> String {
-    let mut h = Sha256::new();
-    h.update(model.name.as_bytes());
-    h.update([0]);
+    let mut bytes = Vec::new();
+    bytes.extend(model.name.as_bytes());
+    bytes.push(0);
     for p in &model.parameters {
-        h.update(p.name.as_bytes());
-        h.update([0]);
-        h.update(p.value.to_bits().to_le_bytes());
+        bytes.extend(p.name.as_bytes());
+        bytes.push(0);
+        bytes.extend(p.value.to_bits().to_le_bytes());
     }
-    h.update(format!("{cases:?}").as_bytes());
-    hex(&h.finalize()[..16])
+    bytes.extend(format!("{cases:?}").as_bytes());
+    crate::files::sha256_hex(&bytes)[..32].to_string()
 }
 
 impl ShardFile {
@@ -78,7 +73,7 @@ impl ShardFile {
         let mut unsealed = self.clone();
         unsealed.digest = String::new();
         let text = serde_json::to_vec(&unsealed).expect("a shard serialises");
-        hex(&Sha256::digest(&text))
+        crate::files::sha256_hex(&text)
     }
 
     /// The file's JSON text, with its digest.

@@ -15,9 +15,7 @@ mod common;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const EXAMPLES: [&str; 5] = [
@@ -130,35 +128,7 @@ fn mutate(text: &str, rng: &mut ChaCha8Rng) -> String {
 
 /// Runs the binary under a deadline: `(exit code, stdout, stderr)`, or `Err` on a hang.
 fn run(args: &[&str], limit: Duration) -> Result<(Option<i32>, String, String), String> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_modaltol"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (mut out, mut err) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
-    let ro = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = out.read_to_string(&mut s);
-        s
-    });
-    let re = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = err.read_to_string(&mut s);
-        s
-    });
-    let t = Instant::now();
-    loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            return Ok((s.code(), ro.join().unwrap(), re.join().unwrap()));
-        }
-        if t.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err(format!("{args:?} hung (killed after {limit:?})"));
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    common::run_with_deadline(args, limit).map(|r| (r.code, r.stdout, r.stderr))
 }
 
 fn non_finite(cell: &str) -> bool {

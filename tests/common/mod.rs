@@ -28,3 +28,50 @@ pub fn at(model: &Model, speed: f64, opt: &Options) -> Point {
     let q0 = initial_guess(model, &p, speed).unwrap();
     point(model, &p, speed, &q0, opt).unwrap()
 }
+
+/// What a run of the binary gave.
+pub struct Run {
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+/// Runs the `modaltol` binary with `args`; kills it and returns `Err` if it is still running
+/// after `limit` (a hang).
+pub fn run_with_deadline(args: &[&str], limit: std::time::Duration) -> Result<Run, String> {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_modaltol"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (mut out, mut err) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
+    let ro = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let re = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
+    let t = std::time::Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return Ok(Run {
+                code: s.code(),
+                stdout: ro.join().unwrap(),
+                stderr: re.join().unwrap(),
+            });
+        }
+        if t.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!("modaltol {args:?} hung (killed after {limit:?})"));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
