@@ -10,10 +10,12 @@
 #![deny(clippy::float_cmp)]
 
 pub mod analyze;
+pub mod cuts;
 pub mod equilibrium;
 pub mod files;
 pub mod frf;
 pub mod hessian;
+pub mod joints;
 pub mod linalg;
 pub mod linearize;
 pub mod mechanics;
@@ -26,6 +28,7 @@ pub mod program;
 pub mod quadrature;
 pub mod real;
 pub mod report;
+pub mod rigid;
 pub mod sensitivity;
 pub mod shard;
 pub mod sweep;

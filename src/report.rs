@@ -6,7 +6,7 @@
 
 use crate::analyze::{Analysis, Method};
 use crate::frf::Complex;
-use crate::model::{JointKind, Model};
+use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::sensitivity::{Sensitivity, Status as SensStatus};
 use crate::sweep::{Point, PointError};
@@ -14,22 +14,6 @@ use crate::tolerance::Quantity;
 use nalgebra::DMatrix;
 use serde_json::{Value, json};
 use std::fmt::Write;
-
-/// Unit of a coordinate of the given joint kind.
-pub fn coordinate_unit(kind: JointKind) -> &'static str {
-    match kind {
-        JointKind::Prismatic => "m",
-        _ => "rad",
-    }
-}
-
-/// Unit of the generalised force on a coordinate of the given kind.
-pub fn force_unit(kind: JointKind) -> &'static str {
-    match kind {
-        JointKind::Prismatic => "N",
-        _ => "N·m",
-    }
-}
 
 /// Optional column groups of the sweep CSV.
 #[derive(Debug, Clone, Default)]
@@ -303,7 +287,7 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
         .iter()
         .enumerate()
         .map(|(i, c)| {
-            json!({"name": c.name, "value": eq.q[i], "unit": coordinate_unit(c.kind), "driven": c.driven,
+            json!({"name": c.name, "value": eq.q[i], "unit": c.unit.symbol(), "driven": c.driven,
                    "speed": eq.qd[i]})
         })
         .collect();
@@ -312,7 +296,7 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
         .iter()
         .map(|&i| {
             let c = &model.coordinates[i];
-            json!({"name": c.name, "force": eq.drive_force[i], "unit": force_unit(c.kind)})
+            json!({"name": c.name, "force": eq.drive_force[i], "unit": c.unit.force_symbol()})
         })
         .collect();
     let modes: Vec<Value> = p
@@ -381,7 +365,7 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
     );
     for (i, c) in model.coordinates.iter().enumerate() {
         let tag = if c.driven {
-            format!("  driven at {} {}/s", eq.qd[i], coordinate_unit(c.kind))
+            format!("  driven at {} {}/s", eq.qd[i], c.unit.symbol())
         } else {
             String::new()
         };
@@ -390,7 +374,7 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
             "  {:<16} {:>16.10} {}{tag}",
             c.name,
             eq.q[i],
-            coordinate_unit(c.kind)
+            c.unit.symbol()
         );
     }
     for &i in &model.driven() {
@@ -400,7 +384,7 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
             "  drive force on {:<8} {:>14.8e} {}",
             c.name,
             eq.drive_force[i],
-            force_unit(c.kind)
+            c.unit.force_symbol()
         );
     }
     let ind: Vec<&str> = p
@@ -453,7 +437,7 @@ pub fn check_summary(model: &Model) -> String {
     let body = |b: Option<usize>| b.map_or("ground".to_string(), |i| model.bodies[i].name.clone());
     let _ = writeln!(s, "  joints ({}):", model.joints.len());
     for j in &model.joints {
-        let kind = format!("{:?}", j.kind).to_lowercase();
+        let kind = j.kind.name();
         let drive = if j.drive.is_some() { ", driven" } else { "" };
         let _ = writeln!(
             s,

@@ -72,8 +72,10 @@ pub struct Options {
 /// The model's initial guesses at parameters `p` and `speed`.
 pub fn initial_guess(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
     let mut q = vec![0.0; model.coordinates.len()];
-    for (i, c) in model.coordinates.iter().enumerate() {
-        q[i] = model.joints[c.joint].initial.eval(p, speed)?;
+    for j in &model.joints {
+        for (k, c) in j.coords.clone().enumerate() {
+            q[c] = j.initial[k].eval(p, speed)?;
+        }
     }
     Ok(q)
 }

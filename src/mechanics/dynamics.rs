@@ -13,7 +13,7 @@
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
 use super::kinematics::{Pose, point, poses, update};
-use super::{ConstraintData, NormDual, System};
+use super::{NormDual, System};
 use crate::real::{D1, D2, M3, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
@@ -65,21 +65,14 @@ impl<T: Real> Dynamics<T> {
 
 /// Constraint values `Φ` at the given body poses.
 pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
-    sys.constraints
-        .iter()
-        .map(|c| match c {
-            ConstraintData::Distance {
-                body1,
-                point1,
-                body2,
-                point2,
-                length,
-            } => {
-                let d = point(p, *body2, point2) - point(p, *body1, point1);
-                (d.dot(&d) - *length * *length) * cst::<U>(0.5)
-            }
-        })
-        .collect()
+    let mut out = Vec::with_capacity(sys.m);
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(&ground, |b| &p[b]);
+    for c in &sys.constraints {
+        let g = &c.geometry;
+        c.kind.values(g, pose(g.body1), pose(g.body2), &mut out);
+    }
+    out
 }
 
 /// `Φ(q)` alone (positions only).

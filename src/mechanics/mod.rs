@@ -8,8 +8,10 @@
 pub mod dynamics;
 pub mod kinematics;
 
-use crate::model::{ConstraintKind, Field, FieldError, JointKind, Model};
+use crate::model::{Field, FieldError, Model};
 use crate::real::{M3, Real, V3, cst};
+use crate::{cuts, joints};
+use std::ops::Range;
 
 /// Mass properties of one body, in the reference configuration.
 #[derive(Debug, Clone)]
@@ -21,16 +23,15 @@ pub struct BodyData<T> {
     pub cm: V3<T>,
 }
 
-/// A tree joint with its geometry in the reference configuration.
+/// A tree joint with its geometry in the reference configuration (unit directions).
 #[derive(Debug, Clone)]
 pub struct JointData<T> {
-    pub kind: JointKind,
+    pub kind: joints::Kind,
     pub parent: Option<usize>,
     pub child: usize,
-    pub at: V3<T>,
-    /// Unit axis.
-    pub axis: V3<T>,
-    pub coord: Option<usize>,
+    pub geometry: joints::Geometry<V3<T>>,
+    /// Indices of its coordinates.
+    pub coords: Range<usize>,
 }
 
 /// Spring and damper acting on one joint coordinate.
@@ -55,17 +56,11 @@ pub struct SpringData<T> {
     pub preload: T,
 }
 
-/// A cut-joint constraint with its numbers.
+/// A cut joint with its numbers (unit directions).
 #[derive(Debug, Clone)]
-pub enum ConstraintData<T> {
-    /// `Φ = ½ (dᵀd − L²)`, `d = x2 − x1`.
-    Distance {
-        body1: Option<usize>,
-        point1: V3<T>,
-        body2: Option<usize>,
-        point2: V3<T>,
-        length: T,
-    },
+pub struct ConstraintData<T> {
+    pub kind: cuts::Kind,
+    pub geometry: cuts::Geometry<V3<T>, T>,
 }
 
 /// A model instantiated at one set of parameter values and one speed, over scalar `T`.
@@ -122,43 +117,31 @@ impl<T: Real> System<T> {
         let mut drive = vec![None; model.coordinates.len()];
         for &ji in &model.order {
             let j = &model.joints[ji];
-            let mut axis = v3(&j.axis, p, w)?;
-            if j.kind != JointKind::Fixed {
-                // Scaled by a power of two (exact, no derivative) before the norm, so that
-                // neither a huge nor a tiny axis over- or underflows in `a·a`.
-                let amax = axis.iter().fold(0.0f64, |m, v| m.max(v.re().abs()));
-                if amax > 0.0 && amax.is_finite() {
-                    let e = (amax.log2().floor() as i32 + 1).clamp(-1000, 1000);
-                    axis *= cst::<T>(2f64.powi(-e));
-                }
-                let n = axis.dot(&axis).sqrt();
-                if !(n.re() > 0.0 && n.re().is_finite()) {
-                    return Err(FieldError {
-                        site: j.axis[0].site.clone(),
-                        error: crate::model::EvalError::DivisionByZero,
-                    });
-                }
-                axis /= n;
-            }
+            let [_, use_axis, use_axis2] = j.kind.uses();
+            let g = &j.geometry;
+            let geometry = joints::Geometry {
+                at: v3(&g.at, p, w)?,
+                axis: direction(&g.axis, use_axis, p, w)?,
+                axis2: direction(&g.axis2, use_axis2, p, w)?,
+            };
             joints.push(JointData {
                 kind: j.kind,
                 parent: j.parent,
                 child: j.child,
-                at: v3(&j.at, p, w)?,
-                axis,
-                coord: j.coord,
+                geometry,
+                coords: j.coords.clone(),
             });
-            if let Some(c) = j.coord {
-                if let Some(d) = &j.drive {
-                    drive[c] = Some(d.eval(p, w)?);
-                }
-                if j.stiffness.is_some() || j.damping.is_some() {
+            if let Some(d) = &j.drive {
+                drive[j.coords.start] = Some(d.eval(p, w)?);
+            }
+            for (k, c) in j.coords.clone().enumerate() {
+                if j.stiffness[k].is_some() || j.damping[k].is_some() {
                     let opt = |f: &Option<Field>| f.as_ref().map_or(Ok(cst(0.0)), |f| f.eval(p, w));
                     joint_elements.push(JointElement {
                         coord: c,
-                        stiffness: opt(&j.stiffness)?,
-                        free: j.free.eval(p, w)?,
-                        damping: opt(&j.damping)?,
+                        stiffness: opt(&j.stiffness[k])?,
+                        free: j.free[k].eval(p, w)?,
+                        damping: opt(&j.damping[k])?,
                     });
                 }
             }
@@ -185,29 +168,20 @@ impl<T: Real> System<T> {
         }
         let mut constraints = Vec::new();
         for c in &model.constraints {
-            match &c.kind {
-                ConstraintKind::Distance {
-                    body1,
-                    point1,
-                    body2,
-                    point2,
-                    length,
-                } => {
-                    let point1 = v3(point1, p, w)?;
-                    let point2 = v3(point2, p, w)?;
-                    let length = match length {
-                        Some(f) => f.eval(p, w)?,
-                        None => (point2 - point1).norm_dual(),
-                    };
-                    constraints.push(ConstraintData::Distance {
-                        body1: *body1,
-                        point1,
-                        body2: *body2,
-                        point2,
-                        length,
-                    });
-                }
-            }
+            let [_, use_axis, use_axis2, _] = c.kind.uses();
+            let g = &c.geometry;
+            constraints.push(ConstraintData {
+                kind: c.kind,
+                geometry: cuts::Geometry {
+                    body1: g.body1,
+                    point1: v3(&g.point1, p, w)?,
+                    body2: g.body2,
+                    point2: v3(&g.point2, p, w)?,
+                    axis: direction(&g.axis, use_axis, p, w)?,
+                    axis2: direction(&g.axis2, use_axis2, p, w)?,
+                    length: g.length.as_ref().map(|f| f.eval(p, w)).transpose()?,
+                },
+            });
         }
         let subtree = subtrees(&joints, model.coordinates.len());
         Ok(System {
@@ -245,9 +219,12 @@ impl<T: Real> System<T> {
                     kind: j.kind,
                     parent: j.parent,
                     child: j.child,
-                    at: v(&j.at),
-                    axis: v(&j.axis),
-                    coord: j.coord,
+                    geometry: joints::Geometry {
+                        at: v(&j.geometry.at),
+                        axis: v(&j.geometry.axis),
+                        axis2: v(&j.geometry.axis2),
+                    },
+                    coords: j.coords.clone(),
                 })
                 .collect(),
             joint_elements: self
@@ -277,20 +254,20 @@ impl<T: Real> System<T> {
             constraints: self
                 .constraints
                 .iter()
-                .map(|c| match c {
-                    ConstraintData::Distance {
-                        body1,
-                        point1,
-                        body2,
-                        point2,
-                        length,
-                    } => ConstraintData::Distance {
-                        body1: *body1,
-                        point1: v(point1),
-                        body2: *body2,
-                        point2: v(point2),
-                        length: f(*length),
-                    },
+                .map(|c| {
+                    let g = &c.geometry;
+                    ConstraintData {
+                        kind: c.kind,
+                        geometry: cuts::Geometry {
+                            body1: g.body1,
+                            point1: v(&g.point1),
+                            body2: g.body2,
+                            point2: v(&g.point2),
+                            axis: v(&g.axis),
+                            axis2: v(&g.axis2),
+                            length: g.length.map(f),
+                        },
+                    }
                 })
                 .collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),
@@ -312,18 +289,48 @@ impl<T: Real> System<T> {
 pub fn steady_speeds(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
     let mut qd = vec![0.0; model.coordinates.len()];
     for j in &model.joints {
-        if let (Some(c), Some(d)) = (j.coord, &j.drive) {
-            qd[c] = d.eval(p, speed)?;
+        if let Some(d) = &j.drive {
+            qd[j.coords.start] = d.eval(p, speed)?;
         }
     }
     Ok(qd)
+}
+
+/// A direction field evaluated as a unit vector when the type uses it (`use_`), as given (zero)
+/// otherwise. It is scaled by a power of two (exact, no derivative) before the norm, so that
+/// neither a huge nor a tiny direction over- or underflows in `a·a`.
+fn direction<T: Real>(
+    f: &[Field; 3],
+    use_: joints::Use,
+    p: &[T],
+    w: T,
+) -> Result<V3<T>, FieldError> {
+    let mut a = v3(f, p, w)?;
+    if !matches!(use_, joints::Use::Required | joints::Use::Optional) {
+        return Ok(a);
+    }
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.re().abs()));
+    if amax > 0.0 && amax.is_finite() {
+        let e = (amax.log2().floor() as i32 + 1).clamp(-1000, 1000);
+        a *= cst::<T>(2f64.powi(-e));
+    }
+    let n = a.dot(&a).sqrt();
+    if !(n.re() > 0.0 && n.re().is_finite()) {
+        return Err(FieldError {
+            site: f[0].site.clone(),
+            error: crate::model::EvalError::DivisionByZero,
+        });
+    }
+    Ok(a / n)
 }
 
 /// The joints below each coordinate's joint (see [`System::subtree`]).
 fn subtrees<T: Real>(joints: &[JointData<T>], n: usize) -> Vec<Vec<usize>> {
     let mut out = vec![Vec::new(); n];
     for (ji, j) in joints.iter().enumerate() {
-        let Some(c) = j.coord else { continue };
+        if j.coords.is_empty() {
+            continue;
+        }
         let mut moving = vec![false; joints.len()];
         let mut bodies = vec![j.child];
         for (k, other) in joints.iter().enumerate().skip(ji) {
@@ -332,7 +339,10 @@ fn subtrees<T: Real>(joints: &[JointData<T>], n: usize) -> Vec<Vec<usize>> {
                 bodies.push(other.child);
             }
         }
-        out[c] = (0..joints.len()).filter(|&k| moving[k]).collect();
+        let below: Vec<usize> = (0..joints.len()).filter(|&k| moving[k]).collect();
+        for c in j.coords.clone() {
+            out[c] = below.clone();
+        }
     }
     out
 }

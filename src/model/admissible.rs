@@ -8,7 +8,7 @@
 //! that is not admissible is a sample of a mechanism that cannot exist: it counts as failed, with
 //! the reason, instead of entering the statistics with a negative mass.
 
-use super::{ConstraintKind, Field, Model};
+use super::{Field, Model};
 
 /// Why a design is not admissible: the element and the defect (without the value, so that
 /// reasons can be tallied), and the offending value.
@@ -71,12 +71,14 @@ impl Model {
         }
         for j in &self.joints {
             let e = Element("joint", &j.name);
-            out.extend(j.at.iter().chain(&j.axis).map(|f| (e, f)));
-            out.push((e, &j.initial));
-            out.push((e, &j.free));
+            let g = &j.geometry;
+            out.extend(g.at.iter().chain(&g.axis).chain(&g.axis2).map(|f| (e, f)));
+            out.extend(j.initial.iter().chain(&j.free).map(|f| (e, f)));
             out.extend(
-                [&j.drive, &j.stiffness, &j.damping]
-                    .into_iter()
+                j.stiffness
+                    .iter()
+                    .chain(&j.damping)
+                    .chain([&j.drive])
                     .flatten()
                     .map(|f| (e, f)),
             );
@@ -93,17 +95,16 @@ impl Model {
         }
         for c in &self.constraints {
             let e = Element("constraint", &c.name);
-            match &c.kind {
-                ConstraintKind::Distance {
-                    point1,
-                    point2,
-                    length,
-                    ..
-                } => {
-                    out.extend(point1.iter().chain(point2).map(|f| (e, f)));
-                    out.extend(length.iter().map(|f| (e, f)));
-                }
-            }
+            let g = &c.geometry;
+            out.extend(
+                g.point1
+                    .iter()
+                    .chain(&g.point2)
+                    .chain(&g.axis)
+                    .chain(&g.axis2)
+                    .chain(&g.length)
+                    .map(|f| (e, f)),
+            );
         }
         out
     }

@@ -144,45 +144,35 @@ pub struct Body {
     pub cm: [Field; 3],
 }
 
-/// Tree joint types.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum JointKind {
-    /// Rotation about `axis` through `at`; coordinate in rad.
-    Revolute,
-    /// Translation along `axis`; coordinate in m.
-    Prismatic,
-    /// No relative motion; no coordinate.
-    Fixed,
-}
-
-/// A tree joint: `child` moves relative to `parent` (`None` = ground).
+/// A tree joint: `child` moves relative to `parent` (`None` = ground) with the joint's
+/// coordinates; its type ([`crate::joints`]) says how.
 #[derive(Debug, Clone)]
 pub struct Joint {
     pub name: String,
-    pub kind: JointKind,
+    pub kind: crate::joints::Kind,
     pub parent: Option<usize>,
     pub child: usize,
-    pub at: [Field; 3],
-    pub axis: [Field; 3],
-    pub initial: Field,
-    /// Constant coordinate speed (rad/s or m/s) when driven.
+    pub geometry: crate::joints::Geometry<[Field; 3]>,
+    /// Per coordinate: the initial guess of the equilibrium (rad or m).
+    pub initial: Vec<Field>,
+    /// Constant coordinate speed (rad/s or m/s) when driven (one-coordinate joints only).
     pub drive: Option<Field>,
-    /// Joint spring rate (N·m/rad or N/m) and its free coordinate value.
-    pub stiffness: Option<Field>,
-    pub free: Field,
-    /// Joint damping (N·m·s/rad or N·s/m).
-    pub damping: Option<Field>,
-    /// Index of this joint's coordinate, if it has one.
-    pub coord: Option<usize>,
+    /// Per coordinate: spring rate (N·m/rad or N/m), its free coordinate value, and damping
+    /// (N·m·s/rad or N·s/m).
+    pub stiffness: Vec<Option<Field>>,
+    pub free: Vec<Field>,
+    pub damping: Vec<Option<Field>>,
+    /// Indices of this joint's coordinates (empty for a fixed joint).
+    pub coords: std::ops::Range<usize>,
 }
 
-/// A generalised coordinate: the relative coordinate of one joint.
+/// A generalised coordinate: one relative coordinate of one joint.
 #[derive(Debug, Clone)]
 pub struct Coordinate {
     pub joint: usize,
+    /// The joint's name, or `joint.suffix` for joints with several coordinates.
     pub name: String,
-    pub kind: JointKind,
+    pub unit: crate::joints::Unit,
     pub driven: bool,
 }
 
@@ -202,35 +192,12 @@ pub struct SpringDamper {
     pub preload: Option<Field>,
 }
 
-/// Cut-joint constraint types. Adding one means a variant here, its equation in
-/// `mechanics::constraints`, and its parsing in `validate`.
-#[derive(Debug, Clone)]
-pub enum ConstraintKind {
-    /// `|x2 − x1| = length` between a point on `body1` and a point on `body2`.
-    Distance {
-        body1: Option<usize>,
-        point1: [Field; 3],
-        body2: Option<usize>,
-        point2: [Field; 3],
-        /// `None`: the distance in the reference configuration.
-        length: Option<Field>,
-    },
-}
-
-impl ConstraintKind {
-    /// Number of scalar equations this constraint adds.
-    pub fn equations(&self) -> usize {
-        match self {
-            ConstraintKind::Distance { .. } => 1,
-        }
-    }
-}
-
-/// A cut joint closing a kinematic loop.
+/// A cut joint closing a kinematic loop; its type ([`crate::cuts`]) gives its equations.
 #[derive(Debug, Clone)]
 pub struct Constraint {
     pub name: String,
-    pub kind: ConstraintKind,
+    pub kind: crate::cuts::Kind,
+    pub geometry: crate::cuts::Geometry<[Field; 3], Field>,
 }
 
 /// Inclusive range of speeds `from:to:step` (rad/s).

@@ -41,6 +41,49 @@ impl<'de> Deserialize<'de> for Num {
 
 /// A spanned number-or-expression.
 pub type SNum = Spanned<Num>;
+
+/// A number or expression, or a list of them: one value per coordinate of a joint (a single
+/// value serves a one-coordinate joint, and for spring rates and damping every coordinate).
+#[derive(Debug, Clone)]
+pub enum Nums {
+    One(Num),
+    Many(Vec<SNum>),
+}
+
+impl<'de> Deserialize<'de> for Nums {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Nums;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, an expression string, or a list of them")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Nums, E> {
+                Ok(Nums::One(Num::Value(v as f64)))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Nums, E> {
+                Ok(Nums::One(Num::Value(v as f64)))
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<Nums, E> {
+                Ok(Nums::One(Num::Value(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Nums, E> {
+                Ok(Nums::One(Num::Expr(v.to_string())))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Nums, A::Error> {
+                let mut out = Vec::new();
+                while let Some(x) = seq.next_element::<SNum>()? {
+                    out.push(x);
+                }
+                Ok(Nums::Many(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A spanned [`Nums`].
+pub type SNums = Spanned<Nums>;
 /// A spanned list of numbers (a vector, checked to have three entries later).
 pub type SVec = Spanned<Vec<SNum>>;
 
@@ -86,11 +129,12 @@ pub struct JointSchema {
     pub child: Spanned<String>,
     pub at: Option<SVec>,
     pub axis: Option<SVec>,
-    pub initial: Option<SNum>,
+    pub axis2: Option<SVec>,
+    pub initial: Option<SNums>,
     pub drive: Option<SNum>,
-    pub stiffness: Option<SNum>,
-    pub free: Option<SNum>,
-    pub damping: Option<SNum>,
+    pub stiffness: Option<SNums>,
+    pub free: Option<SNums>,
+    pub damping: Option<SNums>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -118,7 +162,9 @@ pub struct ConstraintSchema {
     pub body1: Spanned<String>,
     pub point1: SVec,
     pub body2: Spanned<String>,
-    pub point2: SVec,
+    pub point2: Option<SVec>,
+    pub axis: Option<SVec>,
+    pub axis2: Option<SVec>,
     pub length: Option<SNum>,
 }
 

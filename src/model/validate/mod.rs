@@ -7,6 +7,9 @@
 //! mention `speed` are evaluated at the nominal parameters here, so such errors surface at load
 //! time; the rest are checked at each speed when the system is built.
 
+mod cuts;
+mod joints;
+
 use super::schema::{self, FileSchema, Num, SNum, SVec};
 use super::*;
 use std::collections::HashMap;
@@ -472,154 +475,12 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     }
 
     // Joints.
-    let mut joint_names: HashMap<String, usize> = HashMap::new();
-    let mut joints: Vec<Joint> = Vec::new();
-    let mut coordinates = Vec::new();
-    let mut child_of: Vec<Option<usize>> = vec![None; bodies.len()];
-    for j in &raw.joints {
-        let s = j.get_ref();
-        check_name(&ctx, &s.name, "joint")?;
-        let name = s.name.get_ref().clone();
-        if joint_names.insert(name.clone(), joints.len()).is_some() {
-            return Err(ctx.err(s.name.span(), format!("duplicate joint name '{name}'")));
-        }
-        let what = |f: &str| format!("joint '{name}' {f}");
-        let kind = match s.kind.get_ref().as_str() {
-            "revolute" => JointKind::Revolute,
-            "prismatic" => JointKind::Prismatic,
-            "fixed" => JointKind::Fixed,
-            k => {
-                return Err(ctx.err(
-                    s.kind.span(),
-                    format!(
-                        "joint '{name}': unknown type '{k}' (expected revolute, prismatic or fixed)"
-                    ),
-                ));
-            }
-        };
-        let parent = body_ref(&ctx, &body_names, &s.parent)?;
-        let child = body_ref(&ctx, &body_names, &s.child)?.ok_or_else(|| {
-            ctx.err(
-                s.child.span(),
-                format!("joint '{name}': ground cannot be a child"),
-            )
-        })?;
-        if parent == Some(child) {
-            return Err(ctx.err(
-                s.child.span(),
-                format!(
-                    "joint '{name}' connects body '{}' to itself",
-                    bodies[child].name
-                ),
-            ));
-        }
-        if let Some(prev) = child_of[child] {
-            return Err(ctx.err(
-                s.child.span(),
-                format!(
-                    "body '{}' is the child of two joints ('{}' and '{name}'); a body has one parent joint, close loops with [[constraints]]",
-                    bodies[child].name, joints[prev].name
-                ),
-            ));
-        }
-        child_of[child] = Some(joints.len());
-        let at = match &s.at {
-            Some(v) => ctx.vec3(v, what("at"))?,
-            None if kind == JointKind::Revolute => {
-                return Err(ctx.err(
-                    j.span(),
-                    format!("joint '{name}': a revolute joint needs 'at' (a point on its axis)"),
-                ));
-            }
-            None => [0, 1, 2].map(|i| ctx.zero(&j.span(), what(&format!("at[{i}]")))),
-        };
-        let axis = match &s.axis {
-            Some(v) => ctx.vec3(v, what("axis"))?,
-            None if kind == JointKind::Fixed => {
-                [0, 1, 2].map(|i| ctx.zero(&j.span(), what(&format!("axis[{i}]"))))
-            }
-            None => {
-                return Err(ctx.err(j.span(), format!("joint '{name}': missing 'axis'")));
-            }
-        };
-        for f in at.iter() {
-            ctx.nominal(f, &nominal)?;
-        }
-        if kind != JointKind::Fixed {
-            // Any non-zero direction is an axis (the mechanics scales it before normalising).
-            let mut amax = 0.0f64;
-            let mut known = true;
-            for f in axis.iter() {
-                match ctx.nominal(f, &nominal)? {
-                    Some(v) => amax = amax.max(v.abs()),
-                    None => known = false,
-                }
-            }
-            if known && amax == 0.0 {
-                let span = s.axis.as_ref().map_or(j.span(), |a| a.span());
-                return Err(ctx.err(span, format!("joint '{name}': axis is zero")));
-            }
-        }
-        let initial = match &s.initial {
-            Some(n) => ctx.field(n, what("initial"))?,
-            None => ctx.zero(&j.span(), what("initial")),
-        };
-        let free = match &s.free {
-            Some(n) => ctx.field(n, what("free"))?,
-            None => ctx.zero(&j.span(), what("free")),
-        };
-        let drive = ctx.opt_field(&s.drive, what("drive"))?;
-        let stiffness = ctx.opt_field(&s.stiffness, what("stiffness"))?;
-        let damping = ctx.opt_field(&s.damping, what("damping"))?;
-        if kind == JointKind::Fixed {
-            for (f, n) in [
-                (&s.drive, "drive"),
-                (&s.stiffness, "stiffness"),
-                (&s.damping, "damping"),
-                (&s.initial, "initial"),
-            ] {
-                if let Some(x) = f {
-                    return Err(ctx.err(
-                        x.span(),
-                        format!("joint '{name}': a fixed joint has no coordinate, so no '{n}'"),
-                    ));
-                }
-            }
-        }
-        for f in [&initial, &free]
-            .into_iter()
-            .chain(drive.iter())
-            .chain(stiffness.iter())
-            .chain(damping.iter())
-        {
-            ctx.nominal(f, &nominal)?;
-        }
-        let coord = if kind == JointKind::Fixed {
-            None
-        } else {
-            coordinates.push(Coordinate {
-                joint: joints.len(),
-                name: name.clone(),
-                kind,
-                driven: drive.is_some(),
-            });
-            Some(coordinates.len() - 1)
-        };
-        joints.push(Joint {
-            name,
-            kind,
-            parent,
-            child,
-            at,
-            axis,
-            initial,
-            drive,
-            stiffness,
-            free,
-            damping,
-            coord,
-        });
-    }
+    let joints::Tree {
+        joints,
+        coordinates,
+        child_of,
+        names: joint_names,
+    } = joints::joints(&ctx, &raw.joints, &body_names, &bodies, &nominal)?;
 
     // Tree: every body is reached from ground; no cycles.
     for (b, c) in child_of.iter().enumerate() {
@@ -731,59 +592,14 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     }
 
     // Cut joints.
-    let mut constraints = Vec::new();
-    for c in &raw.constraints {
-        let s = c.get_ref();
-        check_name(&ctx, &s.name, "constraint")?;
-        let name = s.name.get_ref().clone();
-        if element_names.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
-            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
-        }
-        let what = |x: &str| format!("constraint '{name}' {x}");
-        let kind = match s.kind.get_ref().as_str() {
-            "distance" => {
-                let body1 = body_ref(&ctx, &body_names, &s.body1)?;
-                let body2 = body_ref(&ctx, &body_names, &s.body2)?;
-                if body1 == body2 {
-                    return Err(ctx.err(
-                        s.body2.span(),
-                        format!("constraint '{name}': both points are on the same body"),
-                    ));
-                }
-                ConstraintKind::Distance {
-                    body1,
-                    point1: ctx.vec3(&s.point1, what("point1"))?,
-                    body2,
-                    point2: ctx.vec3(&s.point2, what("point2"))?,
-                    length: ctx.opt_field(&s.length, what("length"))?,
-                }
-            }
-            k => {
-                return Err(ctx.err(
-                    s.kind.span(),
-                    format!("constraint '{name}': unknown type '{k}' (expected distance)"),
-                ));
-            }
-        };
-        let ConstraintKind::Distance {
-            point1,
-            point2,
-            length,
-            ..
-        } = &kind;
-        for x in point1.iter().chain(point2.iter()).chain(length.iter()) {
-            ctx.nominal(x, &nominal)?;
-        }
-        if coincident(&ctx, point1, point2, &nominal)? {
-            return Err(ctx.err(
-                c.span(),
-                format!(
-                    "constraint '{name}': its two points coincide in the reference configuration, so the distance has no direction there; give distinct points"
-                ),
-            ));
-        }
-        constraints.push(Constraint { name, kind });
-    }
+    let constraints = cuts::constraints(
+        &ctx,
+        &raw.constraints,
+        &body_names,
+        &joint_names,
+        &mut element_names,
+        &nominal,
+    )?;
     let n_free = coordinates.iter().filter(|c| !c.driven).count();
     let n_con: usize = constraints.iter().map(|c| c.kind.equations()).sum();
     if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {

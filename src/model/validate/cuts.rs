@@ -1,0 +1,106 @@
+//! Cut joints of a model file: type, bodies, points and the fields the type
+//! ([`crate::cuts::CutType`]) declares.
+
+use super::joints::{article, least_aligned, list, not_parallel, vector};
+use super::{Ctx, R, body_ref, check_name, coincident};
+use crate::cuts::{Geometry, Kind};
+use crate::joints::Use;
+use crate::model::Constraint;
+use crate::model::schema::ConstraintSchema;
+use std::collections::HashMap;
+use toml::Spanned;
+
+/// Parses and checks the `[[constraints]]` tables; `elements` holds the force elements' names
+/// (names are unique across joints, force elements and cut joints).
+pub(super) fn constraints(
+    ctx: &Ctx,
+    raw: &[Spanned<ConstraintSchema>],
+    body_names: &HashMap<String, usize>,
+    joint_names: &HashMap<String, usize>,
+    elements: &mut HashMap<String, usize>,
+    nominal: &[f64],
+) -> R<Vec<Constraint>> {
+    let mut out = Vec::new();
+    for c in raw {
+        let s = c.get_ref();
+        check_name(ctx, &s.name, "constraint")?;
+        let name = s.name.get_ref().clone();
+        if elements.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
+            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
+        }
+        let owner = format!("constraint '{name}'");
+        let kind = Kind::from_name(s.kind.get_ref()).ok_or_else(|| {
+            ctx.err(
+                s.kind.span(),
+                format!(
+                    "{owner}: unknown type '{}' (expected {})",
+                    s.kind.get_ref(),
+                    list(Kind::ALL.iter().map(|k| k.name()))
+                ),
+            )
+        })?;
+        let this = format!("{} {} cut joint", article(kind.name()), kind.name());
+        let body1 = body_ref(ctx, body_names, &s.body1)?;
+        let body2 = body_ref(ctx, body_names, &s.body2)?;
+        if body1 == body2 {
+            return Err(ctx.err(
+                s.body2.span(),
+                format!("{owner}: both points are on the same body"),
+            ));
+        }
+        let [use_point2, use_axis, use_axis2, use_length] = kind.uses();
+        let item = c.span();
+        let point1 = ctx.vec3(&s.point1, format!("{owner} point1"))?;
+        for f in &point1 {
+            ctx.nominal(f, nominal)?;
+        }
+        let point2 = match (&s.point2, use_point2) {
+            (None, Use::Optional) => point1.clone(),
+            _ => vector(
+                ctx, &s.point2, use_point2, "point2", &owner, &this, &item, nominal,
+            )?,
+        };
+        let axis = vector(
+            ctx, &s.axis, use_axis, "axis", &owner, &this, &item, nominal,
+        )?;
+        let axis2 = match (&s.axis2, use_axis2) {
+            (None, Use::Optional) => least_aligned(ctx, &axis, &owner, &item, nominal)?,
+            _ => vector(
+                ctx, &s.axis2, use_axis2, "axis2", &owner, &this, &item, nominal,
+            )?,
+        };
+        if use_axis2 != Use::Unused {
+            let span = s.axis2.as_ref().map_or(item.clone(), |a| a.span());
+            not_parallel(ctx, &axis, &axis2, &owner, span, nominal)?;
+        }
+        if let (Some(l), Use::Unused) = (&s.length, use_length) {
+            return Err(ctx.err(l.span(), format!("{owner}: {this} has no 'length'")));
+        }
+        let length = ctx.opt_field(&s.length, format!("{owner} length"))?;
+        for f in length.iter() {
+            ctx.nominal(f, nominal)?;
+        }
+        if kind.distinct_points() && coincident(ctx, &point1, &point2, nominal)? {
+            return Err(ctx.err(
+                item,
+                format!(
+                    "{owner}: its two points coincide in the reference configuration, so the distance has no direction there; give distinct points"
+                ),
+            ));
+        }
+        out.push(Constraint {
+            name,
+            kind,
+            geometry: Geometry {
+                body1,
+                point1,
+                body2,
+                point2,
+                axis,
+                axis2,
+                length,
+            },
+        });
+    }
+    Ok(out)
+}
