@@ -265,3 +265,18 @@ fn turning_the_reference_configuration_changes_nothing() {
         }
     }
 }
+
+#[test]
+fn the_shipped_example_is_this_mechanism() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/spinning_spatial_fourbar.toml");
+    let example = Model::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let ball = Model::from_str(&rsur(Cut::Ball, &IDENTITY), "rsur.toml").unwrap();
+    for w in SPEEDS {
+        same_roots(
+            &roots(&solve(&example, w, false)),
+            &roots(&solve(&ball, w, false)),
+            1e-9,
+        );
+    }
+}

@@ -18,12 +18,13 @@ use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-const EXAMPLES: [&str; 5] = [
+const EXAMPLES: [&str; 6] = [
     "rotating_pendulum.toml",
     "governor.toml",
     "spinning_universal_pendulum.toml",
     "multi_arm_governor.toml",
     "multi_arm_governor_13_variables.toml",
+    "spinning_spatial_fourbar.toml",
 ];
 
 /// Numbers that broke things before, and their neighbours.
