@@ -5,9 +5,10 @@
 //! physics, so they must give the same eigenvalues; and turning the whole model's reference
 //! configuration by a rotation must change nothing.
 
-use modaltol::modal::C64;
+mod common;
+
+use common::{roots, same_roots, solve};
 use modaltol::model::Model;
-use modaltol::sweep::{Options, Point, initial_guess, point};
 
 type M3 = [[f64; 3]; 3];
 
@@ -182,45 +183,6 @@ damping = 1.5
         }
     }
     t
-}
-
-fn solve(model: &Model, speed: f64, direct: bool) -> Point {
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
-    if !direct {
-        assert!(model.program(&p, speed, &q0).is_some());
-    }
-    let opt = Options {
-        direct,
-        ..Options::default()
-    };
-    point(model, &p, speed, &q0, &opt).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn roots(pt: &Point) -> Vec<C64> {
-    pt.modes
-        .iter()
-        .flat_map(|m| [m.root.lambda, m.partner.lambda])
-        .collect()
-}
-
-fn same_roots(a: &[C64], b: &[C64], tol: f64) {
-    assert_eq!(a.len(), b.len(), "{a:?} vs {b:?}");
-    let mut used = vec![false; b.len()];
-    for x in a {
-        let (k, d) = b
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| !used[*k])
-            .map(|(k, y)| (k, (x - y).norm()))
-            .min_by(|u, v| u.1.total_cmp(&v.1))
-            .unwrap();
-        used[k] = true;
-        assert!(
-            d <= tol * x.norm().max(1.0),
-            "root {x} unmatched (nearest at {d:e}): {a:?} vs {b:?}"
-        );
-    }
 }
 
 const SPEEDS: [f64; 3] = [0.0, 3.0, 6.0];

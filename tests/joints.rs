@@ -11,57 +11,9 @@
 
 mod common;
 
-use common::example_text;
-use modaltol::modal::C64;
+use common::{example_text, roots, same_roots, solve};
 use modaltol::model::Model;
-use modaltol::sweep::{Options, Point, initial_guess, point};
-
-/// The point at `speed` with nominal parameters from the model's initial guess, on the recorded
-/// route (which must record) or the direct one.
-fn solve(model: &Model, speed: f64, direct: bool) -> Point {
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
-    if !direct {
-        assert!(
-            model.program(&p, speed, &q0).is_some(),
-            "{}: the equations record as a program",
-            model.name
-        );
-    }
-    let opt = Options {
-        direct,
-        ..Options::default()
-    };
-    point(model, &p, speed, &q0, &opt).unwrap_or_else(|e| panic!("{}: {e}", model.name))
-}
-
-/// Every root of every mode.
-fn roots(pt: &Point) -> Vec<C64> {
-    pt.modes
-        .iter()
-        .flat_map(|m| [m.root.lambda, m.partner.lambda])
-        .collect()
-}
-
-/// The two lists hold the same roots (matched greedily, nearest first) to `tol` relative.
-fn same_roots(a: &[C64], b: &[C64], tol: f64) {
-    assert_eq!(a.len(), b.len(), "{a:?} vs {b:?}");
-    let mut used = vec![false; b.len()];
-    for x in a {
-        let (k, d) = b
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| !used[*k])
-            .map(|(k, y)| (k, (x - y).norm()))
-            .min_by(|u, v| u.1.total_cmp(&v.1))
-            .unwrap();
-        used[k] = true;
-        assert!(
-            d <= tol * x.norm().max(1.0),
-            "root {x} unmatched (nearest at {d:e}): {a:?} vs {b:?}"
-        );
-    }
-}
+use modaltol::sweep::Point;
 
 /// Both models give the same roots on both routes, and the same values of the coordinates named
 /// in `pairs` (name in `a`, name in `b`).

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: the shipped examples and one solved point.
 #![allow(dead_code)] // each test target uses its own subset
 
+use modaltol::modal::C64;
 use modaltol::model::Model;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
@@ -73,5 +74,52 @@ pub fn run_with_deadline(args: &[&str], limit: std::time::Duration) -> Result<Ru
             return Err(format!("modaltol {args:?} hung (killed after {limit:?})"));
         }
         std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
+
+/// The point at `speed` with nominal parameters from the model's initial guess, on the recorded
+/// route (which must record) or the direct one.
+pub fn solve(model: &Model, speed: f64, direct: bool) -> Point {
+    let p = model.nominal();
+    let q0 = initial_guess(model, &p, speed).unwrap();
+    if !direct {
+        assert!(
+            model.program(&p, speed, &q0).is_some(),
+            "{}: the equations record as a program",
+            model.name
+        );
+    }
+    let opt = Options {
+        direct,
+        ..Options::default()
+    };
+    point(model, &p, speed, &q0, &opt).unwrap_or_else(|e| panic!("{}: {e}", model.name))
+}
+
+/// Every root of every mode.
+pub fn roots(pt: &Point) -> Vec<C64> {
+    pt.modes
+        .iter()
+        .flat_map(|m| [m.root.lambda, m.partner.lambda])
+        .collect()
+}
+
+/// The two lists hold the same roots (matched greedily, nearest first) to `tol` relative.
+pub fn same_roots(a: &[C64], b: &[C64], tol: f64) {
+    assert_eq!(a.len(), b.len(), "{a:?} vs {b:?}");
+    let mut used = vec![false; b.len()];
+    for x in a {
+        let (k, d) = b
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !used[*k])
+            .map(|(k, y)| (k, (x - y).norm()))
+            .min_by(|u, v| u.1.total_cmp(&v.1))
+            .unwrap();
+        used[k] = true;
+        assert!(
+            d <= tol * x.norm().max(1.0),
+            "root {x} unmatched (nearest at {d:e}): {a:?} vs {b:?}"
+        );
     }
 }
