@@ -3,12 +3,12 @@
 //! Run with `cargo bench --bench engine`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::hint::black_box;
 
-fn example(name: &str) -> Model {
-    Model::from_file(
+fn example(name: &str) -> Compiled {
+    Compiled::from_file(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("examples")
             .join(name),

@@ -2,7 +2,7 @@
 //! speed, against one modal point. Run with `cargo bench --bench sensitivity`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -13,7 +13,7 @@ fn bench(c: &mut Criterion) {
         ("governor.toml", 1.595),
         ("spinning_universal_pendulum.toml", 3.0),
     ] {
-        let model = Model::from_file(
+        let model = Compiled::from_file(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("examples")
                 .join(file),

@@ -6,12 +6,13 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::analyze::{AnalyzeOptions, analyze};
-use modaltol::model::{Model, Sampling};
+use modaltol::compiled::Compiled;
+use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
 use std::time::Duration;
 
 fn bench(c: &mut Criterion) {
-    let model = Model::from_file(
+    let model = Compiled::from_file(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/governor.toml"),
     )
     .unwrap();

@@ -3,12 +3,13 @@
 //! samples × 501 speeds for one case. Prints the wall time; run under `perf record`.
 //! `cargo run --release --example profile_analyze -- [mc]`.
 use modaltol::analyze::{AnalyzeOptions, analyze};
-use modaltol::model::{Model, Sampling};
+use modaltol::compiled::Compiled;
+use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
 
 fn main() {
     let mc = std::env::args().nth(1).is_some_and(|s| s == "mc");
-    let model = Model::from_file(std::path::Path::new("examples/governor.toml")).unwrap();
+    let model = Compiled::from_file(std::path::Path::new("examples/governor.toml")).unwrap();
     let springs: Vec<_> = model
         .analysis
         .cases

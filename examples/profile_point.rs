@@ -1,7 +1,7 @@
 //! Profiling driver: repeats one modal point (or, with a third argument `sens`, the
 //! sensitivities at that point) for `perf record`.
 //! `cargo run --release --example profile_point -- examples/governor.toml 1.595 [sens]`.
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 
@@ -10,7 +10,7 @@ fn main() {
     let file = args.get(1).map_or("examples/governor.toml", |s| s.as_str());
     let speed: f64 = args.get(2).map_or(1.595, |s| s.parse().unwrap());
     let sens = args.get(3).is_some_and(|s| s == "sens");
-    let model = Model::from_file(std::path::Path::new(file)).unwrap();
+    let model = Compiled::from_file(std::path::Path::new(file)).unwrap();
     let p = model.nominal();
     let q0 = initial_guess(&model, &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();

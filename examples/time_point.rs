@@ -3,7 +3,7 @@
 //! at 1.595 rad/s and all its sensitivities there, in µs (the last two in the same rounds'
 //! conditions, so their ratio is not skewed by the machine's phases).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -26,7 +26,7 @@ fn main() {
     let file = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "examples/governor.toml".into());
-    let model = Model::from_file(std::path::Path::new(&file)).unwrap();
+    let model = Compiled::from_file(std::path::Path::new(&file)).unwrap();
     let p = model.nominal();
     let speed = 1.595;
     let q0 = initial_guess(&model, &p, speed).unwrap();

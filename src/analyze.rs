@@ -8,7 +8,8 @@
 //! `analytic` row takes) and optionally the Monte Carlo. Wall times of the Taylor methods, the
 //! quadrature and the Monte Carlo are measured for the summary.
 
-use crate::model::{Case, Model};
+use crate::compiled::Compiled;
+use crate::model::Case;
 use crate::montecarlo::{self, Block, McOptions, McStat, TreeFold};
 use crate::quadrature::{self, Event, QuadOptions, QuadStat};
 use crate::sweep::{Options, Point, Sweep};
@@ -168,7 +169,7 @@ impl Analysis {
 pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 
 /// Runs the analysis. Failed speeds are reported in `failures` and skipped; the run goes on.
-pub fn analyze(model: &Model, opt: &AnalyzeOptions, progress: Progress) -> Analysis {
+pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> Analysis {
     let mut vars: Vec<usize> = opt
         .cases
         .iter()

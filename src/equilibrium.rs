@@ -15,13 +15,12 @@
 //! Kim, Yoo (2007), *Analytical tolerance analysis of the modal characteristics of multibody
 //! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
 
-use crate::mechanics::System;
-use crate::mechanics::dynamics::{Lifted, evaluate_rows};
-use crate::program::Instance;
-use crate::real::{D1, Real, cst, lift1};
+use crate::linalg::least_squares;
+use crate::mechanics::dynamics::evaluate_rows;
+use crate::real::{D1, lift1};
+use crate::route::{Direct, Equations};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
-use std::cell::OnceCell;
 
 /// Why an equilibrium was not found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -61,7 +60,7 @@ pub type Rates = (DMatrix<f64>, DMatrix<f64>);
 
 /// `F`, its Jacobian and, on the recorded route, the [`Rates`] and the driven coordinates'
 /// rows of `r + Φ_qᵀλ`, at one point.
-type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>, Option<Vec<f64>>);
+pub type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>, Option<Vec<f64>>);
 
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -93,23 +92,6 @@ pub struct Equilibrium {
     /// them again; a [`crate::sweep::Point`]'s are in its linearisation).
     #[serde(skip)]
     pub rates: Option<Rates>,
-}
-
-/// The equilibrium equations `F` for unknowns `q_R` (placed into `q`) and `λ`.
-pub fn equations<T: Real>(
-    l: &Lifted<T>,
-    free: &[usize],
-    q: &[T],
-    qd: &[T],
-    lambda: &[T],
-) -> Vec<T> {
-    let zero = vec![cst::<T>(0.0); q.len()];
-    let d = evaluate_rows(l, q, qd, &zero, free);
-    let g = d.with_multipliers(lambda);
-    free.iter()
-        .map(|&i| g[i])
-        .chain(d.phi.iter().copied())
-        .collect()
 }
 
 /// Settings of the equilibrium solve.
@@ -144,148 +126,73 @@ pub struct Start<'a> {
     pub steady_known: bool,
 }
 
-/// The least-squares solution of `a λ = b` (zero if that fails; empty when `a` has no
-/// columns): by QR where `a` has full column rank, the usual case, else by SVD (the
-/// minimum-norm solution).
-fn least_squares(a: DMatrix<f64>, b: DVector<f64>) -> Vec<f64> {
-    let m = a.ncols();
-    if m == 0 {
-        return Vec::new();
-    }
-    if a.nrows() >= m {
-        let qr = a.clone().qr();
-        let r = qr.r();
-        let d = r.diagonal().map(f64::abs);
-        if d.min() > 1e-12 * d.max() {
-            let qtb = qr.q().tr_mul(&b);
-            if let Some(l) = r.solve_upper_triangular(&qtb)
-                && l.iter().all(|v| v.is_finite())
-            {
-                return l.iter().copied().collect();
-            }
-        }
-    }
-    match crate::linalg::svd(a, true, true).map(|svd| svd.solve(&b, 1e-12)) {
-        Some(Ok(l)) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
-        _ => vec![0.0; m],
-    }
-}
-
-/// The system lifted for the direct route's values, made on first use.
-fn lift_value<'c>(sys: &System<f64>, cell: &'c OnceCell<Box<Lifted<f64>>>) -> &'c Lifted<f64> {
-    cell.get_or_init(|| Box::new(Lifted::new(sys.clone())))
-}
-
-/// The system lifted for the direct route's first derivatives, made on first use.
-fn lift_dual<'c>(sys: &System<f64>, cell: &'c OnceCell<Box<Lifted<Dual64>>>) -> &'c Lifted<Dual64> {
-    cell.get_or_init(|| Box::new(Lifted::new(sys.map(lift1))))
-}
-
-/// How a [`Problem`] evaluates its equations.
-enum Route<'a> {
-    /// The model's recorded program at the problem's parameters and speed (same numbers as
-    /// the direct route, less work).
-    Recorded(Box<Instance<'a>>),
-    /// The generic code over dual numbers, with the system lifted on first use.
-    Direct {
-        sys: Box<System<f64>>,
-        value: OnceCell<Box<Lifted<f64>>>,
-        dual: OnceCell<Box<Lifted<Dual64>>>,
-    },
-}
-
-/// Everything needed to solve for the equilibrium of one instantiated system.
-pub struct Problem<'a> {
-    pub free: Vec<usize>,
-    pub driven: Vec<usize>,
-    /// Coordinate names, for messages.
-    pub names: Vec<&'a str>,
-    route: Route<'a>,
-    /// Coordinate speeds at steady state.
-    pub qd: Vec<f64>,
-    /// Number of constraint equations.
-    m: usize,
-}
-
-impl<'a> Problem<'a> {
-    /// Prepares the solve for `sys`, evaluated directly; `free`/`driven` partition the
-    /// coordinates.
-    pub fn new(
-        sys: System<f64>,
-        free: Vec<usize>,
-        driven: Vec<usize>,
-        names: Vec<&'a str>,
-    ) -> Self {
-        Problem {
-            free,
-            driven,
-            names,
-            qd: sys.steady_speeds(),
-            m: sys.m,
-            route: Route::Direct {
-                sys: Box::new(sys),
-                value: OnceCell::new(),
-                dual: OnceCell::new(),
-            },
-        }
-    }
-
-    /// Prepares the solve through the model's recorded program at the problem's parameters
-    /// and speed; `qd` are the steady-state coordinate speeds.
-    pub fn recorded(
-        program: Instance<'a>,
-        qd: Vec<f64>,
-        free: Vec<usize>,
-        driven: Vec<usize>,
-        names: Vec<&'a str>,
-    ) -> Self {
-        Problem {
-            m: program.constraints(),
-            free,
-            driven,
-            names,
-            qd,
-            route: Route::Recorded(Box::new(program)),
-        }
-    }
-
-    /// The system lifted for the direct route's first derivatives, also the linearisation's
-    /// (`None` on the recorded route).
-    pub fn dual(&self) -> Option<&Lifted<Dual64>> {
-        match &self.route {
-            Route::Direct { sys, dual, .. } => Some(lift_dual(sys, dual)),
-            Route::Recorded(_) => None,
-        }
-    }
-
-    fn n_unknowns(&self) -> usize {
-        self.free.len() + self.m
-    }
-
+/// The equations of a point as Newton's method uses them: [`Equations`] in `f64` with the
+/// exact Jacobian and what a converged point needs besides. Implemented by the direct route
+/// ([`Direct`], here) and by the recorded program ([`crate::program::Instance`]).
+pub trait Solvable: Equations<f64> {
     /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
-    ///
+    fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>);
+
+    /// `F`, its exact Jacobian and, where the route has them from the same pass, the
+    /// [`Rates`] and (with `drive`) the driven coordinates' rows of `r + Φ_qᵀλ`: everything
+    /// the linearisation needs, so that a solve whose last Newton step is below the tolerance
+    /// needs no further evaluation.
+    fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
+        let _ = drive;
+        let (f, j) = self.residual_and_jacobian(q, lambda);
+        (f, j, None, None)
+    }
+
+    /// [`Solvable::evaluate`] at `q` with the least-squares multipliers there
+    /// (`Φ_Rᵀ λ ≈ −r_R`), and those multipliers.
+    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation);
+
+    /// The rows `driven` of `r + Φ_qᵀλ` (with `q̇` at steady state, `q̈ = 0`): the drive forces.
+    fn drive_rows(&self, q: &[f64], lambda: &[f64], driven: &[usize]) -> Vec<f64>;
+
+    /// The largest `|F|` at each of the values `q_c + offsets[l]` of the driven coordinate `c`
+    /// (the `d`-th driven one), the rest as given.
+    fn residual_at_drive_offsets(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        d: usize,
+        c: usize,
+        offsets: [f64; 3],
+    ) -> [f64; 3] {
+        let _ = d;
+        let mut qo = q.to_vec();
+        offsets.map(|offset| {
+            qo[c] = q[c] + offset;
+            let f = self.residual(&qo, lambda);
+            f.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+        })
+    }
+
+    /// `Φ_R` (constraint equations × free coordinates) at `q`.
+    fn constraint_jacobian(&self, q: &[f64]) -> DMatrix<f64>;
+}
+
+impl Solvable for Direct<f64> {
     /// One dual pass per free coordinate; `F` is linear in `λ`, so the `λ` columns are
     /// `[Φ_Rᵀ; 0]`, read off `Φ_q` from those same passes.
-    pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-        let dual = match &self.route {
-            Route::Recorded(c) => return c.residual_and_jacobian(q, lambda),
-            Route::Direct { sys, dual, .. } => lift_dual(sys, dual),
-        };
-        let nf = self.free.len();
+    fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        let dual = self.dual();
+        let free = self.free();
+        let nf = free.len();
         let m = lambda.len();
-        let qd: Vec<D1<f64>> = self.qd.iter().map(|&v| lift1(v)).collect();
+        let qd: Vec<D1<f64>> = self.steady_speeds().iter().map(|&v| lift1(v)).collect();
         let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
         let zero = vec![lift1(0.0); q.len()];
         let base: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
         let mut value = Vec::new();
         let mut jac = DMatrix::zeros(nf + m, nf + m);
-        for (k, &i) in self.free.iter().enumerate() {
+        for (k, &i) in free.iter().enumerate() {
             let mut qq = base.clone();
             qq[i] = Dual64::new(q[i], 1.0);
-            let d = evaluate_rows(dual, &qq, &qd, &zero, &self.free);
+            let d = evaluate_rows(dual, &qq, &qd, &zero, free);
             let g = d.with_multipliers(&ld);
-            let f: Vec<D1<f64>> = self
-                .free
+            let f: Vec<D1<f64>> = free
                 .iter()
                 .map(|&j| g[j])
                 .chain(d.phi.iter().copied())
@@ -296,7 +203,7 @@ impl<'a> Problem<'a> {
             if k == 0 {
                 value = f.iter().map(|v| v.re).collect();
                 for c in 0..m {
-                    for (r, &j) in self.free.iter().enumerate() {
+                    for (r, &j) in free.iter().enumerate() {
                         jac[(r, nf + c)] = d.phi_q[(c, j)].re;
                     }
                 }
@@ -305,36 +212,88 @@ impl<'a> Problem<'a> {
         (value, jac)
     }
 
-    /// `F` alone, in `f64` (one partial-velocity pass per free coordinate, no derivatives of
-    /// them).
-    pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
-        match &self.route {
-            Route::Recorded(c) => c.residual(q, lambda),
-            Route::Direct { sys, value, .. } => {
-                equations(lift_value(sys, value), &self.free, q, &self.qd, lambda)
-            }
+    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
+        let free = self.free();
+        let (nf, m) = (free.len(), self.constraints());
+        let zero = vec![0.0; q.len()];
+        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, free);
+        let lambda = least_squares(
+            DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, free[i])]),
+            DVector::from_iterator(nf, free.iter().map(|&i| -d.r[i])),
+        );
+        let e = self.evaluate(q, &lambda, drive);
+        (lambda, e)
+    }
+
+    fn drive_rows(&self, q: &[f64], lambda: &[f64], driven: &[usize]) -> Vec<f64> {
+        let zero = vec![0.0; q.len()];
+        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, driven);
+        let g = d.with_multipliers(lambda);
+        driven.iter().map(|&i| g[i]).collect()
+    }
+
+    fn constraint_jacobian(&self, q: &[f64]) -> DMatrix<f64> {
+        let free = self.free();
+        let zero = vec![0.0; q.len()];
+        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, free);
+        DMatrix::from_fn(self.constraints(), free.len(), |k, j| d.phi_q[(k, free[j])])
+    }
+}
+
+/// Everything needed to solve for the equilibrium of one instantiated system.
+pub struct Problem<'a> {
+    pub free: Vec<usize>,
+    pub driven: Vec<usize>,
+    /// Coordinate names, for messages.
+    pub names: Vec<&'a str>,
+    /// The equations, evaluated by either route.
+    route: Box<dyn Solvable + 'a>,
+    /// Coordinate speeds at steady state.
+    pub qd: Vec<f64>,
+    /// Number of constraint equations.
+    m: usize,
+}
+
+impl<'a> Problem<'a> {
+    /// Prepares the solve of the equations `route`; `qd` are the steady-state coordinate
+    /// speeds, `driven` the driven coordinates and `names` all coordinates' names.
+    pub fn new(
+        route: Box<dyn Solvable + 'a>,
+        qd: Vec<f64>,
+        driven: Vec<usize>,
+        names: Vec<&'a str>,
+    ) -> Self {
+        Problem {
+            free: route.free().to_vec(),
+            m: route.constraints(),
+            driven,
+            names,
+            qd,
+            route,
         }
     }
 
-    /// `F`, its exact Jacobian and, on the recorded route, `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`, at
-    /// `(q, λ)`: everything the linearisation needs, so that a solve whose last Newton step
-    /// is below the tolerance needs no further evaluation.
+    /// The equations being solved.
+    pub fn equations(&self) -> &dyn Solvable {
+        &*self.route
+    }
+
+    fn n_unknowns(&self) -> usize {
+        self.free.len() + self.m
+    }
+
+    /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
+    pub fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        self.route.residual_and_jacobian(q, lambda)
+    }
+
+    /// `F` alone, in `f64`.
+    pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
+        self.route.residual(q, lambda)
+    }
+
     fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
-        match &self.route {
-            Route::Recorded(c) => {
-                let lin = c.linear(q, lambda, drive);
-                (
-                    lin.residual,
-                    lin.jacobian,
-                    Some((lin.damping, lin.mass)),
-                    drive.then_some(lin.drive),
-                )
-            }
-            Route::Direct { .. } => {
-                let (f, j) = self.residual_and_jacobian(q, lambda);
-                (f, j, None, None)
-            }
-        }
+        self.route.evaluate(q, lambda, drive)
     }
 
     /// Solves from the guess `q0` (all coordinates; driven ones keep their values).
@@ -481,22 +440,12 @@ impl<'a> Problem<'a> {
             self.check_steady(&q, &lambda, &jac)?;
         }
         let mut drive_force = vec![0.0; if settings.drive_force { q.len() } else { 0 }];
-        match (&self.route, drive) {
-            _ if !settings.drive_force => {}
-            // From the evaluation at the returned point (a converged solve ends on one).
-            (Route::Recorded(c), rows) => {
-                let rows = rows.unwrap_or_else(|| c.linear(&q, &lambda, true).drive);
-                for (&i, v) in self.driven.iter().zip(rows) {
-                    drive_force[i] = v;
-                }
-            }
-            (Route::Direct { sys, value, .. }, _) => {
-                let zero = vec![0.0; q.len()];
-                let d = evaluate_rows(lift_value(sys, value), &q, &self.qd, &zero, &self.driven);
-                let g = d.with_multipliers(&lambda);
-                for &i in &self.driven {
-                    drive_force[i] = g[i];
-                }
+        if settings.drive_force {
+            // From the evaluation at the returned point where it has them (a converged solve
+            // ends on one).
+            let rows = drive.unwrap_or_else(|| self.route.drive_rows(&q, &lambda, &self.driven));
+            for (&i, v) in self.driven.iter().zip(rows) {
+                drive_force[i] = v;
             }
         }
         // Every number reported must be finite: a drive force that overflows (a huge inertia
@@ -524,41 +473,8 @@ impl<'a> Problem<'a> {
         })
     }
 
-    /// [`Problem::evaluate`] at `q` with the least-squares multipliers there (`Φ_Rᵀ λ ≈
-    /// −r_R`), and those multipliers. On the recorded route this is one pass: the pass at
-    /// `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the multipliers
-    /// ([`crate::program::Linear::shift_multipliers`]).
     fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
-        let (nf, m) = (self.free.len(), self.m);
-        match &self.route {
-            Route::Recorded(c) => {
-                let mut lin = c.linear(q, &vec![0.0; m], drive);
-                let lambda = least_squares(
-                    lin.jacobian.view((0, nf), (nf, m)).into_owned(),
-                    DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
-                );
-                lin.shift_multipliers(&lambda);
-                (
-                    lambda,
-                    (
-                        lin.residual,
-                        lin.jacobian,
-                        Some((lin.damping, lin.mass)),
-                        drive.then_some(lin.drive),
-                    ),
-                )
-            }
-            Route::Direct { sys, value, .. } => {
-                let zero = vec![0.0; q.len()];
-                let d = evaluate_rows(lift_value(sys, value), q, &self.qd, &zero, &self.free);
-                let lambda = least_squares(
-                    DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, self.free[i])]),
-                    DVector::from_iterator(nf, self.free.iter().map(|&i| -d.r[i])),
-                );
-                let e = self.evaluate(q, &lambda, drive);
-                (lambda, e)
-            }
-        }
+        self.route.evaluate_fitted(q, drive)
     }
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
@@ -575,17 +491,10 @@ impl<'a> Problem<'a> {
         let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
-        let mut qo = q.to_vec();
         for (d, &c) in self.driven.iter().enumerate() {
-            let change = match &self.route {
-                Route::Recorded(p) => p.residual_at_drive_offsets(q, lambda, d, OFFSETS),
-                Route::Direct { .. } => OFFSETS.map(|offset| {
-                    qo[c] = q[c] + offset;
-                    let f = self.residual(&qo, lambda);
-                    qo[c] = q[c];
-                    f.iter().fold(0.0f64, |a, v| a.max(v.abs()))
-                }),
-            };
+            let change = self
+                .route
+                .residual_at_drive_offsets(q, lambda, d, c, OFFSETS);
             let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
             if change > tol {
                 return Err(EquilibriumError::NoSteadyState {
@@ -603,19 +512,7 @@ impl<'a> Problem<'a> {
         if self.m == 0 {
             return Vec::new();
         }
-        let nf = self.free.len();
-        let phi_r = match &self.route {
-            // The λ columns of the Jacobian are [Φ_Rᵀ; 0].
-            Route::Recorded(c) => {
-                let (_, j) = c.residual_and_jacobian(q, &vec![0.0; self.m]);
-                j.view((0, nf), (nf, self.m)).transpose()
-            }
-            Route::Direct { sys, value, .. } => {
-                let zero = vec![0.0; q.len()];
-                let d = evaluate_rows(lift_value(sys, value), q, &self.qd, &zero, &self.free);
-                DMatrix::from_fn(self.m, nf, |k, j| d.phi_q[(k, self.free[j])])
-            }
-        };
+        let phi_r = self.route.constraint_jacobian(q);
         crate::linalg::dependent_rows(&phi_r)
     }
 

@@ -32,11 +32,10 @@
 //! calculations*, AIAA 2011-886; Griewank & Walther, *Evaluating Derivatives* (2008), §15
 //! (derivatives of iterative solvers).
 
+use crate::compiled::Compiled;
 use crate::frf::transfer;
 use crate::modal::{C64, Root};
-use crate::model::Model;
 use crate::output::{Output, Quantity};
-use crate::program::Equations;
 use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
@@ -158,7 +157,7 @@ fn root_expansion<J: Jet>(
 type Jets<J> = (Vec<Option<J>>, Vec<Option<J>>);
 
 fn expand<J: Jet>(
-    model: &Model,
+    model: &Compiled,
     seeded: &[J],
     pt: &Point,
     outs: &[Output],
@@ -168,12 +167,12 @@ fn expand<J: Jet>(
     let free = &pt.linear.free;
     let nf = free.len();
     let lu = eq.jacobian.clone().lu();
-    let equations = Equations::new(model, seeded, J::from(pt.speed), &eq.q)?;
+    let equations = model.equations(seeded, J::from(pt.speed), &eq.q)?;
     let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
     let mut lambda: Vec<J> = eq.lambda.iter().map(|&v| J::from(v)).collect();
     // Equilibrium expansion: two chord iterations with Newton's Jacobian.
     for _ in 0..2 {
-        let f = equations.residual(free, &q, &lambda);
+        let f = equations.residual(&q, &lambda);
         for pk in 1..J::PARTS {
             let rhs = DVector::from_iterator(f.len(), f.iter().map(|v| v.part(pk)));
             let d = lu.solve(&rhs).ok_or(PointError::Equilibrium(
@@ -189,7 +188,7 @@ fn expand<J: Jet>(
             }
         }
     }
-    let lin = equations.linearize(free, &q, &lambda, &pt.linear.independent)?;
+    let lin = equations.linearize(&q, &lambda, &pt.linear.independent, None)?;
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
     // Per mode: ω_d, ζ and D (ω_d and ζ not where the roots coalesce, as in
@@ -250,7 +249,7 @@ fn expand<J: Jet>(
 /// `p`: one `Dual2` pass per variable (its gradient entry and diagonal Hessian entry), one
 /// hyper-dual pass per pair of variables (the mixed entry).
 pub fn hessians(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     vars: &[usize],

@@ -10,6 +10,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod analyze;
+pub mod compiled;
 pub mod cuts;
 pub mod equilibrium;
 pub mod files;
@@ -29,6 +30,7 @@ pub mod quadrature;
 pub mod real;
 pub mod report;
 pub mod rigid;
+pub mod route;
 pub mod sensitivity;
 pub mod shard;
 pub mod sweep;

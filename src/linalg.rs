@@ -230,6 +230,33 @@ pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
     rows
 }
 
+/// The least-squares solution of `a λ = b` (zero if that fails; empty when `a` has no
+/// columns): by QR where `a` has full column rank, the usual case, else by SVD (the
+/// minimum-norm solution).
+pub fn least_squares(a: DMatrix<f64>, b: DVector<f64>) -> Vec<f64> {
+    let m = a.ncols();
+    if m == 0 {
+        return Vec::new();
+    }
+    if a.nrows() >= m {
+        let qr = a.clone().qr();
+        let r = qr.r();
+        let d = r.diagonal().map(f64::abs);
+        if d.min() > 1e-12 * d.max() {
+            let qtb = qr.q().tr_mul(&b);
+            if let Some(l) = r.solve_upper_triangular(&qtb)
+                && l.iter().all(|v| v.is_finite())
+            {
+                return l.iter().copied().collect();
+            }
+        }
+    }
+    match svd(a, true, true).map(|svd| svd.solve(&b, 1e-12)) {
+        Some(Ok(l)) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
+        _ => vec![0.0; m],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,6 +4,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::compiled::Compiled;
 use modaltol::files::{AtomicFile, ResultDir, read_bounded, write_atomically};
 use modaltol::frf::transfer;
 use modaltol::model::Sampling;
@@ -266,8 +267,8 @@ struct Failed(String);
 #[error("{0}")]
 struct InputError(String);
 
-fn load(path: &std::path::Path) -> Result<Model> {
-    Model::from_file(path).map_err(|e| InputError(e.to_string()).into())
+fn load(path: &std::path::Path) -> Result<Compiled> {
+    Compiled::from_file(path).map_err(|e| InputError(e.to_string()).into())
 }
 
 fn independent(model: &Model, names: &Option<Vec<String>>) -> Result<Option<Vec<usize>>> {
@@ -359,7 +360,7 @@ fn parse_transfer(model: &Model, spec: &str) -> Result<Transfer> {
 }
 
 fn sensitivities(
-    m: &Model,
+    m: &Compiled,
     pt: &Point,
     wrt: &[usize],
     tf: Option<TransferAt>,
@@ -371,10 +372,10 @@ fn sensitivities(
     }
 }
 
-fn model_or_governor(model: &Option<PathBuf>) -> Result<Model> {
+fn model_or_governor(model: &Option<PathBuf>) -> Result<Compiled> {
     match model {
         Some(path) => load(path),
-        None => Model::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
+        None => Compiled::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
             .map_err(|e| InputError(e.to_string()).into()),
     }
 }
@@ -432,7 +433,7 @@ fn install_interrupt_handler() {
 
 /// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
 fn write_outputs(
-    m: &Model,
+    m: &Compiled,
     a: &modaltol::analyze::Analysis,
     mc: Option<&McOptions>,
     threads: Option<usize>,

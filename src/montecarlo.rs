@@ -18,9 +18,10 @@
 //! heavy-tailed outputs (|H| at a stationary point is χ²-like, κ ≈ 15), where the χ² interval,
 //! valid for normal outputs only, would be several times too narrow.
 
+use crate::compiled::Compiled;
 use crate::equilibrium::Settings;
 use crate::modal::ModeClass;
-use crate::model::{Distribution, Model, Sampling, Transfer};
+use crate::model::{Distribution, Sampling, Transfer};
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{Output, Spread, match_modes, value};
@@ -391,7 +392,7 @@ pub struct Sampler {
 }
 
 impl Sampler {
-    pub fn new(model: &Model, vars: &[usize], spread: &Spread, opt: McOptions) -> Sampler {
+    pub fn new(model: &Compiled, vars: &[usize], spread: &Spread, opt: McOptions) -> Sampler {
         let n = vars.len();
         let chol = correlation_factor(&spread.correlation);
         // One permutation key per variable, drawn from a stream reserved for it.
@@ -497,7 +498,7 @@ type SampleResult = Vec<(f64, Events)>;
 /// with the number of branch switches the sample's sweep made up to there, or `None` where
 /// either failed or the sample has another number of modes.
 pub fn sample_sweep(
-    model: &Model,
+    model: &Compiled,
     p: Vec<f64>,
     speeds: &[f64],
     nominal: &[Option<Point>],
@@ -539,7 +540,7 @@ pub fn sample_sweep(
 /// ([`Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
 /// frequent first. They fail at every speed; this says why.
 pub fn inadmissible(
-    model: &Model,
+    model: &Compiled,
     vars: &[usize],
     spread: &Spread,
     opt: McOptions,
@@ -586,7 +587,7 @@ pub fn branch_counts(nominal: &[Option<Point>]) -> Vec<usize> {
 }
 
 fn run_sample(
-    model: &Model,
+    model: &Compiled,
     p: Vec<f64>,
     speeds: &[f64],
     nominal: &[Option<Point>],
@@ -647,7 +648,7 @@ pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize
 /// (for quantiles).
 #[allow(clippy::too_many_arguments)]
 pub fn run_chunks(
-    model: &Model,
+    model: &Compiled,
     vars: &[usize],
     spread: &Spread,
     speeds: &[f64],
@@ -752,7 +753,7 @@ pub const MAX_KEPT_VALUES: usize = 100_000_000;
 /// number of samples evaluated (fewer than asked when [`request_stop`] interrupted the run).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
-    model: &Model,
+    model: &Compiled,
     vars: &[usize],
     spread: &Spread,
     speeds: &[f64],

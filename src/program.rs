@@ -18,14 +18,16 @@
 //! evaluation at a second, perturbed set of inputs, is discarded: the caller then keeps to the
 //! direct route, which is always available.
 
-use crate::equilibrium::equations;
-use crate::linearize::{Linearization, LinearizeError, linearize, reduce};
+use crate::equilibrium::{Evaluation, Solvable};
+use crate::linalg::least_squares;
+use crate::linearize::{Linearization, LinearizeError, reduce};
 use crate::mechanics::System;
-use crate::mechanics::dynamics::{Lifted, evaluate_rows};
-use crate::model::{FieldError, Model};
-use crate::real::{Real, lift1};
+use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
+use crate::model::Model;
+use crate::real::Real;
+use crate::route::Equations;
 use crate::tape::{Forward, Seeding, Tape, Var, record};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use std::cell::RefCell;
 
 /// The recorded equations of one model (see the module documentation).
@@ -200,7 +202,7 @@ impl Program {
                 return false;
             };
             let qd = sys.steady_speeds();
-            let direct = equations(&Lifted::new(sys), &self.free, q, &qd, l);
+            let direct = equilibrium_residual(&Lifted::new(sys), &self.free, q, &qd, l);
             let Some(here) = self.at(p, w).map(|i| i.residual(q, l)) else {
                 return false;
             };
@@ -527,72 +529,121 @@ impl Program {
     }
 }
 
-/// The equilibrium equations and the linearisation of a model at parameters `p` over any
-/// [`Real`]: through the recorded program when the model has one, else directly. The
-/// sensitivities and the Hessians evaluate them over dual numbers.
-pub enum Equations<'a, S: Real> {
-    Recorded {
-        program: &'a Program,
-        p: Vec<S>,
-        speed: S,
-    },
-    Direct {
-        lifted: Box<Lifted<S>>,
-        qd: Vec<S>,
-    },
+/// The recorded program at parameters `p` and `speed` over any [`Real`]: the
+/// [`Equations`] the sensitivities and the Hessians evaluate over dual numbers.
+pub struct Recorded<'a, S: Real> {
+    pub program: &'a Program,
+    pub p: Vec<S>,
+    pub speed: S,
 }
 
-impl<'a, S: Real> Equations<'a, S> {
-    /// The equations at parameters `p` and `speed`, near the coordinates `q`.
-    pub fn new(model: &'a Model, p: &[S], speed: S, q: &[f64]) -> Result<Self, FieldError> {
-        let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
-        match model.program(&p0, speed.re(), q) {
-            Some(program) => Ok(Equations::Recorded {
-                program,
-                p: p.to_vec(),
-                speed,
-            }),
-            None => {
-                let sys = System::new(model, p, speed)?;
-                Ok(Equations::Direct {
-                    qd: sys.steady_speeds(),
-                    lifted: Box::new(Lifted::new(sys)),
-                })
-            }
-        }
+impl<S: Real> Equations<S> for Recorded<'_, S> {
+    fn free(&self) -> &[usize] {
+        &self.program.free
     }
 
-    /// `F(q_R, λ)` for the free coordinates `free`.
-    pub fn residual(&self, free: &[usize], q: &[S], lambda: &[S]) -> Vec<S> {
-        match self {
-            Equations::Recorded { program, p, speed } => {
-                program.residual_over(p, *speed, q, lambda)
-            }
-            Equations::Direct { lifted, qd, .. } => equations(lifted, free, q, qd, lambda),
-        }
+    fn constraints(&self) -> usize {
+        self.program.m
     }
 
-    /// The linearisation at `(q, λ)` with the given independent coordinates.
-    pub fn linearize(
+    fn residual(&self, q: &[S], lambda: &[S]) -> Vec<S> {
+        self.program.residual_over(&self.p, self.speed, q, lambda)
+    }
+
+    fn linearize(
         &self,
-        free: &[usize],
         q: &[S],
         lambda: &[S],
         independent: &[usize],
+        _stiffness: Option<&DMatrix<S>>,
     ) -> Result<Linearization<S>, LinearizeError> {
-        match self {
-            Equations::Recorded { program, p, speed } => program
-                .linear_over(p, *speed, q, lambda)
-                .reduce(free, independent),
-            Equations::Direct { lifted, qd } => linearize(
-                &Lifted::new(lifted.base.map(lift1)),
-                free,
-                q,
-                qd,
-                lambda,
-                independent,
-                None,
+        self.program
+            .linear_over(&self.p, self.speed, q, lambda)
+            .reduce(&self.program.free, independent)
+    }
+}
+
+impl Equations<f64> for Instance<'_> {
+    fn free(&self) -> &[usize] {
+        &self.program.free
+    }
+
+    fn constraints(&self) -> usize {
+        self.program.m
+    }
+
+    fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
+        Instance::residual(self, q, lambda)
+    }
+
+    fn linearize(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        independent: &[usize],
+        _stiffness: Option<&DMatrix<f64>>,
+    ) -> Result<Linearization<f64>, LinearizeError> {
+        self.linear(q, lambda, false)
+            .reduce(&self.program.free, independent)
+    }
+}
+
+impl Solvable for Instance<'_> {
+    fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        Instance::residual_and_jacobian(self, q, lambda)
+    }
+
+    fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
+        let lin = self.linear(q, lambda, drive);
+        (
+            lin.residual,
+            lin.jacobian,
+            Some((lin.damping, lin.mass)),
+            drive.then_some(lin.drive),
+        )
+    }
+
+    /// One pass: the pass at `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the
+    /// multipliers ([`Linear::shift_multipliers`]).
+    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
+        let (nf, m) = (self.program.free.len(), self.program.m);
+        let mut lin = self.linear(q, &vec![0.0; m], drive);
+        let lambda = least_squares(
+            lin.jacobian.view((0, nf), (nf, m)).into_owned(),
+            DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
+        );
+        lin.shift_multipliers(&lambda);
+        (
+            lambda,
+            (
+                lin.residual,
+                lin.jacobian,
+                Some((lin.damping, lin.mass)),
+                drive.then_some(lin.drive),
             ),
-        }
+        )
+    }
+
+    /// The recorded drive rows are those of the model's driven coordinates, in order.
+    fn drive_rows(&self, q: &[f64], lambda: &[f64], _driven: &[usize]) -> Vec<f64> {
+        self.linear(q, lambda, true).drive
+    }
+
+    fn residual_at_drive_offsets(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        d: usize,
+        _c: usize,
+        offsets: [f64; 3],
+    ) -> [f64; 3] {
+        Instance::residual_at_drive_offsets(self, q, lambda, d, offsets)
+    }
+
+    /// The `λ` columns of the Jacobian are `[Φ_Rᵀ; 0]`.
+    fn constraint_jacobian(&self, q: &[f64]) -> DMatrix<f64> {
+        let (nf, m) = (self.program.free.len(), self.program.m);
+        let (_, j) = Instance::residual_and_jacobian(self, q, &vec![0.0; m]);
+        j.view((0, nf), (nf, m)).transpose()
     }
 }

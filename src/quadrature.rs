@@ -51,7 +51,8 @@
 //! there), and boundaries not crossed by the line direction in the transverse directions
 //! (they are integrated by the transverse rule and show in its error estimate).
 
-use crate::model::{Distribution, Model};
+use crate::compiled::Compiled;
+use crate::model::Distribution;
 use crate::montecarlo::{correlation_factor, parameters_at, sample_sweep};
 use crate::sensitivity::TransferAt;
 use crate::sweep::Point;
@@ -200,7 +201,7 @@ struct Sweep {
 /// local models (their gradients choose the line direction), `nominal` the nominal sweep.
 #[allow(clippy::too_many_arguments)]
 pub fn integrate(
-    model: &Model,
+    model: &Compiled,
     vars: &[usize],
     spread: &Spread,
     speeds: &[f64],

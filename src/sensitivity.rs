@@ -26,11 +26,11 @@
 //! Kim, Yoo (2007) eq. 24; Adhikari, *Rates of change of eigenvalues and eigenvectors in damped
 //! dynamic systems*, AIAA J. 37 (1999).
 
+use crate::compiled::Compiled;
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
 use crate::modal::{C64, Mode, similarity};
-use crate::model::{Model, Transfer};
-use crate::program::Equations;
+use crate::model::Transfer;
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -168,7 +168,7 @@ pub struct DualLinearization {
 /// `M̂, Ĉ, K̂` (and `R`) over dual numbers for each design variable in `wrt`: the equilibrium
 /// shift by the implicit function theorem, then one dual-number linearisation.
 pub fn dual_linearizations(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     wrt: &[usize],
@@ -190,7 +190,7 @@ pub fn dual_linearizations(
             .enumerate()
             .map(|(i, &v)| Dual64::new(v, if i == b { 1.0 } else { 0.0 }))
             .collect();
-        let equations = Equations::new(model, &pd, Dual64::from_re(speed), &eq.q)?;
+        let equations = model.equations(&pd, Dual64::from_re(speed), &eq.q)?;
         let q0: Vec<Dual64> = eq.q.iter().map(|&v| Dual64::from_re(v)).collect();
         let rhs = match &dp {
             Some(dp) => {
@@ -198,7 +198,7 @@ pub fn dual_linearizations(
             }
             None => {
                 let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
-                let fb = equations.residual(free, &q0, &l0);
+                let fb = equations.residual(&q0, &l0);
                 DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps))
             }
         };
@@ -214,7 +214,7 @@ pub fn dual_linearizations(
         let lambda: Vec<Dual64> = (0..eq.lambda.len())
             .map(|k| Dual64::new(eq.lambda[k], dx[free.len() + k]))
             .collect();
-        let linear = equations.linearize(free, &q, &lambda, &pt.linear.independent)?;
+        let linear = equations.linearize(&q, &lambda, &pt.linear.independent, None)?;
         out.push(DualLinearization {
             param: b,
             linear,
@@ -243,7 +243,7 @@ pub fn transfer_derivative(h: &Complex<Dual64>) -> (Option<f64>, Option<f64>) {
 
 /// Exact sensitivities by automatic differentiation through the equilibrium.
 pub fn analytic(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     wrt: &[usize],
@@ -318,7 +318,7 @@ const FD_STEP: f64 = 1e-4;
 /// `[Re λ, Im λ, ω_d, ω_n, ζ, λ₁+λ₂, λ₁λ₂]` (modes matched to the nominal ones by shape), then `|H|`,
 /// `arg H`, then the coordinates; and whether every mode kept its class.
 fn fd_quantities(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     tf: Option<TransferAt>,
@@ -356,7 +356,7 @@ fn fd_quantities(
 /// `h = 1e-4 × max(|b|, 1e-3)`, combined by Richardson extrapolation (error O(h⁴)). Modes are
 /// matched to the nominal ones by shape. A cross-check, and the paper's method.
 pub fn finite_difference(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     wrt: &[usize],

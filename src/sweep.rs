@@ -7,13 +7,11 @@
 //! nearest stable equilibrium, noting the switch. Modes keep their identity across speeds by
 //! the similarity of their shapes in the free coordinates, not by sorting.
 
+use crate::compiled::Compiled;
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
-use crate::linearize::{Linearization, LinearizeError, choose_independent, linearize, reduce};
-use crate::mechanics::dynamics::Lifted;
-use crate::mechanics::{System, steady_speeds};
+use crate::linearize::{Linearization, LinearizeError, choose_independent, reduce};
 use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
 use crate::model::{FieldError, Model};
-use crate::real::lift1;
 use nalgebra::{DMatrix, DVector};
 
 /// Why a speed produced no result.
@@ -82,7 +80,7 @@ pub fn initial_guess(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, F
 
 /// Solves one operating point from the guess `q0`.
 pub fn point(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     speed: f64,
     q0: &[f64],
@@ -93,38 +91,16 @@ pub fn point(
 
 /// As [`point`], with more to start Newton from (see [`Start`]).
 pub fn point_from(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     speed: f64,
     q0: &[f64],
     start: Start,
     opt: &Options,
 ) -> Result<Point, PointError> {
-    let names = model.coordinates.iter().map(|c| c.name.as_str()).collect();
-    let recorded = if opt.direct {
-        None
-    } else {
-        model
-            .program(p, speed, q0)
-            .and_then(|program| program.at(p, speed))
-    };
     // Through the recorded program when there is one (the system's numbers are part of it),
     // else directly.
-    let problem = match recorded {
-        Some(program) => Problem::recorded(
-            program,
-            steady_speeds(model, p, speed)?,
-            model.free(),
-            model.driven(),
-            names,
-        ),
-        None => Problem::new(
-            System::new(model, p, speed)?,
-            model.free(),
-            model.driven(),
-            names,
-        ),
-    };
+    let problem = model.problem(p, speed, q0, opt.direct)?;
     let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);
@@ -144,7 +120,7 @@ pub fn point_from(
             equations: model.n_constraints(),
         }
     })?;
-    let first = analyse(model, p, &problem, eq, opt)?;
+    let first = analyse(model, &problem, eq, opt)?;
     if first.stable() || opt.no_branch_switch {
         return Ok(first);
     }
@@ -200,7 +176,7 @@ pub fn point_from(
                 continue;
             }
             let own_side = side(&eq.q) * s > 0.0;
-            if let Ok(pt) = analyse(model, p, &problem, eq, opt)
+            if let Ok(pt) = analyse(model, &problem, eq, opt)
                 && pt.stable()
             {
                 let pt = Point {
@@ -222,7 +198,6 @@ pub fn point_from(
 /// Linearises and solves the modes at a converged equilibrium.
 fn analyse(
     model: &Model,
-    p: &[f64],
     problem: &Problem,
     mut eq: Equilibrium,
     opt: &Options,
@@ -239,30 +214,12 @@ fn analyse(
         choose_independent(&phi_r, &free, user)?
     };
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
-    let linear = match (eq.rates.take(), problem.dual()) {
-        (Some((damping, mass)), _) => {
-            reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
-        }
-        (None, dual) => {
-            // The recorded route always gives the rates; directly otherwise.
-            let fresh;
-            let dual = match dual {
-                Some(dual) => dual,
-                None => {
-                    fresh = Lifted::new(System::new(model, p, eq.speed)?.map(lift1));
-                    &fresh
-                }
-            };
-            linearize(
-                dual,
-                &free,
-                &eq.q,
-                &eq.qd,
-                &eq.lambda,
-                &independent,
-                Some(&stiffness),
-            )?
-        }
+    let linear = match eq.rates.take() {
+        Some((damping, mass)) => reduce(&free, &independent, &phi_r, mass, damping, stiffness)?,
+        // The recorded route always gives the rates; directly otherwise.
+        None => problem
+            .equations()
+            .linearize(&eq.q, &eq.lambda, &independent, Some(&stiffness))?,
     };
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
@@ -318,7 +275,7 @@ impl Solved {
 
 /// A sweep over speeds with continuation of the equilibrium and tracking of the modes.
 pub struct Sweep<'a> {
-    model: &'a Model,
+    model: &'a Compiled,
     params: Vec<f64>,
     options: Options,
     /// The last solutions, newest first (at most [`PREDICTOR_NODES`]), for the predictor.
@@ -330,7 +287,7 @@ pub struct Sweep<'a> {
 }
 
 impl<'a> Sweep<'a> {
-    pub fn new(model: &'a Model, params: Vec<f64>, options: Options) -> Self {
+    pub fn new(model: &'a Compiled, params: Vec<f64>, options: Options) -> Self {
         Sweep {
             model,
             params,

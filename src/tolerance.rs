@@ -25,8 +25,9 @@
 //! Kim, Yoo (2007) eq. 28; Kendall & Stuart, *The Advanced Theory of Statistics*, §10.6 (moments
 //! of quadratic forms in normal variables).
 
+use crate::compiled::Compiled;
 use crate::hessian::hessians;
-use crate::model::{Case, Distribution, Model, Transfer};
+use crate::model::{Case, Distribution, Transfer};
 use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
@@ -71,7 +72,7 @@ type FirstOrder = (
 );
 
 fn first(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     vars: &[usize],
@@ -134,7 +135,7 @@ pub fn match_modes(reference: &Point, mut q: Point) -> Point {
 /// Builds the local model at `pt` for design variables `vars`; with `hessian`, also the exact
 /// Hessians (hyper-dual numbers, see [`crate::hessian`]).
 pub fn local_model(
-    model: &Model,
+    model: &Compiled,
     p: &[f64],
     pt: &Point,
     vars: &[usize],
@@ -200,7 +201,7 @@ pub struct Spread {
 
 impl Spread {
     /// The spread of `vars` under `case` (tolerances not in the case are zero).
-    pub fn new(model: &Model, case: &Case, vars: &[usize]) -> Spread {
+    pub fn new(model: &Compiled, case: &Case, vars: &[usize]) -> Spread {
         let n = vars.len();
         let mut sigma = vec![0.0; n];
         let mut distribution = vec![Distribution::Normal; n];

@@ -8,7 +8,7 @@
 mod common;
 
 use common::{roots, same_roots, solve};
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 
 type M3 = [[f64; 3]; 3];
 
@@ -189,9 +189,9 @@ const SPEEDS: [f64; 3] = [0.0, 3.0, 6.0];
 
 #[test]
 fn one_mechanism_cut_at_three_places_gives_the_same_eigenvalues() {
-    let models: Vec<Model> = [Cut::RockerHinge, Cut::Ball, Cut::CrankHinge]
+    let models: Vec<Compiled> = [Cut::RockerHinge, Cut::Ball, Cut::CrankHinge]
         .map(|c| {
-            Model::from_str(&rsur(c, &IDENTITY), "rsur.toml").unwrap_or_else(|e| panic!("{e}"))
+            Compiled::from_str(&rsur(c, &IDENTITY), "rsur.toml").unwrap_or_else(|e| panic!("{e}"))
         })
         .into();
     assert_eq!(
@@ -216,8 +216,8 @@ fn one_mechanism_cut_at_three_places_gives_the_same_eigenvalues() {
 fn turning_the_reference_configuration_changes_nothing() {
     let turn = rotation([0.3, -0.8, 0.5], 1.1);
     for cut in [Cut::RockerHinge, Cut::Ball, Cut::CrankHinge] {
-        let a = Model::from_str(&rsur(cut, &IDENTITY), "rsur.toml").unwrap();
-        let b = Model::from_str(&rsur(cut, &turn), "turned.toml").unwrap();
+        let a = Compiled::from_str(&rsur(cut, &IDENTITY), "rsur.toml").unwrap();
+        let b = Compiled::from_str(&rsur(cut, &turn), "turned.toml").unwrap();
         for w in SPEEDS {
             same_roots(
                 &roots(&solve(&b, w, false)),
@@ -232,8 +232,8 @@ fn turning_the_reference_configuration_changes_nothing() {
 fn the_shipped_example_is_this_mechanism() {
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples/spinning_spatial_fourbar.toml");
-    let example = Model::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
-    let ball = Model::from_str(&rsur(Cut::Ball, &IDENTITY), "rsur.toml").unwrap();
+    let example = Compiled::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let ball = Compiled::from_str(&rsur(Cut::Ball, &IDENTITY), "rsur.toml").unwrap();
     for w in SPEEDS {
         same_roots(
             &roots(&solve(&example, w, false)),

@@ -4,14 +4,14 @@
 mod common;
 
 use common::{example, example_text};
+use modaltol::compiled::Compiled;
 use modaltol::modal::ModeClass;
-use modaltol::model::Model;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 
 /// The governor with one more body (a small flap hinged on the collar, so there is a free
 /// coordinate to spare) and a second copy of the link1 cut joint: the constraint count leaves one
 /// degree of freedom, but the constraint Jacobian has rank 2, not 3.
-fn redundant_governor() -> Model {
+fn redundant_governor() -> Compiled {
     let mut text = example_text("governor.toml");
     let link3 = text[text.find("[[constraints]]\nname = \"link1\"").unwrap()
         ..text.find("[[constraints]]\nname = \"link2\"").unwrap()]
@@ -19,7 +19,7 @@ fn redundant_governor() -> Model {
     text.push_str(&format!(
         "\n[[bodies]]\nname = \"flap\"\nmass = 0.1\ninertia = [1e-3, 1e-3, 1e-3]\ncm = [0.05, 0.05, 0]\n\n[[joints]]\nname = \"flap_hinge\"\ntype = \"revolute\"\nparent = \"collar\"\nchild = \"flap\"\nat = [0, 0.05, 0]\naxis = [0, 0, 1]\nstiffness = 5\ndamping = 0.1\n\n{link3}"
     ));
-    Model::from_str(&text, "redundant.toml").unwrap()
+    Compiled::from_str(&text, "redundant.toml").unwrap()
 }
 
 #[test]
@@ -92,7 +92,7 @@ body2 = "c"
 point2 = [1.0, 0, 0]
 length = 0.2
 "#;
-    let model = Model::from_str(text, "open_loop.toml").unwrap();
+    let model = Compiled::from_str(text, "open_loop.toml").unwrap();
     let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
     for w in [0.0, 0.5, 1.0] {
         let err = sweep.step(w).expect_err("the loop cannot close");
@@ -113,7 +113,7 @@ fn repeated_eigenvalues_give_two_identical_modes() {
             "mass = 0.2\ninertia = [1e-3, 2e-3, 1e-3]",
             "mass = 0\ninertia = [0, 0, 0]",
         );
-    let model = Model::from_str(&text, "isotropic.toml").unwrap();
+    let model = Compiled::from_str(&text, "isotropic.toml").unwrap();
     let p = model.nominal();
     let pt = point(
         &model,

@@ -6,6 +6,7 @@ mod common;
 
 use approx::assert_relative_eq;
 use common::{at, example, example_text};
+use modaltol::compiled::Compiled;
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, constraints_at, evaluate};
 use modaltol::modal::ModeClass;
@@ -311,7 +312,7 @@ fn linearisation_matches_finite_differences_of_reduced_equations() {
 
 /// Integrates the full nonlinear pendulum (RK4) from a small perturbation and measures ω_d
 /// (zero crossings) and ζ (decay of successive extrema).
-fn pendulum_time_response(model: &Model, w: f64, theta0: f64) -> (f64, f64) {
+fn pendulum_time_response(model: &Compiled, w: f64, theta0: f64) -> (f64, f64) {
     let sys = System::new(model, &model.nominal(), w).unwrap();
     let lifted = Lifted::new(sys);
     let accel = |t: f64, th: f64, thd: f64| {
@@ -420,7 +421,7 @@ fn gyroscopic_example_has_skew_coupling_and_valid_left_vectors() {
 fn drive_torque_balances_joint_damping_on_the_drive() {
     let text = example_text("rotating_pendulum.toml");
     let text = text.replace("drive = \"speed\"", "drive = \"speed\"\ndamping = 0.7");
-    let model = Model::from_str(&text, "damped_spin.toml").unwrap();
+    let model = Compiled::from_str(&text, "damped_spin.toml").unwrap();
     let p = at(&model, 2.5, &Options::default());
     assert_relative_eq!(
         p.equilibrium.drive_force[0],
@@ -433,7 +434,7 @@ fn drive_torque_balances_joint_damping_on_the_drive() {
 fn gravity_off_the_spin_axis_has_no_steady_state() {
     let text = example_text("rotating_pendulum.toml");
     let text = text.replace("gravity = [0, -9.80665, 0]", "gravity = [-3, -9, 0]");
-    let model = Model::from_str(&text, "tilted.toml").unwrap();
+    let model = Compiled::from_str(&text, "tilted.toml").unwrap();
     let p = model.nominal();
     // Wherever the spin angle starts, including where the residual is stationary in it
     // (cos q_D at 0 and π) and where the tilt lies across the swing plane (π/2).
@@ -463,7 +464,7 @@ fn massless_coordinate_is_reported_as_singular_mass() {
             "inertia = [0, 0, 0]",
         )
         .replace("damping = \"c\"", "damping = \"c\"\nstiffness = 10");
-    let model = Model::from_str(&text, "massless.toml").unwrap();
+    let model = Compiled::from_str(&text, "massless.toml").unwrap();
     let err = point(
         &model,
         &model.nominal(),

@@ -7,7 +7,8 @@
 
 mod common;
 
-use modaltol::model::{Expr, Model};
+use modaltol::compiled::Compiled;
+use modaltol::model::Expr;
 use modaltol::sweep::{Options, initial_guess, point};
 use proptest::prelude::*;
 
@@ -34,7 +35,7 @@ proptest! {
 
     #[test]
     fn arbitrary_text_never_panics_the_validator(s in "\\PC{0,400}") {
-        let _ = Model::from_str(&s, "fuzz.toml");
+        let _ = Compiled::from_str(&s, "fuzz.toml");
     }
 
     #[test]
@@ -48,7 +49,7 @@ proptest! {
             let i = at.index(bytes.len());
             bytes[i] = *byte;
         }
-        if let Ok(model) = Model::from_bytes(&bytes, "mutant.toml") {
+        if let Ok(model) = Compiled::from_bytes(&bytes, "mutant.toml") {
             // A mutant that validates must also solve or fail cleanly at a speed.
             let p = model.nominal();
             if let Ok(q0) = initial_guess(&model, &p, 1.0)
@@ -72,7 +73,7 @@ fn fuzz_corpus_replays() {
             continue; // the pipeline corpus, replayed by tests/fuzz_pipeline.rs
         }
         let bytes = std::fs::read(path).unwrap();
-        if let Ok(model) = Model::from_bytes(&bytes, "corpus.toml") {
+        if let Ok(model) = Compiled::from_bytes(&bytes, "corpus.toml") {
             let p = model.nominal();
             if let Ok(q0) = initial_guess(&model, &p, 1.0) {
                 let _ = point(&model, &p, 1.0, &q0, &Options::default());

@@ -12,12 +12,12 @@
 mod common;
 
 use common::{example_text, roots, same_roots, solve};
-use modaltol::model::Model;
+use modaltol::compiled::Compiled;
 use modaltol::sweep::Point;
 
 /// Both models give the same roots on both routes, and the same values of the coordinates named
 /// in `pairs` (name in `a`, name in `b`).
-fn equivalent(a: &Model, b: &Model, speeds: &[f64], pairs: &[(&str, &str)]) {
+fn equivalent(a: &Compiled, b: &Compiled, speeds: &[f64], pairs: &[(&str, &str)]) {
     for &w in speeds {
         for direct in [false, true] {
             let (pa, pb) = (solve(a, w, direct), solve(b, w, direct));
@@ -49,7 +49,7 @@ fn two_hinges() -> String {
 #[test]
 fn a_universal_joint_is_two_revolutes_through_one_point() {
     let text = two_hinges();
-    let a = Model::from_str(&text, "two_hinges.toml").unwrap();
+    let a = Compiled::from_str(&text, "two_hinges.toml").unwrap();
     let start = text.find("[[joints]]\nname = \"tilt_x\"").unwrap();
     let end = text.find("[analysis]").unwrap();
     let universal = text[..start].replace(
@@ -60,7 +60,7 @@ fn a_universal_joint_is_two_revolutes_through_one_point() {
             "input = \"tilt_x\", output = \"tilt_z\"",
             "input = \"cross.angle1\", output = \"cross.angle2\"",
         );
-    let b = Model::from_str(&universal, "universal.toml").unwrap();
+    let b = Compiled::from_str(&universal, "universal.toml").unwrap();
     assert_eq!(b.coordinates.len(), 3);
     equivalent(
         &a,
@@ -72,7 +72,7 @@ fn a_universal_joint_is_two_revolutes_through_one_point() {
 
 /// A shaft spinning about y carrying a collar on a joint along an inclined axis through an
 /// offset point; `joint` is the TOML of that joint (or chain of joints) from `shaft` to `collar`.
-fn collar(joint: &str, extra_bodies: &str) -> Model {
+fn collar(joint: &str, extra_bodies: &str) -> Compiled {
     let text = format!(
         r#"
 name = "collar"
@@ -99,7 +99,7 @@ drive = "speed"
 {joint}
 "#
     );
-    Model::from_str(&text, "collar.toml").unwrap_or_else(|e| panic!("{e}"))
+    Compiled::from_str(&text, "collar.toml").unwrap_or_else(|e| panic!("{e}"))
 }
 
 const MASSLESS: &str = "mass = 0\ninertia = [0, 0, 0]\ncm = [0, 0, 0]";
@@ -241,7 +241,7 @@ const A: f64 = 0.01;
 const K: f64 = 3.0;
 const G: f64 = 9.80665;
 
-fn ball_pendulum() -> Model {
+fn ball_pendulum() -> Compiled {
     let text = format!(
         r#"
 name = "ball pendulum"
@@ -274,7 +274,7 @@ stiffness = [0, 0, {K}]
 initial = [0.8, 0, 0]
 "#
     );
-    Model::from_str(&text, "ball.toml").unwrap_or_else(|e| panic!("{e}"))
+    Compiled::from_str(&text, "ball.toml").unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Damped frequencies of the point's modes, ascending.

@@ -4,10 +4,12 @@
 mod common;
 
 use common::example;
-use modaltol::equilibrium::{Problem, equations};
+use modaltol::compiled::Compiled;
+use modaltol::equilibrium::Solvable;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
-use modaltol::mechanics::dynamics::{Lifted, evaluate_rows};
+use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
+use modaltol::route::Direct;
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Var, record};
 use nalgebra::DMatrix;
@@ -135,7 +137,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
         let nf = free.len();
         for (p, speed, q, lambda) in states(name) {
             let sys = System::new(&model, &p, speed).unwrap();
-            let direct = Problem::new(sys.clone(), free.clone(), model.driven(), Vec::new());
+            let direct = Direct::new(sys.clone(), free.clone());
             let inst = program.at(&p, speed).unwrap();
             // ∂F/∂p in one pass against one dual-number residual per parameter.
             let np = p.len();
@@ -160,7 +162,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
                 }
             }
             let qd = sys.steady_speeds();
-            let f = equations(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
+            let f = equilibrium_residual(&Lifted::new(sys.clone()), &free, &q, &qd, &lambda);
             let scale = f.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             for (a, b) in inst.residual(&q, &lambda).iter().zip(&f) {
                 assert!(close(*a, *b, scale), "{name}: residual {a} vs {b}");
@@ -222,16 +224,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             } else {
                 choose_independent(&phi_r, &free, None).unwrap()
             };
-            let l = linearize(
-                direct.dual().unwrap(),
-                &free,
-                &q,
-                &qd,
-                &lambda,
-                &independent,
-                None,
-            )
-            .unwrap();
+            let l = linearize(direct.dual(), &free, &q, &qd, &lambda, &independent, None).unwrap();
             for (a, b) in lin.damping.iter().zip(l.c_full.iter()) {
                 assert!(close(*a, *b, l.c_full.amax()), "{name}: C {a} vs {b}");
             }
@@ -314,7 +307,7 @@ fn every_swept_point_is_certified_by_an_exact_newton_step() {
             let Ok(pt) = sweep.step(speed) else { continue };
             let eq = &pt.equilibrium;
             let sys = System::new(&model, &p, speed).unwrap();
-            let direct = Problem::new(sys, free.clone(), model.driven(), Vec::new());
+            let direct = Direct::new(sys, free.clone());
             let (f, j) = direct.residual_and_jacobian(&eq.q, &eq.lambda);
             for (a, b) in eq.jacobian.iter().zip(j.iter()) {
                 assert!(
@@ -337,12 +330,12 @@ fn every_swept_point_is_certified_by_an_exact_newton_step() {
 /// The governor with a stiffness term `(100 (attach − 0.08))^1.5` that vanishes at the nominal
 /// attachment: the expression takes its special case for a zero base there, so a recording
 /// made at nominal would hold a constant where the direct route has a function of `attach`.
-fn governor_with_a_kinked_spring() -> modaltol::model::Model {
+fn governor_with_a_kinked_spring() -> Compiled {
     let text = common::example_text("governor.toml").replace(
         "stiffness = \"spring_k\"",
         "stiffness = \"spring_k * (1 + (100*(attach - 0.08))^1.5)\"",
     );
-    modaltol::model::Model::from_str(&text, "kinked.toml").unwrap()
+    Compiled::from_str(&text, "kinked.toml").unwrap()
 }
 
 #[test]
@@ -392,7 +385,7 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
         "stiffness = \"spring_k\"",
         "stiffness = \"spring_k * sqrt(speed - 0.5)\"",
     );
-    let model = modaltol::model::Model::from_str(&text, "sqrt_speed.toml").unwrap();
+    let model = Compiled::from_str(&text, "sqrt_speed.toml").unwrap();
     let run = |direct: bool| {
         let mut s = Sweep::new(
             &model,

@@ -6,7 +6,8 @@ mod common;
 
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
-use modaltol::model::{Case, Model};
+use modaltol::compiled::Compiled;
+use modaltol::model::Case;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::tolerance::Quantity;
 
@@ -142,7 +143,7 @@ fn exact_with(w: f64, sigma: f64, uniform: bool) -> Exact {
     }
 }
 
-fn cases(model: &Model, names: &[&str]) -> Vec<Case> {
+fn cases(model: &Compiled, names: &[&str]) -> Vec<Case> {
     names
         .iter()
         .map(|n| {
@@ -157,7 +158,7 @@ fn cases(model: &Model, names: &[&str]) -> Vec<Case> {
         .collect()
 }
 
-fn quadrature_only(model: &Model, cases: Vec<Case>, speeds: Vec<f64>) -> Analysis {
+fn quadrature_only(model: &Compiled, cases: Vec<Case>, speeds: Vec<f64>) -> Analysis {
     let opt = AnalyzeOptions {
         speeds,
         cases,
@@ -527,7 +528,7 @@ fn undamped_systems_are_not_called_unstable() {
     ] {
         let text = common::example_text(file).replace(from, to);
         assert_ne!(text, common::example_text(file));
-        let model = Model::from_str(&text, "undamped.toml").unwrap();
+        let model = Compiled::from_str(&text, "undamped.toml").unwrap();
         let speeds: Vec<f64> = (0..=60).map(|k| k as f64 * 0.1).collect();
         let a = quadrature_only(&model, cases(&model, &[case]), speeds);
         let nominal_stable: Vec<bool> = a
@@ -558,7 +559,7 @@ fn uniform_tolerance_matches_exact_moments() {
         "L = { value = 1.0, tolerance = \"3%\", distribution = \"uniform\" }",
     );
     assert_ne!(text, common::example_text("rotating_pendulum.toml"));
-    let model = Model::from_str(&text, "uniform.toml").unwrap();
+    let model = Compiled::from_str(&text, "uniform.toml").unwrap();
     let speeds: Vec<f64> = (0..=120).map(|k| k as f64 * 0.05).collect();
     let a = quadrature_only(&model, cases(&model, &["L12"]), speeds.clone());
     let sigma = 0.12 / 3f64.sqrt();

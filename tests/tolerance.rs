@@ -4,7 +4,8 @@ mod common;
 
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
-use modaltol::model::{Case, Model, Sampling};
+use modaltol::compiled::Compiled;
+use modaltol::model::{Case, Sampling};
 use modaltol::montecarlo::McOptions;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use modaltol::tolerance::Quantity;
@@ -14,7 +15,7 @@ use num_dual::{Dual64, HyperDual64};
 
 const G: f64 = 9.80665;
 
-fn case(model: &Model, name: &str) -> Case {
+fn case(model: &Compiled, name: &str) -> Case {
     model
         .analysis
         .cases
@@ -25,7 +26,7 @@ fn case(model: &Model, name: &str) -> Case {
 }
 
 fn run(
-    model: &Model,
+    model: &Compiled,
     case: Case,
     speeds: &[f64],
     samples: usize,
@@ -154,7 +155,7 @@ fn pendulum_hessians_match_closed_form() {
 
 /// Hessians by central differences of the exact gradients (an independent route: the gradient
 /// code at re-solved perturbed points).
-fn differenced_hessians(model: &Model, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
+fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
     let tf = model.analysis.transfer.as_ref();
     let mut lm = local_model(model, p, pt, vars, tf, false).unwrap();
     let nv = vars.len();

@@ -292,3 +292,21 @@ pub fn evaluate_with<T: Real>(
         spring_force,
     }
 }
+
+/// The equilibrium equations `F(q_R, λ) = [r_R + Φ_Rᵀλ; Φ]` at `q̈ = 0` (Kim & Yoo 2007,
+/// eq. 13), for unknowns `q_R` (placed into `q`) and `λ`.
+pub fn equilibrium_residual<T: Real>(
+    l: &Lifted<T>,
+    free: &[usize],
+    q: &[T],
+    qd: &[T],
+    lambda: &[T],
+) -> Vec<T> {
+    let zero = vec![cst::<T>(0.0); q.len()];
+    let d = evaluate_rows(l, q, qd, &zero, free);
+    let g = d.with_multipliers(lambda);
+    free.iter()
+        .map(|&i| g[i])
+        .chain(d.phi.iter().copied())
+        .collect()
+}

@@ -341,30 +341,9 @@ pub struct Model {
     /// User's choice of independent coordinates (coordinate indices), if any.
     pub independent: Option<Vec<usize>>,
     pub analysis: Analysis,
-    /// The equilibrium equations recorded on first use (see [`Model::program`]).
-    pub(crate) program: std::sync::OnceLock<Option<crate::program::Program>>,
 }
 
 impl Model {
-    /// The model's equations recorded as a program for fast operating-point solves, recorded
-    /// on the first call (at these parameters, speed and coordinates); `None` where the
-    /// recording is not valid, and then the direct route serves.
-    pub fn program(&self, p: &[f64], speed: f64, q: &[f64]) -> Option<&crate::program::Program> {
-        if let Some(recorded) = self.program.get() {
-            return recorded.as_ref();
-        }
-        // Values at which the model does not evaluate cannot be recorded at; a later call may
-        // bring better ones.
-        if crate::mechanics::System::new(self, p, speed).is_err()
-            || q.iter().any(|v| !v.is_finite())
-        {
-            return None;
-        }
-        self.program
-            .get_or_init(|| crate::program::Program::record(self, p, speed, q))
-            .as_ref()
-    }
-
     /// Largest model file accepted (bytes): real models are a few kilobytes.
     pub const MAX_FILE_BYTES: u64 = 4 << 20;
 

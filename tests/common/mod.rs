@@ -1,8 +1,8 @@
 //! Helpers shared by the integration tests: the shipped examples and one solved point.
 #![allow(dead_code)] // each test target uses its own subset
 
+use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
-use modaltol::model::Model;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
 
@@ -19,12 +19,12 @@ pub fn example_text(name: &str) -> String {
 }
 
 /// A shipped example model, validated.
-pub fn example(name: &str) -> Model {
-    Model::from_file(&example_path(name)).unwrap()
+pub fn example(name: &str) -> Compiled {
+    Compiled::from_file(&example_path(name)).unwrap()
 }
 
 /// The point at `speed` with nominal parameters, solved from the model's initial guess.
-pub fn at(model: &Model, speed: f64, opt: &Options) -> Point {
+pub fn at(model: &Compiled, speed: f64, opt: &Options) -> Point {
     let p = model.nominal();
     let q0 = initial_guess(model, &p, speed).unwrap();
     point(model, &p, speed, &q0, opt).unwrap()
@@ -79,7 +79,7 @@ pub fn run_with_deadline(args: &[&str], limit: std::time::Duration) -> Result<Ru
 
 /// The point at `speed` with nominal parameters from the model's initial guess, on the recorded
 /// route (which must record) or the direct one.
-pub fn solve(model: &Model, speed: f64, direct: bool) -> Point {
+pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
     let p = model.nominal();
     let q0 = initial_guess(model, &p, speed).unwrap();
     if !direct {

@@ -679,7 +679,6 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         constraints,
         independent,
         analysis,
-        program: Default::default(),
     })
 }
 

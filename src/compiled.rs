@@ -1,0 +1,142 @@
+//! A model with its equations recorded: what every computation above the mechanics takes.
+//!
+//! A [`Model`] is the validated description of a mechanism. Solving thousands of operating
+//! points of it (a sweep, a Monte Carlo run, the quadrature nodes) is faster through its
+//! equations recorded once as a [`Program`]; [`Compiled`] holds the model and that recording,
+//! made on first use, and hands out each point's equations on the route that serves
+//! ([`Compiled::equations`], [`Compiled::problem`]). It dereferences to the model, so
+//! everything that only describes the mechanism reads it as before.
+
+use crate::equilibrium::Problem;
+use crate::mechanics::{System, steady_speeds};
+use crate::model::{FieldError, Model, ModelError};
+use crate::program::{Program, Recorded};
+use crate::real::Real;
+use crate::route::{Direct, Equations};
+use std::ops::Deref;
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// A model and its recorded equations (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct Compiled {
+    model: Model,
+    program: OnceLock<Option<Program>>,
+}
+
+impl Deref for Compiled {
+    type Target = Model;
+
+    fn deref(&self) -> &Model {
+        &self.model
+    }
+}
+
+impl From<Model> for Compiled {
+    fn from(model: Model) -> Self {
+        Compiled::new(model)
+    }
+}
+
+impl Compiled {
+    /// The model, its equations to be recorded on first use.
+    pub fn new(model: Model) -> Self {
+        Compiled {
+            model,
+            program: OnceLock::new(),
+        }
+    }
+
+    /// Reads and validates a model file ([`Model::from_file`]).
+    pub fn from_file(path: &Path) -> Result<Self, ModelError> {
+        Model::from_file(path).map(Compiled::new)
+    }
+
+    /// Validates a model given as bytes ([`Model::from_bytes`]).
+    pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Self, ModelError> {
+        Model::from_bytes(bytes, file).map(Compiled::new)
+    }
+
+    /// Validates a model given as text ([`Model::from_str`]).
+    pub fn from_str(text: &str, file: &str) -> Result<Self, ModelError> {
+        Model::from_str(text, file).map(Compiled::new)
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The model's equations recorded as a program for fast operating-point solves, recorded
+    /// on the first call (at these parameters, speed and coordinates); `None` where the
+    /// recording is not valid, and then the direct route serves.
+    pub fn program(&self, p: &[f64], speed: f64, q: &[f64]) -> Option<&Program> {
+        if let Some(recorded) = self.program.get() {
+            return recorded.as_ref();
+        }
+        // Values at which the model does not evaluate cannot be recorded at; a later call may
+        // bring better ones.
+        if System::new(&self.model, p, speed).is_err() || q.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        self.program
+            .get_or_init(|| Program::record(&self.model, p, speed, q))
+            .as_ref()
+    }
+
+    /// The equations at parameters `p` and `speed` over any [`Real`], near the coordinates
+    /// `q`: through the recorded program when the model has one, else directly.
+    pub fn equations<S: Real>(
+        &self,
+        p: &[S],
+        speed: S,
+        q: &[f64],
+    ) -> Result<Box<dyn Equations<S> + '_>, FieldError> {
+        let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
+        Ok(match self.program(&p0, speed.re(), q) {
+            Some(program) => Box::new(Recorded {
+                program,
+                p: p.to_vec(),
+                speed,
+            }),
+            None => Box::new(Direct::new(
+                System::new(&self.model, p, speed)?,
+                self.model.free(),
+            )),
+        })
+    }
+
+    /// The equilibrium solve at parameters `p` and `speed` from near `q0`: through the
+    /// recorded program when the model has one and `direct` is off, else directly (the two
+    /// give the same numbers; `direct` is for cross-checks and timing).
+    pub fn problem(
+        &self,
+        p: &[f64],
+        speed: f64,
+        q0: &[f64],
+        direct: bool,
+    ) -> Result<Problem<'_>, FieldError> {
+        let names = self.coordinates.iter().map(|c| c.name.as_str()).collect();
+        let recorded = (!direct)
+            .then(|| self.program(p, speed, q0).and_then(|pr| pr.at(p, speed)))
+            .flatten();
+        Ok(match recorded {
+            Some(instance) => Problem::new(
+                Box::new(instance),
+                steady_speeds(&self.model, p, speed)?,
+                self.driven(),
+                names,
+            ),
+            None => {
+                let system = System::new(&self.model, p, speed)?;
+                let qd = system.steady_speeds();
+                Problem::new(
+                    Box::new(Direct::new(system, self.free())),
+                    qd,
+                    self.driven(),
+                    names,
+                )
+            }
+        })
+    }
+}
