@@ -14,6 +14,7 @@ pub mod compiled;
 pub mod cuts;
 pub mod equilibrium;
 pub mod files;
+pub mod forces;
 pub mod frf;
 pub mod hessian;
 pub mod joints;

@@ -537,7 +537,7 @@ pub fn sample_sweep(
 }
 
 /// The samples `0..samples` whose design is not physically admissible
-/// ([`Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
+/// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
 /// frequent first. They fail at every speed; this says why.
 pub fn inadmissible(
     model: &Compiled,

@@ -270,3 +270,54 @@ fn non_utf8_bytes() {
     let e = Model::from_bytes(&bytes, "bad.toml").unwrap_err();
     check(&e, line_of(BASE, "shaft"), Some(9), "not valid UTF-8");
 }
+
+#[test]
+fn force_elements_take_the_fields_their_type_declares() {
+    let with = |force: &str| {
+        let text = format!("{BASE}\n[[forces]]\nname = \"f\"\n{force}");
+        let e = Model::from_str(&text, "bad.toml").expect_err("the model should be rejected");
+        (text, e)
+    };
+    let (text, e) = with("type = \"torsion_bar\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\n");
+    check(
+        &e,
+        line_of(&text, "torsion_bar"),
+        None,
+        "unknown type 'torsion_bar' (expected spring_damper, rotational_spring_damper or bushing)",
+    );
+    let (text, e) = with(
+        "type = \"bushing\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\nstiffness = [1, 2, 3, 4, 5]\n",
+    );
+    check(
+        &e,
+        line_of(&text, "stiffness = [1"),
+        None,
+        "expected 6 value(s), one per component, got 5",
+    );
+    let (text, e) =
+        with("type = \"rotational_spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\n");
+    check(
+        &e,
+        line_of(&text, "[[forces]]"),
+        None,
+        "a rotational_spring_damper needs 'axis'",
+    );
+    let (text, e) = with(
+        "type = \"rotational_spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\naxis = [0, 0, 1]\npoint1 = [0, 0, 0]\n",
+    );
+    check(
+        &e,
+        line_of(&text, "point1 = [0, 0, 0]\n"),
+        None,
+        "a rotational_spring_damper has no 'point1'",
+    );
+    let (text, e) = with(
+        "type = \"spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\npoint2 = [0, 0, 0]\nstiffness = 3\n",
+    );
+    check(
+        &e,
+        line_of(&text, "[[forces]]"),
+        None,
+        "its two points coincide in the reference configuration",
+    );
+}

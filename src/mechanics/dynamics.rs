@@ -12,8 +12,8 @@
 //! `J_ω = axial(∂A/∂q_i Aᵀ)`, and in the same pass the constraint Jacobian `Φ_q`.
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
-use super::kinematics::{Pose, point, poses, update};
-use super::{NormDual, System};
+use super::System;
+use super::kinematics::{Pose, poses, update};
 use crate::real::{D1, D2, M3, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
@@ -45,8 +45,8 @@ pub struct Dynamics<T: Real> {
     pub phi: Vec<T>,
     /// `Φ_q`, constraint equations × coordinates.
     pub phi_q: DMatrix<T>,
-    /// Tension of each spring-damper (N).
-    pub spring_force: Vec<T>,
+    /// Force of each component of each force element (N or N·m), in order.
+    pub element_force: Vec<T>,
 }
 
 impl<T: Real> Dynamics<T> {
@@ -75,6 +75,19 @@ pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
     out
 }
 
+/// The deformation components of every force element at the given body poses, in order.
+pub fn element_deformations<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
+    let mut out = Vec::new();
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(&ground, |b| &p[b]);
+    for e in &sys.forces {
+        let g = &e.geometry;
+        e.kind
+            .deformation(g, pose(g.body1), pose(g.body2), &mut out);
+    }
+    out
+}
+
 /// `Φ(q)` alone (positions only).
 pub fn constraints_at<U: Real>(sys: &System<U>, q: &[U]) -> Vec<U> {
     constraint_values(sys, &poses(sys, q))
@@ -89,8 +102,8 @@ pub struct Partials<T: Real> {
     pub jv: Vec<Vec<V3<T>>>,
     /// `jw[i][b]`: ∂ω_b/∂q̇_i.
     pub jw: Vec<Vec<V3<T>>>,
-    /// `dlen[i][s]`: ∂ℓ_s/∂q_i.
-    pub dlen: Vec<Vec<T>>,
+    /// `de[i][c]`: ∂e_c/∂q_i for every component `c` of every force element, in order.
+    pub de: Vec<Vec<T>>,
     pub phi_q: DMatrix<T>,
     /// Rotation of every body at `q`.
     pub rot: Vec<M3<T>>,
@@ -110,8 +123,8 @@ impl<T: Real> Partials<T> {
                 .iter()
                 .map(|v| v.iter().map(|x| x.map(f)).collect())
                 .collect(),
-            dlen: self
-                .dlen
+            de: self
+                .de
                 .iter()
                 .map(|v| v.iter().map(|&x| f(x)).collect())
                 .collect(),
@@ -156,7 +169,7 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
     let mut out = Partials {
         jv: Vec::with_capacity(n),
         jw: Vec::with_capacity(n),
-        dlen: Vec::with_capacity(n),
+        de: Vec::with_capacity(n),
         phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
         rot: Vec::new(),
     };
@@ -171,7 +184,7 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         if !coords.contains(&i) {
             out.jv.push(Vec::new());
             out.jw.push(Vec::new());
-            out.dlen.push(Vec::new());
+            out.de.push(Vec::new());
             continue;
         }
         qi[i] = Dual::new(q[i], cst(1.0));
@@ -189,15 +202,10 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         }
         out.jv.push(jv);
         out.jw.push(jw);
-        out.dlen.push(
-            partial
-                .springs
+        out.de.push(
+            element_deformations(partial, &pp)
                 .iter()
-                .map(|s| {
-                    (point(&pp, s.body2, &s.point2) - point(&pp, s.body1, &s.point1))
-                        .norm_dual()
-                        .eps
-                })
+                .map(|e| e.eps)
                 .collect(),
         );
         for (k, c) in constraint_values(partial, &pp).iter().enumerate() {
@@ -256,11 +264,16 @@ pub fn evaluate_with<T: Real>(
         let h = mulv(&iw, &omega);
         moment.push(mulv(&iw, &alpha) + omega.cross(&h));
     }
-    let mut spring_force = Vec::with_capacity(sys.springs.len());
-    for (s, st) in sys.springs.iter().zip(&l.time.springs) {
-        let d = point(&pt, s.body2, &st.point2) - point(&pt, s.body1, &st.point1);
-        let len = d.norm_dual();
-        spring_force.push(s.stiffness * (len.re - s.free_length) + s.damping * len.v1 + s.preload);
+    // Each element's components over the time pass: the values and their rates.
+    let mut element_force = Vec::new();
+    let deformation = element_deformations(&l.time, &pt);
+    let mut e = deformation.iter();
+    for el in &sys.forces {
+        for c in 0..el.free.len() {
+            let d = e.next().expect("one deformation per component");
+            element_force
+                .push(el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c]);
+        }
     }
     let phi: Vec<T> = constraint_values(&l.time, &pt)
         .iter()
@@ -276,8 +289,8 @@ pub fn evaluate_with<T: Real>(
             for b in 0..sys.bodies.len() {
                 ri += j.jv[i][b].dot(&force[b]) + j.jw[i][b].dot(&moment[b]);
             }
-            for (k, f) in spring_force.iter().enumerate() {
-                ri += *f * j.dlen[i][k];
+            for (f, d) in element_force.iter().zip(&j.de[i]) {
+                ri += *f * *d;
             }
             ri
         })
@@ -289,7 +302,7 @@ pub fn evaluate_with<T: Real>(
         r,
         phi,
         phi_q: j.phi_q.clone(),
-        spring_force,
+        element_force,
     }
 }
 

@@ -10,7 +10,8 @@ pub mod kinematics;
 
 use crate::model::{Field, FieldError, Model};
 use crate::real::{M3, Real, V3, cst};
-use crate::{cuts, joints};
+use crate::rigid::Pose;
+use crate::{cuts, forces, joints};
 use std::ops::Range;
 
 /// Mass properties of one body, in the reference configuration.
@@ -43,20 +44,18 @@ pub struct JointElement<T> {
     pub damping: T,
 }
 
-/// Translational spring-damper between two body points (reference-configuration coordinates).
+/// A force element (geometry in the reference configuration) with its per-component spring
+/// rates, damping, free values and preloads.
 #[derive(Debug, Clone)]
-pub struct SpringData<T> {
-    pub body1: Option<usize>,
-    pub point1: V3<T>,
-    pub body2: Option<usize>,
-    pub point2: V3<T>,
-    pub stiffness: T,
-    pub damping: T,
-    pub free_length: T,
-    pub preload: T,
+pub struct ForceData<T> {
+    pub kind: forces::Kind,
+    pub geometry: forces::Geometry<V3<T>>,
+    pub stiffness: Vec<T>,
+    pub damping: Vec<T>,
+    pub free: Vec<T>,
+    pub preload: Vec<T>,
 }
 
-/// A cut joint with its numbers (unit directions).
 #[derive(Debug, Clone)]
 pub struct ConstraintData<T> {
     pub kind: cuts::Kind,
@@ -71,7 +70,7 @@ pub struct System<T> {
     /// Tree joints, parents before children.
     pub joints: Vec<JointData<T>>,
     pub joint_elements: Vec<JointElement<T>>,
-    pub springs: Vec<SpringData<T>>,
+    pub forces: Vec<ForceData<T>>,
     pub constraints: Vec<ConstraintData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
@@ -147,23 +146,37 @@ impl<T: Real> System<T> {
             }
         }
         let opt = |f: &Option<Field>| f.as_ref().map_or(Ok(cst(0.0)), |f| f.eval(p, w));
-        let mut springs = Vec::new();
-        for s in &model.forces {
-            let point1 = v3(&s.point1, p, w)?;
-            let point2 = v3(&s.point2, p, w)?;
-            let free_length = match &s.free_length {
-                Some(f) => f.eval(p, w)?,
-                None => (point2 - point1).norm_dual(),
+        let mut forces = Vec::with_capacity(model.forces.len());
+        for e in &model.forces {
+            let [_, _, use_axis] = e.kind.uses();
+            let g = &e.geometry;
+            let geometry = forces::Geometry {
+                body1: g.body1,
+                point1: v3(&g.point1, p, w)?,
+                body2: g.body2,
+                point2: v3(&g.point2, p, w)?,
+                axis: direction(&g.axis, use_axis, p, w)?,
+                reference: direction(&g.reference, use_axis, p, w)?,
             };
-            springs.push(SpringData {
-                body1: s.body1,
-                point1,
-                body2: s.body2,
-                point2,
-                stiffness: opt(&s.stiffness)?,
-                damping: opt(&s.damping)?,
-                free_length,
-                preload: opt(&s.preload)?,
+            // Unloaded as drawn unless a free value is given.
+            let mut drawn = Vec::new();
+            let identity = Pose::identity();
+            e.kind
+                .deformation(&geometry, &identity, &identity, &mut drawn);
+            let free = e
+                .free
+                .iter()
+                .zip(drawn)
+                .map(|(f, d)| f.as_ref().map_or(Ok(d), |f| f.eval(p, w)))
+                .collect::<Result<_, _>>()?;
+            let each = |v: &[Option<Field>]| v.iter().map(opt).collect::<Result<Vec<T>, _>>();
+            forces.push(ForceData {
+                kind: e.kind,
+                stiffness: each(&e.stiffness)?,
+                damping: each(&e.damping)?,
+                preload: each(&e.preload)?,
+                free,
+                geometry,
             });
         }
         let mut constraints = Vec::new();
@@ -189,7 +202,7 @@ impl<T: Real> System<T> {
             bodies,
             joints,
             joint_elements,
-            springs,
+            forces,
             constraints,
             drive,
             subtree,
@@ -237,18 +250,27 @@ impl<T: Real> System<T> {
                     damping: f(e.damping),
                 })
                 .collect(),
-            springs: self
-                .springs
+            forces: self
+                .forces
                 .iter()
-                .map(|s| SpringData {
-                    body1: s.body1,
-                    point1: v(&s.point1),
-                    body2: s.body2,
-                    point2: v(&s.point2),
-                    stiffness: f(s.stiffness),
-                    damping: f(s.damping),
-                    free_length: f(s.free_length),
-                    preload: f(s.preload),
+                .map(|e| {
+                    let g = &e.geometry;
+                    let each = |v: &[T]| v.iter().map(|&x| f(x)).collect();
+                    ForceData {
+                        kind: e.kind,
+                        geometry: forces::Geometry {
+                            body1: g.body1,
+                            point1: v(&g.point1),
+                            body2: g.body2,
+                            point2: v(&g.point2),
+                            axis: v(&g.axis),
+                            reference: v(&g.reference),
+                        },
+                        stiffness: each(&e.stiffness),
+                        damping: each(&e.damping),
+                        free: each(&e.free),
+                        preload: each(&e.preload),
+                    }
                 })
                 .collect(),
             constraints: self

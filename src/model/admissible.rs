@@ -84,11 +84,22 @@ impl Model {
             );
         }
         for s in &self.forces {
-            let e = Element("spring", &s.name);
-            out.extend(s.point1.iter().chain(&s.point2).map(|f| (e, f)));
+            let e = Element("force", &s.name);
+            let g = &s.geometry;
             out.extend(
-                [&s.stiffness, &s.damping, &s.free_length, &s.preload]
-                    .into_iter()
+                g.point1
+                    .iter()
+                    .chain(&g.point2)
+                    .chain(&g.axis)
+                    .chain(&g.reference)
+                    .map(|f| (e, f)),
+            );
+            out.extend(
+                s.stiffness
+                    .iter()
+                    .chain(&s.damping)
+                    .chain(&s.free)
+                    .chain(&s.preload)
                     .flatten()
                     .map(|f| (e, f)),
             );

@@ -176,20 +176,19 @@ pub struct Coordinate {
     pub driven: bool,
 }
 
-/// Translational spring-damper between a point on one body and a point on another:
-/// `F = k (ℓ − ℓ0) + c ℓ̇ + preload` (tension positive).
+/// A force element between two bodies; its type ([`crate::forces`]) gives its deformation's
+/// components, and each component its own spring, damper, free value and preload.
 #[derive(Debug, Clone)]
-pub struct SpringDamper {
+pub struct ForceElement {
     pub name: String,
-    pub body1: Option<usize>,
-    pub point1: [Field; 3],
-    pub body2: Option<usize>,
-    pub point2: [Field; 3],
-    pub stiffness: Option<Field>,
-    pub damping: Option<Field>,
-    /// `None`: the distance of the two points in the reference configuration.
-    pub free_length: Option<Field>,
-    pub preload: Option<Field>,
+    pub kind: crate::forces::Kind,
+    pub geometry: crate::forces::Geometry<[Field; 3]>,
+    /// Per component (`None`: zero).
+    pub stiffness: Vec<Option<Field>>,
+    pub damping: Vec<Option<Field>>,
+    /// Per component; `None`: the deformation in the reference configuration.
+    pub free: Vec<Option<Field>>,
+    pub preload: Vec<Option<Field>>,
 }
 
 /// A cut joint closing a kinematic loop; its type ([`crate::cuts`]) gives its equations.
@@ -336,7 +335,7 @@ pub struct Model {
     /// Joint indices with every parent before its children.
     pub order: Vec<usize>,
     pub coordinates: Vec<Coordinate>,
-    pub forces: Vec<SpringDamper>,
+    pub forces: Vec<ForceElement>,
     pub constraints: Vec<Constraint>,
     /// User's choice of independent coordinates (coordinate indices), if any.
     pub independent: Option<Vec<usize>>,

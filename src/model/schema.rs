@@ -144,13 +144,15 @@ pub struct ForceSchema {
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     pub body1: Spanned<String>,
-    pub point1: SVec,
+    pub point1: Option<SVec>,
     pub body2: Spanned<String>,
-    pub point2: SVec,
-    pub stiffness: Option<SNum>,
-    pub damping: Option<SNum>,
-    pub free_length: Option<SNum>,
-    pub preload: Option<SNum>,
+    pub point2: Option<SVec>,
+    pub axis: Option<SVec>,
+    pub stiffness: Option<SNums>,
+    pub damping: Option<SNums>,
+    #[serde(alias = "free_length")]
+    pub free: Option<SNums>,
+    pub preload: Option<SNums>,
 }
 
 #[derive(Debug, Deserialize)]

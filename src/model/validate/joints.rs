@@ -155,14 +155,15 @@ pub(super) fn joints(
         };
         let initial = zero(
             "initial",
-            per_coordinate(ctx, &s.initial, k, "initial", false, &what)?,
+            per_coordinate(ctx, &s.initial, k, "initial", false, "coordinate", &what)?,
         );
         let free = zero(
             "free",
-            per_coordinate(ctx, &s.free, k, "free", false, &what)?,
+            per_coordinate(ctx, &s.free, k, "free", false, "coordinate", &what)?,
         );
-        let stiffness = per_coordinate(ctx, &s.stiffness, k, "stiffness", true, &what)?;
-        let damping = per_coordinate(ctx, &s.damping, k, "damping", true, &what)?;
+        let stiffness =
+            per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "coordinate", &what)?;
+        let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "coordinate", &what)?;
         let drive = ctx.opt_field(&s.drive, what("drive"))?;
         for f in initial
             .iter()
@@ -222,7 +223,7 @@ pub(super) fn list<'a>(names: impl Iterator<Item = &'a str>) -> String {
 }
 
 /// `field` or `field[i]` for coordinate `i` of `k`.
-fn indexed(field: &str, i: usize, k: usize) -> String {
+pub(super) fn indexed(field: &str, i: usize, k: usize) -> String {
     if k == 1 {
         field.into()
     } else {
@@ -279,7 +280,7 @@ fn hint(field: &str) -> &'static str {
 }
 
 /// Nominal values of a vector, when none depends on the speed.
-fn known(ctx: &Ctx, v: &[Field; 3], nominal: &[f64]) -> R<Option<[f64; 3]>> {
+pub(super) fn known(ctx: &Ctx, v: &[Field; 3], nominal: &[f64]) -> R<Option<[f64; 3]>> {
     let mut out = [0.0; 3];
     for (o, f) in out.iter_mut().zip(v) {
         match ctx.nominal(f, nominal)? {
@@ -345,14 +346,15 @@ pub(super) fn not_parallel(
     Ok(())
 }
 
-/// Values given per coordinate: a list of `k`, or one value for a one-coordinate joint (or, when
-/// `broadcast`, for every coordinate).
-fn per_coordinate(
+/// Values given per coordinate (or, for a force element, per component: `per` names which): a
+/// list of `k`, or one value where `k` is one (or, when `broadcast`, for every one).
+pub(super) fn per_coordinate(
     ctx: &Ctx,
     v: &Option<SNums>,
     k: usize,
     field: &str,
     broadcast: bool,
+    per: &str,
     what: &impl Fn(&str) -> String,
 ) -> R<Vec<Option<Field>>> {
     let Some(v) = v else {
@@ -367,10 +369,7 @@ fn per_coordinate(
         }
         Nums::One(_) => Err(ctx.err(
             v.span(),
-            format!(
-                "{}: give one value per coordinate, a list of {k}",
-                what(field)
-            ),
+            format!("{}: give one value per {per}, a list of {k}", what(field)),
         )),
         Nums::Many(items) if items.len() == k => items
             .iter()
@@ -380,7 +379,7 @@ fn per_coordinate(
         Nums::Many(items) => Err(ctx.err(
             v.span(),
             format!(
-                "{}: expected {k} value(s), one per coordinate, got {}",
+                "{}: expected {k} value(s), one per {per}, got {}",
                 what(field),
                 items.len()
             ),

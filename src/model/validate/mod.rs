@@ -8,6 +8,7 @@
 //! time; the rest are checked at each speed when the system is built.
 
 mod cuts;
+mod forces;
 mod joints;
 
 use super::schema::{self, FileSchema, Num, SNum, SVec};
@@ -538,58 +539,15 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
     }
 
     // Force elements.
-    let mut forces = Vec::new();
     let mut element_names: HashMap<String, usize> = HashMap::new();
-    for f in &raw.forces {
-        let s = f.get_ref();
-        check_name(&ctx, &s.name, "force")?;
-        let name = s.name.get_ref().clone();
-        if element_names.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
-            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
-        }
-        if s.kind.get_ref() != "spring_damper" {
-            return Err(ctx.err(
-                s.kind.span(),
-                format!(
-                    "force '{name}': unknown type '{}' (expected spring_damper)",
-                    s.kind.get_ref()
-                ),
-            ));
-        }
-        let what = |x: &str| format!("force '{name}' {x}");
-        let e = SpringDamper {
-            body1: body_ref(&ctx, &body_names, &s.body1)?,
-            point1: ctx.vec3(&s.point1, what("point1"))?,
-            body2: body_ref(&ctx, &body_names, &s.body2)?,
-            point2: ctx.vec3(&s.point2, what("point2"))?,
-            stiffness: ctx.opt_field(&s.stiffness, what("stiffness"))?,
-            damping: ctx.opt_field(&s.damping, what("damping"))?,
-            free_length: ctx.opt_field(&s.free_length, what("free_length"))?,
-            preload: ctx.opt_field(&s.preload, what("preload"))?,
-            name,
-        };
-        for x in e
-            .point1
-            .iter()
-            .chain(e.point2.iter())
-            .chain(e.stiffness.iter())
-            .chain(e.damping.iter())
-            .chain(e.free_length.iter())
-            .chain(e.preload.iter())
-        {
-            ctx.nominal(x, &nominal)?;
-        }
-        if coincident(&ctx, &e.point1, &e.point2, &nominal)? && e.free_length.is_none() {
-            return Err(ctx.err(
-                f.span(),
-                format!(
-                    "force '{}': its two points coincide in the reference configuration, so its free length is zero and its line of action undefined there; give distinct points",
-                    e.name
-                ),
-            ));
-        }
-        forces.push(e);
-    }
+    let forces = forces::forces(
+        &ctx,
+        &raw.forces,
+        &body_names,
+        &joint_names,
+        &mut element_names,
+        &nominal,
+    )?;
 
     // Cut joints.
     let constraints = cuts::constraints(

@@ -1,0 +1,144 @@
+//! Force elements: springs and dampers between two bodies, one file per type. Each type owns
+//! how it measures its deformation `e` (a few scalar components) from the poses of its two
+//! bodies, written once over any [`Real`]; the mechanics does the rest for every type alike.
+//!
+//! The element acts with the generalised forces of the potential `½ Σ k_c (e_c − e0_c)²` and
+//! the dissipation `½ Σ c_c ė_c²`, plus a constant preload `f0_c` on each component:
+//!
+//! ```text
+//! f_c = k_c (e_c − e0_c) + c_c ė_c + f0_c,        r_i += Σ_c f_c ∂e_c/∂q_i
+//! ```
+//!
+//! so the tangent stiffness is symmetric at rest and exact everywhere, whatever the measure.
+//! The free value `e0` defaults to the deformation in the reference configuration (the element
+//! is unloaded as drawn). An element joins a point `point1` of `body1` and `point2` of `body2`
+//! (either body may be ground) given in the reference configuration, with an `axis` where its
+//! type uses one.
+//!
+//! Adding a type is one file here implementing [`ForceType`] and one line in `force_types!`
+//! (below); the model parser reads the type's name, components and fields from that trait.
+
+pub mod bushing;
+pub mod rotational;
+pub mod spring_damper;
+
+use crate::joints::{Unit, Use};
+use crate::real::{Real, V3};
+use crate::rigid::Pose;
+
+/// Geometry of a force element in the reference configuration; `V` is a vector (expressions
+/// in the model, values in the mechanics, where `axis` is a unit vector when used).
+#[derive(Debug, Clone)]
+pub struct Geometry<V> {
+    pub body1: Option<usize>,
+    pub point1: V,
+    pub body2: Option<usize>,
+    pub point2: V,
+    pub axis: V,
+    /// A direction not parallel to `axis` (the coordinate axis least aligned with it, chosen
+    /// as the model is read) from which a type measures angles about `axis`.
+    pub reference: V,
+}
+
+/// One component of an element's deformation: its name suffix (as in `stiffness` lists and
+/// messages) and its unit.
+#[derive(Debug, Clone, Copy)]
+pub struct ComponentSpec {
+    pub suffix: &'static str,
+    pub unit: Unit,
+}
+
+/// A force-element type.
+pub trait ForceType {
+    /// Name in the model file's `type` field.
+    const NAME: &'static str;
+    /// The components of the deformation, in order (stiffness, damping, free values and
+    /// preloads are given per component).
+    const COMPONENTS: &'static [ComponentSpec];
+    /// Use of `point1`, `point2` (`Optional`: it defaults to `point1`) and `axis`.
+    const POINT1: Use;
+    const POINT2: Use;
+    const AXIS: Use;
+    /// Whether the two points must differ in the reference configuration (where the measure
+    /// has no derivative at coincident points).
+    const DISTINCT_POINTS: bool;
+    /// Appends the deformation's components with the two bodies at poses `x1` and `x2` (the
+    /// identity for ground).
+    fn deformation<T: Real>(g: &Geometry<V3<T>>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>);
+}
+
+/// Declares the force-element types: the enum [`Kind`] and its dispatch to each type's
+/// [`ForceType`].
+macro_rules! force_types {
+    ($($variant:ident => $ty:path),* $(,)?) => {
+        /// The force-element types a model may use.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum Kind {
+            $($variant),*
+        }
+
+        impl Kind {
+            /// Every type, in the order they are listed to users.
+            pub const ALL: &[Kind] = &[$(Kind::$variant),*];
+
+            /// Name in the model file.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Kind::$variant => <$ty as ForceType>::NAME),*
+                }
+            }
+
+            /// See [`ForceType::COMPONENTS`].
+            pub fn components(self) -> &'static [ComponentSpec] {
+                match self {
+                    $(Kind::$variant => <$ty as ForceType>::COMPONENTS),*
+                }
+            }
+
+            /// Use of `[point1, point2, axis]`.
+            pub fn uses(self) -> [Use; 3] {
+                match self {
+                    $(Kind::$variant => [
+                        <$ty as ForceType>::POINT1,
+                        <$ty as ForceType>::POINT2,
+                        <$ty as ForceType>::AXIS,
+                    ]),*
+                }
+            }
+
+            /// See [`ForceType::DISTINCT_POINTS`].
+            pub fn distinct_points(self) -> bool {
+                match self {
+                    $(Kind::$variant => <$ty as ForceType>::DISTINCT_POINTS),*
+                }
+            }
+
+            /// See [`ForceType::deformation`].
+            #[inline]
+            pub fn deformation<T: Real>(
+                self,
+                g: &Geometry<V3<T>>,
+                x1: &Pose<T>,
+                x2: &Pose<T>,
+                out: &mut Vec<T>,
+            ) {
+                match self {
+                    $(Kind::$variant => <$ty as ForceType>::deformation(g, x1, x2, out)),*
+                }
+            }
+        }
+    };
+}
+
+force_types! {
+    SpringDamper => spring_damper::SpringDamper,
+    Rotational => rotational::Rotational,
+    Bushing => bushing::Bushing,
+}
+
+impl Kind {
+    /// The type named `name` in a model file.
+    pub fn from_name(name: &str) -> Option<Kind> {
+        Kind::ALL.iter().copied().find(|k| k.name() == name)
+    }
+}

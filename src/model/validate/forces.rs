@@ -1,0 +1,124 @@
+//! Force elements of a model file: type, bodies, points, axis and the per-component fields the
+//! type ([`crate::forces::ForceType`]) declares.
+
+use super::joints::{article, indexed, known, least_aligned, list, per_coordinate, vector};
+use super::{Ctx, R, body_ref, check_name, coincident};
+use crate::forces::{Geometry, Kind};
+use crate::joints::Use;
+use crate::model::ForceElement;
+use crate::model::schema::ForceSchema;
+use std::collections::HashMap;
+use toml::Spanned;
+
+/// Parses and checks the `[[forces]]` tables; `elements` collects their names (names are
+/// unique across joints, force elements and cut joints).
+pub(super) fn forces(
+    ctx: &Ctx,
+    raw: &[Spanned<ForceSchema>],
+    body_names: &HashMap<String, usize>,
+    joint_names: &HashMap<String, usize>,
+    elements: &mut HashMap<String, usize>,
+    nominal: &[f64],
+) -> R<Vec<ForceElement>> {
+    let mut out = Vec::new();
+    for f in raw {
+        let s = f.get_ref();
+        check_name(ctx, &s.name, "force")?;
+        let name = s.name.get_ref().clone();
+        if elements.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
+            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
+        }
+        let owner = format!("force '{name}'");
+        let kind = Kind::from_name(s.kind.get_ref()).ok_or_else(|| {
+            ctx.err(
+                s.kind.span(),
+                format!(
+                    "{owner}: unknown type '{}' (expected {})",
+                    s.kind.get_ref(),
+                    list(Kind::ALL.iter().map(|k| k.name()))
+                ),
+            )
+        })?;
+        let this = format!("{} {}", article(kind.name()), kind.name());
+        let body1 = body_ref(ctx, body_names, &s.body1)?;
+        let body2 = body_ref(ctx, body_names, &s.body2)?;
+        if body1 == body2 {
+            return Err(ctx.err(
+                s.body2.span(),
+                format!("{owner}: both ends are on the same body"),
+            ));
+        }
+        let [use_point1, use_point2, use_axis] = kind.uses();
+        let item = f.span();
+        let point1 = vector(
+            ctx, &s.point1, use_point1, "point1", &owner, &this, &item, nominal,
+        )?;
+        let point2 = match (&s.point2, use_point2) {
+            (None, Use::Optional) => point1.clone(),
+            _ => vector(
+                ctx, &s.point2, use_point2, "point2", &owner, &this, &item, nominal,
+            )?,
+        };
+        let axis = vector(
+            ctx, &s.axis, use_axis, "axis", &owner, &this, &item, nominal,
+        )?;
+        let reference = if use_axis == Use::Unused {
+            axis.clone()
+        } else {
+            if known(ctx, &axis, nominal)?.is_none() {
+                let span = s.axis.as_ref().map_or(item.clone(), |a| a.span());
+                return Err(ctx.err(
+                    span,
+                    format!("{owner}: its axis must not depend on the speed"),
+                ));
+            }
+            least_aligned(ctx, &axis, &owner, &item, nominal)?
+        };
+        let components = kind.components();
+        let k = components.len();
+        let what = |x: &str| format!("{owner} {x}");
+        let stiffness =
+            per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "component", &what)?;
+        let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "component", &what)?;
+        let free = per_coordinate(ctx, &s.free, k, "free", false, "component", &what)?;
+        let preload = per_coordinate(ctx, &s.preload, k, "preload", false, "component", &what)?;
+        for x in stiffness
+            .iter()
+            .chain(&damping)
+            .chain(&free)
+            .chain(&preload)
+            .flatten()
+        {
+            ctx.nominal(x, nominal)?;
+        }
+        if kind.distinct_points()
+            && free.iter().any(Option::is_none)
+            && coincident(ctx, &point1, &point2, nominal)?
+        {
+            return Err(ctx.err(
+                item,
+                format!(
+                    "{owner}: its two points coincide in the reference configuration, so its free {} is zero and its line of action undefined there; give distinct points",
+                    indexed(components[0].suffix, 0, 1)
+                ),
+            ));
+        }
+        out.push(ForceElement {
+            name,
+            kind,
+            geometry: Geometry {
+                body1,
+                point1,
+                body2,
+                point2,
+                axis,
+                reference,
+            },
+            stiffness,
+            damping,
+            free,
+            preload,
+        });
+    }
+    Ok(out)
+}
