@@ -9,8 +9,8 @@ pub mod dynamics;
 pub mod kinematics;
 
 use crate::model::{Field, FieldError, Model};
-use crate::real::{M3, Real, V3, cst};
-use crate::rigid::Pose;
+use crate::real::{M3, Real, V3, cst, mul3, mul3_t};
+use crate::rigid::{Pose, perpendicular};
 use crate::{cuts, forces, joints};
 use std::ops::Range;
 
@@ -104,6 +104,14 @@ impl<T: Real> System<T> {
                 for j in 0..3 {
                     inertia[(i, j)] = b.inertia[i][j].eval(p, w)?;
                 }
+            }
+            if let Some([x, y]) = &b.axes {
+                // The inertia axes as the columns of R: I = R I_body Rᵀ in global axes.
+                let x = direction(x, joints::Use::Required, p, w)?;
+                let y = direction(y, joints::Use::Required, p, w)?;
+                let y = perpendicular(&x, &y);
+                let r = M3::from_columns(&[x, y, x.cross(&y)]);
+                inertia = mul3_t(&mul3(&r, &inertia), &r);
             }
             bodies.push(BodyData {
                 mass: b.mass.eval(p, w)?,

@@ -67,6 +67,7 @@ impl Model {
             let e = Element("body", &b.name);
             out.push((e, &b.mass));
             out.extend(b.inertia.iter().flatten().map(|f| (e, f)));
+            out.extend(b.axes.iter().flatten().flatten().map(|f| (e, f)));
             out.extend(b.cm.iter().map(|f| (e, f)));
         }
         for j in &self.joints {

@@ -140,7 +140,11 @@ pub struct Parameter {
 pub struct Body {
     pub name: String,
     pub mass: Field,
+    /// About the centre of mass, in the body's inertia axes.
     pub inertia: [[Field; 3]; 3],
+    /// The inertia axes' x and y directions in the reference configuration (z completes a
+    /// right-handed frame; y is made orthogonal to x); `None`: the global axes.
+    pub axes: Option<[[Field; 3]; 2]>,
     pub cm: [Field; 3],
 }
 

@@ -116,6 +116,9 @@ pub struct BodySchema {
     /// Principal values `[Ixx, Iyy, Izz]` or a full symmetric 3×3 matrix (numbers or
     /// expressions); interpreted in `validate`.
     pub inertia: Option<Spanned<toml::Value>>,
+    /// The axes `inertia` is given in (default: the global axes as drawn).
+    pub x_axis: Option<SVec>,
+    pub y_axis: Option<SVec>,
     pub cm: SVec,
 }
 

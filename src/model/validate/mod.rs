@@ -458,10 +458,27 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
             let span = s.inertia.as_ref().map_or(b.span(), |x| x.span());
             check_inertia(&ctx, &inom, span, &name)?;
         }
+        let axes = match (&s.x_axis, &s.y_axis) {
+            (None, None) => None,
+            (Some(x), Some(y)) => {
+                let (x, y) = (ctx.vec3(x, what("x_axis"))?, ctx.vec3(y, what("y_axis"))?);
+                inertia_axes(&ctx, &x, &y, &nominal, b.span(), &name)?;
+                Some([x, y])
+            }
+            (Some(a), None) | (None, Some(a)) => {
+                return Err(ctx.err(
+                    a.span(),
+                    format!(
+                        "body '{name}': give both 'x_axis' and 'y_axis' (the axes its inertia is given in)"
+                    ),
+                ));
+            }
+        };
         bodies.push(Body {
             name,
             mass,
             inertia,
+            axes,
             cm,
         });
     }
@@ -699,6 +716,43 @@ fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]
     Ok(std::array::from_fn(|i| {
         std::array::from_fn(|j| out[i][j].clone())
     }))
+}
+
+/// Inertia axes: neither zero nor parallel at the nominal values.
+fn inertia_axes(
+    ctx: &Ctx,
+    x: &[Field; 3],
+    y: &[Field; 3],
+    nominal: &[f64],
+    span: Range<usize>,
+    name: &str,
+) -> R<()> {
+    let (Some(a), Some(b)) = (
+        joints::known(ctx, x, nominal)?,
+        joints::known(ctx, y, nominal)?,
+    ) else {
+        return Ok(());
+    };
+    let scale = |v: [f64; 3]| {
+        let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        (m > 0.0).then(|| v.map(|x| x / m))
+    };
+    let (Some(a), Some(b)) = (scale(a), scale(b)) else {
+        return Err(ctx.err(span, format!("body '{name}': x_axis or y_axis is zero")));
+    };
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if norm(c) <= 1e-9 * norm(a) * norm(b) {
+        return Err(ctx.err(
+            span,
+            format!("body '{name}': x_axis and y_axis are parallel"),
+        ));
+    }
+    Ok(())
 }
 
 /// Symmetric and positive semi-definite (see [`super::admissible::inertia_defect`]).
