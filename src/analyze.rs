@@ -8,6 +8,7 @@
 //! `analytic` row takes) and optionally the Monte Carlo. Wall times of the Taylor methods, the
 //! quadrature and the Monte Carlo are measured for the summary.
 
+use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::Case;
 use crate::montecarlo::{self, Block, McOptions, McStat, TreeFold};
@@ -115,6 +116,9 @@ pub struct AnalyzeOptions {
     /// Worker threads for the derivatives (`None`: rayon's default); the Monte Carlo uses its
     /// own setting.
     pub threads: Option<usize>,
+    /// Cancelling it stops the Monte Carlo after its current chunk; the result then covers the
+    /// samples done ([`Analysis::interrupted`]).
+    pub cancel: Cancel,
 }
 
 impl Default for AnalyzeOptions {
@@ -126,6 +130,7 @@ impl Default for AnalyzeOptions {
             monte_carlo: None,
             split: Split::default(),
             threads: None,
+            cancel: Cancel::new(),
         }
     }
 }
@@ -332,6 +337,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                         transfer.as_ref(),
                         mc,
                         range,
+                        &opt.cancel,
                         &|d| progress(&name, d, mc.samples),
                         None,
                     );
@@ -339,7 +345,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                     continue;
                 }
                 Split::Whole => {
-                    if montecarlo::STOP.load(std::sync::atomic::Ordering::SeqCst) {
+                    if opt.cancel.is_cancelled() {
                         samples_done.push(0);
                         continue;
                     }
@@ -352,6 +358,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                         &outs,
                         transfer.as_ref(),
                         mc,
+                        &opt.cancel,
                         &|d| progress(&name, d, mc.samples),
                     )
                 }

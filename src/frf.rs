@@ -5,13 +5,15 @@
 //! ```
 //!
 //! maps a generalised force on one free coordinate to the response of another (independent of
-//! the choice of basis `R`). For one degree of freedom this is Kim & Yoo (2007) eq. 25. The
+//! the choice of basis `R`); between physical points ([`crate::mechanics::ports`]) the force
+//! and response vectors `b` take the place of the unit vectors. For one degree of freedom this is Kim & Yoo (2007) eq. 25. The
 //! complex solve is done as the real block system `[A −B; B A]`, `A = K̂ − ω²M̂`, `B = ωĈ`, over
 //! any [`Real`], so the same function gives `H` and its exact derivatives (including the move of
 //! the equilibrium and of the basis `R`).
 
 use crate::linalg::solve;
 use crate::linearize::Linearization;
+use crate::model::Channel;
 use crate::real::{Real, cst};
 use nalgebra::DMatrix;
 
@@ -33,17 +35,27 @@ impl<T: Real> Complex<T> {
     }
 }
 
-/// `H(jω)` from a generalised force on coordinate `input` to the response of coordinate
-/// `output` (coordinate indices, both free). `None` when `input`/`output` is not free or the
-/// dynamic stiffness is singular (undamped resonance).
+/// `H(jω)` from `input` to `output`: a generalised force on a free coordinate or a force or
+/// torque at a port in, the coordinate's value or the port's displacement or rotation out
+/// (`b_outᵀ R (K̂ − ω² M̂ + jω Ĉ)⁻¹ Rᵀ b_in`, with `b` a unit vector for a coordinate and the
+/// port's vector otherwise). `None` when a coordinate is not free, the linearisation has no
+/// vectors for the ports, or the dynamic stiffness is singular (undamped resonance).
 pub fn transfer<T: Real>(
     lin: &Linearization<T>,
-    input: usize,
-    output: usize,
+    input: Channel,
+    output: Channel,
     omega: f64,
 ) -> Option<Complex<T>> {
-    let i = lin.free.iter().position(|&c| c == input)?;
-    let o = lin.free.iter().position(|&c| c == output)?;
+    let reduced = |c: Channel| -> Option<Vec<T>> {
+        match c {
+            Channel::Coordinate(c) => {
+                let i = lin.free.iter().position(|&f| f == c)?;
+                Some(lin.basis.row(i).iter().copied().collect())
+            }
+            Channel::Port(k) => lin.ports.get(k).cloned(),
+        }
+    };
+    let (bi, bo) = (reduced(input)?, reduced(output)?);
     let n = lin.m.nrows();
     let w = cst::<T>(omega);
     let mut z = DMatrix::from_element(2 * n, 2 * n, cst::<T>(0.0));
@@ -59,13 +71,13 @@ pub fn transfer<T: Real>(
     }
     let mut rhs = DMatrix::from_element(2 * n, 1, cst::<T>(0.0));
     for k in 0..n {
-        rhs[(k, 0)] = lin.basis[(i, k)];
+        rhs[(k, 0)] = bi[k];
     }
     let x = solve(&z, &rhs)?;
     let (mut re, mut im) = (cst::<T>(0.0), cst::<T>(0.0));
     for k in 0..n {
-        re += lin.basis[(o, k)] * x[(k, 0)];
-        im += lin.basis[(o, k)] * x[(k + n, 0)];
+        re += bo[k] * x[(k, 0)];
+        im += bo[k] * x[(k + n, 0)];
     }
     Some(Complex { re, im })
 }

@@ -34,6 +34,7 @@
 
 use crate::compiled::Compiled;
 use crate::frf::transfer;
+use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Root};
 use crate::output::{Output, Quantity};
 use crate::real::Real;
@@ -188,7 +189,9 @@ fn expand<J: Jet>(
             }
         }
     }
-    let lin = equations.linearize(&q, &lambda, &pt.linear.independent, None)?;
+    let lin = equations
+        .linearize(&q, &lambda, &pt.linear.independent, None)?
+        .with_ports(ports_at(model, seeded, J::from(pt.speed), &q, free)?);
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
     // Per mode: ω_d, ζ and D (ω_d and ζ not where the roots coalesce, as in

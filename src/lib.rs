@@ -10,6 +10,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod analyze;
+pub mod cancel;
 pub mod compiled;
 pub mod cuts;
 pub mod equilibrium;

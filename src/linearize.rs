@@ -48,6 +48,28 @@ pub struct Linearization<T: Real> {
     pub m: DMatrix<T>,
     pub c: DMatrix<T>,
     pub k: DMatrix<T>,
+    /// `Rᵀ b` for each of the model's ports (see [`crate::mechanics::ports`]): its force
+    /// vector in the independent coordinates; empty until [`Linearization::with_ports`].
+    pub ports: Vec<Vec<T>>,
+}
+
+impl<T: Real> Linearization<T> {
+    /// Attaches the ports' vectors `b` over the free coordinates, reduced to `Rᵀ b`.
+    pub fn with_ports(mut self, full: Vec<Vec<T>>) -> Self {
+        self.ports = full
+            .iter()
+            .map(|b| {
+                (0..self.basis.ncols())
+                    .map(|k| {
+                        b.iter()
+                            .enumerate()
+                            .fold(cst::<T>(0.0), |s, (i, &v)| s + self.basis[(i, k)] * v)
+                    })
+                    .collect()
+            })
+            .collect();
+        self
+    }
 }
 
 /// Chooses independent coordinates: the user's, or by complete pivoting on `Φ_{q_R}` (the
@@ -164,5 +186,6 @@ pub fn reduce<T: Real>(
         m_full,
         c_full,
         k_full,
+        ports: Vec::new(),
     })
 }

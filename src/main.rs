@@ -4,15 +4,15 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
 use modaltol::files::{AtomicFile, ResultDir, read_bounded, write_atomically};
-use modaltol::frf::transfer;
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns, SweepExtras};
-use modaltol::sensitivity::{self, TransferAt, dual_linearizations, transfer_derivative};
+use modaltol::sensitivity::{self, TransferAt};
 use modaltol::shard::ShardFile;
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
 use std::io::{IsTerminal, Write};
@@ -104,7 +104,8 @@ enum Command {
         /// Independent coordinates (joint names, comma separated), overriding the model.
         #[arg(long, value_delimiter = ',')]
         independent: Option<Vec<String>>,
-        /// Transfer function `input=JOINT,output=JOINT[,order=K]`: generalised force on `input`,
+        /// Transfer function `input=NAME,output=NAME[,order=K]` (NAME a free joint coordinate or a
+        /// [[ports]] entry): generalised force (or port force/torque) on `input`,
         /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
         /// uses the model's [analysis] transfer.
         #[arg(long)]
@@ -136,7 +137,8 @@ enum Command {
         /// How derivatives are computed.
         #[arg(long, value_enum, default_value = "ad")]
         derivatives: Derivatives,
-        /// Transfer function `input=JOINT,output=JOINT[,order=K]`; default: the model's.
+        /// Transfer function `input=NAME,output=NAME[,order=K]` (free coordinates or ports);
+        /// default: the model's.
         #[arg(long)]
         transfer: Option<String>,
         /// Output format.
@@ -219,8 +221,9 @@ enum Command {
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
     },
-    /// Frequency response at one speed: H(jω) from a generalised force on one joint coordinate
-    /// to the response of another, over a range of excitation frequencies.
+    /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
+    /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
+    /// port, over a range of excitation frequencies.
     ///
     /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
     /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
@@ -231,10 +234,12 @@ enum Command {
         /// Operating speed, rad/s.
         #[arg(long, allow_hyphen_values = true)]
         speed: f64,
-        /// Joint whose coordinate receives the generalised force.
+        /// Where the excitation enters: a free joint coordinate (generalised force) or a
+        /// [[ports]] entry (force or torque).
         #[arg(long)]
         input: String,
-        /// Joint whose coordinate is the response.
+        /// Where the response is read: a free joint coordinate or a [[ports]] entry
+        /// (displacement or rotation).
         #[arg(long)]
         output: String,
         /// Excitation frequencies FROM:TO:STEP in rad/s.
@@ -311,52 +316,11 @@ fn design_variables(model: &Model, names: &Option<Vec<String>>) -> Result<Vec<us
     }
 }
 
-/// Parses `input=J,output=J[,order=K]` (or `model` for the model's own transfer function).
+/// Parses `input=NAME,output=NAME[,order=K]` (or `model` for the model's own transfer function).
 fn parse_transfer(model: &Model, spec: &str) -> Result<Transfer> {
-    if spec == "model" {
-        return model.analysis.transfer.ok_or_else(|| {
-            InputError("--transfer model: the model declares no [analysis] transfer".into()).into()
-        });
-    }
-    let (mut input, mut output, mut order) = (None, None, 1.0);
-    for part in spec.split(',') {
-        let (k, v) = part
-            .split_once('=')
-            .ok_or_else(|| InputError(format!("--transfer: '{part}' is not key=value")))?;
-        let coord = |v: &str| {
-            model
-                .coordinate(v.trim())
-                .filter(|&i| !model.coordinates[i].driven)
-                .ok_or_else(|| {
-                    InputError(format!("--transfer: '{v}' is not a free joint coordinate"))
-                })
-        };
-        match k.trim() {
-            "input" => input = Some(coord(v)?),
-            "output" => output = Some(coord(v)?),
-            "order" => {
-                order = v
-                    .trim()
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|o| o.is_finite() && *o >= 0.0)
-                    .ok_or_else(|| {
-                        InputError(format!("--transfer: order '{v}' must be a number ≥ 0"))
-                    })?
-            }
-            _ => {
-                return Err(InputError(format!(
-                    "--transfer: unknown key '{k}' (input, output, order)"
-                ))
-                .into());
-            }
-        }
-    }
-    Ok(Transfer {
-        input: input.ok_or_else(|| InputError("--transfer needs input=JOINT".into()))?,
-        output: output.ok_or_else(|| InputError("--transfer needs output=JOINT".into()))?,
-        order,
-    })
+    model
+        .parse_transfer(spec)
+        .map_err(|e| InputError(format!("--transfer {spec}: {e}")).into())
 }
 
 fn sensitivities(
@@ -420,14 +384,15 @@ fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
     }
 }
 
-/// Ctrl-C stops the Monte Carlo after its current chunk; what was done is written, flagged as
-/// partial, and the exit code is 130.
-fn install_interrupt_handler() {
-    let _ = ctrlc::set_handler(|| {
+/// Ctrl-C cancels `cancel`: the Monte Carlo stops after its current chunk; what was done is
+/// written, flagged as partial, and the exit code is 130.
+fn install_interrupt_handler(cancel: &Cancel) {
+    let cancel = cancel.clone();
+    let _ = ctrlc::set_handler(move || {
         eprintln!(
             "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
         );
-        modaltol::montecarlo::request_stop();
+        cancel.cancel();
     });
 }
 
@@ -823,8 +788,9 @@ fn run(cli: Cli) -> Result<()> {
                 monte_carlo: mc,
                 split,
                 threads,
+                cancel: Cancel::new(),
             };
-            install_interrupt_handler();
+            install_interrupt_handler(&opt.cancel);
             let a = analyze(&m, &opt, &progress_printer());
             if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
                 let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
@@ -904,6 +870,7 @@ fn run(cli: Cli) -> Result<()> {
                 monte_carlo: Some(mc),
                 split: Split::Merged(states),
                 threads: None,
+                cancel: Cancel::new(),
             };
             let dir = ResultDir::create(&output)?;
             let a = analyze(&m, &opt, &progress_printer());
@@ -926,8 +893,16 @@ fn run(cli: Cli) -> Result<()> {
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let pt = point(&m, &p, speed, &q0, &Options::default())
                 .with_context(|| format!("speed {speed:?} rad/s"))?;
-            let duals = dual_linearizations(&m, &p, &pt, &wrt)
-                .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+            let rows = sensitivity::frequency_response(
+                &m,
+                &p,
+                &pt,
+                tf.input,
+                tf.output,
+                &wrt,
+                range.speeds(),
+            )
+            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
             let mut csv = csv::Writer::from_writer(Sink::to(&out)?);
             let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
                 .iter()
@@ -938,19 +913,16 @@ fn run(cli: Cli) -> Result<()> {
                     .map(|&b| format!("d(magnitude)/d({})", m.parameters[b].name)),
             );
             csv.write_record(&header)?;
-            for f in range.speeds() {
-                let mut row = vec![f.to_string()];
-                match transfer(&pt.linear, tf.input, tf.output, f) {
+            let blank = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+            for r in rows {
+                let mut row = vec![r.frequency.to_string()];
+                match r.h {
                     Some(h) => {
                         row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string()))
                     }
                     None => row.extend(std::iter::repeat_n(String::new(), 4)),
                 }
-                for d in &duals {
-                    let v = transfer(&d.linear, tf.input, tf.output, f)
-                        .and_then(|h| transfer_derivative(&h).0);
-                    row.push(v.map_or(String::new(), |x| x.to_string()));
-                }
+                row.extend(r.d_magnitude.into_iter().map(blank));
                 csv.write_record(&row)?;
             }
             csv.into_inner().map_err(|e| e.into_error())?.finish()?;

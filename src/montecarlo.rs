@@ -18,6 +18,7 @@
 //! heavy-tailed outputs (|H| at a stationary point is χ²-like, κ ≈ 15), where the χ² interval,
 //! valid for normal outputs only, would be several times too narrow.
 
+use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::equilibrium::Settings;
 use crate::modal::ModeClass;
@@ -29,16 +30,6 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
-
-/// Set to stop a running Monte Carlo after its current chunk (e.g. from a Ctrl-C handler);
-/// the statistics then cover the samples done so far. Never cleared: once set, later runs in
-/// the same process stop at once.
-pub static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Asks running Monte Carlo loops to stop after their current chunk.
-pub fn request_stop() {
-    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
-}
 
 /// Monte Carlo settings.
 #[derive(Debug, Clone, Copy)]
@@ -643,7 +634,7 @@ pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize
 
 /// Evaluates the chunks `range` (samples `CHUNK·i .. CHUNK·(i+1)` of chunk `i`) and returns each
 /// chunk's moments `[chunk][speed][output]`, in chunk order. Stops early (fewer chunks) when
-/// [`request_stop`] is called. `progress` gets the number of samples done in this call. With
+/// `cancel` is cancelled. `progress` gets the number of samples done in this call. With
 /// `values`, also keeps every finite value per `[speed · outputs + output]`, in sample order
 /// (for quantiles).
 #[allow(clippy::too_many_arguments)]
@@ -657,6 +648,7 @@ pub fn run_chunks(
     transfer: Option<&Transfer>,
     opt: McOptions,
     range: std::ops::Range<usize>,
+    cancel: &Cancel,
     progress: &(dyn Fn(usize) + Sync),
     mut values: Option<&mut Vec<Vec<f32>>>,
 ) -> TreeFold {
@@ -671,7 +663,7 @@ pub fn run_chunks(
         v.resize(speeds.len() * outs.len(), Vec::new());
     }
     for chunk in range {
-        if STOP.load(std::sync::atomic::Ordering::SeqCst) {
+        if cancel.is_cancelled() {
             break;
         }
         let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(opt.samples));
@@ -750,7 +742,7 @@ pub const MAX_KEPT_VALUES: usize = 100_000_000;
 
 /// Runs the whole Monte Carlo: all chunks, folded. Returns `stats[speed][output]` (with the
 /// 5/50/95 % quantiles unless more than [`MAX_KEPT_VALUES`] values would be kept) and the
-/// number of samples evaluated (fewer than asked when [`request_stop`] interrupted the run).
+/// number of samples evaluated (fewer than asked when `cancel` interrupted the run).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     model: &Compiled,
@@ -761,6 +753,7 @@ pub fn run(
     outs: &[Output],
     transfer: Option<&Transfer>,
     opt: McOptions,
+    cancel: &Cancel,
     progress: &(dyn Fn(usize) + Sync),
 ) -> (Vec<Vec<McStat>>, usize) {
     let keep = opt.samples.saturating_mul(speeds.len() * outs.len()) <= MAX_KEPT_VALUES;
@@ -775,6 +768,7 @@ pub fn run(
         transfer,
         opt,
         0..chunks(opt.samples),
+        cancel,
         progress,
         keep.then_some(&mut values),
     );

@@ -29,8 +29,9 @@
 use crate::compiled::Compiled;
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
+use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Mode, similarity};
-use crate::model::Transfer;
+use crate::model::{Channel, Transfer};
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -85,8 +86,8 @@ pub struct Sensitivity {
 /// A transfer function request: coordinates and excitation frequency (rad/s).
 #[derive(Debug, Clone, Copy)]
 pub struct TransferAt {
-    pub input: usize,
-    pub output: usize,
+    pub input: Channel,
+    pub output: Channel,
     pub omega: f64,
 }
 
@@ -165,6 +166,42 @@ pub struct DualLinearization {
     pub d_equilibrium: Vec<f64>,
 }
 
+/// One excitation frequency of a frequency response: `H` and `d|H|/db` for each design
+/// variable (`None` where undefined: an undamped resonance, or `H` passing through zero).
+#[derive(Debug, Clone)]
+pub struct ResponseRow {
+    /// Excitation frequency (rad/s).
+    pub frequency: f64,
+    pub h: Option<Complex<f64>>,
+    pub d_magnitude: Vec<Option<f64>>,
+}
+
+/// The frequency response from `input` to `output` at the point `pt` over `frequencies`, with
+/// the exact derivatives of |H| with respect to the design variables `wrt`.
+pub fn frequency_response(
+    model: &Compiled,
+    p: &[f64],
+    pt: &Point,
+    input: Channel,
+    output: Channel,
+    wrt: &[usize],
+    frequencies: impl Iterator<Item = f64>,
+) -> Result<Vec<ResponseRow>, PointError> {
+    let duals = dual_linearizations(model, p, pt, wrt)?;
+    Ok(frequencies
+        .map(|f| ResponseRow {
+            frequency: f,
+            h: transfer(&pt.linear, input, output, f),
+            d_magnitude: duals
+                .iter()
+                .map(|d| {
+                    transfer(&d.linear, input, output, f).and_then(|h| transfer_derivative(&h).0)
+                })
+                .collect(),
+        })
+        .collect())
+}
+
 /// `M̂, Ĉ, K̂` (and `R`) over dual numbers for each design variable in `wrt`: the equilibrium
 /// shift by the implicit function theorem, then one dual-number linearisation.
 pub fn dual_linearizations(
@@ -214,7 +251,9 @@ pub fn dual_linearizations(
         let lambda: Vec<Dual64> = (0..eq.lambda.len())
             .map(|k| Dual64::new(eq.lambda[k], dx[free.len() + k]))
             .collect();
-        let linear = equations.linearize(&q, &lambda, &pt.linear.independent, None)?;
+        let linear = equations
+            .linearize(&q, &lambda, &pt.linear.independent, None)?
+            .with_ports(ports_at(model, &pd, Dual64::from_re(speed), &q, free)?);
         out.push(DualLinearization {
             param: b,
             linear,

@@ -10,6 +10,7 @@
 use crate::compiled::Compiled;
 use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, reduce};
+use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
 use crate::model::{FieldError, Model};
 use nalgebra::{DMatrix, DVector};
@@ -120,7 +121,7 @@ pub fn point_from(
             equations: model.n_constraints(),
         }
     })?;
-    let first = analyse(model, &problem, eq, opt)?;
+    let first = analyse(model, p, &problem, eq, opt)?;
     if first.stable() || opt.no_branch_switch {
         return Ok(first);
     }
@@ -176,7 +177,7 @@ pub fn point_from(
                 continue;
             }
             let own_side = side(&eq.q) * s > 0.0;
-            if let Ok(pt) = analyse(model, &problem, eq, opt)
+            if let Ok(pt) = analyse(model, p, &problem, eq, opt)
                 && pt.stable()
             {
                 let pt = Point {
@@ -198,6 +199,7 @@ pub fn point_from(
 /// Linearises and solves the modes at a converged equilibrium.
 fn analyse(
     model: &Model,
+    p: &[f64],
     problem: &Problem,
     mut eq: Equilibrium,
     opt: &Options,
@@ -221,6 +223,7 @@ fn analyse(
             .equations()
             .linearize(&eq.q, &eq.lambda, &independent, Some(&stiffness))?,
     };
+    let linear = linear.with_ports(ports_at(model, p, eq.speed, &eq.q, &free)?);
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
     let basis = linear.basis.map(|v| C64::new(v, 0.0));
     let shapes = modes.iter().map(|m| &basis * &m.root.right).collect();

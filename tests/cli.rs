@@ -304,7 +304,7 @@ fn frf_columns_and_unknown_joint() {
         "1:2:1",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("'nope' is not a free joint coordinate"));
+    assert!(stderr(&o).contains("'nope' is neither a free joint coordinate nor a port"));
 }
 
 #[test]

@@ -627,3 +627,35 @@ fn lhs_and_sobol_estimate_the_same_spread() {
         );
     }
 }
+
+#[test]
+fn a_cancelled_token_stops_its_own_monte_carlo_and_no_other() {
+    use modaltol::cancel::Cancel;
+    let model = example("governor.toml");
+    let options = |cancel: Cancel| AnalyzeOptions {
+        speeds: vec![2.0, 3.0],
+        cases: vec![case(&model, "k3")],
+        quadrature: None,
+        monte_carlo: Some(McOptions {
+            samples: 4096,
+            seed: 1,
+            sampling: Sampling::Random,
+            threads: Some(1),
+        }),
+        cancel,
+        ..Default::default()
+    };
+    // Cancelled from the progress callback after the Monte Carlo's first chunk: the result is
+    // partial.
+    let cancel = Cancel::new();
+    let a = analyze(&model, &options(cancel.clone()), &|_, done, total| {
+        if total == 4096 && done > 0 {
+            cancel.cancel();
+        }
+    });
+    assert!(a.interrupted(4096), "{:?}", a.samples_done);
+    assert!(a.samples_done[0] > 0 && a.samples_done[0] < 4096);
+    // A fresh token in the same process runs to the end.
+    let b = analyze(&model, &options(Cancel::new()), &|_, _, _| {});
+    assert_eq!(b.samples_done, [4096]);
+}

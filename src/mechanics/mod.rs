@@ -7,6 +7,7 @@
 
 pub mod dynamics;
 pub mod kinematics;
+pub mod ports;
 
 use crate::model::{Field, FieldError, Model};
 use crate::real::{M3, Real, V3, cst, mul3, mul3_t};
@@ -62,6 +63,15 @@ pub struct ConstraintData<T> {
     pub geometry: cuts::Geometry<V3<T>, T>,
 }
 
+/// A port (see [`crate::model::Port`]): a body's point and a unit direction, as drawn.
+#[derive(Debug, Clone)]
+pub struct PortData<T> {
+    pub body: usize,
+    pub point: V3<T>,
+    pub direction: V3<T>,
+    pub rotation: bool,
+}
+
 /// A model instantiated at one set of parameter values and one speed, over scalar `T`.
 #[derive(Debug, Clone)]
 pub struct System<T> {
@@ -72,6 +82,7 @@ pub struct System<T> {
     pub joint_elements: Vec<JointElement<T>>,
     pub forces: Vec<ForceData<T>>,
     pub constraints: Vec<ConstraintData<T>>,
+    pub ports: Vec<PortData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
     /// For each coordinate, the joints (indices into `joints`, parents first) whose child
@@ -204,6 +215,15 @@ impl<T: Real> System<T> {
                 },
             });
         }
+        let mut ports = Vec::with_capacity(model.ports.len());
+        for port in &model.ports {
+            ports.push(PortData {
+                body: port.body,
+                point: v3(&port.point, p, w)?,
+                direction: direction(&port.direction, joints::Use::Required, p, w)?,
+                rotation: port.rotation,
+            });
+        }
         let subtree = subtrees(&joints, model.coordinates.len());
         Ok(System {
             gravity: v3(&model.gravity, p, w)?,
@@ -212,6 +232,7 @@ impl<T: Real> System<T> {
             joint_elements,
             forces,
             constraints,
+            ports,
             drive,
             subtree,
             n: model.coordinates.len(),
@@ -298,6 +319,16 @@ impl<T: Real> System<T> {
                             length: g.length.map(f),
                         },
                     }
+                })
+                .collect(),
+            ports: self
+                .ports
+                .iter()
+                .map(|port| PortData {
+                    body: port.body,
+                    point: v(&port.point),
+                    direction: v(&port.direction),
+                    rotation: port.rotation,
                 })
                 .collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),

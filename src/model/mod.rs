@@ -276,13 +276,36 @@ pub enum Sampling {
     Sobol,
 }
 
-/// A transfer function: generalised force on `input` → response of `output` (coordinate
-/// indices), excited at `order × speed`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// One end of a transfer function: where the excitation enters or the response is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Channel {
+    /// A free joint coordinate: a generalised force on it in, its value out.
+    Coordinate(usize),
+    /// A [`Port`] (index into [`Model::ports`]): a force or torque in, a displacement or
+    /// rotation out.
+    Port(usize),
+}
+
+/// A transfer function `H(jω)` from `input` to `output` at the excitation frequency
+/// `order × speed`.
+#[derive(Debug, Clone, Copy)]
 pub struct Transfer {
-    pub input: usize,
-    pub output: usize,
+    pub input: Channel,
+    pub output: Channel,
     pub order: f64,
+}
+
+/// A physical degree of freedom of a body where a transfer function may start or end: a
+/// point along a direction (a force in, the point's displacement along it out) or a direction
+/// alone (a torque about it in, the body's rotation about it out). The direction is carried
+/// by the body, as drawn.
+#[derive(Debug, Clone)]
+pub struct Port {
+    pub name: String,
+    pub body: usize,
+    pub point: [Field; 3],
+    pub direction: [Field; 3],
+    pub rotation: bool,
 }
 
 /// A correlation matrix between parameters (rows and columns in the order of `params`).
@@ -341,6 +364,8 @@ pub struct Model {
     pub coordinates: Vec<Coordinate>,
     pub forces: Vec<ForceElement>,
     pub constraints: Vec<Constraint>,
+    /// Named ports for transfer functions between physical points.
+    pub ports: Vec<Port>,
     /// User's choice of independent coordinates (coordinate indices), if any.
     pub independent: Option<Vec<usize>>,
     pub analysis: Analysis,
@@ -420,6 +445,70 @@ impl Model {
     /// Index of the coordinate of the joint named `name`.
     pub fn coordinate(&self, name: &str) -> Option<usize> {
         self.coordinates.iter().position(|c| c.name == name)
+    }
+
+    /// The transfer-function end named `name`: a free coordinate, or a port.
+    pub fn channel(&self, name: &str) -> Option<Channel> {
+        match self.coordinate(name) {
+            Some(c) if !self.coordinates[c].driven => Some(Channel::Coordinate(c)),
+            Some(_) => None,
+            None => self
+                .ports
+                .iter()
+                .position(|p| p.name == name)
+                .map(Channel::Port),
+        }
+    }
+
+    /// The name of a transfer-function end.
+    pub fn channel_name(&self, c: Channel) -> &str {
+        match c {
+            Channel::Coordinate(i) => &self.coordinates[i].name,
+            Channel::Port(i) => &self.ports[i].name,
+        }
+    }
+
+    /// A transfer function from a spec `input=NAME,output=NAME[,order=X]` (names of free
+    /// coordinates or ports), or `model` for the model's `[analysis] transfer`.
+    pub fn parse_transfer(&self, spec: &str) -> Result<Transfer, String> {
+        if spec == "model" {
+            return self
+                .analysis
+                .transfer
+                .ok_or_else(|| "the model declares no [analysis] transfer".to_string());
+        }
+        let (mut input, mut output, mut order) = (None, None, 1.0);
+        for part in spec.split(',') {
+            let (k, v) = part
+                .split_once('=')
+                .ok_or_else(|| format!("'{part}' is not key=value"))?;
+            let channel = |v: &str| {
+                self.channel(v.trim()).ok_or_else(|| {
+                    format!(
+                        "'{}' is neither a free joint coordinate nor a port",
+                        v.trim()
+                    )
+                })
+            };
+            match k.trim() {
+                "input" => input = Some(channel(v)?),
+                "output" => output = Some(channel(v)?),
+                "order" => {
+                    order = v
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|o| o.is_finite() && *o >= 0.0)
+                        .ok_or_else(|| format!("order '{v}' must be a number ≥ 0"))?
+                }
+                _ => return Err(format!("unknown key '{k}' (input, output, order)")),
+            }
+        }
+        Ok(Transfer {
+            input: input.ok_or("needs input=NAME (a free coordinate or a port)")?,
+            output: output.ok_or("needs output=NAME (a free coordinate or a port)")?,
+            order,
+        })
     }
 
     /// Indices of driven coordinates.

@@ -105,6 +105,8 @@ pub struct FileSchema {
     pub forces: Vec<Spanned<ForceSchema>>,
     #[serde(default)]
     pub constraints: Vec<Spanned<ConstraintSchema>>,
+    #[serde(default)]
+    pub ports: Vec<Spanned<PortSchema>>,
     pub analysis: Option<Spanned<AnalysisSchema>>,
 }
 
@@ -179,6 +181,17 @@ pub struct TransferSchema {
     pub input: Spanned<String>,
     pub output: Spanned<String>,
     pub order: Option<Spanned<f64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortSchema {
+    pub name: Spanned<String>,
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    pub body: Spanned<String>,
+    pub point: Option<SVec>,
+    pub direction: SVec,
 }
 
 #[derive(Debug, Deserialize)]

@@ -631,7 +631,14 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         }
     };
 
-    let analysis = analysis(&ctx, raw.analysis.as_ref(), &coordinates, &parameters)?;
+    let ports = ports(&ctx, &raw.ports, &body_names, &coordinates, &nominal)?;
+    let analysis = analysis(
+        &ctx,
+        raw.analysis.as_ref(),
+        &coordinates,
+        &ports,
+        &parameters,
+    )?;
 
     Ok(Model {
         name: raw
@@ -652,9 +659,79 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         coordinates,
         forces,
         constraints,
+        ports,
         independent,
         analysis,
     })
+}
+
+/// Parses and checks the `[[ports]]` tables.
+fn ports(
+    ctx: &Ctx,
+    raw: &[Spanned<schema::PortSchema>],
+    body_names: &HashMap<String, usize>,
+    coordinates: &[Coordinate],
+    nominal: &[f64],
+) -> R<Vec<Port>> {
+    let mut out: Vec<Port> = Vec::new();
+    for item in raw {
+        let s = item.get_ref();
+        check_name(ctx, &s.name, "port")?;
+        let name = s.name.get_ref().clone();
+        if out.iter().any(|p| p.name == name) || coordinates.iter().any(|c| c.name == name) {
+            return Err(ctx.err(
+                s.name.span(),
+                format!("duplicate name '{name}' (ports and joint coordinates share the names a transfer function refers to)"),
+            ));
+        }
+        let owner = format!("port '{name}'");
+        let rotation = match s.kind.get_ref().as_str() {
+            "translation" => false,
+            "rotation" => true,
+            other => {
+                return Err(ctx.err(
+                    s.kind.span(),
+                    format!("{owner}: unknown type '{other}' (expected translation or rotation)"),
+                ));
+            }
+        };
+        let Some(body) = body_ref(ctx, body_names, &s.body)? else {
+            return Err(ctx.err(
+                s.body.span(),
+                format!("{owner}: ground does not move; give a body"),
+            ));
+        };
+        let usage = if rotation {
+            crate::joints::Use::Unused
+        } else {
+            crate::joints::Use::Required
+        };
+        let this = format!("a {} port", s.kind.get_ref());
+        let point = joints::vector(
+            ctx,
+            &s.point,
+            usage,
+            "point",
+            &owner,
+            &this,
+            &item.span(),
+            nominal,
+        )?;
+        let direction = ctx.vec3(&s.direction, format!("{owner} direction"))?;
+        if let Some(d) = joints::known(ctx, &direction, nominal)?
+            && d.iter().all(|x| x.abs() <= 0.0)
+        {
+            return Err(ctx.err(s.direction.span(), format!("{owner}: direction is zero")));
+        }
+        out.push(Port {
+            name,
+            body,
+            point,
+            direction,
+            rotation,
+        });
+    }
+    Ok(out)
 }
 
 /// Reads an inertia given as three principal values or a 3×3 matrix of numbers or expressions.
@@ -769,6 +846,7 @@ fn analysis(
     ctx: &Ctx,
     raw: Option<&Spanned<schema::AnalysisSchema>>,
     coords: &[Coordinate],
+    ports: &[Port],
     params: &[Parameter],
 ) -> R<Analysis> {
     let mut a = Analysis {
@@ -790,18 +868,22 @@ fn analysis(
     if let Some(t) = &s.transfer {
         let t = t.get_ref();
         let coord = |n: &Spanned<String>| {
-            coords
-                .iter()
-                .position(|c| &c.name == n.get_ref() && !c.driven)
-                .ok_or_else(|| {
-                    ctx.err(
-                        n.span(),
-                        format!(
-                            "analysis transfer: '{}' is not a free joint coordinate",
-                            n.get_ref()
-                        ),
-                    )
-                })
+            let name = n.get_ref();
+            match coords.iter().position(|c| &c.name == name) {
+                Some(c) if !coords[c].driven => Ok(Channel::Coordinate(c)),
+                _ => ports
+                    .iter()
+                    .position(|p| &p.name == name)
+                    .map(Channel::Port)
+                    .ok_or_else(|| {
+                        ctx.err(
+                            n.span(),
+                            format!(
+                                "analysis transfer: '{name}' is neither a free joint coordinate nor a port"
+                            ),
+                        )
+                    }),
+            }
         };
         let order = t.order.as_ref().map_or(1.0, |o| *o.get_ref());
         if !order.is_finite() || order < 0.0 {
