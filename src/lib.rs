@@ -35,6 +35,7 @@ pub mod rigid;
 pub mod route;
 pub mod sensitivity;
 pub mod shard;
+pub mod study;
 pub mod sweep;
 pub mod tape;
 pub mod tolerance;

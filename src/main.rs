@@ -6,15 +6,16 @@ use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
-use modaltol::files::{AtomicFile, ResultDir, read_bounded, write_atomically};
+use modaltol::files::{AtomicFile, ResultDir, write_atomically};
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
-use modaltol::report::{self, SweepColumns, SweepExtras};
+use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, TransferAt};
 use modaltol::shard::ShardFile;
-use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use modaltol::study::SweepStudy;
+use modaltol::sweep::{Options, initial_guess, point};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
@@ -323,19 +324,13 @@ fn parse_transfer(model: &Model, spec: &str) -> Result<Transfer> {
         .map_err(|e| InputError(format!("--transfer {spec}: {e}")).into())
 }
 
-fn sensitivities(
-    m: &Compiled,
-    pt: &Point,
-    wrt: &[usize],
-    tf: Option<TransferAt>,
-    how: Derivatives,
-) -> Result<sensitivity::Sensitivity, modaltol::sweep::PointError> {
-    match how {
-        Derivatives::Ad => sensitivity::analytic(m, &m.nominal(), pt, wrt, tf),
-        Derivatives::Fd => sensitivity::finite_difference(m, &m.nominal(), pt, wrt, tf),
+/// The library's choice for the command line's.
+fn how(d: Derivatives) -> sensitivity::Derivatives {
+    match d {
+        Derivatives::Ad => sensitivity::Derivatives::Exact,
+        Derivatives::Fd => sensitivity::Derivatives::FiniteDifference,
     }
 }
-
 fn model_or_governor(model: &Option<PathBuf>) -> Result<Compiled> {
     match model {
         Some(path) => load(path),
@@ -516,14 +511,6 @@ impl Sink {
     }
 }
 
-/// The outputs per speed of the model's Monte Carlo (as `analyze` makes them).
-fn output_count(m: &Model) -> usize {
-    modaltol::output::outputs(m.dof(), m.analysis.transfer.is_some()).len()
-}
-
-/// Largest shard file `merge` reads (a shard holds a few blocks of moments per case).
-const MAX_SHARD_BYTES: u64 = 1 << 30;
-
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Check { model } => {
@@ -597,25 +584,14 @@ fn run(cli: Cli) -> Result<()> {
                 independent: independent(&m, &ind)?,
                 ..Default::default()
             };
-            let mut sweep = Sweep::new(&m, m.nominal(), opt);
+            let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
             let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
             csv.write_record(report::sweep_header(&m, &cols))?;
             let n = range.len();
             let progress = std::io::stderr().is_terminal() && n >= 2000;
             let mut failed = 0usize;
             for (i, w) in range.speeds().enumerate() {
-                let mut r = sweep.step(w);
-                let mut extras = SweepExtras::default();
-                if let Ok(pt) = &r {
-                    let t = tf.map(|t| TransferAt::at_speed(&t, w));
-                    extras.transfer = t.and_then(|t| sensitivity::nominal_transfer(pt, &t));
-                    if !cols.wrt.is_empty() {
-                        match sensitivities(&m, pt, &cols.wrt, t, derivatives) {
-                            Ok(s) => extras.sensitivity = Some(s),
-                            Err(e) => r = Err(e),
-                        }
-                    }
-                }
+                let (r, extras) = study.step(w);
                 if r.is_err() {
                     failed += 1;
                 }
@@ -664,12 +640,13 @@ fn run(cli: Cli) -> Result<()> {
             let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
             let pt = point(&m, &p, speed, &q0, &Options::default())
                 .with_context(|| format!("speed {speed:?} rad/s"))?;
-            let s = sensitivities(
+            let s = sensitivity::sensitivities(
                 &m,
+                &p,
                 &pt,
                 &wrt,
                 tf.map(|t| TransferAt::at_speed(&t, speed)),
-                derivatives,
+                how(derivatives),
             )
             .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
             let method = if derivatives == Derivatives::Ad {
@@ -794,31 +771,13 @@ fn run(cli: Cli) -> Result<()> {
             let a = analyze(&m, &opt, &progress_printer());
             if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
                 let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
-                let expect = modaltol::montecarlo::shard_chunks(mc.samples, *k, *n);
-                let done: Vec<usize> = a
-                    .shard_states
-                    .iter()
-                    .map(|c| c.last().map_or(expect.start, |b| b.chunks().end) - expect.start)
-                    .collect();
-                if done.iter().any(|&d| d < expect.len()) {
+                let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, mc, &range, (*k, *n))
+                else {
                     eprintln!(
                         "modaltol: interrupted; {} not written (a shard is complete or absent)",
                         path.display()
                     );
                     return Err(Interrupted.into());
-                }
-                let file = ShardFile {
-                    format: modaltol::shard::FORMAT.into(),
-                    fingerprint: modaltol::shard::fingerprint(&m, &opt.cases),
-                    speed: format!("{}:{}:{}", range.from, range.to, range.step),
-                    samples: mc.samples,
-                    seed: mc.seed,
-                    sampling: mc.sampling,
-                    shard: k + 1,
-                    of: *n,
-                    outputs: output_count(&m),
-                    cases: a.shard_states.clone(),
-                    digest: String::new(),
                 };
                 write_atomically(&path, file.to_json().as_bytes())?;
                 eprintln!(
@@ -838,23 +797,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let m = model_or_governor(&model)?;
             let cases = tolerance_cases(&m, &only)?;
-            let fingerprint = modaltol::shard::fingerprint(&m, &cases);
-            let mut files = Vec::new();
-            for path in &shards {
-                let name = path.display().to_string();
-                let bytes = read_bounded(path, MAX_SHARD_BYTES)?;
-                let text = String::from_utf8(bytes).map_err(|_| {
-                    InputError(format!("{name}: not a modaltol shard file (not UTF-8)"))
-                })?;
-                let f = ShardFile::parse(&text, &name).map_err(|e| InputError(e.to_string()))?;
-                let speeds = SpeedRange::parse(&f.speed)
-                    .map_err(|e| InputError(format!("{name}: speed '{}': {e}", f.speed)))?
-                    .len();
-                f.check(&name, &fingerprint, speeds, output_count(&m), cases.len())
-                    .map_err(|e| InputError(e.to_string()))?;
-                files.push((name, f));
-            }
-            let (first, states) = modaltol::shard::gather(files, &fingerprint)
+            let (first, states) = modaltol::shard::read_all(&m, &cases, &shards)
                 .map_err(|e| InputError(e.to_string()))?;
             let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
             let mc = McOptions {

@@ -5,10 +5,10 @@
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
 use crate::analyze::{Analysis, Method};
-use crate::frf::Complex;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::sensitivity::{Sensitivity, Status as SensStatus};
+use crate::study::SweepExtras;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::Quantity;
 use nalgebra::DMatrix;
@@ -22,13 +22,6 @@ pub struct SweepColumns {
     pub transfer: bool,
     /// Design variables (parameter indices) for `d(…)/d(P)` columns; empty: none.
     pub wrt: Vec<usize>,
-}
-
-/// Transfer function and sensitivities at one speed, for the optional sweep columns.
-#[derive(Debug, Clone, Default)]
-pub struct SweepExtras {
-    pub transfer: Option<Complex<f64>>,
-    pub sensitivity: Option<Sensitivity>,
 }
 
 fn opt(v: Option<f64>) -> String {

@@ -166,6 +166,33 @@ pub struct DualLinearization {
     pub d_equilibrium: Vec<f64>,
 }
 
+/// How derivatives are computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Derivatives {
+    /// Exact, by automatic differentiation through the equilibrium ([`analytic`]).
+    #[default]
+    Exact,
+    /// Central finite differences of the whole pipeline, Richardson-extrapolated
+    /// ([`finite_difference`], a cross-check).
+    FiniteDifference,
+}
+
+/// The sensitivities of the point `pt` (at parameters `p`) to the design variables `wrt`,
+/// computed `how`.
+pub fn sensitivities(
+    model: &Compiled,
+    p: &[f64],
+    pt: &Point,
+    wrt: &[usize],
+    tf: Option<TransferAt>,
+    how: Derivatives,
+) -> Result<Sensitivity, PointError> {
+    match how {
+        Derivatives::Exact => analytic(model, p, pt, wrt, tf),
+        Derivatives::FiniteDifference => finite_difference(model, p, pt, wrt, tf),
+    }
+}
+
 /// One excitation frequency of a frequency response: `H` and `d|H|/db` for each design
 /// variable (`None` where undefined: an undamped resonance, or `H` passing through zero).
 #[derive(Debug, Clone)]

@@ -15,9 +15,19 @@
 //!   event count lies within them, `m2, m4 ≥ 0`, all numbers finite, the dimensions those of
 //!   the model's outputs at the run's speeds.
 
-use crate::model::{Model, Sampling};
-use crate::montecarlo::{self, Block, Moments};
+use crate::analyze::Analysis;
+use crate::model::{Case, Model, Sampling, SpeedRange};
+use crate::montecarlo::{self, Block, McOptions, Moments};
 use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Largest shard file read (a shard holds a few blocks of moments per case).
+pub const MAX_BYTES: u64 = 1 << 30;
+
+/// The outputs per speed of the model's Monte Carlo (as `analyze` makes them).
+pub fn output_count(m: &Model) -> usize {
+    crate::output::outputs(m.dof(), m.analysis.transfer.is_some()).len()
+}
 
 /// Format tag of shard files (2: aligned blocks, digest).
 pub const FORMAT: &str = "modaltol-shard-2";
@@ -69,6 +79,37 @@ pub fn fingerprint(model: &Model, cases: &[crate::model::Case]) -> String {
 }
 
 impl ShardFile {
+    /// Shard `k` (0-based) of `n` of the analysis `a` of `model` with `cases` over `speed`, run
+    /// with `mc`; `None` when the run was interrupted before all of the shard's chunks were
+    /// done (a shard is complete or absent).
+    pub fn of_analysis(
+        model: &Model,
+        cases: &[Case],
+        a: &Analysis,
+        mc: McOptions,
+        speed: &SpeedRange,
+        (k, n): (usize, usize),
+    ) -> Option<ShardFile> {
+        let expect = montecarlo::shard_chunks(mc.samples, k, n);
+        let complete = a
+            .shard_states
+            .iter()
+            .all(|c| c.last().map_or(expect.start, |b| b.chunks().end) == expect.end);
+        complete.then(|| ShardFile {
+            format: FORMAT.into(),
+            fingerprint: fingerprint(model, cases),
+            speed: format!("{}:{}:{}", speed.from, speed.to, speed.step),
+            samples: mc.samples,
+            seed: mc.seed,
+            sampling: mc.sampling,
+            shard: k + 1,
+            of: n,
+            outputs: output_count(model),
+            cases: a.shard_states.clone(),
+            digest: String::new(),
+        })
+    }
+
     fn content_digest(&self) -> String {
         let mut unsealed = self.clone();
         unsealed.digest = String::new();
@@ -272,4 +313,39 @@ pub fn gather(
         }
     }
     Ok((run, blocks))
+}
+
+/// Reads and verifies the shard files `paths` of one run of `model` with `cases` and gathers
+/// them ([`gather`]).
+pub fn read_all(
+    model: &Model,
+    cases: &[Case],
+    paths: &[PathBuf],
+) -> Result<(RunSettings, Vec<Vec<Block>>), ShardError> {
+    let fingerprint = fingerprint(model, cases);
+    let mut files = Vec::with_capacity(paths.len());
+    for path in paths {
+        let name = path.display().to_string();
+        let refuse = |message: String| ShardError {
+            file: name.clone(),
+            message,
+        };
+        let bytes = crate::files::read_bounded(path, MAX_BYTES)
+            .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
+        let f = ShardFile::parse(&text, &name)?;
+        let speeds = SpeedRange::parse(&f.speed)
+            .map_err(|e| refuse(format!("speed '{}': {e}", f.speed)))?
+            .len();
+        f.check(
+            &name,
+            &fingerprint,
+            speeds,
+            output_count(model),
+            cases.len(),
+        )?;
+        files.push((name, f));
+    }
+    gather(files, &fingerprint)
 }

@@ -9,6 +9,8 @@
 //!   mass) has the six roots of six uncoupled oscillators, k/m and k_r/J per axis; on a frame
 //!   spinning at Ω, an isotropic bushing's whirl roots are i(√(k/m) ± Ω); and ∂ω/∂k by the
 //!   analytic sensitivities equals 1/(2√(km)).
+//! * `free` joint: the same body on one six-coordinate joint has the same roots as on the
+//!   three slides and the ball joint, at rest and spinning.
 
 mod common;
 
@@ -192,7 +194,11 @@ fn a_disk_on_a_torsion_spring_has_the_closed_form_roots() {
 /// (three slides through massless bodies) and rotation (a ball joint at its centre of mass),
 /// held at that centre by a bushing to a frame; `spin` drives that frame about y.
 fn held_by_a_bushing(spin: &str, stiffness: &str, damping: &str) -> Compiled {
-    model(&format!(
+    model(&held_by_a_bushing_text(spin, stiffness, damping))
+}
+
+fn held_by_a_bushing_text(spin: &str, stiffness: &str, damping: &str) -> String {
+    format!(
         r#"
 name = "bushed body"
 gravity = [0, 0, 0]
@@ -264,7 +270,7 @@ point1 = [0.2, 0.1, -0.1]
 stiffness = {stiffness}
 damping = {damping}
 "#
-    ))
+    )
 }
 
 #[test]
@@ -327,6 +333,39 @@ fn an_isotropic_bushing_on_a_spinning_frame_whirls_at_the_natural_frequency_plus
                         .fold(f64::INFINITY, f64::min);
                     assert!(d <= 1e-9 * f, "{expected} not among {found:?} at {w} rad/s");
                 }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_free_joint_is_three_slides_and_a_ball() {
+    for spin in ["drive = 0", "drive = \"speed\""] {
+        let stiffness = "[500, 700, 900, 20, 30, 40]";
+        let damping = "[0.5, 0.6, 0.7, 0.01, 0.02, 0.03]";
+        let chain = held_by_a_bushing(spin, stiffness, damping);
+        let text = held_by_a_bushing_text(spin, stiffness, damping);
+        let start = text.find("[[joints]]\nname = \"x\"").unwrap();
+        let end = text.find("[[forces]]").unwrap();
+        let mut bodies = text[..start].to_string();
+        for slide in ["sx", "sy", "sz"] {
+            bodies = bodies.replace(
+                &format!("[[bodies]]\nname = \"{slide}\"\nmass = 0\ninertia = [0, 0, 0]\ncm = [0, 0, 0]\n"),
+                "",
+            );
+        }
+        let free = bodies
+            + "[[joints]]\nname = \"float\"\ntype = \"free\"\nparent = \"frame\"\nchild = \"body\"\nat = [0.2, 0.1, -0.1]\n"
+            + &text[end..];
+        let free = model(&free);
+        assert_eq!(free.coordinates.len(), 7);
+        for w in [0.0, 3.0] {
+            for direct in [false, true] {
+                same_roots(
+                    &roots(&solve(&free, w, direct)),
+                    &roots(&solve(&chain, w, direct)),
+                    1e-9,
+                );
             }
         }
     }

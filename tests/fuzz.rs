@@ -40,10 +40,10 @@ proptest! {
 
     #[test]
     fn mutated_examples_validate_or_fail_cleanly(
-        which in 0usize..4,
+        which in 0usize..5,
         edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6),
     ) {
-        let name = ["rotating_pendulum.toml", "governor.toml", "spinning_universal_pendulum.toml", "spinning_spatial_fourbar.toml"][which];
+        let name = ["rotating_pendulum.toml", "governor.toml", "spinning_universal_pendulum.toml", "spinning_spatial_fourbar.toml", "rotor_on_rubber_mounts.toml"][which];
         let mut bytes = common::example_text(name).into_bytes();
         for (at, byte) in &edits {
             let i = at.index(bytes.len());

@@ -18,13 +18,14 @@ use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-const EXAMPLES: [&str; 6] = [
+const EXAMPLES: [&str; 7] = [
     "rotating_pendulum.toml",
     "governor.toml",
     "spinning_universal_pendulum.toml",
     "multi_arm_governor.toml",
     "multi_arm_governor_13_variables.toml",
     "spinning_spatial_fourbar.toml",
+    "rotor_on_rubber_mounts.toml",
 ];
 
 /// Numbers that broke things before, and their neighbours.

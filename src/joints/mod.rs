@@ -15,6 +15,7 @@
 
 pub mod cylindrical;
 pub mod fixed;
+pub mod free;
 pub mod planar;
 pub mod prismatic;
 pub mod revolute;
@@ -154,6 +155,7 @@ joint_types! {
     Cylindrical => cylindrical::Cylindrical,
     Spherical => spherical::Spherical,
     Planar => planar::Planar,
+    Free => free::Free,
 }
 
 impl Kind {

@@ -8,7 +8,7 @@
 //! in `q` the partial velocities.
 
 use super::System;
-use crate::real::{Real, V3};
+use crate::real::Real;
 pub use crate::rigid::Pose;
 
 /// Poses of all bodies at coordinates `q` (ground excluded).
@@ -33,13 +33,5 @@ pub fn update<T: Real>(
             Some(p) => out[p].then(&rel),
             None => rel,
         };
-    }
-}
-
-/// Current position of a point on `body` (`None` = ground) given in the reference configuration.
-pub fn point<T: Real>(poses: &[Pose<T>], body: Option<usize>, x0: &V3<T>) -> V3<T> {
-    match body {
-        Some(b) => poses[b].apply(x0),
-        None => *x0,
     }
 }

@@ -1,0 +1,65 @@
+//! A speed sweep with, at every speed, the transfer function and the sensitivities asked for:
+//! what the `sweep` command writes, one speed at a time, for any front end.
+
+use crate::compiled::Compiled;
+use crate::frf::Complex;
+use crate::model::Transfer;
+use crate::sensitivity::{Derivatives, Sensitivity, TransferAt, nominal_transfer, sensitivities};
+use crate::sweep::{Options, Point, PointError, Sweep};
+
+/// Transfer function and sensitivities at one speed, for the optional sweep columns.
+#[derive(Debug, Clone, Default)]
+pub struct SweepExtras {
+    pub transfer: Option<Complex<f64>>,
+    pub sensitivity: Option<Sensitivity>,
+}
+
+/// A sweep at the nominal parameters (continuation from speed to speed, see [`Sweep`]) with
+/// its extras.
+pub struct SweepStudy<'a> {
+    model: &'a Compiled,
+    sweep: Sweep<'a>,
+    transfer: Option<Transfer>,
+    wrt: Vec<usize>,
+    derivatives: Derivatives,
+}
+
+impl<'a> SweepStudy<'a> {
+    /// A sweep of `model` with `options`; at each speed the transfer function `transfer`
+    /// (excited at its order times the speed) and the sensitivities to the design variables
+    /// `wrt` (none when empty), computed `derivatives`.
+    pub fn new(
+        model: &'a Compiled,
+        options: Options,
+        transfer: Option<Transfer>,
+        wrt: Vec<usize>,
+        derivatives: Derivatives,
+    ) -> Self {
+        SweepStudy {
+            sweep: Sweep::new(model, model.nominal(), options),
+            model,
+            transfer,
+            wrt,
+            derivatives,
+        }
+    }
+
+    /// The point at `speed` and its extras. A point whose sensitivities fail fails with their
+    /// reason.
+    pub fn step(&mut self, speed: f64) -> (Result<Point, PointError>, SweepExtras) {
+        let mut result = self.sweep.step(speed);
+        let mut extras = SweepExtras::default();
+        if let Ok(pt) = &result {
+            let t = self.transfer.map(|t| TransferAt::at_speed(&t, speed));
+            extras.transfer = t.and_then(|t| nominal_transfer(pt, &t));
+            if !self.wrt.is_empty() {
+                let p = self.model.nominal();
+                match sensitivities(self.model, &p, pt, &self.wrt, t, self.derivatives) {
+                    Ok(s) => extras.sensitivity = Some(s),
+                    Err(e) => result = Err(e),
+                }
+            }
+        }
+        (result, extras)
+    }
+}
