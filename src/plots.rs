@@ -145,11 +145,16 @@ fn series(a: &Analysis, case: usize, q: Quantity, mode: Option<usize>, m: Method
         .collect()
 }
 
-fn unit(q: Quantity) -> &'static str {
+/// The axis label of a quantity, with its unit (the transfer function's from the model's
+/// `[analysis] transfer`: response per excitation).
+fn unit(model: &Model, q: Quantity) -> String {
     match q {
-        Quantity::DampedFrequency => "ω_d (rad/s)",
-        Quantity::DampingRatio => "ζ",
-        Quantity::TransferMagnitude => "|H| (output/input units)",
+        Quantity::DampedFrequency => "ω_d (rad/s)".into(),
+        Quantity::DampingRatio => "ζ".into(),
+        Quantity::TransferMagnitude => match &model.analysis.transfer {
+            Some(t) => format!("|H| ({})", model.transfer_unit(t)),
+            None => "|H|".into(),
+        },
     }
 }
 
@@ -228,7 +233,7 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
                 });
             }
             let title = format!("{}: {label}, mean ± σ, case {}", model.name, case.name);
-            if let Ok(svg) = draw(&title, unit(q), &lines, &bands) {
+            if let Ok(svg) = draw(&title, &unit(model, q), &lines, &bands) {
                 out.push(Plot {
                     stem: format!("band_{}_{}{tag}", case.name, q.as_str()),
                     title,
@@ -249,7 +254,7 @@ pub fn plots(model: &Model, a: &Analysis) -> (Vec<Plot>, Vec<CriticalSpeed>) {
                 })
                 .collect();
             let title = format!("{}: σ of {label}, case {}", model.name, case.name);
-            if let Ok(svg) = draw(&title, &format!("σ of {}", unit(q)), &lines, &[]) {
+            if let Ok(svg) = draw(&title, &format!("σ of {}", unit(model, q)), &lines, &[]) {
                 out.push(Plot {
                     stem: format!("std_{}_{}{tag}", case.name, q.as_str()),
                     title,

@@ -19,7 +19,11 @@ use modaltol::model::Channel;
 use modaltol::sensitivity::{TransferAt, analytic, nominal_transfer};
 
 fn governor_with_ports() -> Compiled {
-    let text = example_text("governor.toml").replace(
+    Compiled::from_str(&governor_text(), "governor_ports.toml").unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn governor_text() -> String {
+    example_text("governor.toml").replace(
         "[analysis]",
         r#"[[ports]]
 name = "collar_y"
@@ -48,8 +52,7 @@ body = "ball2"
 direction = [0.2, 0.4, -1]
 
 [analysis]"#,
-    );
-    Compiled::from_str(&text, "governor_ports.toml").unwrap_or_else(|e| panic!("{e}"))
+    )
 }
 
 #[test]
@@ -197,6 +200,64 @@ fn reciprocity_holds_between_any_two_ports_at_rest() {
         assert!(
             (ab.re - ba.re).abs() <= 1e-12 * scale && (ab.im - ba.im).abs() <= 1e-12 * scale,
             "{ab:?} vs {ba:?}"
+        );
+    }
+}
+
+#[test]
+fn the_tolerance_analysis_of_a_port_transfer_equals_the_coordinates() {
+    // Every method's mean and σ of |H| (the Taylor methods through the Hessians of the port
+    // vectors, the quadrature through their values) for the collar port as for the collar's
+    // coordinate; and the unit of |H| follows the ends.
+    use modaltol::analyze::{AnalyzeOptions, analyze};
+    use modaltol::tolerance::Quantity;
+    let by_port = Compiled::from_str(
+        &governor_text().replace(
+            "transfer = { input = \"slide\", output = \"slide\", order = 1 }",
+            "transfer = { input = \"collar_y\", output = \"collar_y\", order = 1 }",
+        ),
+        "governor_ports.toml",
+    )
+    .unwrap();
+    let by_coordinate = governor_with_ports();
+    assert_eq!(
+        by_port.analysis.transfer.unwrap().input,
+        by_port.channel("collar_y").unwrap()
+    );
+    let t = by_coordinate.analysis.transfer.unwrap();
+    assert_eq!(by_coordinate.transfer_unit(&t), "m/N");
+    let rotation = by_coordinate.channel("ball1_swing").unwrap();
+    let mixed = modaltol::model::Transfer {
+        input: rotation,
+        output: t.output,
+        order: 1.0,
+    };
+    assert_eq!(by_coordinate.transfer_unit(&mixed), "m/(N·m)");
+    let run = |m: &Compiled| {
+        let case = m.analysis.cases.iter().find(|c| c.name == "all3").unwrap();
+        let opt = AnalyzeOptions {
+            speeds: vec![1.0, 2.5, 4.0],
+            cases: vec![case.clone()],
+            ..Default::default()
+        };
+        analyze(m, &opt, &|_, _, _| {})
+            .rows
+            .into_iter()
+            .filter(|r| r.quantity == Quantity::TransferMagnitude)
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (run(&by_port), run(&by_coordinate));
+    assert_eq!(a.len(), b.len());
+    assert!(a.len() >= 9, "{}", a.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!((x.speed, x.method), (y.speed, y.method));
+        assert!(
+            (x.mean - y.mean).abs() <= 1e-9 * y.mean.abs(),
+            "{x:?} vs {y:?}"
+        );
+        assert!(
+            (x.std - y.std).abs() <= 1e-9 * y.std.abs(),
+            "{x:?} vs {y:?}"
         );
     }
 }

@@ -468,6 +468,29 @@ impl Model {
         }
     }
 
+    /// The units of a transfer-function end: of its response and of its excitation.
+    pub fn channel_units(&self, c: Channel) -> (&'static str, &'static str) {
+        use crate::joints::Unit;
+        let unit = match c {
+            Channel::Coordinate(i) => self.coordinates[i].unit,
+            Channel::Port(i) if self.ports[i].rotation => Unit::Angle,
+            Channel::Port(_) => Unit::Length,
+        };
+        (unit.symbol(), unit.force_symbol())
+    }
+
+    /// The unit of `|H|` of a transfer function: response per excitation, e.g. `m/N` or
+    /// `rad/(N·m)`.
+    pub fn transfer_unit(&self, t: &Transfer) -> String {
+        let (response, _) = self.channel_units(t.output);
+        let (_, excitation) = self.channel_units(t.input);
+        if excitation.contains('·') {
+            format!("{response}/({excitation})")
+        } else {
+            format!("{response}/{excitation}")
+        }
+    }
+
     /// A transfer function from a spec `input=NAME,output=NAME[,order=X]` (names of free
     /// coordinates or ports), or `model` for the model's `[analysis] transfer`.
     pub fn parse_transfer(&self, spec: &str) -> Result<Transfer, String> {
