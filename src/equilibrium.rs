@@ -32,6 +32,14 @@ pub enum EquilibriumError {
     )]
     SingularJacobian { iterations: usize },
     #[error(
+        "equilibrium not isolated: the residual is at rounding level ({residual:.1e}) after {iterations} iterations but Newton's steps do not shrink (relative step {step:.1e}), so the Jacobian is singular or nearly so there: a coordinate that no force or constraint holds (a hinge whose axis is the spin axis, without a spring) or a bifurcation point"
+    )]
+    NotIsolated {
+        iterations: usize,
+        residual: f64,
+        step: f64,
+    },
+    #[error(
         "non-finite residual after {iterations} iterations (a number of the model overflows at this speed, or two points that define a direction coincide)"
     )]
     NotFinite { iterations: usize },
@@ -93,6 +101,10 @@ pub struct Equilibrium {
     #[serde(skip)]
     pub rates: Option<Rates>,
 }
+
+/// `‖F‖∞` at or below this times `1 + max|J|·max|x|` is rounding: `F`'s terms are of that
+/// size, and double precision resolves their sum to a few hundred ulps of it.
+const ROUNDING_FLOOR: f64 = 256.0 * f64::EPSILON;
 
 /// Settings of the equilibrium solve.
 #[derive(Debug, Clone, Copy)]
@@ -343,6 +355,8 @@ impl<'a> Problem<'a> {
         let mut last_step = f64::INFINITY;
         let mut converged = false;
         let mut iterations = 0;
+        // Fresh Jacobians evaluated where F is at its rounding floor.
+        let mut at_floor = 0;
         while iterations < settings.max_iterations {
             if f.iter().any(|v| !v.is_finite()) {
                 return Err(EquilibriumError::NotFinite { iterations });
@@ -375,6 +389,19 @@ impl<'a> Problem<'a> {
             if fresh && size <= tol {
                 converged = true;
                 break;
+            }
+            // F satisfied to rounding while the exact Jacobian's steps stay above the tolerance:
+            // the steps are rounding noise through a (nearly) singular Jacobian, and Newton
+            // would wander to its iteration limit. After a few such evaluations, say so.
+            if fresh && norm(&f) <= ROUNDING_FLOOR * (1.0 + jac.amax() * q_scale.max(l_scale)) {
+                at_floor += 1;
+                if at_floor >= 3 {
+                    return Err(EquilibriumError::NotIsolated {
+                        iterations,
+                        residual: norm(&f),
+                        step: size,
+                    });
+                }
             }
             if !fresh {
                 // The error left after a chord step contracting by ρ is about ρ/(1−ρ) times

@@ -160,3 +160,35 @@ fn an_unstable_equilibrium_is_reported_as_such() {
     assert_eq!(pt.modes[0].class, ModeClass::Unstable);
     assert!(pt.modes[0].root.lambda.re > 0.0 && !pt.stable());
 }
+
+#[test]
+fn an_arm_hinged_about_the_spin_axis_fails_fast_as_not_isolated() {
+    // Found by the long fuzz run: one arm of the 13-variable governor hinged about a direction
+    // within 1e-15 of the spin axis has a neutral coordinate. Newton's residual reaches rounding
+    // level but its steps (noise through a nearly singular Jacobian) never meet the step test;
+    // it used to run to its 60-iteration limit at every node of the quadrature.
+    let text = example_text("multi_arm_governor_13_variables.toml");
+    let at = text.find("name = \"hinge3\"").unwrap();
+    let axis = "axis = [0.866025403784439, 0, 0.5]";
+    let k = at + text[at..].find(axis).unwrap();
+    let text = format!(
+        "{}axis = [0.866025403784439, 1e15, 0.5]{}",
+        &text[..k],
+        &text[k + axis.len()..]
+    );
+    let model = Compiled::from_str(&text, "neutral.toml").unwrap();
+    let p = model.nominal();
+    for w in [0.5, 1.0, 2.0] {
+        let q0 = initial_guess(&model, &p, w).unwrap();
+        let err = point(&model, &p, w, &q0, &Options::default()).expect_err("not isolated");
+        let msg = err.to_string();
+        assert!(msg.contains("equilibrium not isolated"), "{msg}");
+        let iterations: usize = msg
+            .split("after ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        assert!(iterations < 20, "{msg}");
+    }
+}
