@@ -63,27 +63,9 @@ enum Derivatives {
 enum Command {
     /// Validate a model and summarise its bodies, joints, coordinates, constraints, degrees of
     /// freedom and parameters.
-    Check {
-        /// Model file (TOML).
-        model: PathBuf,
-    },
+    Check(CheckArgs),
     /// Equilibrium, drive force, M̂, Ĉ, K̂ and damped modes at one speed.
-    Modal {
-        /// Model file (TOML).
-        model: PathBuf,
-        /// Operating speed, rad/s.
-        #[arg(long, allow_hyphen_values = true)]
-        speed: f64,
-        /// Output format.
-        #[arg(long, value_enum, default_value = "table")]
-        format: Format,
-        /// Independent coordinates (joint names, comma separated), overriding the model.
-        #[arg(long, value_delimiter = ',')]
-        independent: Option<Vec<String>>,
-        /// Write to this file instead of stdout.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
+    Modal(ModalArgs),
     /// Sweep the operating speed: one CSV row per (speed, mode).
     ///
     /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
@@ -96,59 +78,10 @@ enum Command {
     /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
     /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
     /// iterations (Newton), message (why a speed failed, or a branch switch).
-    Sweep {
-        /// Model file (TOML).
-        model: PathBuf,
-        /// Speeds FROM:TO:STEP in rad/s (TO included); default: the model's [analysis] speed.
-        #[arg(long, allow_hyphen_values = true)]
-        speed: Option<String>,
-        /// Independent coordinates (joint names, comma separated), overriding the model.
-        #[arg(long, value_delimiter = ',')]
-        independent: Option<Vec<String>>,
-        /// Transfer function `input=NAME,output=NAME[,order=K]` (NAME a free joint coordinate or a
-        /// [[ports]] entry): generalised force (or port force/torque) on `input`,
-        /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
-        /// uses the model's [analysis] transfer.
-        #[arg(long)]
-        transfer: Option<String>,
-        /// Add the derivatives of every mode (and of |H|) with respect to the design variables.
-        #[arg(long)]
-        sensitivity: bool,
-        /// Design variables (parameter names, comma separated); default: those with a tolerance.
-        #[arg(long, value_delimiter = ',')]
-        wrt: Option<Vec<String>>,
-        /// How derivatives are computed.
-        #[arg(long, value_enum, default_value = "ad")]
-        derivatives: Derivatives,
-        /// Write the CSV to this file instead of stdout.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
+    Sweep(SweepArgs),
     /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
     /// the design variables at one speed, through the move of the equilibrium.
-    Sensitivity {
-        /// Model file (TOML).
-        model: PathBuf,
-        /// Operating speed, rad/s.
-        #[arg(long, allow_hyphen_values = true)]
-        speed: f64,
-        /// Design variables (parameter names, comma separated); default: those with a tolerance.
-        #[arg(long, value_delimiter = ',')]
-        wrt: Option<Vec<String>>,
-        /// How derivatives are computed.
-        #[arg(long, value_enum, default_value = "ad")]
-        derivatives: Derivatives,
-        /// Transfer function `input=NAME,output=NAME[,order=K]` (free coordinates or ports);
-        /// default: the model's.
-        #[arg(long)]
-        transfer: Option<String>,
-        /// Output format.
-        #[arg(long, value_enum, default_value = "table")]
-        format: Format,
-        /// Write to this file instead of stdout.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
+    Sensitivity(SensitivityArgs),
     /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
     /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
     /// paper's method), second order, the invariant-based method for ω_d, the quadrature (the
@@ -165,63 +98,10 @@ enum Command {
     /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
     /// quadrature and the Monte Carlo beside the paper's, failures), the plots and
     /// DIR/report.html. Without MODEL, runs the governor example built into the binary.
-    Analyze {
-        /// Model file (TOML); default: the built-in governor example.
-        model: Option<PathBuf>,
-        /// Output directory (created if missing).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
-        #[arg(long, allow_hyphen_values = true)]
-        speed: Option<String>,
-        /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
-        #[arg(long)]
-        samples: Option<usize>,
-        /// Random seed; default: the model's.
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
-        /// not depend on it); default: all cores.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Skip the Monte Carlo.
-        #[arg(long)]
-        no_monte_carlo: bool,
-        /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
-        /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
-        /// line is refined until its error estimate meets it or the largest grid is reached.
-        #[arg(long, default_value_t = 1e-3, value_name = "REL")]
-        quadrature_tolerance: f64,
-        /// Skip the quadrature (the "analytic" rows then take the automatic Taylor choice).
-        #[arg(long)]
-        no_quadrature: bool,
-        /// Sampling of the design variables; default: the model's.
-        #[arg(long, value_enum)]
-        sampling: Option<SamplingArg>,
-        /// Compute only shard K of N of the Monte Carlo samples (e.g. 2/8, one per batch job)
-        /// and write DIR/shard-K-of-N.json; combine the shards with `modaltol merge`.
-        #[arg(long)]
-        shard: Option<String>,
-        /// Only this tolerance case of the model's [analysis] table (repeatable); default: all.
-        #[arg(long = "case", value_name = "NAME")]
-        cases: Vec<String>,
-    },
+    Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`.
-    Merge {
-        /// Model file the shards were made from; default: the built-in governor example.
-        #[arg(long)]
-        model: Option<PathBuf>,
-        /// Output directory (created if missing).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// The shard files (shard-K-of-N.json), all N of them, in any order.
-        #[arg(required = true)]
-        shards: Vec<PathBuf>,
-        /// The tolerance cases the shards were run with (as given to `analyze --case`).
-        #[arg(long = "case", value_name = "NAME")]
-        cases: Vec<String>,
-    },
+    Merge(MergeArgs),
     /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
     /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
     /// port, over a range of excitation frequencies.
@@ -229,30 +109,172 @@ enum Command {
     /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
     /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
     /// derivative).
-    Frf {
-        /// Model file (TOML).
-        model: PathBuf,
-        /// Operating speed, rad/s.
-        #[arg(long, allow_hyphen_values = true)]
-        speed: f64,
-        /// Where the excitation enters: a free joint coordinate (generalised force) or a
-        /// [[ports]] entry (force or torque).
-        #[arg(long)]
-        input: String,
-        /// Where the response is read: a free joint coordinate or a [[ports]] entry
-        /// (displacement or rotation).
-        #[arg(long)]
-        output: String,
-        /// Excitation frequencies FROM:TO:STEP in rad/s.
-        #[arg(long, allow_hyphen_values = true)]
-        freq: String,
-        /// Design variables (parameter names, comma separated); default: those with a tolerance.
-        #[arg(long, value_delimiter = ',')]
-        wrt: Option<Vec<String>>,
-        /// Write the CSV to this file instead of stdout.
-        #[arg(short = 'o', long = "out")]
-        out: Option<PathBuf>,
-    },
+    Frf(FrfArgs),
+}
+
+// Each command's arguments (their help text is on the `Command` variant).
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// Model file (TOML).
+    model: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ModalArgs {
+    /// Model file (TOML).
+    model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    speed: f64,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "table")]
+    format: Format,
+    /// Independent coordinates (joint names, comma separated), overriding the model.
+    #[arg(long, value_delimiter = ',')]
+    independent: Option<Vec<String>>,
+    /// Write to this file instead of stdout.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// Model file (TOML).
+    model: PathBuf,
+    /// Speeds FROM:TO:STEP in rad/s (TO included); default: the model's [analysis] speed.
+    #[arg(long, allow_hyphen_values = true)]
+    speed: Option<String>,
+    /// Independent coordinates (joint names, comma separated), overriding the model.
+    #[arg(long, value_delimiter = ',')]
+    independent: Option<Vec<String>>,
+    /// Transfer function `input=NAME,output=NAME[,order=K]` (NAME a free joint coordinate or a
+    /// [[ports]] entry): generalised force (or port force/torque) on `input`,
+    /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
+    /// uses the model's [analysis] transfer.
+    #[arg(long)]
+    transfer: Option<String>,
+    /// Add the derivatives of every mode (and of |H|) with respect to the design variables.
+    #[arg(long)]
+    sensitivity: bool,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    wrt: Option<Vec<String>>,
+    /// How derivatives are computed.
+    #[arg(long, value_enum, default_value = "ad")]
+    derivatives: Derivatives,
+    /// Write the CSV to this file instead of stdout.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct SensitivityArgs {
+    /// Model file (TOML).
+    model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    speed: f64,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    wrt: Option<Vec<String>>,
+    /// How derivatives are computed.
+    #[arg(long, value_enum, default_value = "ad")]
+    derivatives: Derivatives,
+    /// Transfer function `input=NAME,output=NAME[,order=K]` (free coordinates or ports);
+    /// default: the model's.
+    #[arg(long)]
+    transfer: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "table")]
+    format: Format,
+    /// Write to this file instead of stdout.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct AnalyzeArgs {
+    /// Model file (TOML); default: the built-in governor example.
+    model: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
+    #[arg(long, allow_hyphen_values = true)]
+    speed: Option<String>,
+    /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
+    #[arg(long)]
+    samples: Option<usize>,
+    /// Random seed; default: the model's.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
+    /// not depend on it); default: all cores.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Skip the Monte Carlo.
+    #[arg(long)]
+    no_monte_carlo: bool,
+    /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
+    /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
+    /// line is refined until its error estimate meets it or the largest grid is reached.
+    #[arg(long, default_value_t = 1e-3, value_name = "REL")]
+    quadrature_tolerance: f64,
+    /// Skip the quadrature (the "analytic" rows then take the automatic Taylor choice).
+    #[arg(long)]
+    no_quadrature: bool,
+    /// Sampling of the design variables; default: the model's.
+    #[arg(long, value_enum)]
+    sampling: Option<SamplingArg>,
+    /// Compute only shard K of N of the Monte Carlo samples (e.g. 2/8, one per batch job)
+    /// and write DIR/shard-K-of-N.json; combine the shards with `modaltol merge`.
+    #[arg(long)]
+    shard: Option<String>,
+    /// Only this tolerance case of the model's [analysis] table (repeatable); default: all.
+    #[arg(long = "case", value_name = "NAME")]
+    cases: Vec<String>,
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// Model file the shards were made from; default: the built-in governor example.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The shard files (shard-K-of-N.json), all N of them, in any order.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// The tolerance cases the shards were run with (as given to `analyze --case`).
+    #[arg(long = "case", value_name = "NAME")]
+    cases: Vec<String>,
+}
+
+#[derive(clap::Args)]
+struct FrfArgs {
+    /// Model file (TOML).
+    model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    speed: f64,
+    /// Where the excitation enters: a free joint coordinate (generalised force) or a
+    /// [[ports]] entry (force or torque).
+    #[arg(long)]
+    input: String,
+    /// Where the response is read: a free joint coordinate or a [[ports]] entry
+    /// (displacement or rotation).
+    #[arg(long)]
+    output: String,
+    /// Excitation frequencies FROM:TO:STEP in rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    freq: String,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    wrt: Option<Vec<String>>,
+    /// Write the CSV to this file instead of stdout.
+    #[arg(short = 'o', long = "out")]
+    out: Option<PathBuf>,
 }
 
 /// The governor example, built into the binary so `analyze` runs with no model file.
@@ -513,364 +535,390 @@ impl Sink {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Check { model } => {
-            let m = load(&model)?;
-            let mut w = Sink::to(&None)?;
-            write!(w, "{}", report::check_summary(&m))?;
-            w.finish()?;
+        Command::Check(args) => check_command(args),
+        Command::Modal(args) => modal_command(args),
+        Command::Sweep(args) => sweep_command(args),
+        Command::Sensitivity(args) => sensitivity_command(args),
+        Command::Analyze(args) => analyze_command(args),
+        Command::Merge(args) => merge_command(args),
+        Command::Frf(args) => frf_command(args),
+    }
+}
+
+/// `modaltol check` (see its `--help`).
+fn check_command(args: CheckArgs) -> Result<()> {
+    let CheckArgs { model } = args;
+    let m = load(&model)?;
+    let mut w = Sink::to(&None)?;
+    write!(w, "{}", report::check_summary(&m))?;
+    w.finish()?;
+
+    Ok(())
+}
+
+/// `modaltol modal` (see its `--help`).
+fn modal_command(args: ModalArgs) -> Result<()> {
+    let ModalArgs {
+        model,
+        speed,
+        format,
+        independent: ind,
+        output,
+    } = args;
+    let m = load(&model)?;
+    if !speed.is_finite() {
+        return Err(InputError("--speed must be finite".into()).into());
+    }
+    let opt = Options {
+        independent: independent(&m, &ind)?,
+        ..Default::default()
+    };
+    let p = m.nominal();
+    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let result = point(&m, &p, speed, &q0, &opt);
+    let mut w = Sink::to(&output)?;
+    match format {
+        Format::Json => writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?
+        )?,
+        Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
+    }
+    w.finish()?;
+    if let Err(e) = result {
+        return Err(Failed(format!("speed {speed:?} rad/s failed: {e}")).into());
+    }
+
+    Ok(())
+}
+
+/// `modaltol sweep` (see its `--help`).
+fn sweep_command(args: SweepArgs) -> Result<()> {
+    let SweepArgs {
+        model,
+        speed,
+        independent: ind,
+        transfer: tspec,
+        sensitivity: sens,
+        wrt,
+        derivatives,
+        output,
+    } = args;
+    let m = load(&model)?;
+    let range = match &speed {
+        Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+        None => m.analysis.speed.ok_or_else(|| {
+            InputError("no --speed given and the model has no [analysis] speed".into())
+        })?,
+    };
+    let tf = tspec
+        .as_deref()
+        .map(|s| parse_transfer(&m, s))
+        .transpose()?;
+    let cols = SweepColumns {
+        transfer: tf.is_some(),
+        wrt: if sens {
+            design_variables(&m, &wrt)?
+        } else {
+            Vec::new()
+        },
+    };
+    let opt = Options {
+        independent: independent(&m, &ind)?,
+        ..Default::default()
+    };
+    let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
+    let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
+    csv.write_record(report::sweep_header(&m, &cols))?;
+    let n = range.len();
+    let progress = std::io::stderr().is_terminal() && n >= 2000;
+    let mut failed = 0usize;
+    for (i, w) in range.speeds().enumerate() {
+        let (r, extras) = study.step(w);
+        if r.is_err() {
+            failed += 1;
         }
-        Command::Modal {
-            model,
-            speed,
-            format,
-            independent: ind,
-            output,
-        } => {
-            let m = load(&model)?;
-            if !speed.is_finite() {
-                return Err(InputError("--speed must be finite".into()).into());
-            }
-            let opt = Options {
-                independent: independent(&m, &ind)?,
-                ..Default::default()
-            };
-            let p = m.nominal();
-            let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-            let result = point(&m, &p, speed, &q0, &opt);
-            let mut w = Sink::to(&output)?;
-            match format {
-                Format::Json => writeln!(
-                    w,
-                    "{}",
-                    serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?
-                )?,
-                Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
-            }
-            w.finish()?;
-            if let Err(e) = result {
-                return Err(Failed(format!("speed {speed:?} rad/s failed: {e}")).into());
-            }
+        for row in report::sweep_rows(&m, &cols, w, &r, &extras) {
+            csv.write_record(&row)?;
         }
-        Command::Sweep {
-            model,
-            speed,
-            independent: ind,
-            transfer: tspec,
-            sensitivity: sens,
-            wrt,
-            derivatives,
-            output,
-        } => {
-            let m = load(&model)?;
-            let range = match &speed {
-                Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-                None => m.analysis.speed.ok_or_else(|| {
-                    InputError("no --speed given and the model has no [analysis] speed".into())
-                })?,
-            };
-            let tf = tspec
-                .as_deref()
-                .map(|s| parse_transfer(&m, s))
-                .transpose()?;
-            let cols = SweepColumns {
-                transfer: tf.is_some(),
-                wrt: if sens {
-                    design_variables(&m, &wrt)?
-                } else {
-                    Vec::new()
-                },
-            };
-            let opt = Options {
-                independent: independent(&m, &ind)?,
-                ..Default::default()
-            };
-            let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
-            let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
-            csv.write_record(report::sweep_header(&m, &cols))?;
-            let n = range.len();
-            let progress = std::io::stderr().is_terminal() && n >= 2000;
-            let mut failed = 0usize;
-            for (i, w) in range.speeds().enumerate() {
-                let (r, extras) = study.step(w);
-                if r.is_err() {
-                    failed += 1;
-                }
-                for row in report::sweep_rows(&m, &cols, w, &r, &extras) {
-                    csv.write_record(&row)?;
-                }
-                if progress && i % 500 == 0 {
-                    eprint!("\rsweep: {i}/{n} speeds");
-                }
-            }
-            csv.into_inner().map_err(|e| e.into_error())?.finish()?;
-            if progress {
-                eprintln!("\rsweep: {n}/{n} speeds");
-            }
-            if failed == n {
-                return Err(Failed(format!(
-                    "all {n} speeds failed (status 'failed', reason in the message column)"
-                ))
-                .into());
-            }
-            if failed > 0 {
-                eprintln!(
-                    "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
-                );
-            }
+        if progress && i % 500 == 0 {
+            eprint!("\rsweep: {i}/{n} speeds");
         }
-        Command::Sensitivity {
-            model,
-            speed,
-            wrt,
-            derivatives,
-            transfer: tspec,
-            format,
-            output,
-        } => {
-            let m = load(&model)?;
-            if !speed.is_finite() {
-                return Err(InputError("--speed must be finite".into()).into());
+    }
+    csv.into_inner().map_err(|e| e.into_error())?.finish()?;
+    if progress {
+        eprintln!("\rsweep: {n}/{n} speeds");
+    }
+    if failed == n {
+        return Err(Failed(format!(
+            "all {n} speeds failed (status 'failed', reason in the message column)"
+        ))
+        .into());
+    }
+    if failed > 0 {
+        eprintln!(
+            "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
+        );
+    }
+
+    Ok(())
+}
+
+/// `modaltol sensitivity` (see its `--help`).
+fn sensitivity_command(args: SensitivityArgs) -> Result<()> {
+    let SensitivityArgs {
+        model,
+        speed,
+        wrt,
+        derivatives,
+        transfer: tspec,
+        format,
+        output,
+    } = args;
+    let m = load(&model)?;
+    if !speed.is_finite() {
+        return Err(InputError("--speed must be finite".into()).into());
+    }
+    let wrt = design_variables(&m, &wrt)?;
+    let tf = match tspec.as_deref() {
+        Some(s) => Some(parse_transfer(&m, s)?),
+        None => m.analysis.transfer,
+    };
+    let p = m.nominal();
+    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let pt = point(&m, &p, speed, &q0, &Options::default())
+        .with_context(|| format!("speed {speed:?} rad/s"))?;
+    let s = sensitivity::sensitivities(
+        &m,
+        &p,
+        &pt,
+        &wrt,
+        tf.map(|t| TransferAt::at_speed(&t, speed)),
+        how(derivatives),
+    )
+    .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let method = if derivatives == Derivatives::Ad {
+        "ad"
+    } else {
+        "fd"
+    };
+    let mut w = Sink::to(&output)?;
+    match format {
+        Format::Json => writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&report::sensitivity_json(&m, speed, method, &pt, &s))?
+        )?,
+        Format::Table => write!(
+            w,
+            "{}",
+            report::sensitivity_table(&m, speed, method, &pt, &s)
+        )?,
+    }
+    w.finish()?;
+
+    Ok(())
+}
+
+/// `modaltol analyze` (see its `--help`).
+fn analyze_command(args: AnalyzeArgs) -> Result<()> {
+    let AnalyzeArgs {
+        model,
+        output,
+        speed,
+        samples,
+        seed,
+        threads,
+        no_monte_carlo,
+        quadrature_tolerance,
+        no_quadrature,
+        sampling,
+        shard,
+        cases: only,
+    } = args;
+    if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
+        return Err(InputError(
+            "--quadrature-tolerance must be a relative error in (0, 1), e.g. 1e-3".into(),
+        )
+        .into());
+    }
+    let m = model_or_governor(&model)?;
+    let range = match &speed {
+        Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+        None => m.analysis.speed.ok_or_else(|| {
+            InputError("no --speed given and the model has no [analysis] speed".into())
+        })?,
+    };
+    let cases = tolerance_cases(&m, &only)?;
+    if let Some(n) = samples
+        && !(2..=modaltol::montecarlo::MAX_SAMPLES).contains(&n)
+    {
+        return Err(InputError(format!(
+            "--samples must lie in 2..={} (got {n})",
+            modaltol::montecarlo::MAX_SAMPLES
+        ))
+        .into());
+    }
+    let mc = (!no_monte_carlo).then(|| McOptions {
+        samples: samples.unwrap_or(m.analysis.samples),
+        seed: seed.unwrap_or(m.analysis.seed),
+        sampling: match sampling {
+            Some(SamplingArg::Random) => Sampling::Random,
+            Some(SamplingArg::Lhs) => Sampling::Lhs,
+            Some(SamplingArg::Sobol) => Sampling::Sobol,
+            None => m.analysis.sampling,
+        },
+        threads,
+    });
+    let split = match &shard {
+        None => Split::Whole,
+        Some(spec) => {
+            let bad = || InputError(format!("--shard '{spec}': expected K/N with 1 ≤ K ≤ N"));
+            let (k, n) = spec.split_once('/').ok_or_else(bad)?;
+            let (k, n): (usize, usize) = (
+                k.trim().parse().map_err(|_| bad())?,
+                n.trim().parse().map_err(|_| bad())?,
+            );
+            if k == 0 || k > n {
+                return Err(bad().into());
             }
-            let wrt = design_variables(&m, &wrt)?;
-            let tf = match tspec.as_deref() {
-                Some(s) => Some(parse_transfer(&m, s)?),
-                None => m.analysis.transfer,
-            };
-            let p = m.nominal();
-            let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-            let pt = point(&m, &p, speed, &q0, &Options::default())
-                .with_context(|| format!("speed {speed:?} rad/s"))?;
-            let s = sensitivity::sensitivities(
-                &m,
-                &p,
-                &pt,
-                &wrt,
-                tf.map(|t| TransferAt::at_speed(&t, speed)),
-                how(derivatives),
-            )
-            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
-            let method = if derivatives == Derivatives::Ad {
-                "ad"
-            } else {
-                "fd"
-            };
-            let mut w = Sink::to(&output)?;
-            match format {
-                Format::Json => writeln!(
-                    w,
-                    "{}",
-                    serde_json::to_string_pretty(&report::sensitivity_json(
-                        &m, speed, method, &pt, &s
-                    ))?
-                )?,
-                Format::Table => write!(
-                    w,
-                    "{}",
-                    report::sensitivity_table(&m, speed, method, &pt, &s)
-                )?,
-            }
-            w.finish()?;
-        }
-        Command::Analyze {
-            model,
-            output,
-            speed,
-            samples,
-            seed,
-            threads,
-            no_monte_carlo,
-            quadrature_tolerance,
-            no_quadrature,
-            sampling,
-            shard,
-            cases: only,
-        } => {
-            if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
+            if mc.is_none() {
                 return Err(InputError(
-                    "--quadrature-tolerance must be a relative error in (0, 1), e.g. 1e-3".into(),
+                    "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo".into(),
                 )
                 .into());
             }
-            let m = model_or_governor(&model)?;
-            let range = match &speed {
-                Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-                None => m.analysis.speed.ok_or_else(|| {
-                    InputError("no --speed given and the model has no [analysis] speed".into())
-                })?,
-            };
-            let cases = tolerance_cases(&m, &only)?;
-            if let Some(n) = samples
-                && !(2..=modaltol::montecarlo::MAX_SAMPLES).contains(&n)
-            {
-                return Err(InputError(format!(
-                    "--samples must lie in 2..={} (got {n})",
-                    modaltol::montecarlo::MAX_SAMPLES
-                ))
-                .into());
-            }
-            let mc = (!no_monte_carlo).then(|| McOptions {
-                samples: samples.unwrap_or(m.analysis.samples),
-                seed: seed.unwrap_or(m.analysis.seed),
-                sampling: match sampling {
-                    Some(SamplingArg::Random) => Sampling::Random,
-                    Some(SamplingArg::Lhs) => Sampling::Lhs,
-                    Some(SamplingArg::Sobol) => Sampling::Sobol,
-                    None => m.analysis.sampling,
-                },
-                threads,
-            });
-            let split = match &shard {
-                None => Split::Whole,
-                Some(spec) => {
-                    let bad =
-                        || InputError(format!("--shard '{spec}': expected K/N with 1 ≤ K ≤ N"));
-                    let (k, n) = spec.split_once('/').ok_or_else(bad)?;
-                    let (k, n): (usize, usize) = (
-                        k.trim().parse().map_err(|_| bad())?,
-                        n.trim().parse().map_err(|_| bad())?,
-                    );
-                    if k == 0 || k > n {
-                        return Err(bad().into());
-                    }
-                    if mc.is_none() {
-                        return Err(InputError(
-                            "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo"
-                                .into(),
-                        )
-                        .into());
-                    }
-                    Split::Shard(k - 1, n)
-                }
-            };
-            // Fail early where the results cannot be written.
-            let dir = match split {
-                Split::Shard(..) => {
-                    std::fs::create_dir_all(&output).with_context(|| {
-                        format!("{}: cannot create the directory", output.display())
-                    })?;
-                    None
-                }
-                _ => Some(ResultDir::create(&output)?),
-            };
-            // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
-            let quadrature =
-                (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
-                    tolerance: quadrature_tolerance,
-                    threads,
-                });
-            let opt = AnalyzeOptions {
-                speeds: range.speeds().collect(),
-                cases,
-                quadrature,
-                monte_carlo: mc,
-                split,
-                threads,
-                cancel: Cancel::new(),
-            };
-            install_interrupt_handler(&opt.cancel);
-            let a = analyze(&m, &opt, &progress_printer());
-            if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
-                let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
-                let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, mc, &range, (*k, *n))
-                else {
-                    eprintln!(
-                        "modaltol: interrupted; {} not written (a shard is complete or absent)",
-                        path.display()
-                    );
-                    return Err(Interrupted.into());
-                };
-                write_atomically(&path, file.to_json().as_bytes())?;
-                eprintln!(
-                    "modaltol: wrote {}; combine the shards with `modaltol merge`",
-                    path.display()
-                );
-                return Ok(());
-            }
-            let dir = dir.expect("a result directory");
-            write_outputs(&m, &a, mc.as_ref(), threads, dir, &output)?;
+            Split::Shard(k - 1, n)
         }
-        Command::Merge {
-            model,
-            output,
-            shards,
-            cases: only,
-        } => {
-            let m = model_or_governor(&model)?;
-            let cases = tolerance_cases(&m, &only)?;
-            let (first, states) = modaltol::shard::read_all(&m, &cases, &shards)
-                .map_err(|e| InputError(e.to_string()))?;
-            let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
-            let mc = McOptions {
-                samples: first.samples,
-                seed: first.seed,
-                sampling: first.sampling,
-                threads: None,
-            };
-            let opt = AnalyzeOptions {
-                speeds: range.speeds().collect(),
-                cases,
-                quadrature: Some(QuadOptions::default()),
-                monte_carlo: Some(mc),
-                split: Split::Merged(states),
-                threads: None,
-                cancel: Cancel::new(),
-            };
-            let dir = ResultDir::create(&output)?;
-            let a = analyze(&m, &opt, &progress_printer());
-            write_outputs(&m, &a, Some(&mc), None, dir, &output)?;
+    };
+    // Fail early where the results cannot be written.
+    let dir = match split {
+        Split::Shard(..) => {
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("{}: cannot create the directory", output.display()))?;
+            None
         }
-        Command::Frf {
-            model,
-            speed,
-            input,
-            output,
-            freq,
-            wrt,
-            out,
-        } => {
-            let m = load(&model)?;
-            let tf = parse_transfer(&m, &format!("input={input},output={output}"))?;
-            let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
-            let wrt = design_variables(&m, &wrt)?;
-            let p = m.nominal();
-            let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-            let pt = point(&m, &p, speed, &q0, &Options::default())
-                .with_context(|| format!("speed {speed:?} rad/s"))?;
-            let rows = sensitivity::frequency_response(
-                &m,
-                &p,
-                &pt,
-                tf.input,
-                tf.output,
-                &wrt,
-                range.speeds(),
-            )
-            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
-            let mut csv = csv::Writer::from_writer(Sink::to(&out)?);
-            let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
-                .iter()
-                .map(|s| s.to_string())
-                .collect();
-            header.extend(
-                wrt.iter()
-                    .map(|&b| format!("d(magnitude)/d({})", m.parameters[b].name)),
+        _ => Some(ResultDir::create(&output)?),
+    };
+    // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
+    let quadrature =
+        (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
+            tolerance: quadrature_tolerance,
+            threads,
+        });
+    let opt = AnalyzeOptions {
+        speeds: range.speeds().collect(),
+        cases,
+        quadrature,
+        monte_carlo: mc,
+        split,
+        threads,
+        cancel: Cancel::new(),
+    };
+    install_interrupt_handler(&opt.cancel);
+    let a = analyze(&m, &opt, &progress_printer());
+    if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
+        let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, mc, &range, (*k, *n)) else {
+            eprintln!(
+                "modaltol: interrupted; {} not written (a shard is complete or absent)",
+                path.display()
             );
-            csv.write_record(&header)?;
-            let blank = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
-            for r in rows {
-                let mut row = vec![r.frequency.to_string()];
-                match r.h {
-                    Some(h) => {
-                        row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string()))
-                    }
-                    None => row.extend(std::iter::repeat_n(String::new(), 4)),
-                }
-                row.extend(r.d_magnitude.into_iter().map(blank));
-                csv.write_record(&row)?;
-            }
-            csv.into_inner().map_err(|e| e.into_error())?.finish()?;
-        }
+            return Err(Interrupted.into());
+        };
+        write_atomically(&path, file.to_json().as_bytes())?;
+        eprintln!(
+            "modaltol: wrote {}; combine the shards with `modaltol merge`",
+            path.display()
+        );
+        return Ok(());
     }
+    let dir = dir.expect("a result directory");
+    write_outputs(&m, &a, mc.as_ref(), threads, dir, &output)?;
+
+    Ok(())
+}
+
+/// `modaltol merge` (see its `--help`).
+fn merge_command(args: MergeArgs) -> Result<()> {
+    let MergeArgs {
+        model,
+        output,
+        shards,
+        cases: only,
+    } = args;
+    let m = model_or_governor(&model)?;
+    let cases = tolerance_cases(&m, &only)?;
+    let (first, states) =
+        modaltol::shard::read_all(&m, &cases, &shards).map_err(|e| InputError(e.to_string()))?;
+    let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
+    let mc = McOptions {
+        samples: first.samples,
+        seed: first.seed,
+        sampling: first.sampling,
+        threads: None,
+    };
+    let opt = AnalyzeOptions {
+        speeds: range.speeds().collect(),
+        cases,
+        quadrature: Some(QuadOptions::default()),
+        monte_carlo: Some(mc),
+        split: Split::Merged(states),
+        threads: None,
+        cancel: Cancel::new(),
+    };
+    let dir = ResultDir::create(&output)?;
+    let a = analyze(&m, &opt, &progress_printer());
+    write_outputs(&m, &a, Some(&mc), None, dir, &output)?;
+
+    Ok(())
+}
+
+/// `modaltol frf` (see its `--help`).
+fn frf_command(args: FrfArgs) -> Result<()> {
+    let FrfArgs {
+        model,
+        speed,
+        input,
+        output,
+        freq,
+        wrt,
+        out,
+    } = args;
+    let m = load(&model)?;
+    let tf = parse_transfer(&m, &format!("input={input},output={output}"))?;
+    let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
+    let wrt = design_variables(&m, &wrt)?;
+    let p = m.nominal();
+    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let pt = point(&m, &p, speed, &q0, &Options::default())
+        .with_context(|| format!("speed {speed:?} rad/s"))?;
+    let rows =
+        sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())
+            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let mut csv = csv::Writer::from_writer(Sink::to(&out)?);
+    let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    header.extend(
+        wrt.iter()
+            .map(|&b| format!("d(magnitude)/d({})", m.parameters[b].name)),
+    );
+    csv.write_record(&header)?;
+    let blank = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+    for r in rows {
+        let mut row = vec![r.frequency.to_string()];
+        match r.h {
+            Some(h) => row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string())),
+            None => row.extend(std::iter::repeat_n(String::new(), 4)),
+        }
+        row.extend(r.d_magnitude.into_iter().map(blank));
+        csv.write_record(&row)?;
+    }
+    csv.into_inner().map_err(|e| e.into_error())?.finish()?;
+
     Ok(())
 }
 
