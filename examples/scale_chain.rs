@@ -1,0 +1,146 @@
+//! Cost of size: a generated family of chains of n rigid segments with joint springs on a hub
+//! spinning about z (the rotating blade of `examples/rotating_blade.toml`, any n), measured per
+//! n in a fresh process each: one cold modal point (recording included), one swept point (the
+//! mean over a 20-speed sweep after its first point), the sensitivities to the two parameters at
+//! one point, and the process's peak resident memory (`VmHWM`, Linux). Then the growth
+//! exponents fitted by least squares on the log–log points. Times are the best of 3 runs.
+//!
+//! `cargo run --release --example scale_chain -- [n …]` (default: 10 20 40 80).
+use modaltol::compiled::Compiled;
+use modaltol::sensitivity::analytic;
+use modaltol::sweep::{Options, Sweep, initial_guess, point};
+use std::time::Instant;
+
+/// The chain of `n` segments: length 1 m, μ = 2 kg/m, EI = 50 N·m², springs `EI/h` between
+/// segments and `2EI/h` at the clamp, flapping out of the plane of rotation.
+fn chain(n: usize) -> String {
+    let mut s = format!(
+        "name = \"chain {n}\"\ngravity = [0, 0, 0]\n[parameters]\n\
+         mu = {{ value = 2.0, tolerance = \"2%\" }}\nEI = {{ value = 50.0, tolerance = \"5%\" }}\n\
+         h = {}\n[[bodies]]\nname = \"hub\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\n\
+         cm = [0, 0, 0]\n[[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\n\
+         child = \"hub\"\nat = [0, 0, 0]\naxis = [0, 0, 1]\ndrive = \"speed\"\n",
+        1.0 / n as f64
+    );
+    for i in 0..n {
+        let parent = if i == 0 {
+            "hub".into()
+        } else {
+            format!("s{}", i - 1)
+        };
+        let k = if i == 0 { "2*EI/h" } else { "EI/h" };
+        s += &format!(
+            "[[bodies]]\nname = \"s{i}\"\nmass = \"mu*h\"\n\
+             inertia = [0, \"mu*h^3/12\", \"mu*h^3/12\"]\ncm = [\"{}*h\", 0, 0]\n\
+             [[joints]]\nname = \"j{i}\"\ntype = \"revolute\"\nparent = \"{parent}\"\n\
+             child = \"s{i}\"\nat = [\"{i}*h\", 0, 0]\naxis = [0, -1, 0]\nstiffness = \"{k}\"\n",
+            i as f64 + 0.5
+        );
+    }
+    s
+}
+
+/// Peak resident memory of this process (MB), from `/proc/self/status`.
+fn peak_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+/// Measures one n in this process: `cold swept sensitivities` (s) and peak memory (MB).
+fn measure(n: usize) -> [f64; 4] {
+    let text = chain(n);
+    let best = |f: &mut dyn FnMut() -> f64| (0..3).map(|_| f()).fold(f64::INFINITY, f64::min);
+    let speed = 5.0;
+    let cold = best(&mut || {
+        // A fresh model each time: the recording is part of a cold point.
+        let model = Compiled::from_str(&text, "chain.toml").unwrap();
+        let p = model.nominal();
+        let t = Instant::now();
+        let q0 = initial_guess(&model, &p, speed).unwrap();
+        point(&model, &p, speed, &q0, &Options::default()).unwrap();
+        t.elapsed().as_secs_f64()
+    });
+    let model = Compiled::from_str(&text, "chain.toml").unwrap();
+    let p = model.nominal();
+    let swept = best(&mut || {
+        let mut sweep = Sweep::new(&model, p.clone(), Options::default());
+        sweep.step(0.0).unwrap();
+        let t = Instant::now();
+        for k in 1..20 {
+            sweep.step(0.5 * k as f64).unwrap();
+        }
+        t.elapsed().as_secs_f64() / 19.0
+    });
+    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+    let wrt = model.toleranced();
+    let sens = best(&mut || {
+        let t = Instant::now();
+        analytic(&model, &p, &pt, &wrt, None).unwrap();
+        t.elapsed().as_secs_f64()
+    });
+    [cold, swept, sens, peak_mb()]
+}
+
+/// Least-squares slope of `ln y` over `ln x`.
+fn exponent(x: &[f64], y: &[f64]) -> f64 {
+    let (lx, ly): (Vec<f64>, Vec<f64>) = x.iter().zip(y).map(|(a, b)| (a.ln(), b.ln())).unzip();
+    let k = lx.len() as f64;
+    let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("one") {
+        let n = args[1].parse().unwrap();
+        let [cold, swept, sens, mb] = measure(n);
+        println!("{cold} {swept} {sens} {mb}");
+        return;
+    }
+    let ns: Vec<usize> = if args.is_empty() {
+        vec![10, 20, 40, 80]
+    } else {
+        args.iter().map(|a| a.parse().unwrap()).collect()
+    };
+    let exe = std::env::current_exe().unwrap();
+    println!("bodies n | cold modal point | per swept speed | sensitivities (2) | peak memory");
+    let mut rows = Vec::new();
+    for &n in &ns {
+        let out = std::process::Command::new(&exe)
+            .args(["one", &n.to_string()])
+            .output()
+            .unwrap();
+        let v: Vec<f64> = String::from_utf8_lossy(&out.stdout)
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        println!(
+            "{n:8} | {:13.3} ms | {:12.3} ms | {:14.3} ms | {:8.1} MB",
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3,
+            v[3]
+        );
+        rows.push((n as f64, v));
+    }
+    if rows.len() >= 2 {
+        let x: Vec<f64> = rows.iter().map(|r| r.0).collect();
+        let fit = |k: usize| exponent(&x, &rows.iter().map(|r| r.1[k]).collect::<Vec<_>>());
+        println!(
+            "growth exponents: cold point n^{:.2}, swept point n^{:.2}, sensitivities n^{:.2}, memory n^{:.2}",
+            fit(0),
+            fit(1),
+            fit(2),
+            fit(3)
+        );
+    }
+}
