@@ -7,40 +7,13 @@ mod common;
 use common::{roots, same_roots, solve};
 use modaltol::compiled::Compiled;
 
-/// A spinning shaft (about y) with an arm on an inclined hinge; `inertia` is the arm's inertia
-/// table entries.
+/// The spinning arm of the other tests with a tip body (inertia in its own axes) on a second
+/// hinge; `inertia` is the arm's inertia entry.
 fn arm_text(inertia: &str) -> String {
-    format!(
+    common::spinning_arm(
+        inertia,
+        "stiffness = 4\ndamping = 0.05",
         r#"
-name = "arm"
-gravity = [0, -9.80665, 0]
-[[bodies]]
-name = "shaft"
-mass = 1
-inertia = [0.01, 0.01, 0.01]
-cm = [0, 0.1, 0]
-[[bodies]]
-name = "arm"
-mass = 0.7
-{inertia}
-cm = [0.3, -0.2, 0.05]
-[[joints]]
-name = "spin"
-type = "revolute"
-parent = "ground"
-child = "shaft"
-at = [0, 0, 0]
-axis = [0, 1, 0]
-drive = "speed"
-[[joints]]
-name = "hinge"
-type = "revolute"
-parent = "shaft"
-child = "arm"
-at = [0.1, 0.2, 0]
-axis = [0.2, 0.3, 1]
-stiffness = 4
-damping = 0.05
 [[joints]]
 name = "twist"
 type = "revolute"
@@ -56,7 +29,7 @@ inertia = [0.001, 0.002, 0.003]
 x_axis = [0, 1, 1]
 y_axis = [0, -1, 1]
 cm = [0.35, -0.25, 0.05]
-"#
+"#,
     )
 }
 

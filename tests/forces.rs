@@ -44,38 +44,10 @@ fn model(text: &str) -> Compiled {
 /// An arm with a full inertia on an inclined hinge of a shaft spinning about y; `hinge` holds
 /// the hinge's spring fields and `forces` any force elements.
 fn arm(hinge: &str, forces: &str) -> Compiled {
-    model(&format!(
-        r#"
-name = "arm"
-gravity = [0, -9.80665, 0]
-[[bodies]]
-name = "shaft"
-mass = 1
-inertia = [0.01, 0.01, 0.01]
-cm = [0, 0.1, 0]
-[[bodies]]
-name = "arm"
-mass = 0.7
-inertia = [[0.004, 0.001, 0], [0.001, 0.006, 0.0005], [0, 0.0005, 0.005]]
-cm = [0.3, -0.2, 0.05]
-[[joints]]
-name = "spin"
-type = "revolute"
-parent = "ground"
-child = "shaft"
-at = [0, 0, 0]
-axis = [0, 1, 0]
-drive = "speed"
-[[joints]]
-name = "hinge"
-type = "revolute"
-parent = "shaft"
-child = "arm"
-at = [0.1, 0.2, 0]
-axis = [0.2, 0.3, 1]
-{hinge}
-{forces}
-"#
+    model(&common::spinning_arm(
+        "inertia = [[0.004, 0.001, 0], [0.001, 0.006, 0.0005], [0, 0.0005, 0.005]]",
+        hinge,
+        forces,
     ))
 }
 

@@ -118,10 +118,3 @@ cut_types! {
     Point => point::Point,
     Revolute => revolute::Revolute,
 }
-
-impl Kind {
-    /// The type named `name` in a model file.
-    pub fn from_name(name: &str) -> Option<Kind> {
-        Kind::ALL.iter().copied().find(|k| k.name() == name)
-    }
-}

@@ -135,10 +135,3 @@ force_types! {
     Rotational => rotational::Rotational,
     Bushing => bushing::Bushing,
 }
-
-impl Kind {
-    /// The type named `name` in a model file.
-    pub fn from_name(name: &str) -> Option<Kind> {
-        Kind::ALL.iter().copied().find(|k| k.name() == name)
-    }
-}

@@ -159,11 +159,6 @@ joint_types! {
 }
 
 impl Kind {
-    /// The type named `name` in a model file.
-    pub fn from_name(name: &str) -> Option<Kind> {
-        Kind::ALL.iter().copied().find(|k| k.name() == name)
-    }
-
     /// Number of coordinates.
     pub fn dof(self) -> usize {
         self.coordinates().len()

@@ -123,3 +123,42 @@ pub fn same_roots(a: &[C64], b: &[C64], tol: f64) {
         );
     }
 }
+
+/// A shaft spinning about y (gravity along −y) carrying an arm on a hinge about an inclined
+/// axis: `inertia` is the arm's inertia entry (with any body-frame keys), `hinge` the hinge's
+/// spring fields, `rest` any further tables (bodies, joints, force elements).
+pub fn spinning_arm(inertia: &str, hinge: &str, rest: &str) -> String {
+    format!(
+        r#"
+name = "arm"
+gravity = [0, -9.80665, 0]
+[[bodies]]
+name = "shaft"
+mass = 1
+inertia = [0.01, 0.01, 0.01]
+cm = [0, 0.1, 0]
+[[bodies]]
+name = "arm"
+mass = 0.7
+{inertia}
+cm = [0.3, -0.2, 0.05]
+[[joints]]
+name = "spin"
+type = "revolute"
+parent = "ground"
+child = "shaft"
+at = [0, 0, 0]
+axis = [0, 1, 0]
+drive = "speed"
+[[joints]]
+name = "hinge"
+type = "revolute"
+parent = "shaft"
+child = "arm"
+at = [0.1, 0.2, 0]
+axis = [0.2, 0.3, 1]
+{hinge}
+{rest}
+"#
+    )
+}

@@ -1,8 +1,8 @@
 //! Cut joints of a model file: type, bodies, points and the fields the type
 //! ([`crate::cuts::CutType`]) declares.
 
-use super::joints::{article, least_aligned, list, not_parallel, vector};
-use super::{Ctx, R, body_ref, check_name, coincident};
+use super::joints::{article, least_aligned, not_parallel, vector};
+use super::{Ctx, R, body_ref, coincident, element_name, type_named};
 use crate::cuts::{Geometry, Kind};
 use crate::joints::Use;
 use crate::model::Constraint;
@@ -23,22 +23,9 @@ pub(super) fn constraints(
     let mut out = Vec::new();
     for c in raw {
         let s = c.get_ref();
-        check_name(ctx, &s.name, "constraint")?;
-        let name = s.name.get_ref().clone();
-        if elements.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
-            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
-        }
+        let name = element_name(ctx, &s.name, "constraint", joint_names, elements)?;
         let owner = format!("constraint '{name}'");
-        let kind = Kind::from_name(s.kind.get_ref()).ok_or_else(|| {
-            ctx.err(
-                s.kind.span(),
-                format!(
-                    "{owner}: unknown type '{}' (expected {})",
-                    s.kind.get_ref(),
-                    list(Kind::ALL.iter().map(|k| k.name()))
-                ),
-            )
-        })?;
+        let kind = type_named(ctx, &s.kind, &owner, Kind::ALL, Kind::name)?;
         let this = format!("{} {} cut joint", article(kind.name()), kind.name());
         let body1 = body_ref(ctx, body_names, &s.body1)?;
         let body2 = body_ref(ctx, body_names, &s.body2)?;

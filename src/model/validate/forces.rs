@@ -1,8 +1,8 @@
 //! Force elements of a model file: type, bodies, points, axis and the per-component fields the
 //! type ([`crate::forces::ForceType`]) declares.
 
-use super::joints::{article, indexed, known, least_aligned, list, per_coordinate, vector};
-use super::{Ctx, R, body_ref, check_name, coincident};
+use super::joints::{article, indexed, known, least_aligned, per_coordinate, vector};
+use super::{Ctx, R, body_ref, coincident, element_name, type_named};
 use crate::forces::{Geometry, Kind};
 use crate::joints::Use;
 use crate::model::ForceElement;
@@ -23,22 +23,9 @@ pub(super) fn forces(
     let mut out = Vec::new();
     for f in raw {
         let s = f.get_ref();
-        check_name(ctx, &s.name, "force")?;
-        let name = s.name.get_ref().clone();
-        if elements.insert(name.clone(), 0).is_some() || joint_names.contains_key(&name) {
-            return Err(ctx.err(s.name.span(), format!("duplicate name '{name}'")));
-        }
+        let name = element_name(ctx, &s.name, "force", joint_names, elements)?;
         let owner = format!("force '{name}'");
-        let kind = Kind::from_name(s.kind.get_ref()).ok_or_else(|| {
-            ctx.err(
-                s.kind.span(),
-                format!(
-                    "{owner}: unknown type '{}' (expected {})",
-                    s.kind.get_ref(),
-                    list(Kind::ALL.iter().map(|k| k.name()))
-                ),
-            )
-        })?;
+        let kind = type_named(ctx, &s.kind, &owner, Kind::ALL, Kind::name)?;
         let this = format!("{} {}", article(kind.name()), kind.name());
         let body1 = body_ref(ctx, body_names, &s.body1)?;
         let body2 = body_ref(ctx, body_names, &s.body2)?;

@@ -1,7 +1,7 @@
 //! Tree joints of a model file: type, bodies, geometry and the per-coordinate fields, checked
 //! against what the joint type ([`crate::joints::JointType`]) declares.
 
-use super::{Ctx, R, body_ref, check_name};
+use super::{Ctx, R, body_ref, check_name, type_named};
 use crate::joints::{Kind, Use};
 use crate::model::schema::{JointSchema, Nums, SNums, SVec};
 use crate::model::{Body, Coordinate, Expr, Field};
@@ -39,16 +39,13 @@ pub(super) fn joints(
             return Err(ctx.err(s.name.span(), format!("duplicate joint name '{name}'")));
         }
         let what = |f: &str| format!("joint '{name}' {f}");
-        let kind = Kind::from_name(s.kind.get_ref()).ok_or_else(|| {
-            ctx.err(
-                s.kind.span(),
-                format!(
-                    "joint '{name}': unknown type '{}' (expected {})",
-                    s.kind.get_ref(),
-                    list(Kind::ALL.iter().map(|k| k.name()))
-                ),
-            )
-        })?;
+        let kind = type_named(
+            ctx,
+            &s.kind,
+            &format!("joint '{name}'"),
+            Kind::ALL,
+            Kind::name,
+        )?;
         let parent = body_ref(ctx, body_names, &s.parent)?;
         let child = body_ref(ctx, body_names, &s.child)?.ok_or_else(|| {
             ctx.err(

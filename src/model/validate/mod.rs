@@ -347,6 +347,47 @@ fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<P
 }
 
 /// Resolves a body name (`ground` → `None`).
+/// The name of a force element or cut joint (`what`): well formed and unique across joints,
+/// force elements and cut joints (`elements` collects the latter two).
+fn element_name(
+    ctx: &Ctx,
+    name: &Spanned<String>,
+    what: &str,
+    joint_names: &HashMap<String, usize>,
+    elements: &mut HashMap<String, usize>,
+) -> R<String> {
+    check_name(ctx, name, what)?;
+    let n = name.get_ref().clone();
+    if elements.insert(n.clone(), 0).is_some() || joint_names.contains_key(&n) {
+        return Err(ctx.err(name.span(), format!("duplicate name '{n}'")));
+    }
+    Ok(n)
+}
+
+/// The type named by `kind` among `all` (whose names `name` gives), or an error of `owner`
+/// listing them.
+fn type_named<K: Copy>(
+    ctx: &Ctx,
+    kind: &Spanned<String>,
+    owner: &str,
+    all: &[K],
+    name: impl Fn(K) -> &'static str,
+) -> R<K> {
+    all.iter()
+        .copied()
+        .find(|&k| name(k) == kind.get_ref())
+        .ok_or_else(|| {
+            ctx.err(
+                kind.span(),
+                format!(
+                    "{owner}: unknown type '{}' (expected {})",
+                    kind.get_ref(),
+                    joints::list(all.iter().map(|&k| name(k)))
+                ),
+            )
+        })
+}
+
 fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R<Option<usize>> {
     if s.get_ref() == "ground" {
         return Ok(None);
