@@ -413,7 +413,10 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
                 let (x, y) = (a.modes[0].root.lambda, b.modes[0].root.lambda);
                 assert!((x - y).norm() < 1e-8 * (1.0 + y.norm()));
             }
-            (Err(a), Err(b)) => assert_eq!(a, b),
+            // The same reason; how many iterations a Newton solve wanders at a locked
+            // mechanism before it gives up depends on rounding, which the routes do in
+            // different orders.
+            (Err(a), Err(b)) => assert_eq!(without_counts(a), without_counts(b)),
             (a, b) => panic!("{a:?} vs {b:?}"),
         }
     }
@@ -421,4 +424,12 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
         let e = recorded[k].as_ref().unwrap_err();
         assert!(e.contains("sqrt_speed.toml") && e.contains("sqrt"), "{e}");
     }
+}
+
+/// An error message with its iteration counts taken out.
+fn without_counts(e: &str) -> String {
+    e.split(' ')
+        .map(|w| if w.parse::<u64>().is_ok() { "N" } else { w })
+        .collect::<Vec<_>>()
+        .join(" ")
 }

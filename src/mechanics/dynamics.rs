@@ -8,12 +8,14 @@
 //! equal to the velocity-transformation form `M* = B_Rᵀ M B_R`, `Q* = B_Rᵀ Q − B_Rᵀ M Ḃ q̇`
 //! (Kim & Yoo 2007, eqs. 9–12). One pass over `Dual2` numbers along `q(t) = q + q̇ t + q̈ t²/2`
 //! gives every body's velocity and acceleration (`ω̃ = Ȧ Aᵀ`, `α̃ = skew(Ä Aᵀ)`); one pass over
-//! `Dual` numbers per coordinate gives the partial velocities `J_v = ∂r_cm/∂q_i` and
-//! `J_ω = axial(∂A/∂q_i Aᵀ)`, and in the same pass the constraint Jacobian `Φ_q`.
+//! `Dual` numbers per coordinate, through its own joint alone, gives the partial velocities `J_v = ∂r_cm/∂q_i` and
+//! `J_ω = axial(∂A/∂q_i Aᵀ)` as the twist of its joint's child (see [`Partials`]), and the
+//! constraint Jacobian `Φ_q`; the projection `r_i = s_iᵀ W_i` pairs that twist with the wrench on
+//! the bodies below the joint, accumulated from the leaves (O(n) for all rows).
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
 use super::System;
-use super::kinematics::{Pose, poses, update};
+use super::kinematics::{Pose, poses};
 use crate::real::{D1, D2, M3, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
@@ -93,66 +95,143 @@ pub fn constraints_at<U: Real>(sys: &System<U>, q: &[U]) -> Vec<U> {
     constraint_values(sys, &poses(sys, q))
 }
 
-/// Partial velocities at `q`, one dual pass per coordinate: for coordinate `i`, `J_v` and
-/// `J_ω` of every body, `∂ℓ/∂q_i` of every spring-damper, and column `i` of `Φ_q`. They depend
-/// on `q` only, so a linearisation in `q̇` and `q̈` computes them once.
+/// A screw in global axes at the global origin: a twist `(ω, v)` (a rigid velocity, the
+/// velocity of a point `x` being `v + ω × x`), or a wrench `(moment about the origin, force)`.
+/// A twist paired with a wrench is the power `ω·N + v·F`.
+#[derive(Debug, Clone, Copy)]
+pub struct Screw<T: Real> {
+    pub w: V3<T>,
+    pub v: V3<T>,
+}
+
+impl<T: Real> Screw<T> {
+    pub fn zero() -> Self {
+        let z = V3::from_element(cst::<T>(0.0));
+        Screw { w: z, v: z }
+    }
+
+    /// `ω·N + v·F`.
+    pub fn pair(&self, other: &Screw<T>) -> T {
+        self.w.dot(&other.w) + self.v.dot(&other.v)
+    }
+
+    /// `self + other · s`.
+    fn add_scaled(&mut self, other: &Screw<T>, s: T) {
+        self.w += other.w * s;
+        self.v += other.v * s;
+    }
+
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Screw<U> {
+        Screw {
+            w: self.w.map(f),
+            v: self.v.map(f),
+        }
+    }
+}
+
+/// The first-order kinematics at `q` that the projection onto the coordinates needs, O(n) in
+/// all (Featherstone, *Rigid Body Dynamics Algorithms*, Springer 2008, §2 and §5.3): a change of
+/// coordinate `i` moves the bodies below its joint rigidly together, by the twist `s_i`, so
+/// the partial velocities of every body are `J_ω,i = ω_i`, `J_v,i = v_i + ω_i × x_cm` (or zero for
+/// the bodies above), and a generalised force is `s_i` paired with the wrench on the bodies
+/// below. Force elements and constraint equations enter through their gradient with respect to
+/// a twist of each end body. All of it depends on `q` only, so a linearisation in `q̇` and `q̈`
+/// computes it once.
 #[derive(Debug, Clone)]
 pub struct Partials<T: Real> {
-    /// `jv[i][b]`: ∂(centre of mass of body b)/∂q_i.
-    pub jv: Vec<Vec<V3<T>>>,
-    /// `jw[i][b]`: ∂ω_b/∂q̇_i.
-    pub jw: Vec<Vec<V3<T>>>,
-    /// `de[i][c]`: ∂e_c/∂q_i for every component `c` of every force element, in order.
-    pub de: Vec<Vec<T>>,
+    /// `twist[i]`: `s_i`, for the coordinates asked for (`None` for the others).
+    pub twist: Vec<Option<Screw<T>>>,
+    /// For every component `c` of every force element in order: `(body, ∂e_c/∂ξ)` for each end
+    /// body carried by a coordinate asked for (`ξ` a twist of that body alone).
+    pub de: Vec<Vec<(usize, Screw<T>)>>,
     pub phi_q: DMatrix<T>,
     /// Rotation of every body at `q`.
     pub rot: Vec<M3<T>>,
+    /// Centre of mass of every body at `q`.
+    pub cm: Vec<V3<T>>,
 }
 
 impl<T: Real> Partials<T> {
     /// The same partials over another scalar.
     pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Partials<U> {
         Partials {
-            jv: self
-                .jv
-                .iter()
-                .map(|v| v.iter().map(|x| x.map(f)).collect())
-                .collect(),
-            jw: self
-                .jw
-                .iter()
-                .map(|v| v.iter().map(|x| x.map(f)).collect())
-                .collect(),
+            twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
             de: self
                 .de
                 .iter()
-                .map(|v| v.iter().map(|&x| f(x)).collect())
+                .map(|v| v.iter().map(|(b, g)| (*b, g.map(f))).collect())
                 .collect(),
             phi_q: self.phi_q.map(f),
             rot: self.rot.iter().map(|r| r.map(f)).collect(),
+            cm: self.cm.iter().map(|x| x.map(f)).collect(),
+        }
+    }
+
+    /// `J_v,i` of body `b` (zero when `b` does not move with coordinate `i`).
+    pub fn jv<U: Real>(&self, sys: &System<U>, i: usize, b: usize) -> V3<T> {
+        match &self.twist[i] {
+            Some(s) if sys.moves(i, b) => s.v + s.w.cross(&self.cm[b]),
+            _ => V3::from_element(cst(0.0)),
+        }
+    }
+
+    /// `J_ω,i` of body `b`.
+    pub fn jw<U: Real>(&self, sys: &System<U>, i: usize, b: usize) -> V3<T> {
+        match &self.twist[i] {
+            Some(s) if sys.moves(i, b) => s.w,
+            _ => V3::from_element(cst(0.0)),
         }
     }
 }
 
 /// The mass matrix `∂r/∂q̈ = Σ_b (m J_vᵀ J_v + J_ωᵀ I_w J_ω)` for the coordinates `coords`,
 /// from partial velocities computed for them (r is linear in q̈ with exactly these
-/// coefficients, so no time pass is needed).
+/// coefficients, so no time pass is needed): `M_ik = s_iᵀ I_c s_k` with `I_c` the composite
+/// spatial inertia of the bodies both coordinates move (Featherstone's composite-rigid-body
+/// algorithm, §6.2), O(n) for the composites and O(1) per entry.
 pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usize]) -> DMatrix<T> {
+    let nb = sys.bodies.len();
+    // Composite inertia about the origin of each body and those below it: mass, first moment
+    // `m x`, and `I_w + m (|x|² 1 − x xᵀ)`.
+    let mut mass = vec![cst::<T>(0.0); nb];
+    let mut first = vec![V3::from_element(cst::<T>(0.0)); nb];
+    let mut second = vec![M3::from_element(cst::<T>(0.0)); nb];
+    for (b, body) in sys.bodies.iter().enumerate() {
+        let (m, x, a) = (body.mass.re, j.cm[b], &j.rot[b]);
+        mass[b] = m;
+        first[b] = x * m;
+        second[b] = mul3_t(&mul3(a, &body.inertia.map(|x| x.re)), a)
+            + (M3::identity() * x.dot(&x) - x * x.transpose()) * m;
+    }
+    for jt in sys.joints.iter().rev() {
+        if let Some(p) = jt.parent {
+            let c = jt.child;
+            let (m, h, i) = (mass[c], first[c], second[c]);
+            mass[p] += m;
+            first[p] += h;
+            second[p] += i;
+        }
+    }
+    let body = |i: usize| sys.joints[sys.coord_joint[i]].child;
     let n = coords.len();
-    let iw: Vec<M3<T>> = sys
-        .bodies
-        .iter()
-        .zip(&j.rot)
-        .map(|(b, a)| mul3_t(&mul3(a, &b.inertia.map(|x| x.re)), a))
-        .collect();
     DMatrix::from_fn(n, n, |r, c| {
         let (i, k) = (coords[r], coords[c]);
-        let mut s = cst::<T>(0.0);
-        for (b, body) in sys.bodies.iter().enumerate() {
-            s += j.jv[i][b].dot(&j.jv[k][b]) * body.mass.re
-                + j.jw[i][b].dot(&mulv(&iw[b], &j.jw[k][b]));
-        }
-        s
+        let (bi, bk) = (body(i), body(k));
+        let b = if sys.carries(bi, bk) {
+            bk
+        } else if sys.carries(bk, bi) {
+            bi
+        } else {
+            return cst::<T>(0.0);
+        };
+        let (Some(si), Some(sk)) = (&j.twist[i], &j.twist[k]) else {
+            return cst::<T>(f64::NAN);
+        };
+        let h = first[b];
+        si.v.dot(&sk.v) * mass[b]
+            + si.v.dot(&sk.w.cross(&h))
+            + si.w.cross(&h).dot(&sk.v)
+            + si.w.dot(&mulv(&second[b], &sk.w))
     })
 }
 
@@ -162,61 +241,141 @@ pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
     partials_for(partial, q, &all)
 }
 
-/// Partial velocities for the coordinates `coords` only (one dual pass each). Rows of `r`
-/// evaluated with them exist for those coordinates only; the others come out NaN.
-pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize]) -> Partials<T> {
-    let n = q.len();
-    let mut out = Partials {
-        jv: Vec::with_capacity(n),
-        jw: Vec::with_capacity(n),
-        de: Vec::with_capacity(n),
-        phi_q: DMatrix::from_element(partial.m, n, cst::<T>(0.0)),
-        rot: Vec::new(),
-    };
-    let mut qi: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
-    // Poses without derivative, once; per coordinate only the bodies below its joint move, so
-    // only their poses are recomputed (and restored afterwards).
-    let p0 = poses(partial, &qi);
-    out.rot = p0.iter().map(|p| p.rot.map(|c| c.re)).collect();
-    let mut pp = p0.clone();
-    let zero = V3::from_element(cst::<T>(0.0));
-    for i in 0..n {
-        if !coords.contains(&i) {
-            out.jv.push(Vec::new());
-            out.jw.push(Vec::new());
-            out.de.push(Vec::new());
-            continue;
-        }
-        qi[i] = Dual::new(q[i], cst(1.0));
-        update(partial, &qi, &mut pp, partial.subtree[i].iter().copied());
-        qi[i] = lift1(q[i]);
-        let (mut jv, mut jw) = (vec![zero; pp.len()], vec![zero; pp.len()]);
-        for &ji in &partial.subtree[i] {
-            let b = partial.joints[ji].child;
-            let pose = &pp[b];
-            let x = pose.apply(&partial.bodies[b].cm);
-            jv[b] = x.map(|c| c.eps);
-            let a = pose.rot.map(|c| c.re);
-            let ae = pose.rot.map(|c| c.eps);
-            jw[b] = axial(&mul3_t(&ae, &a));
-        }
-        out.jv.push(jv);
-        out.jw.push(jw);
-        out.de.push(
-            element_deformations(partial, &pp)
-                .iter()
-                .map(|e| e.eps)
-                .collect(),
-        );
-        for (k, c) in constraint_values(partial, &pp).iter().enumerate() {
-            out.phi_q[(k, i)] = c.eps;
-        }
-        for &ji in &partial.subtree[i] {
-            let b = partial.joints[ji].child;
-            pp[b] = p0[b];
+/// `pose` moved by the unit twist `k` (`0..3`: a rotation about global axis `k` through the
+/// origin; `3..6`: a translation along axis `k − 3`) as its dual part, from a pose with none.
+fn nudged<T: Real>(pose: &Pose<D1<T>>, k: usize) -> Pose<D1<T>> {
+    let mut e = V3::from_element(cst::<T>(0.0));
+    e[k % 3] = cst(1.0);
+    let mut out = *pose;
+    let trans = pose.trans.map(|c| c.re);
+    let d = if k < 3 { e.cross(&trans) } else { e };
+    for r in 0..3 {
+        out.trans[r].eps = d[r];
+    }
+    if k < 3 {
+        for c in 0..3 {
+            let col = e.cross(&V3::new(
+                pose.rot[(0, c)].re,
+                pose.rot[(1, c)].re,
+                pose.rot[(2, c)].re,
+            ));
+            for r in 0..3 {
+                out.rot[(r, c)].eps = col[r];
+            }
         }
     }
     out
+}
+
+/// Gradients of the values `f(pose1, pose2)` with respect to a twist of each end body that one
+/// of the coordinates `coords` moves: for each value, `(body, gradient)` per such end.
+fn end_gradients<T: Real>(
+    sys: &System<D1<T>>,
+    p: &[Pose<D1<T>>],
+    ends: [Option<usize>; 2],
+    coords: &[usize],
+    f: impl Fn(&Pose<D1<T>>, &Pose<D1<T>>, &mut Vec<D1<T>>),
+) -> Vec<Vec<(usize, Screw<T>)>> {
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(ground, |b| p[b]);
+    let (x1, x2) = (pose(ends[0]), pose(ends[1]));
+    let mut out: Vec<Vec<(usize, Screw<T>)>> = Vec::new();
+    let mut values = Vec::new();
+    for (e, body) in ends.iter().enumerate() {
+        let Some(b) = *body else { continue };
+        if !coords.iter().any(|&i| sys.moves(i, b)) {
+            continue;
+        }
+        let mut g: Vec<Screw<T>> = Vec::new();
+        for k in 0..6 {
+            values.clear();
+            if e == 0 {
+                f(&nudged(&x1, k), &x2, &mut values);
+            } else {
+                f(&x1, &nudged(&x2, k), &mut values);
+            }
+            g.resize(values.len(), Screw::zero());
+            for (gc, v) in g.iter_mut().zip(&values) {
+                if k < 3 {
+                    gc.w[k] = v.eps;
+                } else {
+                    gc.v[k - 3] = v.eps;
+                }
+            }
+        }
+        out.resize(g.len(), Vec::new());
+        for (o, gc) in out.iter_mut().zip(g) {
+            o.push((b, gc));
+        }
+    }
+    out
+}
+
+/// Partial velocities for the coordinates `coords` only (one dual pass of its joint each).
+/// Rows of `r` evaluated with them exist for those coordinates only; the others come out NaN.
+pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize]) -> Partials<T> {
+    let n = q.len();
+    let mut qi: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
+    let p0 = poses(partial, &qi);
+    let mut twist = vec![None; n];
+    for &i in coords {
+        let j = &partial.joints[partial.coord_joint[i]];
+        qi[i] = Dual::new(q[i], cst(1.0));
+        let rel = j.kind.relative(&j.geometry, &qi[j.coords.clone()]);
+        qi[i] = lift1(q[i]);
+        let pose = match j.parent {
+            Some(p) => p0[p].then(&rel),
+            None => rel,
+        };
+        let a = pose.rot.map(|c| c.re);
+        let w = axial(&mul3_t(&pose.rot.map(|c| c.eps), &a));
+        let t = pose.trans.map(|c| c.re);
+        twist[i] = Some(Screw {
+            w,
+            v: pose.trans.map(|c| c.eps) - w.cross(&t),
+        });
+    }
+    // Force elements: one list per component.
+    let mut de = Vec::new();
+    for e in &partial.forces {
+        let g = &e.geometry;
+        let grads = end_gradients(partial, &p0, [g.body1, g.body2], coords, |x1, x2, out| {
+            e.kind.deformation(g, x1, x2, out)
+        });
+        let mut grads = grads.into_iter();
+        de.extend((0..e.free.len()).map(|_| grads.next().unwrap_or_default()));
+    }
+    let mut phi_q = DMatrix::from_element(partial.m, n, cst::<T>(0.0));
+    let mut row = 0;
+    for c in &partial.constraints {
+        let g = &c.geometry;
+        let grads = end_gradients(partial, &p0, [g.body1, g.body2], coords, |x1, x2, out| {
+            c.kind.values(g, x1, x2, out)
+        });
+        for (k, ends) in grads.iter().enumerate() {
+            for (b, gk) in ends {
+                for &i in coords {
+                    if let Some(s) = &twist[i]
+                        && partial.moves(i, *b)
+                    {
+                        phi_q[(row + k, i)] += s.pair(gk);
+                    }
+                }
+            }
+        }
+        row += c.kind.equations();
+    }
+    Partials {
+        twist,
+        de,
+        phi_q,
+        rot: p0.iter().map(|p| p.rot.map(|c| c.re)).collect(),
+        cm: p0
+            .iter()
+            .zip(&partial.bodies)
+            .map(|(p, b)| p.apply(&b.cm).map(|c| c.re))
+            .collect(),
+    }
 }
 
 /// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
@@ -249,8 +408,8 @@ pub fn evaluate_with<T: Real>(
     // Time pass: velocities and accelerations of every body.
     let qt: Vec<D2<T>> = (0..n).map(|i| Dual2::new(q[i], qd[i], qdd[i])).collect();
     let pt = poses(&l.time, &qt);
-    let mut force = Vec::with_capacity(sys.bodies.len());
-    let mut moment = Vec::with_capacity(sys.bodies.len());
+    // The wrench of every body's inertia and weight about the origin.
+    let mut wrench = Vec::with_capacity(sys.bodies.len());
     for (b, body) in sys.bodies.iter().enumerate() {
         let x = pt[b].apply(&l.time.bodies[b].cm);
         let acc = x.map(|c| c.v2);
@@ -260,39 +419,46 @@ pub fn evaluate_with<T: Real>(
         let omega = axial(&mul3_t(&ad, &a));
         let alpha = axial(&mul3_t(&add, &a));
         let iw = mul3_t(&mul3(&a, &body.inertia), &a);
-        force.push((acc - sys.gravity) * body.mass);
+        let force = (acc - sys.gravity) * body.mass;
         let h = mulv(&iw, &omega);
-        moment.push(mulv(&iw, &alpha) + omega.cross(&h));
+        let moment = mulv(&iw, &alpha) + omega.cross(&h);
+        wrench.push(Screw {
+            w: moment + x.map(|c| c.re).cross(&force),
+            v: force,
+        });
     }
-    // Each element's components over the time pass: the values and their rates.
+    // Each element's components over the time pass (the values and their rates), applied to
+    // its end bodies as the wrenches whose power on a twist is the element's.
     let mut element_force = Vec::new();
     let deformation = element_deformations(&l.time, &pt);
     let mut e = deformation.iter();
+    let mut grads = j.de.iter();
     for el in &sys.forces {
         for c in 0..el.free.len() {
             let d = e.next().expect("one deformation per component");
-            element_force
-                .push(el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c]);
+            let f = el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c];
+            element_force.push(f);
+            for (b, g) in grads.next().expect("one gradient list per component") {
+                wrench[*b].add_scaled(g, f);
+            }
         }
     }
     let phi: Vec<T> = constraint_values(&l.time, &pt)
         .iter()
         .map(|c| c.re)
         .collect();
-    // Project onto the partial velocities.
+    // The wrench on each body and those below it (children before parents).
+    for jt in sys.joints.iter().rev() {
+        if let Some(p) = jt.parent {
+            let c = wrench[jt.child];
+            wrench[p].add_scaled(&c, cst(1.0));
+        }
+    }
+    // Project onto the coordinates.
     let mut r: Vec<T> = (0..n)
-        .map(|i| {
-            if j.jv[i].is_empty() && !sys.bodies.is_empty() {
-                return cst::<T>(f64::NAN);
-            }
-            let mut ri = cst::<T>(0.0);
-            for b in 0..sys.bodies.len() {
-                ri += j.jv[i][b].dot(&force[b]) + j.jw[i][b].dot(&moment[b]);
-            }
-            for (f, d) in element_force.iter().zip(&j.de[i]) {
-                ri += *f * *d;
-            }
-            ri
+        .map(|i| match &j.twist[i] {
+            Some(s) => s.pair(&wrench[sys.joints[sys.coord_joint[i]].child]),
+            None => cst::<T>(f64::NAN),
         })
         .collect();
     for e in &sys.joint_elements {

@@ -85,10 +85,12 @@ pub struct System<T> {
     pub ports: Vec<PortData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
-    /// For each coordinate, the joints (indices into `joints`, parents first) whose child
-    /// moves with it: the joint of the coordinate and every joint below it. Only the poses of
-    /// their children depend on the coordinate.
-    pub subtree: Vec<Vec<usize>>,
+    /// For each coordinate, its joint (index into `joints`).
+    pub coord_joint: Vec<usize>,
+    /// For each body, the range of depth-first (pre-order) positions of the bodies it carries,
+    /// itself first: body `c` moves with body `b` iff `span[b].0 ≤ span[c].0 < span[b].1` (see
+    /// [`System::carries`]).
+    pub span: Vec<(usize, usize)>,
     /// Number of coordinates.
     pub n: usize,
     /// Number of constraint equations.
@@ -224,7 +226,11 @@ impl<T: Real> System<T> {
                 rotation: port.rotation,
             });
         }
-        let subtree = subtrees(&joints, model.coordinates.len());
+        let span = spans(&joints, model.bodies.len());
+        let mut coord_joint = vec![0; model.coordinates.len()];
+        for (ji, j) in joints.iter().enumerate() {
+            coord_joint[j.coords.clone()].fill(ji);
+        }
         Ok(System {
             gravity: v3(&model.gravity, p, w)?,
             bodies,
@@ -234,7 +240,8 @@ impl<T: Real> System<T> {
             constraints,
             ports,
             drive,
-            subtree,
+            coord_joint,
+            span,
             n: model.coordinates.len(),
             m: model.n_constraints(),
         })
@@ -332,7 +339,8 @@ impl<T: Real> System<T> {
                 })
                 .collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),
-            subtree: self.subtree.clone(),
+            coord_joint: self.coord_joint.clone(),
+            span: self.span.clone(),
             n: self.n,
             m: self.m,
         }
@@ -385,27 +393,52 @@ fn direction<T: Real>(
     Ok(a / n)
 }
 
-/// The joints below each coordinate's joint (see [`System::subtree`]).
-fn subtrees<T: Real>(joints: &[JointData<T>], n: usize) -> Vec<Vec<usize>> {
-    let mut out = vec![Vec::new(); n];
-    for (ji, j) in joints.iter().enumerate() {
-        if j.coords.is_empty() {
-            continue;
-        }
-        let mut moving = vec![false; joints.len()];
-        let mut bodies = vec![j.child];
-        for (k, other) in joints.iter().enumerate().skip(ji) {
-            if k == ji || other.parent.is_some_and(|p| bodies.contains(&p)) {
-                moving[k] = true;
-                bodies.push(other.child);
-            }
-        }
-        let below: Vec<usize> = (0..joints.len()).filter(|&k| moving[k]).collect();
-        for c in j.coords.clone() {
-            out[c] = below.clone();
+/// The depth-first ranges of [`System::span`]: the tree walked from the bodies on ground, each
+/// body's children after it. A body that no joint holds carries only itself.
+fn spans<T: Real>(joints: &[JointData<T>], bodies: usize) -> Vec<(usize, usize)> {
+    let mut children = vec![Vec::new(); bodies];
+    let mut roots = Vec::new();
+    for j in joints {
+        match j.parent {
+            Some(p) => children[p].push(j.child),
+            None => roots.push(j.child),
         }
     }
-    out
+    let mut held = vec![false; bodies];
+    for j in joints {
+        held[j.child] = true;
+    }
+    roots.extend((0..bodies).filter(|&b| !held[b]));
+    let mut span = vec![(0, 0); bodies];
+    let mut next = 0;
+    // (body, children visited?)
+    let mut stack: Vec<(usize, bool)> = roots.iter().rev().map(|&b| (b, false)).collect();
+    while let Some((b, done)) = stack.pop() {
+        if done {
+            span[b].1 = next;
+            continue;
+        }
+        span[b].0 = next;
+        next += 1;
+        stack.push((b, true));
+        stack.extend(children[b].iter().rev().map(|&c| (c, false)));
+    }
+    span
+}
+
+impl<T: Real> System<T> {
+    /// Does body `c` move with body `b` (is it `b` or below it)?
+    #[inline]
+    pub fn carries(&self, b: usize, c: usize) -> bool {
+        let (lo, hi) = self.span[b];
+        (lo..hi).contains(&self.span[c].0)
+    }
+
+    /// Does body `c` move with coordinate `i`?
+    #[inline]
+    pub fn moves(&self, i: usize, c: usize) -> bool {
+        self.carries(self.joints[self.coord_joint[i]].child, c)
+    }
 }
 
 /// Euclidean norm over any [`Real`] (nalgebra's `norm` needs a `RealField`).

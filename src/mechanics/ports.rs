@@ -35,11 +35,11 @@ pub fn port_vectors<T: Real>(sys: &System<T>, q: &[T], coords: &[usize]) -> Vec<
             coords
                 .iter()
                 .map(|&i| {
-                    let w = j.jw[i][b];
+                    let w = j.jw(sys, i, b);
                     if port.rotation {
                         u.dot(&w)
                     } else {
-                        u.dot(&(j.jv[i][b] + w.cross(&arm)))
+                        u.dot(&(j.jv(sys, i, b) + w.cross(&arm)))
                     }
                 })
                 .collect()
