@@ -33,6 +33,7 @@ pub mod real;
 pub mod report;
 pub mod rigid;
 pub mod route;
+pub mod schur;
 pub mod sensitivity;
 pub mod shard;
 pub mod study;

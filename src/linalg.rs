@@ -6,7 +6,7 @@
 //! few solves that must carry derivatives (the independent-coordinate basis) use this
 //! elimination, pivoting on real parts.
 //!
-//! **Every iterative factorisation goes through this module** ([`svd`], [`complex_eigenvalues`],
+//! **Every iterative factorisation goes through this module** ([`svd`], [`schur`],
 //! [`symmetric_eigen`]). nalgebra's plain calls iterate without bound and panic on a NaN they
 //! produce themselves: entries near `f64::MAX` overflow inside the QR sweeps, after which the
 //! iteration never converges (a hang) or a singular value is NaN (a panic). Here the input must be
@@ -77,13 +77,14 @@ pub fn svd<T: ComplexField<RealField = f64>>(
     Some(out)
 }
 
-/// Eigenvalues of a real square matrix (real Schur form), or `None` when `a` is not finite
-/// or the QR iteration does not converge.
-pub fn complex_eigenvalues(a: DMatrix<f64>) -> Option<DVector<nalgebra::Complex<f64>>> {
+/// Real Schur form `s A = Q T Qᵀ` of a real square matrix as `(Q, T, s)`, `s` the power of
+/// two that balances `A`; `None` when `a` is not finite or the QR iteration does not converge.
+/// [`crate::schur::RealSchur`] reads eigenvalues and eigenvectors from it.
+pub fn schur(a: DMatrix<f64>) -> Option<(DMatrix<f64>, DMatrix<f64>, f64)> {
     let s = balance(&a)?;
     let n = a.nrows();
-    let schur = Schur::try_new(scaled(a, s), f64::EPSILON, sweeps(n))?;
-    Some(schur.complex_eigenvalues().map(|l| l / s))
+    let (q, t) = Schur::try_new(scaled(a, s), f64::EPSILON, sweeps(n))?.unpack();
+    Some((q, t, s))
 }
 
 /// Eigen-decomposition of a real symmetric matrix (eigenvalues unsorted), or `None` when `a`
@@ -290,8 +291,10 @@ mod tests {
         // Entries near f64::MAX overflow inside nalgebra's unscaled sweeps (a hang in Schur, a
         // NaN panic in the SVD); balanced, they are ordinary matrices.
         let big = DMatrix::from_row_slice(2, 2, &[1e308, -1e308, 1e308, 1e308]);
-        let ev = complex_eigenvalues(big.clone()).unwrap();
-        for l in ev.iter() {
+        let ev = crate::schur::RealSchur::new(big.clone())
+            .unwrap()
+            .eigenvalues();
+        for l in ev.iter().map(|e| e.lambda) {
             assert!((l.re / 1e308 - 1.0).abs() < 1e-12 && (l.im.abs() / 1e308 - 1.0).abs() < 1e-12);
         }
         let sv = svd(big.clone(), true, true).unwrap().singular_values;
@@ -304,7 +307,7 @@ mod tests {
         let sym = DMatrix::from_row_slice(2, 2, &[1e-320, 5e-321, 5e-321, 1e-320]);
         assert!(symmetric_eigen(sym).is_some());
         let nan = DMatrix::from_row_slice(1, 1, &[f64::NAN]);
-        assert!(complex_eigenvalues(nan.clone()).is_none());
+        assert!(schur(nan.clone()).is_none());
         assert!(svd(nan.clone(), false, false).is_none());
         assert!(symmetric_eigen(DMatrix::from_element(2, 2, f64::INFINITY)).is_none());
     }

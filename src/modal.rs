@@ -1,10 +1,11 @@
 //! Damped modal analysis of `M̂ z̈ + Ĉ ż + K̂ z = 0` (Kim & Yoo 2007, eq. 23).
 //!
 //! Eigenvalues of `(λ² M̂ + λ Ĉ + K̂) x = 0` come from the 2n×2n first-order form
-//! `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` (real Schur); for each, the right vector `x` and the left vector `y`
-//! (`yᵀ(λ²M̂ + λĈ + K̂) = 0`) are the right singular vectors of the smallest singular value of
-//! the pencil at `λ` and of its transpose. The 2n roots form n modes: a complex-conjugate pair, or two real roots whose
-//! vectors are most alike. Per mode, with roots `λ₁, λ₂`:
+//! `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` (real Schur form, [`crate::schur`]); for each, the right vector `x`
+//! is read from the form's right eigenvector `[x; λx]`, and the left vector `y`
+//! (`yᵀ(λ²M̂ + λĈ + K̂) = 0`) from its left eigenvector `[·; M̂ᵀy]`, both by substitution on the
+//! Schur form (O(n²) each, O(n³) in all). The 2n roots form n modes: a complex-conjugate pair,
+//! or two real roots whose vectors are most alike. Per mode, with roots `λ₁, λ₂`:
 //!
 //! ```text
 //! ω_n = √|λ₁ λ₂|,  ζ = −(λ₁ + λ₂) / (2 ω_n),  ω_d = |Im λ| (0 when the roots are real)
@@ -14,6 +15,7 @@
 //! `overdamped`. All frequencies in rad/s.
 
 use crate::linalg;
+use crate::schur::RealSchur;
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// Complex scalar.
@@ -128,24 +130,46 @@ pub fn modes(
             a[(n + i, n + j)] = -mc[(i, j)];
         }
     }
-    let eig = linalg::complex_eigenvalues(a).ok_or(ModalError::NoConvergence {
+    let schur = RealSchur::new(a).ok_or(ModalError::NoConvergence {
         what: "real Schur form",
     })?;
+    let eig = schur.eigenvalues();
     let scale = eig
         .iter()
-        .fold(0.0f64, |s, l| s.max(l.norm()))
+        .fold(0.0f64, |s, e| s.max(e.lambda.norm()))
         .max(f64::MIN_POSITIVE);
-    let roots: Vec<Root> = eig
-        .iter()
-        .map(|&l| {
-            let l = if l.im.abs() <= IM_TOL * scale.max(l.norm()) {
-                C64::new(l.re, 0.0)
-            } else {
-                l
-            };
-            root(m, c, k, l)
-        })
-        .collect::<Result<_, _>>()?;
+    // The left vectors of the first-order form are `[·; Mᵀ y]`.
+    let lu_t = m.transpose().lu();
+    let mut roots = Vec::with_capacity(n + 1);
+    for e in &eig {
+        let l = e.lambda;
+        let l = if l.im.abs() <= IM_TOL * scale.max(l.norm()) {
+            C64::new(l.re, 0.0)
+        } else {
+            l
+        };
+        // A complex root's conjugate is its partner, with conjugate vectors.
+        if l.im < 0.0 {
+            continue;
+        }
+        // `[x; λx]`: the half that carries x with the smaller rounding.
+        let right = if l.norm() <= 1.0 {
+            schur.right(e, l, 0..n)
+        } else {
+            schur.right(e, l, n..2 * n) / l
+        };
+        let w2 = schur.left(e, l, n..2 * n);
+        let left = lu_t
+            .solve(&w2.map(|z| z.re))
+            .zip(lu_t.solve(&w2.map(|z| z.im)))
+            .map(|(re, im)| re.zip_map(&im, C64::new))
+            .ok_or(ModalError::SingularMass { condition })?;
+        roots.push(Root {
+            lambda: l,
+            right: normalize(right),
+            left: normalize(left),
+        });
+    }
     let mut out = Vec::new();
     let mut real: Vec<Root> = Vec::new();
     for r in roots {
@@ -255,54 +279,6 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
         root,
         partner,
     }
-}
-
-/// Right and left null vectors of `P(λ) = λ²M + λC + K` (unit norm).
-fn root(
-    m: &DMatrix<f64>,
-    c: &DMatrix<f64>,
-    k: &DMatrix<f64>,
-    lambda: C64,
-) -> Result<Root, ModalError> {
-    let n = m.nrows();
-    let p = DMatrix::from_fn(n, n, |i, j| {
-        lambda * lambda * m[(i, j)] + lambda * c[(i, j)] + k[(i, j)]
-    });
-    if n == 1 {
-        let one = DVector::from_element(1, C64::new(1.0, 0.0));
-        return Ok(Root {
-            lambda,
-            right: one.clone(),
-            left: one,
-        });
-    }
-    let right = null_vector(p.clone())?;
-    let left = null_vector(p.transpose())?;
-    Ok(Root {
-        lambda,
-        right: normalize(right),
-        left: normalize(left),
-    })
-}
-
-/// Right singular vector of the smallest singular value: `a v ≈ 0`.
-fn null_vector(a: DMatrix<C64>) -> Result<DVector<C64>, ModalError> {
-    let n = a.ncols();
-    let svd = linalg::svd(a, false, true).ok_or(ModalError::NoConvergence {
-        what: "SVD of the pencil at a root",
-    })?;
-    let imin = svd
-        .singular_values
-        .iter()
-        .enumerate()
-        .fold(
-            (0, f64::INFINITY),
-            |acc, (i, &s)| if s < acc.1 { (i, s) } else { acc },
-        )
-        .0;
-    let vt = svd.v_t.expect("requested");
-    // a = U Σ Vᴴ: the right singular vectors are the conjugated rows of Vᴴ.
-    Ok(DVector::from_fn(n, |i, _| vt[(imin, i)].conj()))
 }
 
 /// Scales to unit norm with the largest entry real and positive (a fixed phase).
