@@ -1050,13 +1050,63 @@ impl Tape {
         for (r, &live) in range.iter_mut().zip(&live) {
             *r = if live { (r.0, r.1 - r.0) } else { (0, 0) };
         }
+        let (slot, slots) = self.slots(&range, differentiated);
         Seeding {
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             seeds: seeds.to_vec(),
             lanes,
             range,
             differentiated,
+            slot,
+            slots,
         }
+    }
+
+    /// A row of the tangent buffer for every operation with lanes, reused once its last reader
+    /// has run (linear-scan allocation; the differentiated outputs keep theirs to the end): the
+    /// buffer holds the operations alive at once, not all of them. A chain's pass keeps a few
+    /// bodies' operations alive where it records all of them. Returns the rows and their number.
+    fn slots(&self, range: &[(u32, u32)], differentiated: usize) -> (Vec<u32>, usize) {
+        let n = self.ops.len();
+        // The last reader with lanes of each operation (`usize::MAX`: kept to the end).
+        let mut last: Vec<Option<usize>> = vec![None; n];
+        for (i, op) in self.ops.iter().enumerate() {
+            if range[i].1 > 0 {
+                for a in op.args().into_iter().flatten() {
+                    last[a as usize] = Some(i);
+                }
+            }
+        }
+        for o in &self.outputs[..differentiated] {
+            if let Var::Node(i, _) = *o {
+                last[i as usize] = Some(usize::MAX);
+            }
+        }
+        // For each operation, the operations whose last reader it is.
+        let mut ends: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (i, l) in last.iter().enumerate() {
+            match *l {
+                Some(l) if range[i].1 > 0 && l < n => ends[l].push(i as u32),
+                // Read by nothing: its row is free again at once.
+                None if range[i].1 > 0 => ends[i].push(i as u32),
+                _ => {}
+            }
+        }
+        let mut slot = vec![NO_SLOT; n];
+        let mut free: Vec<u32> = Vec::new();
+        let mut count = 0u32;
+        for i in 0..n {
+            if range[i].1 > 0 {
+                slot[i] = free.pop().unwrap_or_else(|| {
+                    count += 1;
+                    count - 1
+                });
+            }
+            for &a in &ends[i] {
+                free.push(slot[a as usize]);
+            }
+        }
+        (slot, count as usize)
     }
 
     /// Forward mode with several directions (lanes) at once: values of every output and first
@@ -1077,27 +1127,48 @@ impl Tape {
         work.val.clear();
         work.val.resize(self.ops.len(), zero);
         work.val[..ns].copy_from_slice(&fixed[..ns]);
-        // Lanes outside an operation's chunks are never written, so they stay zero as long as
-        // the buffer serves one seeding.
-        if work.seeding != seeding.id || work.tan.len() != self.ops.len() * stride {
+        // A row holds zeros outside what its operation wrote (`dirty`); a row taken over by
+        // another operation is cleared where the new one does not write.
+        if work.seeding != seeding.id || work.tan.len() != (seeding.slots + 1) * stride {
             work.tan.clear();
-            work.tan.resize(self.ops.len() * stride, zero);
+            work.tan.resize((seeding.slots + 1) * stride, zero);
+            work.dirty.clear();
+            work.dirty.resize(seeding.slots, (0, 0));
             work.seeding = seeding.id;
         }
-        let (val, tan) = (&mut work.val, &mut work.tan);
+        let (val, tan, dirty) = (&mut work.val, &mut work.tan, &mut work.dirty);
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
             let (lo, w) = seeding.range[i];
+            let at = seeding.slot[i];
+            if at != NO_SLOT {
+                let (lo, w) = (lo as usize, w as usize);
+                let written = if w == 1 {
+                    (lo, lo + 1)
+                } else {
+                    (lo, lo + w.div_ceil(CHUNK) * CHUNK)
+                };
+                let d = &mut dirty[at as usize];
+                if d.0 < written.0 || d.1 > written.1 {
+                    let row = at as usize * stride;
+                    tan[row + d.0..row + d.1].fill(zero);
+                }
+                *d = written;
+            }
             let lanes = Lanes {
                 stride,
-                at: i,
+                at: at as usize,
                 lo: lo as usize,
                 width: w as usize,
+                slot: &seeding.slot,
+                zero_row: seeding.slots,
             };
             let v = match *op {
                 Op::Input(k) => {
                     lanes.map(tan, [], |[]| zero);
-                    for &(_, l) in seeds.iter().filter(|s| s.0 == k as usize) {
-                        tan[i * stride + l] = S::from(1.0);
+                    if lanes.width > 0 {
+                        for &(_, l) in seeds.iter().filter(|s| s.0 == k as usize) {
+                            tan[lanes.at * stride + l] = S::from(1.0);
+                        }
                     }
                     x[k as usize]
                 }
@@ -1175,7 +1246,13 @@ impl Tape {
                     let i = i as usize;
                     values.push(val[i]);
                     if k < nd {
-                        derivs.extend_from_slice(&tan[i * stride..i * stride + lanes]);
+                        match seeding.slot[i] {
+                            NO_SLOT => derivs.extend(std::iter::repeat_n(zero, lanes)),
+                            at => {
+                                let row = at as usize * stride;
+                                derivs.extend_from_slice(&tan[row..row + lanes]);
+                            }
+                        }
                     }
                 }
             }
@@ -1188,39 +1265,47 @@ impl Tape {
 /// vectorises; the lane ranges are mostly 1 to 4 wide).
 const CHUNK: usize = 4;
 
-/// The lanes one operation of [`Tape::forward`] writes: `width` lanes from `lo` of operation
-/// `at`, in rows of `stride` (the lanes plus room for the last chunk).
-struct Lanes {
+/// The lanes one operation of [`Tape::forward`] writes: `width` lanes from `lo` of tangent row
+/// `at`, in rows of `stride` (the lanes plus room for the last chunk); `slot` gives each
+/// operation's row.
+struct Lanes<'a> {
     stride: usize,
     at: usize,
     lo: usize,
     width: usize,
+    slot: &'a [u32],
+    /// A row of zeros.
+    zero_row: usize,
 }
 
-impl Lanes {
+impl Lanes<'_> {
     /// `out[l] = f([arg[l] for arg in args])` over the operation's lanes, a single lane alone
     /// and wider ranges in whole chunks. A chunk's lanes beyond the range are outside every
     /// operand's range too, so they are written with zeros (the derivatives there) and the
-    /// zero invariant of [`Forward`] holds.
+    /// zero invariant of [`Forward`] holds. An operand's row is never the operation's own (it
+    /// is freed after the operation's row is taken).
     #[inline(always)]
     fn map<S: Copy, const K: usize>(&self, tan: &mut [S], args: [u32; K], f: impl Fn([S; K]) -> S) {
-        let (head, rest) = tan.split_at_mut(self.at * self.stride);
-        let base = args.map(|a| a as usize * self.stride + self.lo);
-        let out = &mut rest[self.lo..];
+        // An operand without lanes reads the zero row after the last.
+        let row = |a: u32| match self.slot[a as usize] {
+            NO_SLOT => self.zero_row,
+            r => r as usize,
+        };
+        let base = args.map(|a| row(a) * self.stride + self.lo);
+        let out = self.at * self.stride + self.lo;
         if self.width == 1 {
-            out[0] = f(base.map(|b| head[b]));
+            tan[out] = f(base.map(|b| tan[b]));
             return;
         }
         let mut k = 0;
         while k < self.width {
             let chunk: [[S; CHUNK]; K] = base.map(|b| {
-                head[b + k..b + k + CHUNK]
+                tan[b + k..b + k + CHUNK]
                     .try_into()
                     .expect("a chunk is CHUNK long")
             });
-            for (j, o) in out[k..k + CHUNK].iter_mut().enumerate() {
-                *o = f(chunk.map(|c| c[j]));
-            }
+            let value: [S; CHUNK] = std::array::from_fn(|j| f(chunk.map(|c| c[j])));
+            tan[out + k..out + k + CHUNK].copy_from_slice(&value);
             k += CHUNK;
         }
     }
@@ -1231,6 +1316,8 @@ impl Lanes {
 pub struct Forward<S> {
     val: Vec<S>,
     tan: Vec<S>,
+    /// The lanes each tangent row's last operation wrote (zeros elsewhere).
+    dirty: Vec<(usize, usize)>,
     /// The [`Seeding`] the buffer was last used with.
     seeding: usize,
 }
@@ -1252,6 +1339,7 @@ impl<S> Default for Forward<S> {
         Forward {
             val: Vec::new(),
             tan: Vec::new(),
+            dirty: Vec::new(),
             seeding: 0,
         }
     }
@@ -1267,4 +1355,10 @@ pub struct Seeding {
     range: Vec<(u32, u32)>,
     /// Outputs with derivatives (the first ones).
     differentiated: usize,
+    /// Tangent row of each operation ([`NO_SLOT`] for those without lanes), and their number.
+    slot: Vec<u32>,
+    slots: usize,
 }
+
+/// The tangent row of an operation without lanes.
+const NO_SLOT: u32 = u32::MAX;
