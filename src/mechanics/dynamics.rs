@@ -141,9 +141,8 @@ impl<T: Real> Screw<T> {
 pub struct Partials<T: Real> {
     /// `twist[i]`: `s_i`, for the coordinates asked for (`None` for the others).
     pub twist: Vec<Option<Screw<T>>>,
-    /// For every component `c` of every force element in order: `(body, ∂e_c/∂ξ)` for each end
-    /// body carried by a coordinate asked for (`ξ` a twist of that body alone).
-    pub de: Vec<Vec<(usize, Screw<T>)>>,
+    /// The derivatives of every force element's components (see [`EndPartials`]).
+    pub de: Vec<EndPartials<T>>,
     pub phi_q: DMatrix<T>,
     /// Rotation of every body at `q`.
     pub rot: Vec<M3<T>>,
@@ -156,11 +155,7 @@ impl<T: Real> Partials<T> {
     pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Partials<U> {
         Partials {
             twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
-            de: self
-                .de
-                .iter()
-                .map(|v| v.iter().map(|(b, g)| (*b, g.map(f))).collect())
-                .collect(),
+            de: self.de.iter().map(|e| e.map(f)).collect(),
             phi_q: self.phi_q.map(f),
             rot: self.rot.iter().map(|r| r.map(f)).collect(),
             cm: self.cm.iter().map(|x| x.map(f)).collect(),
@@ -241,74 +236,159 @@ pub fn partials<T: Real>(partial: &System<D1<T>>, q: &[T]) -> Partials<T> {
     partials_for(partial, q, &all)
 }
 
-/// `pose` moved by the unit twist `k` (`0..3`: a rotation about global axis `k` through the
-/// origin; `3..6`: a translation along axis `k − 3`) as its dual part, from a pose with none.
-fn nudged<T: Real>(pose: &Pose<D1<T>>, k: usize) -> Pose<D1<T>> {
-    let mut e = V3::from_element(cst::<T>(0.0));
-    e[k % 3] = cst(1.0);
+/// `pose` moved by the twist `s` (to first order) as its dual part, from a pose with none.
+fn nudged<T: Real>(pose: &Pose<D1<T>>, s: &Screw<T>) -> Pose<D1<T>> {
     let mut out = *pose;
     let trans = pose.trans.map(|c| c.re);
-    let d = if k < 3 { e.cross(&trans) } else { e };
+    let d = s.v + s.w.cross(&trans);
     for r in 0..3 {
         out.trans[r].eps = d[r];
     }
-    if k < 3 {
-        for c in 0..3 {
-            let col = e.cross(&V3::new(
-                pose.rot[(0, c)].re,
-                pose.rot[(1, c)].re,
-                pose.rot[(2, c)].re,
-            ));
-            for r in 0..3 {
-                out.rot[(r, c)].eps = col[r];
-            }
+    for c in 0..3 {
+        let col = s.w.cross(&V3::new(
+            pose.rot[(0, c)].re,
+            pose.rot[(1, c)].re,
+            pose.rot[(2, c)].re,
+        ));
+        for r in 0..3 {
+            out.rot[(r, c)].eps = col[r];
         }
     }
     out
 }
 
-/// Gradients of the values `f(pose1, pose2)` with respect to a twist of each end body that one
-/// of the coordinates `coords` moves: for each value, `(body, gradient)` per such end.
-fn end_gradients<T: Real>(
-    sys: &System<D1<T>>,
-    p: &[Pose<D1<T>>],
-    ends: [Option<usize>; 2],
-    coords: &[usize],
-    f: impl Fn(&Pose<D1<T>>, &Pose<D1<T>>, &mut Vec<D1<T>>),
-) -> Vec<Vec<(usize, Screw<T>)>> {
-    let ground = Pose::identity();
-    let pose = |b: Option<usize>| b.map_or(ground, |b| p[b]);
-    let (x1, x2) = (pose(ends[0]), pose(ends[1]));
-    let mut out: Vec<Vec<(usize, Screw<T>)>> = Vec::new();
-    let mut values = Vec::new();
-    for (e, body) in ends.iter().enumerate() {
-        let Some(b) = *body else { continue };
-        if !coords.iter().any(|&i| sys.moves(i, b)) {
-            continue;
+/// The unit twist `k`: `0..3` a rotation about global axis `k` through the origin, `3..6` a
+/// translation along axis `k − 3`.
+fn unit_twist<T: Real>(k: usize) -> Screw<T> {
+    let mut s = Screw::zero();
+    if k < 3 {
+        s.w[k] = cst(1.0);
+    } else {
+        s.v[k - 3] = cst(1.0);
+    }
+    s
+}
+
+/// The first derivatives of the values `f(pose1, pose2)` of a force element's components or
+/// of a cut joint's equations, in whichever of two forms costs fewer dual evaluations (a
+/// choice from the tree alone, so the same for every value of the inputs):
+///
+/// * per coordinate: `∂f/∂q_i` for each coordinate of `coords` that moves an end, both ends
+///   moved by its twist at once (shallow trees: a few coordinates);
+/// * per end body: the gradient with respect to a twist of that body alone, six evaluations
+///   per end, whatever the depth (the coordinates' derivatives are then `s_i` paired with it).
+#[derive(Debug, Clone)]
+pub enum EndPartials<T: Real> {
+    /// For each value, `(coordinate, ∂f/∂q_i)`.
+    Coordinates(Vec<Vec<(usize, T)>>),
+    /// For each value, `(body, ∂f/∂ξ)`.
+    Bodies(Vec<Vec<(usize, Screw<T>)>>),
+}
+
+impl<T: Real> EndPartials<T> {
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> EndPartials<U> {
+        match self {
+            EndPartials::Coordinates(v) => EndPartials::Coordinates(
+                v.iter()
+                    .map(|l| l.iter().map(|&(i, d)| (i, f(d))).collect())
+                    .collect(),
+            ),
+            EndPartials::Bodies(v) => EndPartials::Bodies(
+                v.iter()
+                    .map(|l| l.iter().map(|(b, g)| (*b, g.map(f))).collect())
+                    .collect(),
+            ),
         }
-        let mut g: Vec<Screw<T>> = Vec::new();
-        for k in 0..6 {
-            values.clear();
-            if e == 0 {
-                f(&nudged(&x1, k), &x2, &mut values);
-            } else {
-                f(&x1, &nudged(&x2, k), &mut values);
+    }
+
+    /// `∂f_k/∂q_i` for every coordinate `i` with a twist, added into `out(k, i)`.
+    fn add_columns<U: Real>(
+        &self,
+        sys: &System<U>,
+        twist: &[Option<Screw<T>>],
+        mut out: impl FnMut(usize, usize, T),
+    ) {
+        match self {
+            EndPartials::Coordinates(v) => {
+                for (k, l) in v.iter().enumerate() {
+                    for &(i, d) in l {
+                        out(k, i, d);
+                    }
+                }
             }
-            g.resize(values.len(), Screw::zero());
-            for (gc, v) in g.iter_mut().zip(&values) {
-                if k < 3 {
-                    gc.w[k] = v.eps;
-                } else {
-                    gc.v[k - 3] = v.eps;
+            EndPartials::Bodies(v) => {
+                for (k, l) in v.iter().enumerate() {
+                    for (b, g) in l {
+                        for (i, s) in twist.iter().enumerate() {
+                            if let Some(s) = s
+                                && sys.moves(i, *b)
+                            {
+                                out(k, i, s.pair(g));
+                            }
+                        }
+                    }
                 }
             }
         }
-        out.resize(g.len(), Vec::new());
+    }
+}
+
+/// [`EndPartials`] of `f` (which pushes `values` values) between the bodies `ends`.
+fn end_partials<T: Real>(
+    sys: &System<D1<T>>,
+    p: &[Pose<D1<T>>],
+    ends: [Option<usize>; 2],
+    twist: &[Option<Screw<T>>],
+    values: usize,
+    f: impl Fn(&Pose<D1<T>>, &Pose<D1<T>>, &mut Vec<D1<T>>),
+) -> EndPartials<T> {
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(ground, |b| p[b]);
+    let (x1, x2) = (pose(ends[0]), pose(ends[1]));
+    let moves = |i: usize, b: Option<usize>| b.is_some_and(|b| sys.moves(i, b));
+    let movers: Vec<usize> = (0..twist.len())
+        .filter(|&i| twist[i].is_some() && (moves(i, ends[0]) || moves(i, ends[1])))
+        .collect();
+    let moving_ends: Vec<usize> = (0..2)
+        .filter(|&e| movers.iter().any(|&i| moves(i, ends[e])))
+        .collect();
+    let mut buf = Vec::with_capacity(values);
+    if movers.len() <= 6 * moving_ends.len() {
+        let mut out = vec![Vec::with_capacity(movers.len()); values];
+        for &i in &movers {
+            let s = twist[i].as_ref().expect("a mover has a twist");
+            let nudge = |e: usize, x: &Pose<D1<T>>| {
+                if moves(i, ends[e]) { nudged(x, s) } else { *x }
+            };
+            buf.clear();
+            f(&nudge(0, &x1), &nudge(1, &x2), &mut buf);
+            for (o, v) in out.iter_mut().zip(&buf) {
+                o.push((i, v.eps));
+            }
+        }
+        return EndPartials::Coordinates(out);
+    }
+    let mut out = vec![Vec::with_capacity(2); values];
+    for &e in &moving_ends {
+        let b = ends[e].expect("a moving end is a body");
+        let mut g = vec![Screw::zero(); values];
+        for k in 0..6 {
+            let u = unit_twist(k);
+            buf.clear();
+            if e == 0 {
+                f(&nudged(&x1, &u), &x2, &mut buf);
+            } else {
+                f(&x1, &nudged(&x2, &u), &mut buf);
+            }
+            for (gc, v) in g.iter_mut().zip(&buf) {
+                gc.add_scaled(&u, v.eps);
+            }
+        }
         for (o, gc) in out.iter_mut().zip(g) {
             o.push((b, gc));
         }
     }
-    out
+    EndPartials::Bodies(out)
 }
 
 /// Partial velocities for the coordinates `coords` only (one dual pass of its joint each).
@@ -335,35 +415,36 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             v: pose.trans.map(|c| c.eps) - w.cross(&t),
         });
     }
-    // Force elements: one list per component.
-    let mut de = Vec::new();
-    for e in &partial.forces {
-        let g = &e.geometry;
-        let grads = end_gradients(partial, &p0, [g.body1, g.body2], coords, |x1, x2, out| {
-            e.kind.deformation(g, x1, x2, out)
-        });
-        let mut grads = grads.into_iter();
-        de.extend((0..e.free.len()).map(|_| grads.next().unwrap_or_default()));
-    }
+    let de = partial
+        .forces
+        .iter()
+        .map(|e| {
+            let g = &e.geometry;
+            end_partials(
+                partial,
+                &p0,
+                [g.body1, g.body2],
+                &twist,
+                e.free.len(),
+                |x1, x2, out| e.kind.deformation(g, x1, x2, out),
+            )
+        })
+        .collect();
     let mut phi_q = DMatrix::from_element(partial.m, n, cst::<T>(0.0));
     let mut row = 0;
     for c in &partial.constraints {
         let g = &c.geometry;
-        let grads = end_gradients(partial, &p0, [g.body1, g.body2], coords, |x1, x2, out| {
-            c.kind.values(g, x1, x2, out)
-        });
-        for (k, ends) in grads.iter().enumerate() {
-            for (b, gk) in ends {
-                for &i in coords {
-                    if let Some(s) = &twist[i]
-                        && partial.moves(i, *b)
-                    {
-                        phi_q[(row + k, i)] += s.pair(gk);
-                    }
-                }
-            }
-        }
-        row += c.kind.equations();
+        let rows = c.kind.equations();
+        end_partials(
+            partial,
+            &p0,
+            [g.body1, g.body2],
+            &twist,
+            rows,
+            |x1, x2, out| c.kind.values(g, x1, x2, out),
+        )
+        .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
+        row += rows;
     }
     Partials {
         twist,
@@ -432,15 +513,24 @@ pub fn evaluate_with<T: Real>(
     let mut element_force = Vec::new();
     let deformation = element_deformations(&l.time, &pt);
     let mut e = deformation.iter();
-    let mut grads = j.de.iter();
-    for el in &sys.forces {
+    // Derivatives per coordinate, paired with the forces after the projection.
+    let mut direct = Vec::new();
+    for (el, partials) in sys.forces.iter().zip(&j.de) {
+        let first = element_force.len();
         for c in 0..el.free.len() {
             let d = e.next().expect("one deformation per component");
-            let f = el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c];
-            element_force.push(f);
-            for (b, g) in grads.next().expect("one gradient list per component") {
-                wrench[*b].add_scaled(g, f);
+            element_force
+                .push(el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c]);
+        }
+        match partials {
+            EndPartials::Bodies(g) => {
+                for (f, ends) in element_force[first..].iter().zip(g) {
+                    for (b, gc) in ends {
+                        wrench[*b].add_scaled(gc, *f);
+                    }
+                }
             }
+            EndPartials::Coordinates(_) => direct.push((first, partials)),
         }
     }
     let phi: Vec<T> = constraint_values(&l.time, &pt)
@@ -461,6 +551,11 @@ pub fn evaluate_with<T: Real>(
             None => cst::<T>(f64::NAN),
         })
         .collect();
+    for (first, partials) in direct {
+        partials.add_columns(sys, &j.twist, |k, i, d| {
+            r[i] += element_force[first + k] * d;
+        });
+    }
     for e in &sys.joint_elements {
         r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
     }
