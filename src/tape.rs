@@ -1050,14 +1050,13 @@ impl Tape {
         for (r, &live) in range.iter_mut().zip(&live) {
             *r = if live { (r.0, r.1 - r.0) } else { (0, 0) };
         }
-        let (slot, slots) = self.slots(&range, differentiated);
+        let slots = self.slots(&range, lanes, differentiated);
         Seeding {
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             seeds: seeds.to_vec(),
             lanes,
             range,
             differentiated,
-            slot,
             slots,
         }
     }
@@ -1066,8 +1065,16 @@ impl Tape {
     /// has run (linear-scan allocation; the differentiated outputs keep theirs to the end): the
     /// buffer holds the operations alive at once, not all of them. A chain's pass keeps a few
     /// bodies' operations alive where it records all of them. Returns the rows and their number.
-    fn slots(&self, range: &[(u32, u32)], differentiated: usize) -> (Vec<u32>, usize) {
+    fn slots(&self, range: &[(u32, u32)], lanes: usize, differentiated: usize) -> Slots {
         let n = self.ops.len();
+        // A buffer of one row per operation is kept when small: no clearing on takeover.
+        if n * (lanes + CHUNK - 1) <= SMALL_BUFFER {
+            return Slots {
+                slot: (0..n as u32).collect(),
+                rows: n,
+                reuse: false,
+            };
+        }
         // The last reader with lanes of each operation (`usize::MAX`: kept to the end).
         let mut last: Vec<Option<usize>> = vec![None; n];
         for (i, op) in self.ops.iter().enumerate() {
@@ -1092,7 +1099,7 @@ impl Tape {
                 _ => {}
             }
         }
-        let mut slot = vec![NO_SLOT; n];
+        let mut slot = vec![u32::MAX; n];
         let mut free: Vec<u32> = Vec::new();
         let mut count = 0u32;
         for i in 0..n {
@@ -1106,7 +1113,17 @@ impl Tape {
                 free.push(slot[a as usize]);
             }
         }
-        (slot, count as usize)
+        // The operations without lanes read the zero row after the last.
+        for s in &mut slot {
+            if *s == u32::MAX {
+                *s = count;
+            }
+        }
+        Slots {
+            slot,
+            rows: count as usize,
+            reuse: true,
+        }
     }
 
     /// Forward mode with several directions (lanes) at once: values of every output and first
@@ -1114,6 +1131,22 @@ impl Tape {
     /// outputs' values and those derivatives (`differentiated × lanes`, row-major). The local derivative of each elementary
     /// function comes from evaluating it over a dual number; the lanes carry the chain rule.
     pub fn forward<S: Real>(
+        &self,
+        fixed: &[S],
+        x: &[S],
+        seeding: &Seeding,
+        work: &mut Forward<S>,
+    ) -> (Vec<S>, Vec<S>) {
+        if seeding.slots.reuse {
+            self.forward_with::<S, true>(fixed, x, seeding, work)
+        } else {
+            self.forward_with::<S, false>(fixed, x, seeding, work)
+        }
+    }
+
+    /// [`Tape::forward`] with rows shared or not (two compiled loops: the small programs'
+    /// one keeps no bookkeeping of shared rows).
+    fn forward_with<S: Real, const REUSE: bool>(
         &self,
         fixed: &[S],
         x: &[S],
@@ -1129,18 +1162,19 @@ impl Tape {
         work.val[..ns].copy_from_slice(&fixed[..ns]);
         // A row holds zeros outside what its operation wrote (`dirty`); a row taken over by
         // another operation is cleared where the new one does not write.
-        if work.seeding != seeding.id || work.tan.len() != (seeding.slots + 1) * stride {
+        let rows = seeding.slots.rows + 1;
+        if work.seeding != seeding.id || work.tan.len() != rows * stride {
             work.tan.clear();
-            work.tan.resize((seeding.slots + 1) * stride, zero);
+            work.tan.resize(rows * stride, zero);
             work.dirty.clear();
-            work.dirty.resize(seeding.slots, (0, 0));
+            work.dirty.resize(rows, (0, 0));
             work.seeding = seeding.id;
         }
         let (val, tan, dirty) = (&mut work.val, &mut work.tan, &mut work.dirty);
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
             let (lo, w) = seeding.range[i];
-            let at = seeding.slot[i];
-            if at != NO_SLOT {
+            let at = seeding.slots.slot[i];
+            if REUSE && w > 0 {
                 let (lo, w) = (lo as usize, w as usize);
                 let written = if w == 1 {
                     (lo, lo + 1)
@@ -1154,13 +1188,12 @@ impl Tape {
                 }
                 *d = written;
             }
-            let lanes = Lanes {
+            let lanes = Lanes::<REUSE> {
                 stride,
                 at: at as usize,
                 lo: lo as usize,
                 width: w as usize,
-                slot: &seeding.slot,
-                zero_row: seeding.slots,
+                slot: &seeding.slots.slot,
             };
             let v = match *op {
                 Op::Input(k) => {
@@ -1246,13 +1279,8 @@ impl Tape {
                     let i = i as usize;
                     values.push(val[i]);
                     if k < nd {
-                        match seeding.slot[i] {
-                            NO_SLOT => derivs.extend(std::iter::repeat_n(zero, lanes)),
-                            at => {
-                                let row = at as usize * stride;
-                                derivs.extend_from_slice(&tan[row..row + lanes]);
-                            }
-                        }
+                        let row = seeding.slots.slot[i] as usize * stride;
+                        derivs.extend_from_slice(&tan[row..row + lanes]);
                     }
                 }
             }
@@ -1268,17 +1296,15 @@ const CHUNK: usize = 4;
 /// The lanes one operation of [`Tape::forward`] writes: `width` lanes from `lo` of tangent row
 /// `at`, in rows of `stride` (the lanes plus room for the last chunk); `slot` gives each
 /// operation's row.
-struct Lanes<'a> {
+struct Lanes<'a, const REUSE: bool> {
     stride: usize,
     at: usize,
     lo: usize,
     width: usize,
     slot: &'a [u32],
-    /// A row of zeros.
-    zero_row: usize,
 }
 
-impl Lanes<'_> {
+impl<const REUSE: bool> Lanes<'_, REUSE> {
     /// `out[l] = f([arg[l] for arg in args])` over the operation's lanes, a single lane alone
     /// and wider ranges in whole chunks. A chunk's lanes beyond the range are outside every
     /// operand's range too, so they are written with zeros (the derivatives there) and the
@@ -1286,12 +1312,29 @@ impl Lanes<'_> {
     /// is freed after the operation's row is taken).
     #[inline(always)]
     fn map<S: Copy, const K: usize>(&self, tan: &mut [S], args: [u32; K], f: impl Fn([S; K]) -> S) {
-        // An operand without lanes reads the zero row after the last.
-        let row = |a: u32| match self.slot[a as usize] {
-            NO_SLOT => self.zero_row,
-            r => r as usize,
-        };
-        let base = args.map(|a| row(a) * self.stride + self.lo);
+        let base = args.map(|a| self.slot[a as usize] as usize * self.stride + self.lo);
+        if !REUSE {
+            // Every operand's row is before the operation's own.
+            let (head, rest) = tan.split_at_mut(self.at * self.stride);
+            let out = &mut rest[self.lo..];
+            if self.width == 1 {
+                out[0] = f(base.map(|b| head[b]));
+                return;
+            }
+            let mut k = 0;
+            while k < self.width {
+                let chunk: [[S; CHUNK]; K] = base.map(|b| {
+                    head[b + k..b + k + CHUNK]
+                        .try_into()
+                        .expect("a chunk is CHUNK long")
+                });
+                for (j, o) in out[k..k + CHUNK].iter_mut().enumerate() {
+                    *o = f(chunk.map(|c| c[j]));
+                }
+                k += CHUNK;
+            }
+            return;
+        }
         let out = self.at * self.stride + self.lo;
         if self.width == 1 {
             tan[out] = f(base.map(|b| tan[b]));
@@ -1355,10 +1398,18 @@ pub struct Seeding {
     range: Vec<(u32, u32)>,
     /// Outputs with derivatives (the first ones).
     differentiated: usize,
-    /// Tangent row of each operation ([`NO_SLOT`] for those without lanes), and their number.
-    slot: Vec<u32>,
-    slots: usize,
+    slots: Slots,
 }
 
-/// The tangent row of an operation without lanes.
-const NO_SLOT: u32 = u32::MAX;
+/// The tangent rows of a [`Seeding`]'s operations.
+#[derive(Debug, Clone)]
+struct Slots {
+    /// Row of each operation; the operations without lanes read row `rows`, which stays zero.
+    slot: Vec<u32>,
+    rows: usize,
+    /// Rows are shared by operations alive at different times.
+    reuse: bool,
+}
+
+/// Tangent buffers up to this many numbers (8 MB of `f64`) keep one row per operation.
+const SMALL_BUFFER: usize = 1 << 20;
