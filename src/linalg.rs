@@ -6,7 +6,7 @@
 //! few solves that must carry derivatives (the independent-coordinate basis) use this
 //! elimination, pivoting on real parts.
 //!
-//! **Every iterative factorisation goes through this module** ([`svd`], [`schur`],
+//! **Every iterative factorisation goes through this module** ([`svd`], [`schur`], [`eigen_dense`],
 //! [`symmetric_eigen`]). nalgebra's plain calls iterate without bound and panic on a NaN they
 //! produce themselves: entries near `f64::MAX` overflow inside the QR sweeps, after which the
 //! iteration never converges (a hang) or a singular value is NaN (a panic). Here the input must be
@@ -85,6 +85,47 @@ pub fn schur(a: DMatrix<f64>) -> Option<(DMatrix<f64>, DMatrix<f64>, f64)> {
     let n = a.nrows();
     let (q, t) = Schur::try_new(scaled(a, s), f64::EPSILON, sweeps(n))?.unpack();
     Some((q, t, s))
+}
+
+/// `(eigenvalues, left vectors, right vectors)` of [`eigen_dense`].
+pub type DenseEigen = (Vec<nalgebra::Complex<f64>>, DMatrix<f64>, DMatrix<f64>);
+
+/// Eigenvalues of a real square matrix with its left and right eigenvectors by faer's blocked
+/// Hessenberg reduction, multishift QR and triangular eigenvector solves (LAPACK's `dgeev`
+/// layout: a complex pair's vectors are the real and imaginary parts in two adjacent columns, the
+/// one with positive imaginary part first), as `(eigenvalues, left, right)`. `None` when `a` is
+/// not finite or the iteration does not converge.
+pub fn eigen_dense(a: &DMatrix<f64>) -> Option<DenseEigen> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{ComputeEigenvectors, evd_real, evd_scratch};
+    let s = balance(a)?;
+    let n = a.nrows();
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| a[(i, j)] * s);
+    let (mut re, mut im) = (
+        faer::diag::Diag::<f64>::zeros(n),
+        faer::diag::Diag::<f64>::zeros(n),
+    );
+    let (mut ul, mut ur) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, n));
+    let par = faer::Par::Seq;
+    let yes = ComputeEigenvectors::Yes;
+    let mut buf = MemBuffer::new(evd_scratch::<f64>(n, yes, yes, par, Default::default()));
+    evd_real(
+        m.as_ref(),
+        re.as_mut(),
+        im.as_mut(),
+        Some(ul.as_mut()),
+        Some(ur.as_mut()),
+        par,
+        MemStack::new(&mut buf),
+        Default::default(),
+    )
+    .ok()?;
+    let values = (0..n)
+        .map(|k| nalgebra::Complex::new(re.column_vector()[k] / s, im.column_vector()[k] / s))
+        .collect();
+    let left = DMatrix::from_fn(n, n, |i, j| ul[(i, j)]);
+    let right = DMatrix::from_fn(n, n, |i, j| ur[(i, j)]);
+    Some((values, left, right))
 }
 
 /// Eigen-decomposition of a real symmetric matrix (eigenvalues unsorted), or `None` when `a`

@@ -1,10 +1,10 @@
 //! Damped modal analysis of `M̂ z̈ + Ĉ ż + K̂ z = 0` (Kim & Yoo 2007, eq. 23).
 //!
 //! Eigenvalues of `(λ² M̂ + λ Ĉ + K̂) x = 0` come from the 2n×2n first-order form
-//! `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` (real Schur form, [`crate::schur`]); for each, the right vector `x`
+//! `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` ([`crate::schur::Eigen`]: the real Schur form); for each, the right vector `x`
 //! is read from the form's right eigenvector `[x; λx]`, and the left vector `y`
 //! (`yᵀ(λ²M̂ + λĈ + K̂) = 0`) from its left eigenvector `[·; M̂ᵀy]`, both by substitution on the
-//! Schur form (O(n²) each, O(n³) in all). The 2n roots form n modes: a complex-conjugate pair,
+//! Schur form (O(n²) each, O(n³) in all; faer's blocked `dgeev` from 16 rows on). The 2n roots form n modes: a complex-conjugate pair,
 //! or two real roots whose vectors are most alike. Per mode, with roots `λ₁, λ₂`:
 //!
 //! ```text
@@ -15,7 +15,7 @@
 //! `overdamped`. All frequencies in rad/s.
 
 use crate::linalg;
-use crate::schur::RealSchur;
+use crate::schur::Eigen;
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// Complex scalar.
@@ -130,35 +130,37 @@ pub fn modes(
             a[(n + i, n + j)] = -mc[(i, j)];
         }
     }
-    let schur = RealSchur::new(a).ok_or(ModalError::NoConvergence {
-        what: "real Schur form",
+    let eigen = Eigen::new(a).ok_or(ModalError::NoConvergence {
+        what: "eigenvalues of the first-order form",
     })?;
-    let eig = schur.eigenvalues();
+    let eig = eigen.values();
     let scale = eig
         .iter()
-        .fold(0.0f64, |s, e| s.max(e.lambda.norm()))
+        .fold(0.0f64, |s, l| s.max(l.norm()))
         .max(f64::MIN_POSITIVE);
     // The left vectors of the first-order form are `[·; Mᵀ y]`.
     let lu_t = m.transpose().lu();
-    let mut roots = Vec::with_capacity(n + 1);
-    for e in &eig {
-        let l = e.lambda;
-        let l = if l.im.abs() <= IM_TOL * scale.max(l.norm()) {
-            C64::new(l.re, 0.0)
-        } else {
-            l
-        };
-        // A complex root's conjugate is its partner, with conjugate vectors.
+    let mut roots: Vec<Root> = Vec::with_capacity(n + 1);
+    for (k, &l0) in eig.iter().enumerate() {
+        let snapped = l0.im != 0.0 && l0.im.abs() <= IM_TOL * scale.max(l0.norm());
+        let l = if snapped { C64::new(l0.re, 0.0) } else { l0 };
+        // A complex root's conjugate is its partner, with conjugate vectors; a pair rounded to
+        // two real roots shares the vectors of its first.
         if l.im < 0.0 {
+            continue;
+        }
+        if snapped && l0.im < 0.0 {
+            let twin = roots.last().expect("the pair's first root").clone();
+            roots.push(Root { lambda: l, ..twin });
             continue;
         }
         // `[x; λx]`: the half that carries x with the smaller rounding.
         let right = if l.norm() <= 1.0 {
-            schur.right(e, l, 0..n)
+            eigen.right(k, l, 0..n)
         } else {
-            schur.right(e, l, n..2 * n) / l
+            eigen.right(k, l, n..2 * n) / l
         };
-        let w2 = schur.left(e, l, n..2 * n);
+        let w2 = eigen.left(k, l, n..2 * n);
         let left = lu_t
             .solve(&w2.map(|z| z.re))
             .zip(lu_t.solve(&w2.map(|z| z.im)))

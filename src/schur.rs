@@ -215,6 +215,98 @@ impl RealSchur {
     }
 }
 
+/// Matrices from this size on take faer's blocked `dgeev` ([`linalg::eigen_dense`]), all
+/// vectors at once; smaller ones nalgebra's Schur form with vectors by substitution for the
+/// roots asked for (less set-up: the governor's 4×4 form is solved in a fraction of the time).
+pub const DENSE_FROM: usize = 16;
+
+/// Eigenvalues of a real matrix with right and left eigenvectors, by the route that is faster
+/// at its size (see [`DENSE_FROM`]).
+#[derive(Debug, Clone)]
+pub enum Eigen {
+    Schur(RealSchur, Vec<Eigenvalue>),
+    /// `dgeev`'s layout (see [`linalg::eigen_dense`]).
+    Dense {
+        values: Vec<C64>,
+        left: DMatrix<f64>,
+        right: DMatrix<f64>,
+    },
+}
+
+impl Eigen {
+    /// `None` when `a` is not finite or the iteration does not converge.
+    pub fn new(a: DMatrix<f64>) -> Option<Eigen> {
+        // faer's vector solves do not guard against growth: a stiff spectrum (a long chain's
+        // highest modes next to its lowest) can overflow them, and the substitution here,
+        // which keeps every vector finite, takes over.
+        let finite = |m: &DMatrix<f64>| m.iter().all(|v| v.is_finite());
+        if a.nrows() >= DENSE_FROM
+            && let Some((values, left, right)) = linalg::eigen_dense(&a)
+            && finite(&left)
+            && finite(&right)
+        {
+            Some(Eigen::Dense {
+                values,
+                left,
+                right,
+            })
+        } else {
+            let s = RealSchur::new(a)?;
+            let e = s.eigenvalues();
+            Some(Eigen::Schur(s, e))
+        }
+    }
+
+    /// The eigenvalues; a complex pair's two adjacent.
+    pub fn values(&self) -> Vec<C64> {
+        match self {
+            Eigen::Schur(_, e) => e.iter().map(|e| e.lambda).collect(),
+            Eigen::Dense { values, .. } => values.clone(),
+        }
+    }
+
+    /// Rows `rows` of the right eigenvector of eigenvalue `k` (`A x = λ x`), computed at
+    /// `lambda` (its value, or one rounded from it) where the route computes per root.
+    pub fn right(&self, k: usize, lambda: C64, rows: std::ops::Range<usize>) -> DVector<C64> {
+        match self {
+            Eigen::Schur(s, e) => s.right(&e[k], lambda, rows),
+            Eigen::Dense { values, right, .. } => packed(right, values, k, rows, false),
+        }
+    }
+
+    /// Rows `rows` of the left eigenvector of eigenvalue `k` (`yᵀ A = λ yᵀ`).
+    pub fn left(&self, k: usize, lambda: C64, rows: std::ops::Range<usize>) -> DVector<C64> {
+        match self {
+            Eigen::Schur(s, e) => s.left(&e[k], lambda, rows),
+            // dgeev's left vectors are `uᴴ A = λ uᴴ`: `y = ū`.
+            Eigen::Dense { values, left, .. } => packed(left, values, k, rows, true),
+        }
+    }
+}
+
+/// The vector of eigenvalue `k` from `dgeev`'s real layout, conjugated with `conj`.
+fn packed(
+    v: &DMatrix<f64>,
+    values: &[C64],
+    k: usize,
+    rows: std::ops::Range<usize>,
+    conj: bool,
+) -> DVector<C64> {
+    let im = values[k].im;
+    let (re_col, im_col, sign) = if im > 0.0 {
+        (k, Some(k + 1), 1.0)
+    } else if im < 0.0 {
+        (k - 1, Some(k), -1.0)
+    } else {
+        (k, None, 1.0)
+    };
+    let sign = if conj { -sign } else { sign };
+    DVector::from_iterator(
+        rows.len(),
+        rows.map(|r| C64::new(v[(r, re_col)], im_col.map_or(0.0, |c| sign * v[(r, c)]))),
+    )
+}
+
 /// Scales `v` down by a power of two when an entry grows past `2^500` (a nearly repeated
 /// eigenvalue makes the substitution grow), keeping it finite; the direction is unchanged.
 fn rescale(v: &mut [C64]) {
@@ -234,28 +326,43 @@ mod tests {
     /// `‖A x − λ x‖ / ‖x‖` and `‖yᵀ A − λ yᵀ‖ / ‖y‖` for every eigenvalue of `a`.
     fn residuals(a: &DMatrix<f64>) -> f64 {
         let n = a.nrows();
-        let s = RealSchur::new(a.clone()).unwrap();
+        let e = Eigen::new(a.clone()).unwrap();
         let ac = a.map(|v| C64::new(v, 0.0));
         let mut worst = 0.0f64;
-        for e in s.eigenvalues() {
-            let x = s.right(&e, e.lambda, 0..n);
-            let y = s.left(&e, e.lambda, 0..n);
-            let rx = (&ac * &x - &x * e.lambda).norm() / x.norm();
-            let ry = (ac.transpose() * &y - &y * e.lambda).norm() / y.norm();
+        for (k, l) in e.values().into_iter().enumerate() {
+            let x = e.right(k, l, 0..n);
+            let y = e.left(k, l, 0..n);
+            let rx = (&ac * &x - &x * l).norm() / x.norm();
+            let ry = (ac.transpose() * &y - &y * l).norm() / y.norm();
             worst = worst.max(rx).max(ry);
         }
         worst / a.amax()
     }
 
-    #[test]
-    fn vectors_of_a_random_matrix_satisfy_their_equations() {
-        // A fixed pseudo-random 12×12 matrix: complex pairs and real eigenvalues.
+    fn pseudo_random(n: usize) -> DMatrix<f64> {
         let mut x = 0.3f64;
-        let a = DMatrix::from_fn(12, 12, |_, _| {
+        DMatrix::from_fn(n, n, |_, _| {
             x = (x * 3.7 + 0.11).fract();
             x - 0.5
-        });
-        assert!(residuals(&a) < 1e-13, "{}", residuals(&a));
+        })
+    }
+
+    #[test]
+    fn vectors_of_a_random_matrix_satisfy_their_equations_on_both_routes() {
+        // Fixed pseudo-random matrices, one below and one above DENSE_FROM: complex pairs and
+        // real eigenvalues.
+        assert!(matches!(
+            Eigen::new(pseudo_random(12)),
+            Some(Eigen::Schur(..))
+        ));
+        assert!(matches!(
+            Eigen::new(pseudo_random(40)),
+            Some(Eigen::Dense { .. })
+        ));
+        for n in [12, 40] {
+            let a = pseudo_random(n);
+            assert!(residuals(&a) < 1e-13, "{n}: {}", residuals(&a));
+        }
     }
 
     #[test]
@@ -268,6 +375,15 @@ mod tests {
         assert!(residuals(&j) < 1e-12, "{}", residuals(&j));
         let d = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1.0, 3.0, 3.0]));
         assert!(residuals(&d) < 1e-14);
+        // The same on the dense route: a 20×20 Jordan block beside a repeated pair.
+        let mut j = DMatrix::identity(20, 20) * 2.0;
+        for i in 0..9 {
+            j[(i, i + 1)] = 1.0;
+        }
+        j[(18, 18)] = 5.0;
+        j[(19, 19)] = 5.0;
+        let r = residuals(&j);
+        assert!(r.is_finite() && r < 1e-12, "{r}");
     }
 
     #[test]
