@@ -387,6 +387,17 @@ mod tests {
     }
 
     #[test]
+    fn eigenvalues_near_the_largest_double_are_found_from_the_balanced_form() {
+        // Entries near f64::MAX overflow inside nalgebra's unscaled sweeps; balanced by a power
+        // of two, λ = 1e308 (1 ± i) comes out exact to rounding.
+        let big = DMatrix::from_row_slice(2, 2, &[1e308, -1e308, 1e308, 1e308]);
+        for e in RealSchur::new(big).unwrap().eigenvalues() {
+            let l = e.lambda;
+            assert!((l.re / 1e308 - 1.0).abs() < 1e-12 && (l.im.abs() / 1e308 - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
     fn the_eigenvalues_of_a_rotation_block_are_its_complex_pair() {
         let a = DMatrix::from_row_slice(2, 2, &[0.0, -2.0, 2.0, 0.0]);
         let s = RealSchur::new(a.clone()).unwrap();

@@ -4,6 +4,8 @@
 //! centrifugal stiffening `dω₁²/dΩ²` at low speed to Southwell's coefficient `S = 1.193`
 //! (zero hub radius), as N grows. The shipped example is the N = 20 chain.
 
+#[path = "../examples/common/chain.rs"]
+mod chain;
 mod common;
 
 use common::solve;
@@ -102,43 +104,14 @@ fn the_shipped_blade_is_the_twenty_segment_chain() {
     }
 }
 
-/// The benchmark's chain (`examples/scale_chain.rs`): the blade with its rates as toleranced
-/// parameters and `h` written as a number.
-fn benchmark_chain(n: usize) -> String {
-    let mut s = format!(
-        "name = \"chain {n}\"\ngravity = [0, 0, 0]\n[parameters]\n\
-         mu = {{ value = 2.0, tolerance = \"2%\" }}\nEI = {{ value = 50.0, tolerance = \"5%\" }}\n\
-         h = {}\n[[bodies]]\nname = \"hub\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\n\
-         cm = [0, 0, 0]\n[[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\n\
-         child = \"hub\"\nat = [0, 0, 0]\naxis = [0, 0, 1]\ndrive = \"speed\"\n",
-        1.0 / n as f64
-    );
-    for i in 0..n {
-        let parent = if i == 0 {
-            "hub".into()
-        } else {
-            format!("s{}", i - 1)
-        };
-        let k = if i == 0 { "2*EI/h" } else { "EI/h" };
-        s += &format!(
-            "[[bodies]]\nname = \"s{i}\"\nmass = \"mu*h\"\n\
-             inertia = [0, \"mu*h^3/12\", \"mu*h^3/12\"]\ncm = [\"{}*h\", 0, 0]\n\
-             [[joints]]\nname = \"j{i}\"\ntype = \"revolute\"\nparent = \"{parent}\"\n\
-             child = \"s{i}\"\nat = [\"{i}*h\", 0, 0]\naxis = [0, -1, 0]\nstiffness = \"{k}\"\n",
-            i as f64 + 0.5
-        );
-    }
-    s
-}
-
 #[test]
 fn a_three_hundred_twenty_segment_blade_solves_on_southwells_line() {
-    // A stiff spectrum (the highest modes 1e5 times the lowest): the point completes, every
+    // The benchmark's chain (examples/common/chain.rs). A stiff spectrum (the highest modes 1e5 times the lowest): the point completes, every
     // mode shape finite (checked by the modal solve itself), and the first frequency lies on
     // Southwell's line ω₁² ≈ ω₁₀² + S Ω² (the Ω⁴ term and the chain's discretisation are below
     // 1e-4 here).
     let model =
-        Compiled::from_str(&benchmark_chain(320), "chain.toml").unwrap_or_else(|e| panic!("{e}"));
+        Compiled::from_str(&chain::chain(320), "chain.toml").unwrap_or_else(|e| panic!("{e}"));
     let w10 = 1.875_104_068_711_961f64.powi(2) * (50.0f64 / 2.0).sqrt();
     let omega = 5.0;
     let w1 = first(&model, omega);

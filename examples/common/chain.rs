@@ -1,0 +1,31 @@
+//! The benchmark's chain family, shared by `examples/scale_chain.rs` and `tests/blade.rs`
+//! (included by path: a file in a subdirectory of `examples/` is not an example of its own).
+
+/// The chain of `n` segments: length 1 m, μ = 2 kg/m, EI = 50 N·m², springs `EI/h` between
+/// segments and `2EI/h` at the clamp, flapping out of the plane of rotation.
+pub fn chain(n: usize) -> String {
+    let mut s = format!(
+        "name = \"chain {n}\"\ngravity = [0, 0, 0]\n[parameters]\n\
+         mu = {{ value = 2.0, tolerance = \"2%\" }}\nEI = {{ value = 50.0, tolerance = \"5%\" }}\n\
+         h = {}\n[[bodies]]\nname = \"hub\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\n\
+         cm = [0, 0, 0]\n[[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\n\
+         child = \"hub\"\nat = [0, 0, 0]\naxis = [0, 0, 1]\ndrive = \"speed\"\n",
+        1.0 / n as f64
+    );
+    for i in 0..n {
+        let parent = if i == 0 {
+            "hub".into()
+        } else {
+            format!("s{}", i - 1)
+        };
+        let k = if i == 0 { "2*EI/h" } else { "EI/h" };
+        s += &format!(
+            "[[bodies]]\nname = \"s{i}\"\nmass = \"mu*h\"\n\
+             inertia = [0, \"mu*h^3/12\", \"mu*h^3/12\"]\ncm = [\"{}*h\", 0, 0]\n\
+             [[joints]]\nname = \"j{i}\"\ntype = \"revolute\"\nparent = \"{parent}\"\n\
+             child = \"s{i}\"\nat = [\"{i}*h\", 0, 0]\naxis = [0, -1, 0]\nstiffness = \"{k}\"\n",
+            i as f64 + 0.5
+        );
+    }
+    s
+}
