@@ -76,6 +76,22 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("cold") {
+        // Profiling driver: `cold n reps` repeats the cold point (for `perf record`).
+        let n = args[1].parse().unwrap();
+        let text = chain(n);
+        let opt = Options {
+            direct: args.get(3).is_some_and(|a| a == "direct"),
+            ..Options::default()
+        };
+        for _ in 0..args[2].parse().unwrap() {
+            let model = Compiled::from_str(&text, "chain.toml").unwrap();
+            let p = model.nominal();
+            let q0 = initial_guess(&model, &p, 5.0).unwrap();
+            point(&model, &p, 5.0, &q0, &opt).unwrap();
+        }
+        return;
+    }
     if args.first().map(String::as_str) == Some("one") {
         let n = args[1].parse().unwrap();
         let [cold, swept, sens, mb] = measure(n);

@@ -57,13 +57,13 @@ pub struct Program {
 }
 
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
-/// `r + Φ_qᵀλ` and then `Φ`; with `full`, `F` depends on the free coordinates' rates too, and
-/// is followed by the entries of `Φ_R` (constraint by constraint; their derivatives along `q_R`
-/// are the constraints' second derivatives); with `drive` as well, by the driven coordinates'
-/// rows of `r + Φ_qᵀλ` (the drive forces at zero rates) and the entries of `Φ_D`. (Recording
-/// without the drive rows, rather than pruning them away, keeps the fusion of products that
-/// only they share with `F`.)
-fn trace(model: &Model, x: &[Var], full: bool, drive: bool) -> Option<Vec<Var>> {
+/// `r + Φ_qᵀλ` and then `Φ`, as functions of the free coordinates' rates too; the entries of
+/// `Φ_R` (constraint by constraint; their derivatives along `q_R` are the constraints' second
+/// derivatives); the driven coordinates' rows of `r + Φ_qᵀλ` (the drive forces at zero rates)
+/// and the entries of `Φ_D`. The programs are cut from this one trace ([`Tape::finish`] prunes
+/// before it fuses, so a product that only the drive rows share with `F` is still fused where
+/// they are left out).
+fn trace(model: &Model, x: &[Var]) -> Option<Vec<Var>> {
     let (np, n, m) = (
         model.parameters.len(),
         model.coordinates.len(),
@@ -75,17 +75,13 @@ fn trace(model: &Model, x: &[Var], full: bool, drive: bool) -> Option<Vec<Var>> 
     let q = &x[np + 1..np + 1 + n];
     let mut qd = sys.steady_speeds();
     let mut qdd = vec![Var::Const(0.0); n];
+    for (k, &i) in free.iter().enumerate() {
+        qd[i] = x[np + 1 + n + k];
+        qdd[i] = x[np + 1 + n + nf + k];
+    }
     let mut rows = free.clone();
-    if full {
-        for (k, &i) in free.iter().enumerate() {
-            qd[i] = x[np + 1 + n + k];
-            qdd[i] = x[np + 1 + n + nf + k];
-        }
-    }
-    if drive {
-        rows.extend(&driven);
-        rows.sort_unstable();
-    }
+    rows.extend(&driven);
+    rows.sort_unstable();
     let lambda = &x[np + 1 + n + 2 * nf..np + 1 + n + 2 * nf + m];
     let l = Lifted::new(sys);
     let d = evaluate_rows(&l, q, &qd, &qdd, &rows);
@@ -101,13 +97,9 @@ fn trace(model: &Model, x: &[Var], full: bool, drive: bool) -> Option<Vec<Var>> 
         .map(|&i| g[i])
         .chain(d.phi.iter().copied())
         .collect();
-    if full {
-        out.extend(phi(&free));
-    }
-    if drive {
-        out.extend(driven.iter().map(|&i| g[i]));
-        out.extend(phi(&driven));
-    }
+    out.extend(phi(&free));
+    out.extend(driven.iter().map(|&i| g[i]));
+    out.extend(phi(&driven));
     Some(out)
 }
 
@@ -121,15 +113,27 @@ impl Program {
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        let recorded = record(&x, |v| trace(model, v, false, false))?;
+        // One trace with every output; the three programs are cut from it. The residual's
+        // rates are zero: replayed with them as constants, so that all they multiply folds.
+        let raw = record(&x, |v| trace(model, v))?;
+        let differentiated = nf + m + m * nf;
+        let rates: Vec<(usize, f64)> = (np + 1 + n..np + 1 + n + 2 * nf)
+            .map(|k| (k, 0.0))
+            .collect();
+        let recorded = raw
+            .specialise(&x, &rates, &(0..nf + m).collect::<Vec<_>>())?
+            .finish(&(0..nf + m).collect::<Vec<_>>());
         let residual = recorded.split(&fixed);
         // The parameters as inputs that move: one lane each.
         let parametric = recorded.split(&[np]);
         let parameters =
             parametric.seeding(&(0..np).map(|k| (k, k)).collect::<Vec<_>>(), np, nf + m);
-        let full = record(&x, |v| trace(model, v, true, false))?.split(&fixed);
-        let full_drive = record(&x, |v| trace(model, v, true, true))?.split(&fixed);
-        let differentiated = nf + m + m * nf;
+        let full = raw
+            .finish(&(0..differentiated).collect::<Vec<_>>())
+            .split(&fixed);
+        let full_drive = raw
+            .finish(&(0..raw.n_outputs()).collect::<Vec<_>>())
+            .split(&fixed);
         let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()

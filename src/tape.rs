@@ -327,7 +327,9 @@ impl Var {
 #[derive(Default)]
 struct Recorder {
     ops: Vec<Op>,
-    seen: HashMap<Key, u32>,
+    /// Hash-consing: the index of each distinct operation (foldhash: recording is hashing
+    /// bound, and SipHash's resistance is not needed for keys made by the program itself).
+    seen: HashMap<Key, u32, foldhash::fast::FixedState>,
     tainted: bool,
 }
 
@@ -339,13 +341,11 @@ thread_local! {
 fn push(op: Op, value: f64) -> Var {
     RECORDER.with(|r| match r.borrow_mut().as_mut() {
         Some(rec) => {
-            let key = op.key();
-            if let Some(&i) = rec.seen.get(&key) {
-                return Var::Node(i, value);
+            let next = rec.ops.len() as u32;
+            let i = *rec.seen.entry(op.key()).or_insert(next);
+            if i == next {
+                rec.ops.push(op);
             }
-            let i = rec.ops.len() as u32;
-            rec.ops.push(op);
-            rec.seen.insert(key, i);
             Var::Node(i, value)
         }
         None => Var::Const(value),
@@ -726,8 +726,10 @@ pub struct Tape {
     n_static: usize,
 }
 
-/// Traces `f` at the input values `x`: returns the program, or `None` when `f` failed or the
-/// trace branched on a value (then it is not valid away from `x`).
+/// Traces `f` at the input values `x`: returns the raw trace (operations hash-consed and
+/// folded with constants, none dropped or fused: [`Tape::finish`] makes the program of some of
+/// its outputs), or `None` when `f` failed or the trace branched on a value (then it is not
+/// valid away from `x`).
 pub fn record(x: &[f64], f: impl FnOnce(&[Var]) -> Option<Vec<Var>>) -> Option<Tape> {
     RECORDER.with(|r| {
         *r.borrow_mut() = Some(Recorder::default());
@@ -743,15 +745,11 @@ pub fn record(x: &[f64], f: impl FnOnce(&[Var]) -> Option<Vec<Var>>) -> Option<T
     if rec.tainted {
         return None;
     }
-    let tape = Tape {
+    Some(Tape {
         ops: rec.ops,
         outputs,
         n_static: 0,
-    };
-    Some(
-        tape.prune(&(0..tape.outputs.len()).collect::<Vec<_>>())
-            .fuse(),
-    )
+    })
 }
 
 impl Tape {
@@ -760,9 +758,42 @@ impl Tape {
         self.ops.len()
     }
 
+    /// Number of outputs.
+    pub fn n_outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
     /// Is the program empty?
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
+    }
+
+    /// The program of the outputs `keep` of a raw trace (in that order): without the
+    /// operations they do not need, and with the products used once fused into their sums.
+    pub fn finish(&self, keep: &[usize]) -> Tape {
+        self.prune(keep).fuse()
+    }
+
+    /// The raw trace of the outputs `keep` with the inputs `constants` (index, value) made
+    /// constants: traced again from its own operations at the inputs `x`, so that everything
+    /// that folds with those constants folds (`x·0`, `x+0`, ...) as if `f` had been recorded
+    /// with them. One recording thus serves several programs: a trace of the mechanics costs
+    /// many times its length in hashed operations, a replay one each. (`None` where the replay
+    /// branched, which a straight-line program does not.)
+    pub fn specialise(
+        &self,
+        x: &[f64],
+        constants: &[(usize, f64)],
+        keep: &[usize],
+    ) -> Option<Tape> {
+        let pruned = self.prune(keep);
+        record(x, |v| {
+            let mut v = v.to_vec();
+            for &(k, c) in constants {
+                v[k] = Var::Const(c);
+            }
+            Some(pruned.eval(&[], &v, &mut Vec::new()))
+        })
     }
 
     /// The program restricted to the outputs `keep` (in that order), without the operations
