@@ -128,6 +128,72 @@ pub fn eigen_dense(a: &DMatrix<f64>) -> Option<DenseEigen> {
     Some((values, left, right))
 }
 
+/// Relative asymmetry (of the largest entry) below which a matrix counts as symmetric: rounding
+/// in the assembly of `M̂`, `K̂` leaves a few ε (measured: 3e-16 on the blade's `M̂`).
+const SYMMETRY: f64 = 1e-13;
+
+/// The undamped pencil `K x = μ M x` with `M` and `K` symmetric and `M` positive definite.
+#[derive(Debug, Clone)]
+pub struct Definite {
+    /// The eigenvalues `μ`, ascending.
+    pub values: Vec<f64>,
+    /// The eigenvectors, `M`-orthonormal columns.
+    pub vectors: DMatrix<f64>,
+    /// The spectral condition number of `M`.
+    pub mass_condition: f64,
+}
+
+/// Solves `K x = μ M x` by LAPACK `dsygv`'s route (Golub & Van Loan, *Matrix Computations*,
+/// 4th ed., 2013, §8.7.2) on faer's blocked kernels: Cholesky `M = LLᵀ`, the symmetric
+/// standard problem `L⁻¹ K L⁻ᵀ z = μ z`, `x = L⁻ᵀ z`. An n×n symmetric problem instead of the
+/// 2n×2n nonsymmetric first-order form: about twenty times fewer operations, real `μ` by
+/// construction (no rounding can give an undamped mode a spurious real part), and vectors with
+/// no overflow however stiff the spectrum. `None` when either matrix is not symmetric (to
+/// 1e-13 of its largest entry), `M` is not positive definite, or the iteration fails: the
+/// caller then takes the general route.
+pub fn symmetric_definite(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Definite> {
+    use faer::linalg::triangular_solve::{
+        solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+    };
+    use faer::{Mat, Par, Side};
+    let n = m.nrows();
+    if n == 0 || k.nrows() != n || m.iter().chain(k.iter()).any(|v| !v.is_finite()) {
+        return None;
+    }
+    let symmetric = |a: &DMatrix<f64>| {
+        let s = a.amax();
+        (0..n).all(|j| (0..j).all(|i| (a[(i, j)] - a[(j, i)]).abs() <= SYMMETRY * s))
+    };
+    if !symmetric(m) || !symmetric(k) {
+        return None;
+    }
+    let mean = |a: &DMatrix<f64>| Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let fm = mean(m);
+    let mass = fm.self_adjoint_eigenvalues(Side::Lower).ok()?;
+    let (lo, hi) = (mass[0], mass[n - 1]);
+    if lo <= 0.0 || !hi.is_finite() {
+        return None;
+    }
+    let llt = fm.llt(Side::Lower).ok()?;
+    let l = llt.L();
+    // L⁻¹ K, then L⁻¹ (L⁻¹ K)ᵀ = L⁻¹ K L⁻ᵀ.
+    let mut b = mean(k);
+    solve_lower_triangular_in_place(l, b.as_mut(), Par::Seq);
+    let mut b = b.transpose().to_owned();
+    solve_lower_triangular_in_place(l, b.as_mut(), Par::Seq);
+    let b = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (b[(i, j)] + b[(j, i)]));
+    let evd = b.self_adjoint_eigen(Side::Lower).ok()?;
+    let mut z = evd.U().to_owned();
+    solve_upper_triangular_in_place(l.transpose(), z.as_mut(), Par::Seq);
+    let values: Vec<f64> = (0..n).map(|j| evd.S().column_vector()[j]).collect();
+    let vectors = DMatrix::from_fn(n, n, |i, j| z[(i, j)]);
+    (values.iter().chain(vectors.iter()).all(|v| v.is_finite())).then_some(Definite {
+        values,
+        vectors,
+        mass_condition: hi / lo,
+    })
+}
+
 /// Eigen-decomposition of a real symmetric matrix (eigenvalues unsorted), or `None` when `a`
 /// is not finite or the iteration does not converge.
 pub fn symmetric_eigen(a: DMatrix<f64>) -> Option<SymmetricEigen<f64, Dyn>> {

@@ -13,6 +13,13 @@
 //!
 //! and a class: `unstable` if a root has positive real part, else `underdamped` or
 //! `overdamped`. All frequencies in rad/s.
+//!
+//! An undamped, non-gyroscopic system (`Ĉ = 0` exactly, `M̂` and `K̂` symmetric: a blade
+//! flapping, a chain of pendulums in one plane) is solved as the n×n symmetric-definite pencil
+//! `K̂ x = ω² M̂ x` instead ([`linalg::symmetric_definite`]): the same modes to rounding, about
+//! twenty times fewer operations, and no rounding that could give a stiff chain's highest
+//! modes a spurious positive real part (the first-order form `M̂⁻¹K̂` of a 320-segment blade
+//! spans ten decades).
 
 use crate::linalg;
 use crate::schur::Eigen;
@@ -104,7 +111,6 @@ pub fn modes(
     c: &DMatrix<f64>,
     k: &DMatrix<f64>,
 ) -> Result<Vec<Mode>, ModalError> {
-    let n = m.nrows();
     if m.iter()
         .chain(c.iter())
         .chain(k.iter())
@@ -112,11 +118,80 @@ pub fn modes(
     {
         return Err(ModalError::NotFinite);
     }
+    let undamped = c
+        .iter()
+        .all(|&v| v == 0.0)
+        .then(|| undamped_modes(m, k))
+        .flatten();
+    let mut out = match undamped {
+        Some(out) => out,
+        None => first_order_modes(m, c, k)?,
+    };
+    out.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
+    for (i, m) in out.iter().enumerate() {
+        check_mode(i + 1, m)?;
+    }
+    Ok(out)
+}
+
+/// The modes of an undamped, non-gyroscopic system (`Ĉ = 0`, `M̂` and `K̂` symmetric, `M̂`
+/// positive definite): from `K̂ x = μ M̂ x` ([`linalg::symmetric_definite`]), each `μ > 0` a
+/// pair `±i√μ` and each `μ < 0` the real pair `±√−μ` (unstable), with real vectors, each its
+/// own left vector. `None` where the general route must decide: the matrices are not of that
+/// form, `M̂` is as ill-conditioned as [`first_order_modes`] refuses, or a root is as close to
+/// zero as the first-order form's rounding (a neutral mode, which that route classes).
+fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
+    let d = linalg::symmetric_definite(m, k)?;
+    if d.mass_condition > MAX_MASS_CONDITION {
+        return None;
+    }
+    let scale = d
+        .values
+        .iter()
+        .fold(0.0f64, |s, mu| s.max(mu.abs().sqrt()))
+        .max(f64::MIN_POSITIVE);
+    if d.values.iter().any(|mu| mu.abs().sqrt() <= IM_TOL * scale) {
+        return None;
+    }
+    let modes = d
+        .values
+        .iter()
+        .zip(d.vectors.column_iter())
+        .map(|(&mu, x)| {
+            let x = normalize(x.map(|v| C64::new(v, 0.0)));
+            let root = |lambda| Root {
+                lambda,
+                right: x.clone(),
+                left: x.clone(),
+            };
+            let w = mu.abs().sqrt();
+            if mu > 0.0 {
+                make_mode(root(C64::new(0.0, w)), root(C64::new(0.0, -w)), scale)
+            } else {
+                make_mode(root(C64::new(w, 0.0)), root(C64::new(-w, 0.0)), scale)
+            }
+        })
+        .collect();
+    Some(modes)
+}
+
+/// Condition number of `M̂` above which the modes are refused (a coordinate moves next to no
+/// mass: the roots would be rounding).
+const MAX_MASS_CONDITION: f64 = 1e12;
+
+/// The modes from the 2n×2n first-order form (any `M̂`, `Ĉ`, `K̂`; see the module
+/// documentation), unsorted.
+fn first_order_modes(
+    m: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+) -> Result<Vec<Mode>, ModalError> {
+    let n = m.nrows();
     let sv = linalg::svd(m.clone(), false, false)
         .ok_or(ModalError::NoConvergence { what: "SVD of M̂" })?
         .singular_values;
     let condition = sv.max() / sv.min().max(f64::MIN_POSITIVE);
-    if sv.max() == 0.0 || condition > 1e12 {
+    if sv.max() == 0.0 || condition > MAX_MASS_CONDITION {
         return Err(ModalError::SingularMass { condition });
     }
     let lu = m.clone().lu();
@@ -205,10 +280,6 @@ pub fn modes(
             (b, a)
         };
         out.push(make_mode(hi, lo, scale));
-    }
-    out.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
-    for (i, m) in out.iter().enumerate() {
-        check_mode(i + 1, m)?;
     }
     Ok(out)
 }
@@ -329,4 +400,87 @@ pub fn match_shapes(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A random symmetric positive definite `M` and a symmetric `K` with some negative
+    /// eigenvalues (unstable modes), both of size n.
+    fn pencil(n: usize, seed: u64) -> (DMatrix<f64>, DMatrix<f64>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut r = |n| DMatrix::<f64>::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+        let a = r(n);
+        let m = &a * a.transpose() + DMatrix::identity(n, n) * 0.5;
+        let b = r(n);
+        let k = (&b + b.transpose()) * 20.0 + DMatrix::identity(n, n) * 30.0;
+        (m, k)
+    }
+
+    /// The undamped route against the first-order form: the same modes (frequencies, class,
+    /// shapes), and each mode satisfying `(λ²M + K) x = 0` with `x` its own left vector.
+    #[test]
+    fn undamped_modes_agree_with_the_first_order_form() {
+        for (n, seed) in [(5, 1), (12, 2), (30, 3)] {
+            let (m, k) = pencil(n, seed);
+            let c = DMatrix::zeros(n, n);
+            let mut fast = undamped_modes(&m, &k).expect("symmetric definite");
+            let mut general = first_order_modes(&m, &c, &k).unwrap();
+            for v in [&mut fast, &mut general] {
+                v.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
+            }
+            assert_eq!(fast.len(), n);
+            assert!(fast.iter().any(|x| x.class == ModeClass::Unstable));
+            assert!(fast.iter().any(|x| x.class == ModeClass::Underdamped));
+            let scale = k.amax() + m.amax();
+            for (a, b) in fast.iter().zip(&general) {
+                let w = a.natural_frequency;
+                assert!(
+                    (w - b.natural_frequency).abs() <= 1e-10 * (1.0 + w),
+                    "{w} vs {b:?}"
+                );
+                assert_eq!(a.class, b.class, "n = {n}, ω = {w}");
+                assert!((a.damped_frequency - b.damped_frequency).abs() <= 1e-10 * (1.0 + w));
+                assert!(a.damping_ratio.abs() <= 0.0, "ζ = {}", a.damping_ratio);
+                assert!(similarity(&a.root.right, &b.root.right) > 1.0 - 1e-9);
+                assert!(similarity(&a.root.left, &b.root.left) > 1.0 - 1e-9);
+                let l = a.root.lambda;
+                let x = &a.root.right;
+                let mc = m.map(|v| C64::new(v, 0.0));
+                let kc = k.map(|v| C64::new(v, 0.0));
+                let r = (&mc * x) * (l * l) + &kc * x;
+                assert!(
+                    r.norm() <= 1e-11 * scale * (1.0 + l.norm_sqr()),
+                    "{}",
+                    r.norm()
+                );
+            }
+            // With `M` and `K` passed to `modes`, the undamped route is the one taken.
+            let out = modes(&m, &c, &k).unwrap();
+            assert!(out.iter().all(|x| x.damping_ratio == 0.0));
+        }
+    }
+
+    /// Only the undamped, non-gyroscopic, symmetric pencil takes that route.
+    #[test]
+    fn the_undamped_route_refuses_other_pencils() {
+        let (m, k) = pencil(6, 4);
+        let mut asymmetric = k.clone();
+        asymmetric[(0, 1)] += 1e-9 * k.amax();
+        assert!(undamped_modes(&m, &asymmetric).is_none());
+        let mut indefinite = m.clone();
+        indefinite[(0, 0)] = -1.0;
+        assert!(undamped_modes(&indefinite, &k).is_none());
+        // A damped pencil goes to the first-order form: its damping ratios are not zero.
+        let c = DMatrix::identity(6, 6) * 0.3;
+        assert!(
+            modes(&m, &c, &k)
+                .unwrap()
+                .iter()
+                .all(|x| x.damping_ratio != 0.0)
+        );
+    }
 }
