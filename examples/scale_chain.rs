@@ -2,8 +2,9 @@
 //! spinning about z (the rotating blade of `examples/rotating_blade.toml`, any n), measured per
 //! n in a fresh process each: one cold modal point (recording included), one swept point (the
 //! mean over a 20-speed sweep after its first point), the sensitivities to the two parameters at
-//! one point, and the process's peak resident memory (`VmHWM`, Linux). Then the growth
-//! exponents fitted by least squares on the log–log points. Times are the best of 3 runs.
+//! one point, and the process's peak resident memory (`VmHWM`, Linux) after the cold points
+//! and at the end. Then the growth exponents fitted by least squares on the log–log points.
+//! Times are the best of 3 runs.
 //!
 //! `cargo run --release --example scale_chain -- [n …]` (default: 10 20 40 80 160; 320 runs in
 //! about two minutes).
@@ -28,8 +29,9 @@ fn peak_mb() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
-/// Measures one n in this process: `cold swept sensitivities` (s) and peak memory (MB).
-fn measure(n: usize) -> [f64; 4] {
+/// Measures one n in this process: `cold swept sensitivities` (s) and the peak memory after
+/// the cold points and at the end (MB).
+fn measure(n: usize) -> [f64; 5] {
     let text = chain(n);
     let best = |f: &mut dyn FnMut() -> f64| (0..3).map(|_| f()).fold(f64::INFINITY, f64::min);
     let speed = 5.0;
@@ -42,6 +44,7 @@ fn measure(n: usize) -> [f64; 4] {
         point(&model, &p, speed, &q0, &Options::default()).unwrap();
         t.elapsed().as_secs_f64()
     });
+    let cold_peak = peak_mb();
     let model = Compiled::from_str(&text, "chain.toml").unwrap();
     let p = model.nominal();
     let swept = best(&mut || {
@@ -61,7 +64,7 @@ fn measure(n: usize) -> [f64; 4] {
         analytic(&model, &p, &pt, &wrt, None).unwrap();
         t.elapsed().as_secs_f64()
     });
-    [cold, swept, sens, peak_mb()]
+    [cold, swept, sens, cold_peak, peak_mb()]
 }
 
 /// Least-squares slope of `ln y` over `ln x`.
@@ -77,7 +80,8 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("cold") {
-        // Profiling driver: `cold n reps` repeats the cold point (for `perf record`).
+        // Profiling driver: `cold n reps [direct]` repeats the cold point (for `perf record`;
+        // `direct` without the recorded program).
         let n = args[1].parse().unwrap();
         let text = chain(n);
         let opt = Options {
@@ -94,8 +98,8 @@ fn main() {
     }
     if args.first().map(String::as_str) == Some("one") {
         let n = args[1].parse().unwrap();
-        let [cold, swept, sens, mb] = measure(n);
-        println!("{cold} {swept} {sens} {mb}");
+        let [cold, swept, sens, cold_mb, mb] = measure(n);
+        println!("{cold} {swept} {sens} {cold_mb} {mb}");
         return;
     }
     let ns: Vec<usize> = if args.is_empty() {
@@ -104,7 +108,9 @@ fn main() {
         args.iter().map(|a| a.parse().unwrap()).collect()
     };
     let exe = std::env::current_exe().unwrap();
-    println!("bodies n | cold modal point | per swept speed | sensitivities (2) | peak memory");
+    println!(
+        "bodies n | cold modal point | per swept speed | sensitivities (2) | peak: cold point, all"
+    );
     let mut rows = Vec::new();
     for &n in &ns {
         let out = std::process::Command::new(&exe)
@@ -116,11 +122,12 @@ fn main() {
             .map(|x| x.parse().unwrap())
             .collect();
         println!(
-            "{n:8} | {:13.3} ms | {:12.3} ms | {:14.3} ms | {:8.1} MB",
+            "{n:8} | {:13.3} ms | {:12.3} ms | {:14.3} ms | {:7.1} MB, {:6.1} MB",
             v[0] * 1e3,
             v[1] * 1e3,
             v[2] * 1e3,
-            v[3]
+            v[3],
+            v[4]
         );
         rows.push((n as f64, v));
     }
@@ -128,11 +135,13 @@ fn main() {
         let x: Vec<f64> = rows.iter().map(|r| r.0).collect();
         let fit = |k: usize| exponent(&x, &rows.iter().map(|r| r.1[k]).collect::<Vec<_>>());
         println!(
-            "growth exponents: cold point n^{:.2}, swept point n^{:.2}, sensitivities n^{:.2}, memory n^{:.2}",
+            "growth exponents: cold point n^{:.2}, swept point n^{:.2}, sensitivities n^{:.2}, \
+             memory (cold point) n^{:.2}, (all) n^{:.2}",
             fit(0),
             fit(1),
             fit(2),
-            fit(3)
+            fit(3),
+            fit(4)
         );
     }
 }

@@ -30,7 +30,7 @@ use crate::compiled::Compiled;
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
-use crate::modal::{C64, Mode, similarity};
+use crate::modal::{C64, Mode, Root, similarity};
 use crate::model::{Channel, Transfer};
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
@@ -140,7 +140,7 @@ fn mode_derivative(m: &Mode, d1: C64, d2: C64, invariants: Option<(f64, f64)>) -
     }
 }
 
-/// `dλ = −yᵀ(λ²M' + λC' + K')x / yᵀ(2λM + C)x`.
+/// `dλ = −yᵀ(λ²M' + λC' + K')x / yᵀ(2λM + C)x` for one root.
 pub fn eigenvalue_derivative(
     lambda: C64,
     x: &DVector<C64>,
@@ -148,14 +148,106 @@ pub fn eigenvalue_derivative(
     (m, c): (&DMatrix<f64>, &DMatrix<f64>),
     (dm, dc, dk): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
 ) -> C64 {
-    let n = m.nrows();
-    let num = DMatrix::from_fn(n, n, |i, j| {
-        lambda * lambda * dm[(i, j)] + lambda * dc[(i, j)] + dk[(i, j)]
-    });
-    let den = DMatrix::from_fn(n, n, |i, j| lambda * 2.0 * m[(i, j)] + c[(i, j)]);
-    let a = (y.transpose() * num * x)[(0, 0)];
-    let b = (y.transpose() * den * x)[(0, 0)];
-    -a / b
+    let b = |a: &DMatrix<f64>| bilinear(y, a, x);
+    -(lambda * lambda * b(dm) + lambda * b(dc) + b(dk)) / (lambda * 2.0 * b(m) + b(c))
+}
+
+/// `yᵀ A x` for a real `A` (no complex matrix formed).
+fn bilinear(y: &DVector<C64>, a: &DMatrix<f64>, x: &DVector<C64>) -> C64 {
+    a.column_iter()
+        .zip(x.iter())
+        .map(|(col, &xj)| {
+            col.iter()
+                .zip(y.iter())
+                .map(|(&v, &yi)| yi * v)
+                .sum::<C64>()
+                * xj
+        })
+        .sum()
+}
+
+/// [`eigenvalue_derivative`] for all the roots of a point at once. The roots' right vectors
+/// are the columns of one matrix, so that a design variable costs three real matrix products
+/// (`M'X`, `C'X`, `K'X`, blocked) and O(n) per root, where a root at a time is a pass over
+/// three matrices each (memory-bound, and 2n roots); the denominators `yᵀ(2λM + C)x` do not
+/// depend on the variable and are computed once. A conjugate partner's derivative is the
+/// conjugate, bitwise.
+struct RootDerivatives<'a> {
+    /// Per mode, its root and the partner (`None` when it is the root's conjugate).
+    roots: Vec<(&'a Root, Option<&'a Root>)>,
+    /// Real and imaginary parts of the distinct roots' right vectors, as columns.
+    xr: DMatrix<f64>,
+    xi: DMatrix<f64>,
+    /// `yᵀ(2λM + C)x` per distinct root.
+    den: Vec<C64>,
+}
+
+impl<'a> RootDerivatives<'a> {
+    fn new(modes: &'a [Mode], m: &DMatrix<f64>, c: &DMatrix<f64>) -> Self {
+        let roots: Vec<(&Root, Option<&Root>)> = modes
+            .iter()
+            .map(|md| {
+                let (r, p) = (&md.root, &md.partner);
+                let conjugate = p.lambda == r.lambda.conj()
+                    && p.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
+                    && p.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj());
+                (r, (!conjugate).then_some(p))
+            })
+            .collect();
+        let distinct: Vec<&Root> = roots
+            .iter()
+            .flat_map(|&(r, p)| std::iter::once(r).chain(p))
+            .collect();
+        let n = m.nrows();
+        let xr = DMatrix::from_fn(n, distinct.len(), |i, k| distinct[k].right[i].re);
+        let xi = DMatrix::from_fn(n, distinct.len(), |i, k| distinct[k].right[i].im);
+        let (mr, mi, cr, ci) = (m * &xr, m * &xi, c * &xr, c * &xi);
+        let den = distinct
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                (0..n)
+                    .map(|i| {
+                        let mx = C64::new(mr[(i, k)], mi[(i, k)]);
+                        let cx = C64::new(cr[(i, k)], ci[(i, k)]);
+                        r.left[i] * (r.lambda * 2.0 * mx + cx)
+                    })
+                    .sum()
+            })
+            .collect();
+        RootDerivatives { roots, xr, xi, den }
+    }
+
+    /// `(dλ_root, dλ_partner)` per mode along `(M', C', K')`.
+    fn along(
+        &self,
+        (dm, dc, dk): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    ) -> Vec<(C64, C64)> {
+        let prod = |a: &DMatrix<f64>| (a * &self.xr, a * &self.xi);
+        let ((mr, mi), (cr, ci), (kr, ki)) = (prod(dm), prod(dc), prod(dk));
+        let n = dm.nrows();
+        let mut k = 0;
+        let mut next = |r: &Root| {
+            let l = r.lambda;
+            let num: C64 = (0..n)
+                .map(|i| {
+                    let at =
+                        |re: &DMatrix<f64>, im: &DMatrix<f64>| C64::new(re[(i, k)], im[(i, k)]);
+                    r.left[i] * (l * l * at(&mr, &mi) + l * at(&cr, &ci) + at(&kr, &ki))
+                })
+                .sum();
+            let d = -num / self.den[k];
+            k += 1;
+            d
+        };
+        self.roots
+            .iter()
+            .map(|&(r, p)| {
+                let d1 = next(r);
+                (d1, p.map_or(d1.conj(), &mut next))
+            })
+            .collect()
+    }
 }
 
 /// The linearisation over dual numbers seeded along one design variable, with the equilibrium
@@ -317,6 +409,7 @@ pub fn analytic(
 ) -> Result<Sensitivity, PointError> {
     let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
     let mut variables = Vec::with_capacity(wrt.len());
+    let roots = RootDerivatives::new(&pt.modes, &pt.linear.m, &pt.linear.c);
     for DualLinearization {
         param: b,
         linear: lin,
@@ -336,23 +429,8 @@ pub fn analytic(
         let modes = pt
             .modes
             .iter()
-            .map(|md| {
-                let d1 = eigenvalue_derivative(
-                    md.root.lambda,
-                    &md.root.right,
-                    &md.root.left,
-                    (m, c),
-                    (&dm, &dc, &dk),
-                );
-                let d2 = eigenvalue_derivative(
-                    md.partner.lambda,
-                    &md.partner.right,
-                    &md.partner.left,
-                    (m, c),
-                    (&dm, &dc, &dk),
-                );
-                mode_derivative(md, d1, d2, invariants)
-            })
+            .zip(roots.along((&dm, &dc, &dk)))
+            .map(|(md, (d1, d2))| mode_derivative(md, d1, d2, invariants))
             .collect();
         let (dmag, dphase) = match (tf, nominal) {
             (Some(t), Some(_)) => transfer(&lin, t.input, t.output, t.omega)
