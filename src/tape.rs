@@ -1030,11 +1030,43 @@ impl Tape {
     /// choice of seeds; an operation's derivative is only propagated over its lane range.
     /// Derivatives are wanted for the first `differentiated` outputs only: the operations that
     /// only the others need are evaluated without them.
+    ///
+    /// More than [`BLOCK`] lanes are split into blocks of that many, each a seeding of its own
+    /// that [`Tape::forward`] runs in turn: the tangent buffer then holds `BLOCK` lanes of the
+    /// operations alive at once, not all the lanes. (A chain's pass keeps every body's pose alive
+    /// until the wrenches come back from the tip, and a lane per coordinate: one buffer over
+    /// all lanes grows with the square of the number of bodies, about 1 GB at a thousand.) The
+    /// values are evaluated once per block; the lane work is the same.
     pub fn seeding(
         &self,
         seeds: &[(usize, usize)],
         lanes: usize,
         differentiated: usize,
+    ) -> Seeding {
+        let mut whole = self.seeding_of(seeds, lanes, differentiated, lanes <= BLOCK);
+        if lanes > BLOCK {
+            whole.blocks = (0..lanes.div_ceil(BLOCK))
+                .map(|b| {
+                    let (lo, hi) = (b * BLOCK, (b * BLOCK + BLOCK).min(lanes));
+                    let within: Vec<(usize, usize)> = seeds
+                        .iter()
+                        .filter(|s| (lo..hi).contains(&s.1))
+                        .map(|&(k, l)| (k, l - lo))
+                        .collect();
+                    self.seeding_of(&within, hi - lo, differentiated, true)
+                })
+                .collect();
+        }
+        whole
+    }
+
+    /// One block of [`Tape::seeding`] (its tangent rows allocated when `rows`).
+    fn seeding_of(
+        &self,
+        seeds: &[(usize, usize)],
+        lanes: usize,
+        differentiated: usize,
+        rows: bool,
     ) -> Seeding {
         static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
         let mut range = vec![(0u32, 0u32); self.ops.len()];
@@ -1081,7 +1113,15 @@ impl Tape {
         for (r, &live) in range.iter_mut().zip(&live) {
             *r = if live { (r.0, r.1 - r.0) } else { (0, 0) };
         }
-        let slots = self.slots(&range, lanes, differentiated);
+        let slots = if rows {
+            self.slots(&range, lanes, differentiated)
+        } else {
+            Slots {
+                slot: Vec::new(),
+                rows: 0,
+                reuse: false,
+            }
+        };
         Seeding {
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             seeds: seeds.to_vec(),
@@ -1089,6 +1129,7 @@ impl Tape {
             range,
             differentiated,
             slots,
+            blocks: Vec::new(),
         }
     }
 
@@ -1168,6 +1209,21 @@ impl Tape {
         seeding: &Seeding,
         work: &mut Forward<S>,
     ) -> (Vec<S>, Vec<S>) {
+        if !seeding.blocks.is_empty() {
+            let (nd, lanes) = (seeding.differentiated, seeding.lanes);
+            let mut derivs = vec![S::from(0.0); nd * lanes];
+            let mut values = Vec::new();
+            for (b, block) in seeding.blocks.iter().enumerate() {
+                let (v, d) = self.forward(fixed, x, block, work);
+                let (lo, w) = (b * BLOCK, block.lanes);
+                for r in 0..nd {
+                    derivs[r * lanes + lo..r * lanes + lo + w]
+                        .copy_from_slice(&d[r * w..(r + 1) * w]);
+                }
+                values = v;
+            }
+            return (values, derivs);
+        }
         if seeding.slots.reuse {
             self.forward_with::<S, true>(fixed, x, seeding, work)
         } else {
@@ -1430,7 +1486,13 @@ pub struct Seeding {
     /// Outputs with derivatives (the first ones).
     differentiated: usize,
     slots: Slots,
+    /// The blocks of at most [`BLOCK`] lanes the lanes are split into (none when they are
+    /// that few; then `slots` are this seeding's own rows).
+    blocks: Vec<Seeding>,
 }
+
+/// Most lanes one pass of [`Tape::forward`] carries (see [`Tape::seeding`]).
+pub const BLOCK: usize = 256;
 
 /// The tangent rows of a [`Seeding`]'s operations.
 #[derive(Debug, Clone)]

@@ -112,6 +112,46 @@ fn a_trace_specialised_to_constant_inputs_is_the_trace_recorded_with_them() {
     }
 }
 
+/// A recurrence along 300 inputs: output k depends on inputs 0..=k.
+fn recurrence<T: modaltol::real::Real>(x: &[T]) -> Vec<T> {
+    let mut c = x[0];
+    let mut out = vec![c];
+    for k in 1..x.len() {
+        c = c * T::from(0.5) + x[k].sin() * x[k - 1] + c * x[k];
+        out.push(c);
+    }
+    out
+}
+
+#[test]
+fn a_forward_pass_over_more_lanes_than_a_block_runs_block_by_block_and_is_exact() {
+    let n = 300;
+    assert!(n > modaltol::tape::BLOCK);
+    let at: Vec<f64> = (0..n).map(|k| 0.3 + 0.4 * (k as f64 * 0.7).sin()).collect();
+    let tape = record(&at, |v| Some(recurrence(v)))
+        .unwrap()
+        .finish(&(0..n).collect::<Vec<_>>());
+    let seeds: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
+    let seeding = tape.seeding(&seeds, n, n);
+    let (v, d) = tape.forward(&[], &at, &seeding, &mut Forward::default());
+    assert_eq!(v, recurrence(&at));
+    // Columns in the first block, on both sides of the boundary and in the last, against
+    // dual numbers through the function itself.
+    for lane in [0, 1, 255, 256, 257, 299] {
+        let xd: Vec<Dual64> = (0..n)
+            .map(|k| Dual64::new(at[k], if k == lane { 1.0 } else { 0.0 }))
+            .collect();
+        for (r, y) in recurrence(&xd).iter().enumerate() {
+            let got = d[r * n + lane];
+            assert!(
+                (got - y.eps).abs() <= 1e-13 * y.eps.abs().max(1.0),
+                "∂y{r}/∂x{lane}: {got} vs {}",
+                y.eps
+            );
+        }
+    }
+}
+
 #[test]
 fn a_trace_that_branches_on_a_value_is_refused() {
     let branching = |v: &[Var]| Some(vec![if v[0] > Var::from(0.0) { v[0] } else { -v[0] }]);
