@@ -1161,14 +1161,29 @@ impl Tape {
                 last[i as usize] = Some(usize::MAX);
             }
         }
-        // For each operation, the operations whose last reader it is.
-        let mut ends: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for (i, l) in last.iter().enumerate() {
-            match *l {
-                Some(l) if range[i].1 > 0 && l < n => ends[l].push(i as u32),
-                // Read by nothing: its row is free again at once.
-                None if range[i].1 > 0 => ends[i].push(i as u32),
-                _ => {}
+        // The operation after which each row is free again (read by nothing: at once).
+        let end = |i: usize| match last[i] {
+            Some(l) if range[i].1 > 0 && l < n => Some(l),
+            None if range[i].1 > 0 => Some(i),
+            _ => None,
+        };
+        // For each operation, the operations whose last reader it is: `ended[start[i]..
+        // start[i + 1]]` in increasing order (grouped by a counting sort, not a list each).
+        let mut start = vec![0usize; n + 1];
+        for i in 0..n {
+            if let Some(l) = end(i) {
+                start[l + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut ended = vec![0u32; start[n]];
+        let mut fill = start.clone();
+        for i in 0..n {
+            if let Some(l) = end(i) {
+                ended[fill[l]] = i as u32;
+                fill[l] += 1;
             }
         }
         let mut slot = vec![u32::MAX; n];
@@ -1181,7 +1196,7 @@ impl Tape {
                     count - 1
                 });
             }
-            for &a in &ends[i] {
+            for &a in &ended[start[i]..start[i + 1]] {
                 free.push(slot[a as usize]);
             }
         }
