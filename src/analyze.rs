@@ -116,8 +116,10 @@ pub struct AnalyzeOptions {
     /// Worker threads for the derivatives (`None`: rayon's default); the Monte Carlo uses its
     /// own setting.
     pub threads: Option<usize>,
-    /// Cancelling it stops the Monte Carlo after its current chunk; the result then covers the
-    /// samples done ([`Analysis::interrupted`]).
+    /// Cancelling it stops the run at its next check: the sweep before its next speed (the
+    /// speeds left are failures, "interrupted"), the quadrature before its next case, the Monte
+    /// Carlo after its current chunk. The result then covers what was done
+    /// ([`Analysis::interrupted`]).
     pub cancel: Cancel,
 }
 
@@ -161,12 +163,16 @@ pub struct Analysis {
     pub inadmissible: Vec<Vec<(String, usize, f64)>>,
     /// With [`Split::Shard`]: this shard's chunk moments per case, in chunk order.
     pub shard_states: Vec<Vec<Block>>,
+    /// The run's [`Cancel`] token was cancelled before the end (see
+    /// [`AnalyzeOptions::cancel`]).
+    pub cancelled: bool,
 }
 
 impl Analysis {
-    /// Was the Monte Carlo interrupted before all samples were evaluated?
+    /// Was the run cancelled before it was done: a speed of the sweep, a case of the
+    /// quadrature or Monte Carlo samples left out?
     pub fn interrupted(&self, asked: usize) -> bool {
-        self.samples_done.iter().any(|&n| n < asked)
+        self.cancelled || self.samples_done.iter().any(|&n| n < asked)
     }
 }
 
@@ -201,6 +207,11 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         rayon::scope(|scope| {
             let mut sweep = Sweep::new(model, p.clone(), Options::default());
             for (i, &w) in opt.speeds.iter().enumerate() {
+                if opt.cancel.is_cancelled() {
+                    failures.push((w, "interrupted".to_string()));
+                    nominal.push(None);
+                    continue;
+                }
                 match sweep.step(w) {
                     Ok(pt) => {
                         let (slot, done, pt_local, p, vars) =
@@ -259,6 +270,9 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .enumerate()
         .map(|(ci, s)| {
             let q = opt.quadrature?;
+            if opt.cancel.is_cancelled() {
+                return None;
+            }
             let name = format!("quadrature {}", opt.cases[ci].name);
             let r = quadrature::integrate(
                 model,
@@ -412,6 +426,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         samples_done,
         inadmissible,
         shard_states,
+        cancelled: opt.cancel.is_cancelled(),
     }
 }
 

@@ -52,6 +52,22 @@ impl Compiled {
         Model::from_file(path).map(Compiled::new)
     }
 
+    /// Reads and validates a model file with some parameters' nominal values replaced
+    /// ([`Model::from_file_with`]).
+    pub fn from_file_with(path: &Path, overrides: &[(String, f64)]) -> Result<Self, ModelError> {
+        Model::from_file_with(path, overrides).map(Compiled::new)
+    }
+
+    /// Validates a model given as bytes with some parameters' nominal values replaced
+    /// ([`Model::from_bytes_with`]).
+    pub fn from_bytes_with(
+        bytes: &[u8],
+        file: &str,
+        overrides: &[(String, f64)],
+    ) -> Result<Self, ModelError> {
+        Model::from_bytes_with(bytes, file, overrides).map(Compiled::new)
+    }
+
     /// Validates a model given as bytes ([`Model::from_bytes`]).
     pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Self, ModelError> {
         Model::from_bytes(bytes, file).map(Compiled::new)

@@ -31,6 +31,7 @@ pub mod program;
 pub mod quadrature;
 pub mod real;
 pub mod report;
+pub mod results;
 pub mod rigid;
 pub mod route;
 pub mod schur;

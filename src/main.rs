@@ -33,12 +33,51 @@ use std::path::PathBuf;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Replace a parameter's nominal value, as if the model file said so (repeatable):
+    /// `--set L=1.02 --set m=3.1`. The value is in the parameter's unit; a tolerance given in
+    /// percent applies to the new value.
+    #[arg(long = "set", global = true, value_name = "NAME=VALUE", value_parser = parse_set)]
+    set: Vec<(String, f64)>,
+}
+
+/// Parses a count or seed, saying what was wrong with a negative or fractional one (clap's own
+/// parser mistakes `-5` for a flag and suggests `-- -5`).
+fn whole_number<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("expected a whole number ≥ 0, got '{s}'"))
+}
+
+/// Parses `--set NAME=VALUE`.
+fn parse_set(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, e.g. L=1.02 (got '{s}')"))?;
+    let v: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{}' is not a number", value.trim()))?;
+    if !v.is_finite() {
+        return Err(format!("{name}: the value must be finite (got {v})"));
+    }
+    Ok((name.trim().to_string(), v))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
 enum Format {
+    /// Text for reading.
     Table,
+    /// Everything, for scripts.
     Json,
+    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate)
+    /// or of derivatives (`sensitivity`: one row per mode and design variable).
+    Csv,
+}
+
+/// Writes a header and rows as CSV.
+fn write_csv(mut w: impl Write, header: &[impl AsRef<[u8]>], rows: &[Vec<String>]) -> Result<()> {
+    w.write_all(&modaltol::results::csv_bytes(header, rows))?;
+    Ok(())
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -203,14 +242,14 @@ struct AnalyzeArgs {
     #[arg(long, allow_hyphen_values = true)]
     speed: Option<String>,
     /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     samples: Option<usize>,
     /// Random seed; default: the model's.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<u64>)]
     seed: Option<u64>,
     /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
     /// not depend on it); default: all cores.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     threads: Option<usize>,
     /// Skip the Monte Carlo.
     #[arg(long)]
@@ -258,22 +297,26 @@ struct FrfArgs {
     /// Operating speed, rad/s.
     #[arg(long, allow_hyphen_values = true)]
     speed: f64,
-    /// Where the excitation enters: a free joint coordinate (generalised force) or a
-    /// [[ports]] entry (force or torque).
+    /// Transfer function `input=NAME,output=NAME` (NAME a free joint coordinate or a
+    /// [[ports]] entry): generalised force (or port force/torque) on `input`, response of
+    /// `output`; default: the model's [analysis] transfer.
     #[arg(long)]
-    input: String,
-    /// Where the response is read: a free joint coordinate or a [[ports]] entry
-    /// (displacement or rotation).
-    #[arg(long)]
-    output: String,
+    transfer: Option<String>,
     /// Excitation frequencies FROM:TO:STEP in rad/s.
     #[arg(long, allow_hyphen_values = true)]
     freq: String,
     /// Design variables (parameter names, comma separated); default: those with a tolerance.
     #[arg(long, value_delimiter = ',')]
     wrt: Option<Vec<String>>,
-    /// Write the CSV to this file instead of stdout.
-    #[arg(short = 'o', long = "out")]
+    /// Write the CSV to this file instead of stdout. (With the older `--input A --output B`
+    /// spelling of the transfer function, `--output` names the response and `--out` the file.)
+    #[arg(short, long)]
+    output: Option<String>,
+    /// Older spelling: where the excitation enters (use --transfer input=…,output=…).
+    #[arg(long, hide = true)]
+    input: Option<String>,
+    /// Older spelling of -o/--output, kept for scripts.
+    #[arg(long, hide = true)]
     out: Option<PathBuf>,
 }
 
@@ -295,48 +338,26 @@ struct Failed(String);
 #[error("{0}")]
 struct InputError(String);
 
-fn load(path: &std::path::Path) -> Result<Compiled> {
-    Compiled::from_file(path).map_err(|e| InputError(e.to_string()).into())
+fn load(path: &std::path::Path, set: &[(String, f64)]) -> Result<Compiled> {
+    Compiled::from_file_with(path, set).map_err(|e| InputError(e.to_string()).into())
 }
 
 fn independent(model: &Model, names: &Option<Vec<String>>) -> Result<Option<Vec<usize>>> {
-    let Some(names) = names else { return Ok(None) };
-    let mut out = Vec::new();
-    for n in names {
-        let i = model
-            .coordinate(n)
-            .filter(|&i| !model.coordinates[i].driven)
-            .ok_or_else(|| {
-                InputError(format!(
-                    "--independent: '{n}' is not a free joint coordinate of the model"
-                ))
-            })?;
-        out.push(i);
-    }
-    if out.len() != model.dof() {
-        return Err(InputError(format!(
-            "--independent names {} coordinate(s) but the model has {} degree(s) of freedom",
-            out.len(),
-            model.dof()
-        ))
-        .into());
-    }
-    Ok(Some(out))
+    names
+        .as_deref()
+        .map(|n| {
+            model
+                .independent_coordinates(n)
+                .map_err(|e| InputError(format!("--independent: {e}")).into())
+        })
+        .transpose()
 }
 
 /// Design variables by name, or those with a tolerance.
 fn design_variables(model: &Model, names: &Option<Vec<String>>) -> Result<Vec<usize>> {
-    match names {
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                model
-                    .parameter(n)
-                    .ok_or_else(|| InputError(format!("--wrt: unknown parameter '{n}'")).into())
-            })
-            .collect(),
-        None => Ok(model.toleranced()),
-    }
+    model
+        .design_variables(names.as_deref())
+        .map_err(|e| InputError(format!("--wrt: {e}")).into())
 }
 
 /// Parses `input=NAME,output=NAME[,order=K]` (or `model` for the model's own transfer function).
@@ -353,50 +374,46 @@ fn how(d: Derivatives) -> sensitivity::Derivatives {
         Derivatives::Fd => sensitivity::Derivatives::FiniteDifference,
     }
 }
-fn model_or_governor(model: &Option<PathBuf>) -> Result<Compiled> {
+fn model_or_governor(model: &Option<PathBuf>, set: &[(String, f64)]) -> Result<Compiled> {
     match model {
-        Some(path) => load(path),
-        None => Compiled::from_str(EMBEDDED_GOVERNOR, "governor.toml (built in)")
-            .map_err(|e| InputError(e.to_string()).into()),
+        Some(path) => load(path, set),
+        None => Compiled::from_bytes_with(
+            EMBEDDED_GOVERNOR.as_bytes(),
+            "governor.toml (built in)",
+            set,
+        )
+        .map_err(|e| InputError(e.to_string()).into()),
     }
 }
 
 /// The model's tolerance cases, or one made of the parameters' own tolerances.
 fn tolerance_cases(m: &Model, only: &[String]) -> Result<Vec<modaltol::model::Case>> {
-    let mut cases = m.analysis.cases.clone();
-    if !only.is_empty() {
-        let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
-        if let Some(bad) = only.iter().find(|n| !names.contains(&n.as_str())) {
-            return Err(InputError(format!(
-                "--case {bad}: the model has no such tolerance case (it has: {})",
-                names.join(", ")
-            ))
-            .into());
-        }
-        cases.retain(|c| only.contains(&c.name));
-    }
-    if cases.is_empty() {
-        let c = modaltol::model::Case::from_parameters(m);
-        if c.tolerances.is_empty() {
-            return Err(InputError(
-                "the model declares no tolerance case and no parameter carries a tolerance".into(),
-            )
-            .into());
-        }
-        cases.push(c);
-    }
-    Ok(cases)
+    m.tolerance_cases(only).map_err(|e| {
+        let flag = if only.is_empty() { "" } else { "--case: " };
+        InputError(format!("{flag}{e}")).into()
+    })
 }
 
-/// Progress on stderr when it is a terminal.
+/// Progress on stderr: on a terminal one line rewritten in place; otherwise (a batch job's
+/// log) one line per tenth of each stage, so that logs show how far a run got.
 fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
-    let show = std::io::stderr().is_terminal();
+    let terminal = std::io::stderr().is_terminal();
+    let last = std::sync::Mutex::new((String::new(), usize::MAX));
     move |stage: &str, done: usize, total: usize| {
-        if show && (done == total || done.is_multiple_of(16)) {
-            eprint!("\r{stage}: {done}/{total}          ");
-            if done == total {
-                eprintln!();
+        if terminal {
+            if done == total || done.is_multiple_of(16) {
+                eprint!("\r{stage}: {done}/{total}          ");
+                if done == total {
+                    eprintln!();
+                }
             }
+            return;
+        }
+        let tenth = (done * 10).checked_div(total).unwrap_or(10);
+        let mut last = last.lock().unwrap_or_else(|e| e.into_inner());
+        if last.0 != stage || last.1 != tenth {
+            *last = (stage.to_string(), tenth);
+            eprintln!("{stage}: {done}/{total}");
         }
     }
 }
@@ -419,50 +436,15 @@ fn write_outputs(
     a: &modaltol::analyze::Analysis,
     mc: Option<&McOptions>,
     threads: Option<usize>,
-    mut dir: ResultDir,
+    dir: ResultDir,
     output: &std::path::Path,
 ) -> Result<()> {
-    let partial = mc.is_some_and(|mc| a.interrupted(mc.samples));
-    let mut csv = csv::Writer::from_writer(Vec::new());
-    csv.write_record(report::tolerance_header(m, a))?;
-    for row in report::tolerance_rows(a, partial) {
-        csv.write_record(&row)?;
-    }
-    dir.write(
-        "tolerance.csv",
-        &csv.into_inner().map_err(|e| e.into_error())?,
-    )?;
-    let mut csv = csv::Writer::from_writer(Vec::new());
-    csv.write_record(report::PROBABILITY_HEADER)?;
-    for row in report::probability_rows(a) {
-        csv.write_record(&row)?;
-    }
-    dir.write(
-        "probabilities.csv",
-        &csv.into_inner().map_err(|e| e.into_error())?,
-    )?;
-    let (plots, critical) = modaltol::plots::plots(m, a);
-    let fonts = modaltol::plots::fonts();
-    let mut files = Vec::new();
-    for p in &plots {
-        let svg = format!("{}.svg", p.stem);
-        dir.write(&svg, p.svg.as_bytes())?;
-        match modaltol::plots::png(&p.svg, &fonts) {
-            Ok(png) => dir.write(&format!("{}.png", p.stem), &png)?,
-            Err(e) => eprintln!("modaltol: no PNG for {}: {e}", p.stem),
-        }
-        files.push((svg, p.title.clone()));
-    }
-    dir.write(
-        "report.html",
-        report::report_html(m, a, &files, &critical, mc).as_bytes(),
-    )?;
     let used = threads.unwrap_or_else(rayon::current_num_threads);
-    dir.write(
-        "summary.json",
-        serde_json::to_string_pretty(&report::summary_json(m, a, mc, used))?.as_bytes(),
-    )?;
-    dir.commit(partial)?;
+    let written = modaltol::results::write(m, a, mc, used, dir)?;
+    for (stem, e) in &written.missing_png {
+        eprintln!("modaltol: no PNG for {stem}: {e}");
+    }
+    let partial = written.partial;
     eprintln!(
         "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
         a.analytic_seconds,
@@ -535,20 +517,20 @@ impl Sink {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Check(args) => check_command(args),
-        Command::Modal(args) => modal_command(args),
-        Command::Sweep(args) => sweep_command(args),
-        Command::Sensitivity(args) => sensitivity_command(args),
-        Command::Analyze(args) => analyze_command(args),
-        Command::Merge(args) => merge_command(args),
-        Command::Frf(args) => frf_command(args),
+        Command::Check(args) => check_command(args, &cli.set),
+        Command::Modal(args) => modal_command(args, &cli.set),
+        Command::Sweep(args) => sweep_command(args, &cli.set),
+        Command::Sensitivity(args) => sensitivity_command(args, &cli.set),
+        Command::Analyze(args) => analyze_command(args, &cli.set),
+        Command::Merge(args) => merge_command(args, &cli.set),
+        Command::Frf(args) => frf_command(args, &cli.set),
     }
 }
 
 /// `modaltol check` (see its `--help`).
-fn check_command(args: CheckArgs) -> Result<()> {
+fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
     let CheckArgs { model } = args;
-    let m = load(&model)?;
+    let m = load(&model, set)?;
     let mut w = Sink::to(&None)?;
     write!(w, "{}", report::check_summary(&m))?;
     w.finish()?;
@@ -557,7 +539,7 @@ fn check_command(args: CheckArgs) -> Result<()> {
 }
 
 /// `modaltol modal` (see its `--help`).
-fn modal_command(args: ModalArgs) -> Result<()> {
+fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
     let ModalArgs {
         model,
         speed,
@@ -565,7 +547,7 @@ fn modal_command(args: ModalArgs) -> Result<()> {
         independent: ind,
         output,
     } = args;
-    let m = load(&model)?;
+    let m = load(&model, set)?;
     if !speed.is_finite() {
         return Err(InputError("--speed must be finite".into()).into());
     }
@@ -584,6 +566,10 @@ fn modal_command(args: ModalArgs) -> Result<()> {
             serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?
         )?,
         Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
+        Format::Csv => {
+            let rows = result.as_ref().map(report::modes_rows).unwrap_or_default();
+            write_csv(&mut w, &report::modes_header(&m), &rows)?
+        }
     }
     w.finish()?;
     if let Err(e) = result {
@@ -594,7 +580,7 @@ fn modal_command(args: ModalArgs) -> Result<()> {
 }
 
 /// `modaltol sweep` (see its `--help`).
-fn sweep_command(args: SweepArgs) -> Result<()> {
+fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
     let SweepArgs {
         model,
         speed,
@@ -605,7 +591,7 @@ fn sweep_command(args: SweepArgs) -> Result<()> {
         derivatives,
         output,
     } = args;
-    let m = load(&model)?;
+    let m = load(&model, set)?;
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
         None => m.analysis.speed.ok_or_else(|| {
@@ -632,7 +618,8 @@ fn sweep_command(args: SweepArgs) -> Result<()> {
     let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
     csv.write_record(report::sweep_header(&m, &cols))?;
     let n = range.len();
-    let progress = std::io::stderr().is_terminal() && n >= 2000;
+    // Long sweeps (sensitivities at each speed, or many speeds) report their progress.
+    let progress = (sens || n >= 2000).then(progress_printer);
     let mut failed = 0usize;
     for (i, w) in range.speeds().enumerate() {
         let (r, extras) = study.step(w);
@@ -642,14 +629,11 @@ fn sweep_command(args: SweepArgs) -> Result<()> {
         for row in report::sweep_rows(&m, &cols, w, &r, &extras) {
             csv.write_record(&row)?;
         }
-        if progress && i % 500 == 0 {
-            eprint!("\rsweep: {i}/{n} speeds");
+        if let Some(p) = &progress {
+            p("sweep speeds", i + 1, n);
         }
     }
     csv.into_inner().map_err(|e| e.into_error())?.finish()?;
-    if progress {
-        eprintln!("\rsweep: {n}/{n} speeds");
-    }
     if failed == n {
         return Err(Failed(format!(
             "all {n} speeds failed (status 'failed', reason in the message column)"
@@ -666,7 +650,7 @@ fn sweep_command(args: SweepArgs) -> Result<()> {
 }
 
 /// `modaltol sensitivity` (see its `--help`).
-fn sensitivity_command(args: SensitivityArgs) -> Result<()> {
+fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<()> {
     let SensitivityArgs {
         model,
         speed,
@@ -676,7 +660,7 @@ fn sensitivity_command(args: SensitivityArgs) -> Result<()> {
         format,
         output,
     } = args;
-    let m = load(&model)?;
+    let m = load(&model, set)?;
     if !speed.is_finite() {
         return Err(InputError("--speed must be finite".into()).into());
     }
@@ -715,6 +699,11 @@ fn sensitivity_command(args: SensitivityArgs) -> Result<()> {
             "{}",
             report::sensitivity_table(&m, speed, method, &pt, &s)
         )?,
+        Format::Csv => write_csv(
+            &mut w,
+            &report::SENSITIVITY_HEADER,
+            &report::sensitivity_rows(&m, &pt, &s),
+        )?,
     }
     w.finish()?;
 
@@ -722,7 +711,7 @@ fn sensitivity_command(args: SensitivityArgs) -> Result<()> {
 }
 
 /// `modaltol analyze` (see its `--help`).
-fn analyze_command(args: AnalyzeArgs) -> Result<()> {
+fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
     let AnalyzeArgs {
         model,
         output,
@@ -743,7 +732,7 @@ fn analyze_command(args: AnalyzeArgs) -> Result<()> {
         )
         .into());
     }
-    let m = model_or_governor(&model)?;
+    let m = model_or_governor(&model, set)?;
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
         None => m.analysis.speed.ok_or_else(|| {
@@ -841,14 +830,14 @@ fn analyze_command(args: AnalyzeArgs) -> Result<()> {
 }
 
 /// `modaltol merge` (see its `--help`).
-fn merge_command(args: MergeArgs) -> Result<()> {
+fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     let MergeArgs {
         model,
         output,
         shards,
         cases: only,
     } = args;
-    let m = model_or_governor(&model)?;
+    let m = model_or_governor(&model, set)?;
     let cases = tolerance_cases(&m, &only)?;
     let (first, states) =
         modaltol::shard::read_all(&m, &cases, &shards).map_err(|e| InputError(e.to_string()))?;
@@ -876,18 +865,66 @@ fn merge_command(args: MergeArgs) -> Result<()> {
 }
 
 /// `modaltol frf` (see its `--help`).
-fn frf_command(args: FrfArgs) -> Result<()> {
+fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     let FrfArgs {
         model,
         speed,
-        input,
-        output,
+        transfer,
         freq,
         wrt,
+        output,
+        input,
         out,
     } = args;
-    let m = load(&model)?;
-    let tf = parse_transfer(&m, &format!("input={input},output={output}"))?;
+    let m = load(&model, set)?;
+    // `--input A --output B [--out FILE]` is the older spelling; `-o/--output` is the file
+    // otherwise, as in every other command.
+    let (tf, file) = match (&transfer, &input) {
+        (Some(_), Some(_)) => {
+            return Err(InputError(
+                "give the transfer function once: --transfer input=…,output=… (the older \
+                 --input/--output pair is its other spelling)"
+                    .into(),
+            )
+            .into());
+        }
+        (Some(spec), None) => {
+            if spec.contains("order=") {
+                return Err(InputError(format!(
+                    "--transfer {spec}: `order` does not apply to frf (the excitation \
+                     frequencies are --freq)"
+                ))
+                .into());
+            }
+            (parse_transfer(&m, spec)?, output.map(PathBuf::from).or(out))
+        }
+        (None, Some(inp)) => {
+            let outp = output.ok_or_else(|| {
+                InputError("--input needs --output (the response); or use --transfer".into())
+            })?;
+            eprintln!(
+                "modaltol: note: `--input {inp} --output {outp}` is the older spelling of \
+                 `--transfer input={inp},output={outp}`; -o/--output now names the CSV file"
+            );
+            (
+                parse_transfer(&m, &format!("input={inp},output={outp}"))?,
+                out,
+            )
+        }
+        (None, None) => {
+            let tf = m.analysis.transfer.ok_or_else(|| {
+                InputError(
+                    "frf needs --transfer input=NAME,output=NAME (the model's [analysis] has \
+                     no transfer function)"
+                        .into(),
+                )
+            })?;
+            (tf, output.map(PathBuf::from).or(out))
+        }
+    };
+    if !speed.is_finite() {
+        return Err(InputError("--speed must be finite".into()).into());
+    }
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
     let p = m.nominal();
@@ -897,24 +934,9 @@ fn frf_command(args: FrfArgs) -> Result<()> {
     let rows =
         sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())
             .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
-    let mut csv = csv::Writer::from_writer(Sink::to(&out)?);
-    let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    header.extend(
-        wrt.iter()
-            .map(|&b| format!("d(magnitude)/d({})", m.parameters[b].name)),
-    );
-    csv.write_record(&header)?;
-    let blank = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
-    for r in rows {
-        let mut row = vec![r.frequency.to_string()];
-        match r.h {
-            Some(h) => row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string())),
-            None => row.extend(std::iter::repeat_n(String::new(), 4)),
-        }
-        row.extend(r.d_magnitude.into_iter().map(blank));
+    let mut csv = csv::Writer::from_writer(Sink::to(&file)?);
+    csv.write_record(report::frf_header(&m, &wrt))?;
+    for row in report::frf_rows(&rows) {
         csv.write_record(&row)?;
     }
     csv.into_inner().map_err(|e| e.into_error())?.finish()?;

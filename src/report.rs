@@ -5,9 +5,10 @@
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
 use crate::analyze::{Analysis, Method};
+use crate::modal::C64;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
-use crate::sensitivity::{Sensitivity, Status as SensStatus};
+use crate::sensitivity::{ResponseRow, Sensitivity, Status as SensStatus};
 use crate::study::SweepExtras;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::Quantity;
@@ -154,6 +155,173 @@ pub fn sweep_rows(
     }
 }
 
+/// A mode shape for display: scaled so that its largest component is 1 (real), the
+/// convention of modal test reports; a zero shape stays zero.
+pub fn display_shape(shape: &[C64]) -> Vec<C64> {
+    let big = shape
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .filter(|z| z.norm() > 0.0);
+    shape.iter().map(|&z| big.map_or(z, |b| z / b)).collect()
+}
+
+/// Header of the modes table (`modal --format csv`): the mode's frequencies, damping ratio,
+/// its two roots, then its shape in the free coordinates, scaled by [`display_shape`]
+/// (`shape_re:<joint>`, `shape_im:<joint>`).
+pub fn modes_header(model: &Model) -> Vec<String> {
+    let mut h: Vec<String> = [
+        "speed",
+        "mode",
+        "status",
+        "damped_frequency",
+        "natural_frequency",
+        "damping_ratio",
+        "eigen_re",
+        "eigen_im",
+        "eigen2_re",
+        "eigen2_im",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for &i in &model.free() {
+        let c = &model.coordinates[i].name;
+        h.push(format!("shape_re:{c}"));
+        h.push(format!("shape_im:{c}"));
+    }
+    h
+}
+
+/// Rows of the modes table at the point `p` (see [`modes_header`]).
+pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
+    p.modes
+        .iter()
+        .zip(&p.shapes)
+        .enumerate()
+        .map(|(i, (m, shape))| {
+            let mut r = vec![
+                p.speed.to_string(),
+                (i + 1).to_string(),
+                m.class.as_str().to_string(),
+                m.damped_frequency.to_string(),
+                m.natural_frequency.to_string(),
+                m.damping_ratio.to_string(),
+                m.root.lambda.re.to_string(),
+                m.root.lambda.im.to_string(),
+                m.partner.lambda.re.to_string(),
+                m.partner.lambda.im.to_string(),
+            ];
+            let shape: Vec<C64> = shape.iter().copied().collect();
+            for z in display_shape(&shape) {
+                r.push(z.re.to_string());
+                r.push(z.im.to_string());
+            }
+            r
+        })
+        .collect()
+}
+
+/// The elasticity `(b/f)·df/db`: the relative change of `f` per relative change of `b`; none
+/// where `f` is zero (an undamped mode's ζ, an overdamped mode's ω_d).
+pub fn elasticity(b: f64, f: f64, df_db: f64) -> Option<f64> {
+    let e = b / f * df_db;
+    (f != 0.0 && e.is_finite()).then_some(e)
+}
+
+/// Header of the sensitivity table (`sensitivity --format csv`): one row per mode and design
+/// variable, the derivatives per unit of the variable (`d_…`) and normalised (`elasticity_…`,
+/// [`elasticity`]).
+pub const SENSITIVITY_HEADER: [&str; 18] = [
+    "speed",
+    "mode",
+    "status",
+    "damped_frequency",
+    "natural_frequency",
+    "damping_ratio",
+    "transfer_magnitude",
+    "parameter",
+    "value",
+    "sensitivity_status",
+    "d_damped_frequency",
+    "d_natural_frequency",
+    "d_damping_ratio",
+    "d_transfer_magnitude",
+    "elasticity_damped_frequency",
+    "elasticity_natural_frequency",
+    "elasticity_damping_ratio",
+    "elasticity_transfer_magnitude",
+];
+
+/// Rows of the sensitivity table (see [`SENSITIVITY_HEADER`]); derivatives that do not exist
+/// are empty and `sensitivity_status` says `not_differentiable`.
+pub fn sensitivity_rows(model: &Model, pt: &Point, s: &Sensitivity) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    for (i, m) in pt.modes.iter().enumerate() {
+        for v in &s.variables {
+            let b = model.parameters[v.param].value;
+            let ms = &v.modes[i];
+            let ok = ms.status == SensStatus::Ok;
+            let d = |x: f64| ok.then_some(x);
+            let dh = v.d_transfer_magnitude;
+            let el = |f: f64, df: Option<f64>| df.and_then(|df| elasticity(b, f, df));
+            rows.push(vec![
+                pt.speed.to_string(),
+                (i + 1).to_string(),
+                m.class.as_str().to_string(),
+                m.damped_frequency.to_string(),
+                m.natural_frequency.to_string(),
+                m.damping_ratio.to_string(),
+                opt(s.transfer_magnitude),
+                model.parameters[v.param].name.clone(),
+                b.to_string(),
+                if ok { "ok" } else { "not_differentiable" }.to_string(),
+                opt(d(ms.d_damped_frequency)),
+                opt(d(ms.d_natural_frequency)),
+                opt(d(ms.d_damping_ratio)),
+                opt(dh),
+                opt(el(m.damped_frequency, d(ms.d_damped_frequency))),
+                opt(el(m.natural_frequency, d(ms.d_natural_frequency))),
+                opt(el(m.damping_ratio, d(ms.d_damping_ratio))),
+                opt(s.transfer_magnitude.and_then(|h| el(h, dh))),
+            ]);
+        }
+    }
+    rows
+}
+
+/// Header of the frequency-response table (`frf`): excitation frequency, |H|, arg H, its real
+/// and imaginary parts, then `d(magnitude)/d(P)` per design variable.
+pub fn frf_header(model: &Model, wrt: &[usize]) -> Vec<String> {
+    let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    header.extend(
+        wrt.iter()
+            .map(|&b| format!("d(magnitude)/d({})", model.parameters[b].name)),
+    );
+    header
+}
+
+/// Rows of the frequency-response table (see [`frf_header`]); empty cells where `H` or a
+/// derivative does not exist.
+pub fn frf_rows(rows: &[ResponseRow]) -> Vec<Vec<String>> {
+    rows.iter()
+        .map(|r| {
+            let mut row = vec![r.frequency.to_string()];
+            match r.h {
+                Some(h) => {
+                    row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string()))
+                }
+                None => row.extend(std::iter::repeat_n(String::new(), 4)),
+            }
+            row.extend(r.d_magnitude.iter().map(|&v| opt(v)));
+            row
+        })
+        .collect()
+}
+
 /// The `sensitivity` result as JSON.
 pub fn sensitivity_json(
     model: &Model,
@@ -219,9 +387,16 @@ pub fn sensitivity_table(
             m.natural_frequency,
             m.damping_ratio
         );
+        let pw = s
+            .variables
+            .iter()
+            .map(|v| model.parameters[v.param].name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(14);
         let _ = writeln!(
             out,
-            "  {:<14} {:>16} {:>16} {:>16} {:>16}",
+            "  {:<pw$} {:>16} {:>16} {:>16} {:>16}",
             "parameter", "dω_d/dP", "dω_n/dP", "dζ/dP", "d|H|/dP"
         );
         for v in &s.variables {
@@ -238,7 +413,7 @@ pub fn sensitivity_table(
                 .map_or(format!("{:>16}", "-"), |x| format!("{x:>16.8e}"));
             let _ = writeln!(
                 out,
-                "  {:<14} {} {} {} {dh}",
+                "  {:<pw$} {} {} {} {dh}",
                 model.parameters[v.param].name,
                 f(ms.d_damped_frequency),
                 f(ms.d_natural_frequency),
@@ -302,7 +477,7 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
                    "damping_ratio": m.damping_ratio,
                    "eigenvalue": {"re": m.root.lambda.re, "im": m.root.lambda.im},
                    "partner_eigenvalue": {"re": m.partner.lambda.re, "im": m.partner.lambda.im},
-                   "shape": p.shapes[i].iter().map(|z| json!({"re": z.re, "im": z.im})).collect::<Vec<_>>()})
+                   "shape": model.free().iter().zip(display_shape(p.shapes[i].as_slice())).map(|(&c, z)| json!({"coordinate": model.coordinates[c].name, "re": z.re, "im": z.im})).collect::<Vec<_>>()})
         })
         .collect();
     let names = |v: &[usize]| {
@@ -413,6 +588,39 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
             m.root.lambda.im
         );
     }
+    let free = model.free();
+    let width = free
+        .iter()
+        .map(|&i| model.coordinates[i].name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(10);
+    let _ = writeln!(
+        s,
+        "\nmode shapes in the free coordinates (largest component 1; magnitude ∠ phase):"
+    );
+    let _ = write!(s, "  {:<width$}", "coordinate");
+    for i in 0..p.modes.len() {
+        let _ = write!(s, " {:>18}", format!("mode {}", i + 1));
+    }
+    let _ = writeln!(s);
+    let shapes: Vec<Vec<C64>> = p
+        .shapes
+        .iter()
+        .map(|x| display_shape(x.as_slice()))
+        .collect();
+    for (k, &c) in free.iter().enumerate() {
+        let _ = write!(s, "  {:<width$}", model.coordinates[c].name);
+        for shape in &shapes {
+            let z = shape[k];
+            let _ = write!(
+                s,
+                " {:>18}",
+                format!("{:.4} ∠ {:+7.2}°", z.norm(), z.arg().to_degrees())
+            );
+        }
+        let _ = writeln!(s);
+    }
     if let Some(n) = &p.note {
         let _ = writeln!(s, "\nnote: {n}");
     }
@@ -429,12 +637,23 @@ pub fn check_summary(model: &Model) -> String {
     }
     let body = |b: Option<usize>| b.map_or("ground".to_string(), |i| model.bodies[i].name.clone());
     let _ = writeln!(s, "  joints ({}):", model.joints.len());
+    // Columns as wide as the longest name, so that long names do not push them out of line.
+    let wide = |names: &mut dyn Iterator<Item = &str>, least: usize| {
+        names
+            .map(|n| n.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(least)
+    };
+    let jw = wide(&mut model.joints.iter().map(|j| j.name.as_str()), 12);
+    let kw = wide(&mut model.joints.iter().map(|j| j.kind.name()), 10);
+    let pw = wide(&mut model.parameters.iter().map(|p| p.name.as_str()), 14);
     for j in &model.joints {
         let kind = j.kind.name();
         let drive = if j.drive.is_some() { ", driven" } else { "" };
         let _ = writeln!(
             s,
-            "    {:<12} {:<10} {} → {}{drive}",
+            "    {:<jw$} {:<kw$} {} → {}{drive}",
             j.name,
             kind,
             body(j.parent),
@@ -466,7 +685,7 @@ pub fn check_summary(model: &Model) -> String {
             Some(crate::model::Tolerance::Absolute(a)) => format!("  ± {a}"),
             None => String::new(),
         };
-        let _ = writeln!(s, "    {:<14} {}{tol}", p.name, p.value);
+        let _ = writeln!(s, "    {:<pw$} {}{tol}", p.name, p.value);
     }
     if !model.analysis.cases.is_empty() {
         let names: Vec<&str> = model
@@ -675,7 +894,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
                                           "samples_done": a.samples_done, "partial": a.interrupted(m.samples),
                                           "inadmissible_samples": inadmissible_summary(a)})),
-        "partial": mc.is_some_and(|m| a.interrupted(m.samples)),
+        "partial": a.cancelled || mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
         "ratio_monte_carlo_to_quadrature": a.monte_carlo_seconds.zip(a.quadrature_seconds).map(|(m, q)| m / q),
         "paper": {"note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",

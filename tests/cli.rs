@@ -675,3 +675,185 @@ fn quadrature_tolerance_must_be_a_relative_error() {
         );
     }
 }
+
+#[test]
+fn frf_takes_the_transfer_like_sweep_and_output_is_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("frf.csv");
+    let gov = example("governor.toml");
+    let gov = gov.to_str().unwrap();
+    let common = ["frf", gov, "--speed", "1.595", "--freq", "0.5:5:0.5"];
+    let new = run(&[
+        &common[..],
+        &[
+            "--transfer",
+            "input=slide,output=slide",
+            "-o",
+            file.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert!(new.status.success(), "{}", stderr(&new));
+    assert!(stdout(&new).is_empty());
+    // The older spelling still works: --input/--output name the pair, the CSV on stdout.
+    let old = run(&[&common[..], &["--input", "slide", "--output", "slide"]].concat());
+    assert!(old.status.success(), "{}", stderr(&old));
+    assert!(stderr(&old).contains("older spelling"), "{}", stderr(&old));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), stdout(&old));
+    // The model's own transfer function is the default (the pendulum has one).
+    let pend = example("rotating_pendulum.toml");
+    let o = run(&[
+        "frf",
+        pend.to_str().unwrap(),
+        "--speed",
+        "1",
+        "--freq",
+        "1:2:1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o).lines().count(), 3);
+    // Both spellings at once, or an order (meaningless for a response over --freq), are refused.
+    let both = run(&[
+        &common[..],
+        &["--transfer", "input=slide,output=slide", "--input", "slide"],
+    ]
+    .concat());
+    assert_eq!(both.status.code(), Some(2), "{}", stderr(&both));
+    let order = run(&[
+        &common[..],
+        &["--transfer", "input=slide,output=slide,order=2"],
+    ]
+    .concat());
+    assert_eq!(order.status.code(), Some(2), "{}", stderr(&order));
+    assert!(stderr(&order).contains("order"), "{}", stderr(&order));
+}
+
+#[test]
+fn set_replaces_a_parameter_as_the_edited_file_does() {
+    let text = std::fs::read_to_string(example("rotating_pendulum.toml")).unwrap();
+    let edited = text.replacen("L = { value = 1.0", "L = { value = 1.07", 1);
+    assert_ne!(
+        edited, text,
+        "the example's L line changed: update this test"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("edited.toml");
+    std::fs::write(&path, edited).unwrap();
+    let args = ["--speed", "0:6:0.5", "--transfer", "model", "--sensitivity"];
+    let from_file = run(&[&["sweep", path.to_str().unwrap()][..], &args[..]].concat());
+    let pend = example("rotating_pendulum.toml");
+    let pend = pend.to_str().unwrap();
+    let set = run(&[&["--set", "L=1.07", "sweep", pend][..], &args[..]].concat());
+    let nominal = run(&[&["sweep", pend][..], &args[..]].concat());
+    assert!(set.status.success(), "{}", stderr(&set));
+    assert_eq!(stdout(&set), stdout(&from_file));
+    assert_ne!(stdout(&set), stdout(&nominal));
+    let unknown = run(&["check", pend, "--set", "Lx=1"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(
+        stderr(&unknown).contains("override 'Lx'"),
+        "{}",
+        stderr(&unknown)
+    );
+    let nan = run(&["check", pend, "--set", "L=nan"]);
+    assert_eq!(nan.status.code(), Some(2));
+}
+
+#[test]
+fn negative_counts_are_explained_not_mistaken_for_flags() {
+    let o = run(&["analyze", "-o", "unused", "--samples", "-5"]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(e.contains("expected a whole number"), "{e}");
+    assert!(!e.contains("-- -5"), "{e}");
+}
+
+#[test]
+fn progress_goes_to_a_log_one_line_per_tenth() {
+    // stderr is a pipe here, not a terminal: a batch job's log.
+    let dir = tempfile::tempdir().unwrap();
+    let o = run(&[
+        "analyze",
+        example("rotating_pendulum.toml").to_str().unwrap(),
+        "-o",
+        dir.path().join("a").to_str().unwrap(),
+        "--speed",
+        "3:4:0.1",
+        "--samples",
+        "640",
+        "--case",
+        "L3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(!e.contains('\r'), "{e}");
+    let mc: Vec<&str> = e
+        .lines()
+        .filter(|l| l.starts_with("monte carlo L3: "))
+        .collect();
+    assert!((2..=11).contains(&mc.len()), "{e}");
+    assert_eq!(mc.last(), Some(&"monte carlo L3: 640/640"), "{e}");
+    assert!(e.lines().any(|l| l.starts_with("quadrature L3: ")), "{e}");
+}
+
+#[test]
+fn check_columns_stay_aligned_for_long_names() {
+    let text = std::fs::read_to_string(example("rotating_pendulum.toml")).unwrap();
+    let long = "a_hinge_with_a_rather_long_name";
+    let edited = text.replace("\"hinge\"", &format!("\"{long}\""));
+    assert_ne!(edited, text);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("long.toml");
+    std::fs::write(&path, edited).unwrap();
+    let o = run(&["check", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    let joints: Vec<&str> = s
+        .lines()
+        .skip_while(|l| !l.starts_with("  joints"))
+        .skip(1)
+        .take(2)
+        .collect();
+    // The type column starts at the same place on every joint line.
+    let at = |l: &str, w: &str| l.find(w).unwrap_or_else(|| panic!("{w} in {l}"));
+    assert_eq!(at(joints[0], "revolute"), at(joints[1], "revolute"), "{s}");
+}
+
+#[test]
+fn modal_and_sensitivity_as_csv_name_the_shapes_and_give_elasticities() {
+    let gov = example("governor.toml");
+    let gov = gov.to_str().unwrap();
+    let o = run(&["modal", gov, "--speed", "1.595", "--format", "csv"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    let header: Vec<&str> = s.lines().next().unwrap().split(',').collect();
+    for c in ["arm1", "arm2", "slide"] {
+        assert!(header.contains(&format!("shape_re:{c}").as_str()), "{s}");
+    }
+    // The largest shape component is 1.
+    let row: Vec<f64> = s
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .skip(10)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let largest = row.chunks(2).map(|z| z[0].hypot(z[1])).fold(0.0, f64::max);
+    assert!((largest - 1.0).abs() < 1e-12, "{s}");
+    let o = run(&["sensitivity", gov, "--speed", "1.595", "--format", "csv"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    let header: Vec<&str> = s.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    for line in s.lines().skip(1) {
+        let r: Vec<&str> = line.split(',').collect();
+        let f = |n: &str| r[col(n)].parse::<f64>().unwrap();
+        let e = f("value") / f("damped_frequency") * f("d_damped_frequency");
+        assert!(
+            (f("elasticity_damped_frequency") - e).abs() <= 1e-12 * e.abs(),
+            "{line}"
+        );
+    }
+    assert_eq!(s.lines().count(), 4, "{s}"); // one mode × three toleranced parameters
+}

@@ -377,6 +377,12 @@ impl Model {
 
     /// Reads and validates a model file.
     pub fn from_file(path: &Path) -> Result<Model, ModelError> {
+        Model::from_file_with(path, &[])
+    }
+
+    /// Reads and validates a model file with the nominal values of some parameters replaced
+    /// (see [`Model::from_bytes_with`]).
+    pub fn from_file_with(path: &Path, overrides: &[(String, f64)]) -> Result<Model, ModelError> {
         let file = path.display().to_string();
         // Bounded whatever the file is: a device or a pipe has no size to check beforehand.
         let bytes =
@@ -394,11 +400,21 @@ impl Model {
                 },
                 snippet: None,
             })?;
-        Model::from_bytes(&bytes, &file)
+        Model::from_bytes_with(&bytes, &file, overrides)
     }
 
     /// Validates a model given as bytes; `file` names it in messages.
     pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Model, ModelError> {
+        Model::from_bytes_with(bytes, file, &[])
+    }
+
+    /// Validates a model given as bytes with the nominal values of some parameters replaced
+    /// (`(name, value)`, applied in order): the same model as the file edited to say so.
+    pub fn from_bytes_with(
+        bytes: &[u8],
+        file: &str,
+        overrides: &[(String, f64)],
+    ) -> Result<Model, ModelError> {
         if bytes.len() as u64 > Self::MAX_FILE_BYTES {
             return Err(ModelError {
                 file: file.to_string(),
@@ -417,12 +433,12 @@ impl Model {
             let prefix = String::from_utf8_lossy(&bytes[..off]).into_owned();
             validate::error_at(file, &prefix, off, "the file is not valid UTF-8 text")
         })?;
-        validate::validate(text, file)
+        validate::validate(text, file, overrides)
     }
 
     /// Validates a model given as text; `file` names it in messages.
     pub fn from_str(text: &str, file: &str) -> Result<Model, ModelError> {
-        validate::validate(text, file)
+        validate::validate(text, file, &[])
     }
 
     /// Nominal parameter values.
@@ -551,6 +567,69 @@ impl Model {
     /// Number of scalar constraint equations.
     pub fn n_constraints(&self) -> usize {
         self.constraints.iter().map(|c| c.kind.equations()).sum()
+    }
+
+    /// The design variables named (parameter indices), or, without names, those that carry a
+    /// tolerance. An unknown name is an error naming it.
+    pub fn design_variables(&self, names: Option<&[String]>) -> Result<Vec<usize>, String> {
+        match names {
+            Some(names) => names
+                .iter()
+                .map(|n| {
+                    self.parameter(n)
+                        .ok_or_else(|| format!("unknown parameter '{n}'"))
+                })
+                .collect(),
+            None => Ok(self.toleranced()),
+        }
+    }
+
+    /// Free coordinates named as the independent ones (coordinate indices): as many as the
+    /// degrees of freedom, each a free joint coordinate.
+    pub fn independent_coordinates(&self, names: &[String]) -> Result<Vec<usize>, String> {
+        let out = names
+            .iter()
+            .map(|n| {
+                self.coordinate(n)
+                    .filter(|&i| !self.coordinates[i].driven)
+                    .ok_or_else(|| format!("'{n}' is not a free joint coordinate of the model"))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        if out.len() != self.dof() {
+            return Err(format!(
+                "{} coordinate(s) named but the model has {} degree(s) of freedom",
+                out.len(),
+                self.dof()
+            ));
+        }
+        Ok(out)
+    }
+
+    /// The tolerance cases of `[analysis]` named in `only` (all of them when it is empty), or,
+    /// when the model declares none, the one made of the parameters' own tolerances.
+    pub fn tolerance_cases(&self, only: &[String]) -> Result<Vec<Case>, String> {
+        let mut cases = self.analysis.cases.clone();
+        if !only.is_empty() {
+            let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+            if let Some(bad) = only.iter().find(|n| !names.contains(&n.as_str())) {
+                return Err(format!(
+                    "the model has no tolerance case '{bad}' (it has: {})",
+                    names.join(", ")
+                ));
+            }
+            cases.retain(|c| only.contains(&c.name));
+        }
+        if cases.is_empty() {
+            let c = Case::from_parameters(self);
+            if c.tolerances.is_empty() {
+                return Err(
+                    "the model declares no tolerance case and no parameter carries a tolerance"
+                        .into(),
+                );
+            }
+            cases.push(c);
+        }
+        Ok(cases)
     }
 
     /// Degrees of freedom: free coordinates minus constraint equations.

@@ -361,7 +361,37 @@ fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<P
     })
 }
 
-/// Resolves a body name (`ground` → `None`).
+/// Replaces the nominal values of the named parameters, before anything reads them: the
+/// model is then validated exactly as if the file had said so. A name the model does not
+/// declare, or a value that is not finite, is an error naming the override.
+fn override_values(ctx: &Ctx, parameters: &mut [Parameter], overrides: &[(String, f64)]) -> R<()> {
+    for (name, value) in overrides {
+        let err = |message: String| ModelError {
+            file: ctx.file.to_string(),
+            line: None,
+            column: None,
+            message,
+            snippet: None,
+        };
+        let Some(p) = parameters.iter().position(|p| &p.name == name) else {
+            let names: Vec<&str> = parameters.iter().map(|p| p.name.as_str()).collect();
+            return Err(err(format!(
+                "override '{name}': the model has no such parameter (it has: {})",
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            )));
+        };
+        if !value.is_finite() {
+            return Err(err(format!("override '{name}' = {value}: not finite")));
+        }
+        parameters[p].value = *value;
+    }
+    Ok(())
+}
+
 /// The name of a force element or cut joint (`what`): well formed and unique across joints,
 /// force elements and cut joints (`elements` collects the latter two).
 fn element_name(
@@ -403,6 +433,7 @@ fn type_named<K: Copy>(
         })
 }
 
+/// Resolves a body name (`ground` → `None`).
 fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R<Option<usize>> {
     if s.get_ref() == "ground" {
         return Ok(None);
@@ -415,7 +446,7 @@ fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R
     })
 }
 
-pub(super) fn validate(text: &str, file: &str) -> R<Model> {
+pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
     let raw: FileSchema = toml::from_str(text).map_err(|e| {
         let off = e.span().map_or(0, |s| s.start);
         let msg = e.message().trim().to_string();
@@ -451,6 +482,7 @@ pub(super) fn validate(text: &str, file: &str) -> R<Model> {
         }
         parameters.push(parameter(&ctx, k, v)?);
     }
+    override_values(&ctx, &mut parameters, overrides)?;
     ctx.params = parameters.iter().map(|p| p.name.clone()).collect();
     check_text(&ctx, &raw.name, "model name", MAX_TITLE)?;
     check_text(&ctx, &raw.description, "description", MAX_DESCRIPTION)?;

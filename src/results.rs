@@ -1,0 +1,82 @@
+//! The result directory of an analysis: `tolerance.csv`, `probabilities.csv`, the plots (SVG
+//! and PNG), `report.html` and `summary.json`, staged and put in place together by
+//! [`ResultDir`]. Shared by the command line and the Python package so that both write the
+//! same files.
+
+use crate::analyze::Analysis;
+use crate::compiled::Compiled;
+use crate::files::{FileError, ResultDir};
+use crate::montecarlo::McOptions;
+use crate::{plots, report};
+
+/// What [`write()`] leaves for its caller to tell the user.
+#[derive(Debug, Default)]
+pub struct Written {
+    /// The result is partial (the run was cancelled); the directory says so too.
+    pub partial: bool,
+    /// Plots that got no PNG, with the reason (their SVG is written).
+    pub missing_png: Vec<(String, String)>,
+}
+
+/// One table as CSV bytes.
+pub fn csv_bytes(header: &[impl AsRef<[u8]>], rows: &[Vec<String>]) -> Vec<u8> {
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    // Writing to memory cannot fail.
+    csv.write_record(header).expect("in memory");
+    for row in rows {
+        csv.write_record(row).expect("in memory");
+    }
+    csv.into_inner().expect("in memory")
+}
+
+/// Writes every file of the analysis `a` of `m` (run with the Monte Carlo `mc` and `threads`
+/// worker threads) into `dir` and commits it.
+pub fn write(
+    m: &Compiled,
+    a: &Analysis,
+    mc: Option<&McOptions>,
+    threads: usize,
+    mut dir: ResultDir,
+) -> Result<Written, FileError> {
+    let partial = a.cancelled || mc.is_some_and(|mc| a.interrupted(mc.samples));
+    dir.write(
+        "tolerance.csv",
+        &csv_bytes(
+            &report::tolerance_header(m, a),
+            &report::tolerance_rows(a, partial),
+        ),
+    )?;
+    dir.write(
+        "probabilities.csv",
+        &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
+    )?;
+    let (plots, critical) = plots::plots(m, a);
+    let fonts = plots::fonts();
+    let mut files = Vec::new();
+    let mut missing_png = Vec::new();
+    for p in &plots {
+        let svg = format!("{}.svg", p.stem);
+        dir.write(&svg, p.svg.as_bytes())?;
+        match plots::png(&p.svg, &fonts) {
+            Ok(png) => dir.write(&format!("{}.png", p.stem), &png)?,
+            Err(e) => missing_png.push((p.stem.clone(), e.to_string())),
+        }
+        files.push((svg, p.title.clone()));
+    }
+    dir.write(
+        "report.html",
+        report::report_html(m, a, &files, &critical, mc).as_bytes(),
+    )?;
+    let summary = report::summary_json(m, a, mc, threads);
+    dir.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)
+            .expect("a JSON value")
+            .as_bytes(),
+    )?;
+    dir.commit(partial)?;
+    Ok(Written {
+        partial,
+        missing_png,
+    })
+}
