@@ -1,0 +1,280 @@
+"""modaltol: tolerance analysis of the modal characteristics of multibody systems in dynamic
+equilibrium, from Python.
+
+A mechanism is read from a TOML model file (the format of ``docs/model-format.md``)::
+
+    import modaltol
+    gov = modaltol.load("examples/governor.toml")
+    sweep = gov.sweep("0:3:0.01")                       # pandas DataFrame, the CLI's columns
+    point = gov.modal(1.595)                           # numpy M, C, K and a modes table
+    res = gov.analyze(samples=3000)                    # tolerance, probabilities, summary
+
+Units are SI throughout: speeds and frequencies in rad/s, angles in rad, translations in m,
+drive forces in N·m (revolute) or N (prismatic). Every table has the columns of the command
+line's CSV file of the same name and the same numbers (see ``modaltol --help``).
+
+Errors: an invalid model raises :class:`ModelError` (a ``ValueError``) whose message starts
+with ``file:line:column``; a computation that fails at the operating point asked for raises
+:class:`SolveError` (a ``RuntimeError``); bad arguments raise ``ValueError``. Long calls
+release the GIL and stop on Ctrl-C (``KeyboardInterrupt``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any, Iterable, Mapping, Sequence, Union
+
+import numpy as np
+import pandas as pd
+
+from . import _modaltol
+from ._modaltol import ModelError, SolveError, __version__
+
+__all__ = [
+    "Analysis",
+    "Model",
+    "ModalPoint",
+    "ModelError",
+    "SolveError",
+    "__version__",
+    "load",
+    "loads",
+]
+
+#: Speeds or frequencies: ``"FROM:TO:STEP"`` in rad/s (TO included) or a sequence of values.
+Speeds = Union[str, Sequence[float], np.ndarray]
+
+
+def _frame(columns: Mapping[str, list]) -> pd.DataFrame:
+    return pd.DataFrame(dict(columns), columns=list(columns))
+
+
+def _speeds(speeds: Speeds | None) -> Any:
+    if speeds is None or isinstance(speeds, str):
+        return speeds
+    return [float(x) for x in np.asarray(speeds, dtype=float).ravel()]
+
+
+def _names(names: str | Iterable[str] | None) -> list[str] | None:
+    if names is None:
+        return None
+    if isinstance(names, str):
+        return [n.strip() for n in names.split(",")]
+    return list(names)
+
+
+@dataclass(frozen=True)
+class ModalPoint:
+    """The dynamic equilibrium and the linearised system at one speed.
+
+    ``M``, ``C``, ``K`` are M̂, Ĉ, K̂ in the independent coordinates (``independent``);
+    ``modes`` has one row per mode (frequencies in rad/s, damping ratio, both roots) and its
+    shape in the free coordinates as complex columns ``shape:<joint>`` (largest component 1).
+    """
+
+    speed: float
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    independent: list[str]
+    q: dict[str, float]
+    drive: dict[str, float]
+    iterations: int
+    note: str | None
+    modes: pd.DataFrame
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """A tolerance analysis: ``tolerance`` and ``probabilities`` have the columns of the CLI's
+    ``tolerance.csv`` and ``probabilities.csv``; ``summary`` is its ``summary.json``."""
+
+    tolerance: pd.DataFrame
+    probabilities: pd.DataFrame
+    summary: dict[str, Any]
+
+    def answer(self) -> pd.DataFrame:
+        """The rows to read: method ``analytic`` (the quadrature where it ran)."""
+        return self.tolerance[self.tolerance["method"] == "analytic"].reset_index(drop=True)
+
+
+class Model:
+    """A validated mechanism. Made by :func:`load` or :func:`loads`."""
+
+    def __init__(self, native: _modaltol.NativeModel) -> None:
+        self._native = native
+
+    def __repr__(self) -> str:
+        return f"<modaltol.Model {self.name!r}: {self.dof} degree(s) of freedom>"
+
+    @property
+    def name(self) -> str:
+        """The model's name."""
+        return self._native.name
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom."""
+        return self._native.dof
+
+    @property
+    def parameters(self) -> pd.DataFrame:
+        """Parameters: name, nominal value, tolerance (absolute, in the parameter's unit; NaN
+        where none) and distribution."""
+        return _frame(self._native.parameters())
+
+    @property
+    def coordinates(self) -> pd.DataFrame:
+        """Generalised coordinates: name, unit (rad or m), driven."""
+        return _frame(self._native.coordinates())
+
+    @property
+    def cases(self) -> list[str]:
+        """The tolerance cases :meth:`analyze` runs by default."""
+        return self._native.cases()
+
+    def check(self) -> str:
+        """The summary ``modaltol check`` prints."""
+        return self._native.check()
+
+    def sweep(
+        self,
+        speeds: Speeds | None = None,
+        *,
+        transfer: str | None = None,
+        sensitivity: bool = False,
+        wrt: str | Iterable[str] | None = None,
+        derivatives: str = "ad",
+        independent: str | Iterable[str] | None = None,
+    ) -> pd.DataFrame:
+        """Sweep the operating speed: one row per (speed, mode), the CLI's ``sweep`` columns.
+
+        ``speeds``: ``"FROM:TO:STEP"`` (rad/s) or values; default the model's ``[analysis]``.
+        ``transfer``: ``"input=NAME,output=NAME[,order=K]"`` adds |H| and its phase.
+        ``sensitivity``: add d(…)/d(P) for the design variables ``wrt`` (default: those with a
+        tolerance), computed ``"ad"`` (exact) or ``"fd"``. A failed speed has status
+        ``failed`` and its reason in ``message``.
+        """
+        return _frame(
+            self._native.sweep(
+                _speeds(speeds),
+                transfer,
+                sensitivity,
+                _names(wrt),
+                derivatives,
+                _names(independent),
+            )
+        )
+
+    def modal(
+        self, speed: float, *, independent: str | Iterable[str] | None = None
+    ) -> ModalPoint:
+        """Equilibrium, M̂, Ĉ, K̂ and the damped modes at ``speed`` (rad/s)."""
+        d = self._native.modal(float(speed), _names(independent))
+        modes = _frame(d["modes"])
+        for name in d["free"]:
+            re, im = f"shape_re:{name}", f"shape_im:{name}"
+            modes[f"shape:{name}"] = modes.pop(re) + 1j * modes.pop(im)
+        return ModalPoint(
+            speed=float(speed),
+            M=np.array(d["M"], dtype=float),
+            C=np.array(d["C"], dtype=float),
+            K=np.array(d["K"], dtype=float),
+            independent=d["independent"],
+            q=d["q"],
+            drive=d["drive"],
+            iterations=d["iterations"],
+            note=d["note"],
+            modes=modes,
+        )
+
+    def sensitivity(
+        self,
+        speed: float,
+        *,
+        wrt: str | Iterable[str] | None = None,
+        transfer: str | None = None,
+        derivatives: str = "ad",
+    ) -> pd.DataFrame:
+        """Derivatives of every mode's ω_d, ω_n, ζ (and |H|) with respect to the design
+        variables at ``speed``: one row per (mode, parameter), per unit of the parameter
+        (``d_…``) and normalised (``elasticity_…`` = (P/f)·df/dP). The CLI's
+        ``sensitivity --format csv`` columns."""
+        return _frame(
+            self._native.sensitivity(float(speed), _names(wrt), transfer, derivatives)
+        )
+
+    def frf(
+        self,
+        speed: float,
+        freq: Speeds,
+        *,
+        transfer: str | None = None,
+        wrt: str | Iterable[str] | None = None,
+    ) -> pd.DataFrame:
+        """Frequency response H(jω) at ``speed`` over the excitation frequencies ``freq``
+        (rad/s), from ``transfer = "input=NAME,output=NAME"`` (default the model's), with
+        d|H|/dP. The CLI's ``frf`` columns."""
+        return _frame(
+            self._native.frf(float(speed), _speeds(freq), transfer, _names(wrt))
+        )
+
+    def analyze(
+        self,
+        speeds: Speeds | None = None,
+        *,
+        cases: str | Iterable[str] | None = None,
+        samples: int | None = None,
+        seed: int | None = None,
+        sampling: str | None = None,
+        monte_carlo: bool = True,
+        quadrature: bool = True,
+        quadrature_tolerance: float = 1e-3,
+        threads: int | None = None,
+        output: str | PathLike[str] | None = None,
+    ) -> Analysis:
+        """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
+        per tolerance case, by first and second order, the quadrature (``analytic``: the
+        answer to read) and Monte Carlo (``samples``, ``seed``, ``sampling`` = ``"random"``,
+        ``"lhs"`` or ``"sobol"``; default the model's). With ``output``, also writes the CLI's
+        result directory (CSV, plots, report.html, summary.json). Ctrl-C stops it."""
+        d = self._native.analyze(
+            _speeds(speeds),
+            _names(cases),
+            samples,
+            seed,
+            sampling,
+            monte_carlo,
+            quadrature,
+            quadrature_tolerance,
+            threads,
+            None if output is None else str(output),
+        )
+        return Analysis(
+            tolerance=_frame(d["tolerance"]),
+            probabilities=_frame(d["probabilities"]),
+            summary=json.loads(d["summary"]),
+        )
+
+
+def load(
+    path: str | PathLike[str], parameters: Mapping[str, float] | None = None
+) -> Model:
+    """Read and validate a model file. ``parameters`` replaces nominal values (name → value,
+    in the parameter's unit), exactly as editing the file would."""
+    return Model(_modaltol.load(str(path), dict(parameters) if parameters else None))
+
+
+def loads(
+    text: str,
+    parameters: Mapping[str, float] | None = None,
+    *,
+    name: str = "<string>",
+) -> Model:
+    """Validate a model given as TOML text (``name`` names it in error messages);
+    ``parameters`` as in :func:`load`."""
+    return Model(
+        _modaltol.loads(text, dict(parameters) if parameters else None, name)
+    )

@@ -1,0 +1,656 @@
+//! `modaltol._modaltol`: the native half of the Python package `modaltol`.
+//!
+//! Every computation is the library's, and every table is built by the same functions as the
+//! command line's CSV files ([`modaltol::report`]), so a DataFrame and the CLI's file hold the
+//! same columns and the same numbers. This module hands tables to Python as dicts of typed
+//! columns (float, int or str) and the pure-Python layer (`modaltol/__init__.py`) turns them
+//! into pandas DataFrames and numpy arrays.
+//!
+//! Long calls run on a worker thread with the GIL released; the calling thread waits, looks at
+//! Python's signals every 50 ms, and on Ctrl-C cancels the run ([`Cancel`]) and raises
+//! `KeyboardInterrupt` once the worker has stopped.
+
+use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::cancel::Cancel;
+use modaltol::compiled::Compiled;
+use modaltol::files::ResultDir;
+use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
+use modaltol::montecarlo::{MAX_SAMPLES, McOptions};
+use modaltol::quadrature::QuadOptions;
+use modaltol::report::{self, SweepColumns};
+use modaltol::sensitivity::{self, Derivatives, TransferAt};
+use modaltol::study::SweepStudy;
+use modaltol::sweep::{Options, initial_guess, point};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+use std::sync::mpsc::{RecvTimeoutError, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+pyo3::create_exception!(
+    _modaltol,
+    ModelError,
+    PyValueError,
+    "The model is invalid; `file`, `line`, `column` (1-based, or None) say where."
+);
+pyo3::create_exception!(
+    _modaltol,
+    SolveError,
+    PyRuntimeError,
+    "A computation failed at the operating point asked for (no equilibrium, a singular \
+     mass matrix, …); the message says why."
+);
+
+/// A model error as `ModelError`, carrying its place.
+fn model_error(py: Python<'_>, e: modaltol::model::ModelError) -> PyErr {
+    let err = ModelError::new_err(e.to_string());
+    let v = err.value(py);
+    // Setting attributes on a fresh exception instance cannot fail.
+    let _ = v.setattr("file", e.file.clone());
+    let _ = v.setattr("line", e.line);
+    let _ = v.setattr("column", e.column);
+    let _ = v.setattr("reason", e.message.clone());
+    err
+}
+
+/// Bad arguments (names, ranges): `ValueError`.
+fn bad(msg: impl Into<String>) -> PyErr {
+    PyValueError::new_err(msg.into())
+}
+
+/// Runs `work` on a worker thread with the GIL released; Ctrl-C cancels `cancel`, waits for
+/// the worker to stop at its next check and raises `KeyboardInterrupt`.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    cancel: &Cancel,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    std::thread::scope(|s| {
+        let (tx, rx) = channel();
+        let rx = Mutex::new(rx);
+        s.spawn(move || {
+            let _ = tx.send(work());
+        });
+        loop {
+            let got = py.detach(|| {
+                rx.lock()
+                    .expect("unpoisoned")
+                    .recv_timeout(Duration::from_millis(50))
+            });
+            match got {
+                Ok(v) => return Ok(v),
+                Err(RecvTimeoutError::Timeout) => {
+                    if let Err(e) = py.check_signals() {
+                        cancel.cancel();
+                        let _ = py.detach(|| rx.lock().expect("unpoisoned").recv());
+                        return Err(e);
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(PyRuntimeError::new_err(
+                        "modaltol: internal error (the computation stopped without a result)",
+                    ));
+                }
+            }
+        }
+    })
+}
+
+/// A table (header and string cells, as the CLI writes them) as a dict of typed columns: a
+/// column whose cells all read `true`/`false` is bool; one whose cells all read as integers is
+/// int; one whose non-empty cells all read as numbers is float (empty cells NaN); any other is
+/// str (empty cells None). The CLI's cells
+/// are shortest round-trip decimals, so the floats are the library's bit for bit.
+fn table<'py>(
+    py: Python<'py>,
+    header: &[impl AsRef<str>],
+    rows: &[Vec<String>],
+) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    for (j, name) in header.iter().enumerate() {
+        let cells: Vec<&str> = rows.iter().map(|r| r[j].as_str()).collect();
+        let ints: Option<Vec<i64>> = cells.iter().map(|c| c.parse().ok()).collect();
+        let floats: Option<Vec<f64>> = cells
+            .iter()
+            .map(|c| {
+                if c.is_empty() {
+                    Some(f64::NAN)
+                } else {
+                    c.parse().ok()
+                }
+            })
+            .collect();
+        let bools: Option<Vec<bool>> = cells.iter().map(|c| c.parse().ok()).collect();
+        let column = match (ints, floats, bools) {
+            (_, _, Some(b)) if !cells.is_empty() => PyList::new(py, b)?,
+            (Some(i), _, _) if !cells.is_empty() => PyList::new(py, i)?,
+            (_, Some(f), _) if cells.iter().any(|c| !c.is_empty()) || cells.is_empty() => {
+                PyList::new(py, f)?
+            }
+            _ => PyList::new(
+                py,
+                cells
+                    .iter()
+                    .map(|c| (!c.is_empty()).then_some(*c))
+                    .collect::<Vec<_>>(),
+            )?,
+        };
+        out.set_item(name.as_ref(), column)?;
+    }
+    Ok(out)
+}
+
+/// Speeds from `"FROM:TO:STEP"` or a sequence of numbers.
+fn speeds(spec: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let v: Vec<f64> = if let Ok(s) = spec.extract::<String>() {
+        let r = SpeedRange::parse(&s).map_err(|e| bad(format!("{what}: {e}")))?;
+        r.speeds().collect()
+    } else {
+        spec.extract()
+            .map_err(|_| bad(format!("{what}: expected \"FROM:TO:STEP\" or numbers")))?
+    };
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(bad(format!("{what}: {x} is not finite")));
+    }
+    if v.is_empty() {
+        return Err(bad(format!("{what}: no values")));
+    }
+    Ok(v)
+}
+
+fn derivatives(how: &str) -> PyResult<Derivatives> {
+    match how {
+        "ad" => Ok(Derivatives::Exact),
+        "fd" => Ok(Derivatives::FiniteDifference),
+        _ => Err(bad(format!(
+            "derivatives must be \"ad\" (exact) or \"fd\" (finite differences), got {how:?}"
+        ))),
+    }
+}
+
+/// A validated model with its equations recorded on first use.
+#[pyclass(frozen, module = "modaltol._modaltol")]
+struct NativeModel {
+    model: Arc<Compiled>,
+}
+
+impl NativeModel {
+    fn m(&self) -> &Model {
+        &self.model
+    }
+
+    fn transfer(&self, spec: Option<&str>) -> PyResult<Option<Transfer>> {
+        spec.map(|s| {
+            self.m()
+                .parse_transfer(s)
+                .map_err(|e| bad(format!("transfer {s:?}: {e}")))
+        })
+        .transpose()
+    }
+
+    fn wrt(&self, names: Option<Vec<String>>) -> PyResult<Vec<usize>> {
+        self.m()
+            .design_variables(names.as_deref())
+            .map_err(|e| bad(format!("wrt: {e}")))
+    }
+
+    fn options(&self, independent: Option<Vec<String>>) -> PyResult<Options> {
+        Ok(Options {
+            independent: independent
+                .map(|n| {
+                    self.m()
+                        .independent_coordinates(&n)
+                        .map_err(|e| bad(format!("independent: {e}")))
+                })
+                .transpose()?,
+            ..Default::default()
+        })
+    }
+
+    /// The nominal point at `speed`.
+    fn point(&self, speed: f64, opt: &Options) -> PyResult<modaltol::sweep::Point> {
+        if !speed.is_finite() {
+            return Err(bad(format!("speed must be finite, got {speed}")));
+        }
+        let p = self.model.nominal();
+        let q0 = initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
+        point(&self.model, &p, speed, &q0, opt)
+            .map_err(|e| SolveError::new_err(format!("speed {speed:?} rad/s failed: {e}")))
+    }
+}
+
+#[pymethods]
+impl NativeModel {
+    /// The model's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.m().name.clone()
+    }
+
+    /// Degrees of freedom.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.m().dof()
+    }
+
+    /// The parameters: name, nominal value, tolerance (absolute, in the parameter's unit),
+    /// tolerance as written, distribution.
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        let d = PyDict::new(py);
+        d.set_item(
+            "name",
+            m.parameters
+                .iter()
+                .map(|p| p.name.clone())
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "value",
+            m.parameters.iter().map(|p| p.value).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "tolerance",
+            m.parameters
+                .iter()
+                .map(|p| p.tolerance.map_or(f64::NAN, |t| t.absolute(p.value)))
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "distribution",
+            m.parameters
+                .iter()
+                .map(|p| match p.distribution {
+                    modaltol::model::Distribution::Normal => "normal",
+                    modaltol::model::Distribution::Uniform => "uniform",
+                })
+                .collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// The generalised coordinates: name, unit, driven.
+    fn coordinates<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        let d = PyDict::new(py);
+        d.set_item(
+            "name",
+            m.coordinates
+                .iter()
+                .map(|c| c.name.clone())
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "unit",
+            m.coordinates
+                .iter()
+                .map(|c| c.unit.symbol())
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "driven",
+            m.coordinates.iter().map(|c| c.driven).collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// The names of the tolerance cases an analysis runs by default.
+    fn cases(&self) -> Vec<String> {
+        self.m()
+            .tolerance_cases(&[])
+            .map(|c| c.into_iter().map(|c| c.name).collect())
+            .unwrap_or_default()
+    }
+
+    /// What `modaltol check` prints.
+    fn check(&self) -> String {
+        report::check_summary(self.m())
+    }
+
+    /// The speed sweep's table (the CLI's `sweep` columns).
+    #[pyo3(signature = (speeds=None, transfer=None, sensitivity=false, wrt=None, derivatives="ad", independent=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        speeds: Option<&Bound<'py, PyAny>>,
+        transfer: Option<&str>,
+        sensitivity: bool,
+        wrt: Option<Vec<String>>,
+        derivatives: &str,
+        independent: Option<Vec<String>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        let w = match speeds {
+            Some(s) => self::speeds(s, "speeds")?,
+            None => m
+                .analysis
+                .speed
+                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
+                .speeds()
+                .collect(),
+        };
+        let tf = self.transfer(transfer)?;
+        let cols = SweepColumns {
+            transfer: tf.is_some(),
+            wrt: if sensitivity {
+                self.wrt(wrt)?
+            } else {
+                Vec::new()
+            },
+        };
+        let opt = self.options(independent)?;
+        let how = self::derivatives(derivatives)?;
+        let cancel = Cancel::new();
+        let model = &*self.model;
+        let rows = interruptible(py, &cancel, || {
+            let mut study = SweepStudy::new(model, opt, tf, cols.wrt.clone(), how);
+            let mut rows = Vec::new();
+            for &speed in &w {
+                if cancel.is_cancelled() {
+                    break;
+                }
+                let (r, extras) = study.step(speed);
+                rows.extend(report::sweep_rows(model, &cols, speed, &r, &extras));
+            }
+            rows
+        })?;
+        table(py, &report::sweep_header(m, &cols), &rows)
+    }
+
+    /// Equilibrium, M̂, Ĉ, K̂ and the modes at one speed.
+    #[pyo3(signature = (speed, independent=None))]
+    fn modal<'py>(
+        &self,
+        py: Python<'py>,
+        speed: f64,
+        independent: Option<Vec<String>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let opt = self.options(independent)?;
+        let pt = py.detach(|| self.point(speed, &opt))?;
+        let m = self.m();
+        let d = PyDict::new(py);
+        let matrix = |a: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
+            (0..a.nrows())
+                .map(|i| (0..a.ncols()).map(|j| a[(i, j)]).collect())
+                .collect()
+        };
+        d.set_item("M", matrix(&pt.linear.m))?;
+        d.set_item("C", matrix(&pt.linear.c))?;
+        d.set_item("K", matrix(&pt.linear.k))?;
+        let names = |v: &[usize]| {
+            v.iter()
+                .map(|&i| m.coordinates[i].name.clone())
+                .collect::<Vec<_>>()
+        };
+        d.set_item("independent", names(&pt.linear.independent))?;
+        d.set_item("free", names(&m.free()))?;
+        let q = PyDict::new(py);
+        for (c, v) in m.coordinates.iter().zip(&pt.equilibrium.q) {
+            q.set_item(&c.name, v)?;
+        }
+        d.set_item("q", q)?;
+        let drive = PyDict::new(py);
+        for &i in &m.driven() {
+            drive.set_item(&m.coordinates[i].name, pt.equilibrium.drive_force[i])?;
+        }
+        d.set_item("drive", drive)?;
+        d.set_item("iterations", pt.equilibrium.iterations)?;
+        d.set_item("note", pt.note.clone())?;
+        d.set_item(
+            "modes",
+            table(py, &report::modes_header(m), &report::modes_rows(&pt))?,
+        )?;
+        Ok(d)
+    }
+
+    /// Sensitivities at one speed (the CLI's `sensitivity --format csv` columns).
+    #[pyo3(signature = (speed, wrt=None, transfer=None, derivatives="ad"))]
+    fn sensitivity<'py>(
+        &self,
+        py: Python<'py>,
+        speed: f64,
+        wrt: Option<Vec<String>>,
+        transfer: Option<&str>,
+        derivatives: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let wrt = self.wrt(wrt)?;
+        let tf = match transfer {
+            Some(_) => self.transfer(transfer)?,
+            None => self.m().analysis.transfer,
+        };
+        let how = self::derivatives(derivatives)?;
+        let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
+            let pt = self.point(speed, &Options::default())?;
+            let p = self.model.nominal();
+            let s = sensitivity::sensitivities(
+                &self.model,
+                &p,
+                &pt,
+                &wrt,
+                tf.map(|t| TransferAt::at_speed(&t, speed)),
+                how,
+            )
+            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
+            Ok(report::sensitivity_rows(self.m(), &pt, &s))
+        })?;
+        table(py, &report::SENSITIVITY_HEADER, &rows)
+    }
+
+    /// Frequency response at one speed (the CLI's `frf` columns).
+    #[pyo3(signature = (speed, freq, transfer=None, wrt=None))]
+    fn frf<'py>(
+        &self,
+        py: Python<'py>,
+        speed: f64,
+        freq: &Bound<'py, PyAny>,
+        transfer: Option<&str>,
+        wrt: Option<Vec<String>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let tf = match transfer {
+            Some(_) => self.transfer(transfer)?,
+            None => self.m().analysis.transfer,
+        }
+        .ok_or_else(|| {
+            bad("frf needs transfer=\"input=NAME,output=NAME\" (the model has no [analysis] transfer)")
+        })?;
+        let freqs = self::speeds(freq, "freq")?;
+        let wrt = self.wrt(wrt)?;
+        let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
+            let pt = self.point(speed, &Options::default())?;
+            let p = self.model.nominal();
+            let r = sensitivity::frequency_response(
+                &self.model,
+                &p,
+                &pt,
+                tf.input,
+                tf.output,
+                &wrt,
+                freqs.into_iter(),
+            )
+            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
+            Ok(report::frf_rows(&r))
+        })?;
+        table(py, &report::frf_header(self.m(), &wrt), &rows)
+    }
+
+    /// The tolerance analysis (the CLI's `analyze`): tolerance and probability tables and the
+    /// summary (JSON text); with `output`, also the CLI's result directory.
+    #[pyo3(signature = (speeds=None, cases=None, samples=None, seed=None, sampling=None, monte_carlo=true, quadrature=true, quadrature_tolerance=1e-3, threads=None, output=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn analyze<'py>(
+        &self,
+        py: Python<'py>,
+        speeds: Option<&Bound<'py, PyAny>>,
+        cases: Option<Vec<String>>,
+        samples: Option<i64>,
+        seed: Option<u64>,
+        sampling: Option<&str>,
+        monte_carlo: bool,
+        quadrature: bool,
+        quadrature_tolerance: f64,
+        threads: Option<usize>,
+        output: Option<PathBuf>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        let w = match speeds {
+            Some(s) => self::speeds(s, "speeds")?,
+            None => m
+                .analysis
+                .speed
+                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
+                .speeds()
+                .collect(),
+        };
+        let cases = m
+            .tolerance_cases(&cases.unwrap_or_default())
+            .map_err(|e| bad(format!("cases: {e}")))?;
+        if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
+            return Err(bad(
+                "quadrature_tolerance must be a relative error in (0, 1), e.g. 1e-3",
+            ));
+        }
+        if let Some(n) = samples
+            && !(2..=MAX_SAMPLES as i64).contains(&n)
+        {
+            return Err(bad(format!(
+                "samples must lie in 2..={MAX_SAMPLES} (got {n})"
+            )));
+        }
+        if threads == Some(0) {
+            return Err(bad("threads must be at least 1 (None: all cores)"));
+        }
+        let sampling = match sampling {
+            None => m.analysis.sampling,
+            Some("random") => Sampling::Random,
+            Some("lhs") => Sampling::Lhs,
+            Some("sobol") => Sampling::Sobol,
+            Some(s) => {
+                return Err(bad(format!(
+                    "sampling must be \"random\", \"lhs\" or \"sobol\", got {s:?}"
+                )));
+            }
+        };
+        let mc = monte_carlo.then(|| McOptions {
+            samples: samples.map_or(m.analysis.samples, |n| n as usize),
+            seed: seed.unwrap_or(m.analysis.seed),
+            sampling,
+            threads,
+        });
+        // Fail early where the results cannot be written.
+        let dir = output
+            .as_ref()
+            .map(|o| ResultDir::create(o).map_err(|e| bad(e.to_string())))
+            .transpose()?;
+        let opt = AnalyzeOptions {
+            speeds: w,
+            cases,
+            quadrature: quadrature.then_some(QuadOptions {
+                tolerance: quadrature_tolerance,
+                threads,
+            }),
+            monte_carlo: mc,
+            split: Split::Whole,
+            threads,
+            cancel: Cancel::new(),
+        };
+        let model = &*self.model;
+        let a = interruptible(py, &opt.cancel, || {
+            analyze(model, &opt, &|_: &str, _: usize, _: usize| {})
+        })?;
+        if a.cancelled {
+            // Ctrl-C arrived between the worker's last check and its end.
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
+        }
+        let used =
+            threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        if let Some(dir) = dir {
+            py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, dir))
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        }
+        let d = PyDict::new(py);
+        d.set_item(
+            "tolerance",
+            table(
+                py,
+                &report::tolerance_header(m, &a),
+                &report::tolerance_rows(&a, false),
+            )?,
+        )?;
+        d.set_item(
+            "probabilities",
+            table(
+                py,
+                &report::PROBABILITY_HEADER,
+                &report::probability_rows(&a),
+            )?,
+        )?;
+        d.set_item(
+            "summary",
+            serde_json::to_string(&report::summary_json(m, &a, mc.as_ref(), used))
+                .expect("a JSON value"),
+        )?;
+        Ok(d)
+    }
+}
+
+/// Parameter overrides from a dict (name → number).
+fn overrides(parameters: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, f64)>> {
+    let Some(d) = parameters else {
+        return Ok(Vec::new());
+    };
+    d.iter()
+        .map(|(k, v)| {
+            let k: String = k
+                .extract()
+                .map_err(|_| bad("parameters: the keys must be parameter names (str)"))?;
+            let v: f64 = v
+                .extract()
+                .map_err(|_| bad(format!("parameters[{k:?}]: expected a number")))?;
+            Ok((k, v))
+        })
+        .collect()
+}
+
+/// Reads and validates a model file; `parameters` replaces nominal values.
+#[pyfunction]
+#[pyo3(signature = (path, parameters=None))]
+fn load(
+    py: Python<'_>,
+    path: PathBuf,
+    parameters: Option<&Bound<'_, PyDict>>,
+) -> PyResult<NativeModel> {
+    let set = overrides(parameters)?;
+    Compiled::from_file_with(&path, &set)
+        .map(|m| NativeModel { model: Arc::new(m) })
+        .map_err(|e| model_error(py, e))
+}
+
+/// Validates a model given as TOML text; `name` names it in messages.
+#[pyfunction]
+#[pyo3(signature = (text, parameters=None, name="<string>"))]
+fn loads(
+    py: Python<'_>,
+    text: &str,
+    parameters: Option<&Bound<'_, PyDict>>,
+    name: &str,
+) -> PyResult<NativeModel> {
+    let set = overrides(parameters)?;
+    Compiled::from_bytes_with(text.as_bytes(), name, &set)
+        .map(|m| NativeModel { model: Arc::new(m) })
+        .map_err(|e| model_error(py, e))
+}
+
+/// The native module.
+#[pymodule]
+fn _modaltol(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("ModelError", m.py().get_type::<ModelError>())?;
+    m.add("SolveError", m.py().get_type::<SolveError>())?;
+    m.add_class::<NativeModel>()?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(loads, m)?)?;
+    Ok(())
+}
