@@ -90,6 +90,48 @@ enum SamplingArg {
     Sobol,
 }
 
+/// A unit for speeds or frequencies in the plots and report.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum UnitArg {
+    #[value(name = "rad/s")]
+    RadPerSecond,
+    #[value(name = "hz")]
+    Hertz,
+    #[value(name = "rpm")]
+    Rpm,
+}
+
+impl From<UnitArg> for modaltol::plots::FrequencyUnit {
+    fn from(u: UnitArg) -> Self {
+        match u {
+            UnitArg::RadPerSecond => Self::RadPerSecond,
+            UnitArg::Hertz => Self::Hertz,
+            UnitArg::Rpm => Self::Rpm,
+        }
+    }
+}
+
+/// The plots' and report's units (the CSV and JSON files stay in rad/s).
+#[derive(clap::Args, Clone, Copy)]
+struct DisplayArgs {
+    /// Unit of the operating speed in the plots and report.html (rad/s, hz, rpm); the CSV and
+    /// JSON files stay in rad/s.
+    #[arg(long, value_enum, default_value = "rad/s")]
+    speed_unit: UnitArg,
+    /// Unit of the damped natural frequencies in the plots and report.html (rad/s, hz, rpm).
+    #[arg(long, value_enum, default_value = "rad/s")]
+    frequency_unit: UnitArg,
+}
+
+impl From<DisplayArgs> for modaltol::plots::Display {
+    fn from(d: DisplayArgs) -> Self {
+        Self {
+            speed: d.speed_unit.into(),
+            frequency: d.frequency_unit.into(),
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum Derivatives {
     /// Exact, by automatic differentiation through the equilibrium (default).
@@ -110,7 +152,8 @@ enum Command {
     /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
     /// (underdamped|overdamped|unstable|failed), damped_frequency, natural_frequency (rad/s),
     /// damping_ratio, eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
-    /// partner root); with --transfer: transfer_magnitude (output unit per input unit, e.g.
+    /// partner root), tuning_order (ω_d/Ω: the engine order the mode sits at, as an absorber
+    /// is tuned; empty at Ω = 0); with --transfer: transfer_magnitude (output unit per input unit, e.g.
     /// rad/(N·m) or m/N), transfer_phase (rad); with --sensitivity, for every design variable P:
     /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with
     /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
@@ -135,8 +178,13 @@ enum Command {
     /// share:<parameter>; SI units, rad/s for speeds and frequencies), DIR/probabilities.csv
     /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
     /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
-    /// quadrature and the Monte Carlo beside the paper's, failures), the plots and
-    /// DIR/report.html. Without MODEL, runs the governor example built into the binary.
+    /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures),
+    /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
+    /// probabilities, variance shares, a Campbell diagram with engine orders 1–3 and the
+    /// critical speeds marked) and DIR/report.html (a summary of σ by method at the largest σ,
+    /// the critical speeds and the |H| peak, then the plots). --speed-unit and
+    /// --frequency-unit show the plots and report in rpm or Hz. Without MODEL, runs the
+    /// governor example built into the binary.
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`.
@@ -272,6 +320,8 @@ struct AnalyzeArgs {
     /// Only this tolerance case of the model's [analysis] table (repeatable); default: all.
     #[arg(long = "case", value_name = "NAME")]
     cases: Vec<String>,
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 #[derive(clap::Args)]
@@ -288,6 +338,8 @@ struct MergeArgs {
     /// The tolerance cases the shards were run with (as given to `analyze --case`).
     #[arg(long = "case", value_name = "NAME")]
     cases: Vec<String>,
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 #[derive(clap::Args)]
@@ -436,11 +488,12 @@ fn write_outputs(
     a: &modaltol::analyze::Analysis,
     mc: Option<&McOptions>,
     threads: Option<usize>,
+    display: modaltol::plots::Display,
     dir: ResultDir,
     output: &std::path::Path,
 ) -> Result<()> {
     let used = threads.unwrap_or_else(rayon::current_num_threads);
-    let written = modaltol::results::write(m, a, mc, used, dir)?;
+    let written = modaltol::results::write(m, a, mc, used, display, dir)?;
     for (stem, e) in &written.missing_png {
         eprintln!("modaltol: no PNG for {stem}: {e}");
     }
@@ -725,6 +778,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         sampling,
         shard,
         cases: only,
+        display,
     } = args;
     if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
         return Err(InputError(
@@ -824,7 +878,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         return Ok(());
     }
     let dir = dir.expect("a result directory");
-    write_outputs(&m, &a, mc.as_ref(), threads, dir, &output)?;
+    write_outputs(&m, &a, mc.as_ref(), threads, display.into(), dir, &output)?;
 
     Ok(())
 }
@@ -836,6 +890,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
         output,
         shards,
         cases: only,
+        display,
     } = args;
     let m = model_or_governor(&model, set)?;
     let cases = tolerance_cases(&m, &only)?;
@@ -859,7 +914,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     };
     let dir = ResultDir::create(&output)?;
     let a = analyze(&m, &opt, &progress_printer());
-    write_outputs(&m, &a, Some(&mc), None, dir, &output)?;
+    write_outputs(&m, &a, Some(&mc), None, display.into(), dir, &output)?;
 
     Ok(())
 }

@@ -4,10 +4,11 @@
 //! Units: speeds and frequencies in rad/s, angles in rad, translations in m, drive forces in
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
-use crate::analyze::{Analysis, Method};
+use crate::analyze::{Analysis, Method, Row};
 use crate::modal::C64;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
+use crate::plots::{CriticalSpeed, Display, Plot};
 use crate::sensitivity::{ResponseRow, Sensitivity, Status as SensStatus};
 use crate::study::SweepExtras;
 use crate::sweep::{Point, PointError};
@@ -43,6 +44,7 @@ pub fn sweep_header(model: &Model, cols: &SweepColumns) -> Vec<String> {
         "eigen_im",
         "eigen2_re",
         "eigen2_im",
+        "tuning_order",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -103,6 +105,7 @@ pub fn sweep_rows(
                     m.root.lambda.im.to_string(),
                     m.partner.lambda.re.to_string(),
                     m.partner.lambda.im.to_string(),
+                    opt((speed != 0.0).then(|| m.damped_frequency / speed)),
                 ];
                 if cols.transfer {
                     r.push(opt(extras.transfer.map(|h| h.magnitude())));
@@ -857,7 +860,22 @@ fn probability_summary(a: &Analysis) -> Vec<Value> {
     out
 }
 
-/// `summary.json` of an analysis: model, cases, timings beside the paper's, failures.
+/// The paper's timings (Kim & Yoo 2007, Tables 1–2: analytic s, Monte Carlo s, ratio) when the
+/// model is one of its two examples: the rotating pendulum (parameters `m`, `L`, `c`, one
+/// degree of freedom, no loop) or the governor (`ball_mass`, `spring_k`, `attach`, two loops).
+pub fn paper_timings(model: &Model) -> Option<(&'static str, f64, f64, f64)> {
+    let has = |names: &[&str]| names.iter().all(|n| model.parameter(n).is_some());
+    if has(&["m", "L", "c"]) && model.dof() == 1 && model.constraints.is_empty() {
+        Some(("pendulum", 0.703, 448.281, 638.0))
+    } else if has(&["ball_mass", "spring_k", "attach"]) && model.n_constraints() == 2 {
+        Some(("governor", 2.188, 2525.375, 1154.0))
+    } else {
+        None
+    }
+}
+
+/// `summary.json` of an analysis: model, cases, timings (beside the paper's for its two
+/// examples), failures.
 pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads: usize) -> Value {
     let cases: Vec<Value> = a
         .cases
@@ -897,9 +915,9 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "partial": a.cancelled || mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
         "ratio_monte_carlo_to_quadrature": a.monte_carlo_seconds.zip(a.quadrature_seconds).map(|(m, q)| m / q),
-        "paper": {"note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
-                  "pendulum": {"analytic_seconds": 0.703, "monte_carlo_seconds": 448.281, "ratio": 638},
-                  "governor": {"analytic_seconds": 2.188, "monte_carlo_seconds": 2525.375, "ratio": 1154}},
+        "paper": paper_timings(model).map(|(example, analytic, mc, ratio)| json!({
+            "note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
+            "example": example, "analytic_seconds": analytic, "monte_carlo_seconds": mc, "ratio": ratio})),
         "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
     })
 }
@@ -1015,6 +1033,172 @@ fn first_order_table(a: &Analysis) -> String {
     h
 }
 
+/// The numeric summary of an analysis, per case: for the first modes' ω_d and ζ and for |H|,
+/// σ by every method where it matters (the speed of the largest σ, the critical speeds of the
+/// 1×Ω line, the |H| peak), and how the methods agree there: first order against the answer,
+/// and whether the answer lies inside Monte Carlo's 95 % interval of σ.
+fn summary_table(model: &Model, a: &Analysis, critical: &[CriticalSpeed], d: Display) -> String {
+    const MODES: usize = 3;
+    let fs = d.speed.per_rad_per_second();
+    let mut outputs: Vec<(Quantity, Option<usize>)> = a
+        .rows
+        .iter()
+        .filter(|r| r.method == Method::Analytic)
+        .filter(|r| r.mode.is_none_or(|m| m < MODES))
+        .filter(|r| r.quantity != Quantity::DampingRatio || r.mean != 0.0 || r.std > 0.0)
+        .map(|r| (r.quantity, r.mode))
+        .collect();
+    outputs.sort_by_key(|o| (o.1, o.0 as u8));
+    outputs.dedup();
+    let label = |q: Quantity, mode: Option<usize>| -> String {
+        let name = match q {
+            Quantity::DampedFrequency => format!("ω_d ({})", d.frequency.symbol()),
+            Quantity::DampingRatio => "ζ".into(),
+            Quantity::TransferMagnitude => match &model.analysis.transfer {
+                Some(t) => format!("|H| ({})", model.transfer_unit(t)),
+                None => "|H|".into(),
+            },
+        };
+        mode.map_or(name.clone(), |m| format!("{name}, mode {}", m + 1))
+    };
+    let mut h = format!(
+        "<h2>Summary: σ where it matters</h2><p>Per case, σ of each output by every method at \
+         the speed of its largest σ, at the critical speeds (1×Ω) and at the |H| peak. \
+         “first order vs answer” is first order's σ against the answer's (analytic); \
+         “Monte Carlo agrees” says whether the answer lies inside Monte Carlo's 95 % interval \
+         of σ. Speeds in {}.</p>",
+        d.speed.symbol()
+    );
+    for (ci, c) in a.cases.iter().enumerate() {
+        let find = |q: Quantity, mode: Option<usize>, m: Method, w: f64| {
+            a.rows.iter().find(|r| {
+                r.case == ci
+                    && r.quantity == q
+                    && r.mode == mode
+                    && r.method == m
+                    && r.speed.to_bits() == w.to_bits()
+            })
+        };
+        let answers = |q: Quantity, mode: Option<usize>| -> Vec<&Row> {
+            a.rows
+                .iter()
+                .filter(|r| r.case == ci && r.quantity == q && r.mode == mode)
+                .filter(|r| r.method == Method::Analytic && r.std.is_finite())
+                .collect()
+        };
+        // (output, where, speed) triples.
+        let mut places: Vec<(Quantity, Option<usize>, String, f64)> = Vec::new();
+        for &(q, mode) in &outputs {
+            if let Some(r) = answers(q, mode)
+                .into_iter()
+                .max_by(|x, y| x.std.total_cmp(&y.std))
+            {
+                places.push((q, mode, "largest σ".into(), r.speed));
+            }
+        }
+        for cs in critical
+            .iter()
+            .filter(|c| c.order.to_bits() == 1f64.to_bits() && c.mode < MODES)
+        {
+            let rows = answers(Quantity::DampedFrequency, Some(cs.mode));
+            if let Some(r) = rows.iter().min_by(|x, y| {
+                (x.speed - cs.speed)
+                    .abs()
+                    .total_cmp(&(y.speed - cs.speed).abs())
+            }) {
+                places.push((
+                    Quantity::DampedFrequency,
+                    Some(cs.mode),
+                    format!("critical speed {:.4}", cs.speed * fs),
+                    r.speed,
+                ));
+            }
+        }
+        if let Some(r) = answers(Quantity::TransferMagnitude, None)
+            .into_iter()
+            .max_by(|x, y| x.mean.total_cmp(&y.mean))
+        {
+            places.push((
+                Quantity::TransferMagnitude,
+                None,
+                "|H| peak".into(),
+                r.speed,
+            ));
+        }
+        if places.is_empty() {
+            continue;
+        }
+        let _ = write!(
+            h,
+            "<h3>case {}</h3><table><tr><th>output</th><th>where</th><th>speed</th><th>mean</th>\
+             <th>σ analytic (the answer)</th><th>σ first order</th><th>σ second order</th>\
+             <th>σ Monte Carlo [95 %]</th><th>first order vs answer</th><th>Monte Carlo agrees</th></tr>",
+            esc(&c.name)
+        );
+        let num = |v: Option<f64>| v.filter(|x| x.is_finite()).map_or("–".to_string(), sig);
+        for (q, mode, place, w) in places {
+            let ys = if q == Quantity::DampedFrequency {
+                d.frequency.per_rad_per_second()
+            } else {
+                1.0
+            };
+            let get = |m: Method| find(q, mode, m, w);
+            let answer = get(Method::Analytic);
+            let sa = answer.map(|r| r.std);
+            let sf = get(Method::FirstOrder).map(|r| r.std);
+            let mc = get(Method::MonteCarlo).and_then(|r| r.mc);
+            let vs = sa
+                .zip(sf)
+                .filter(|(a, _)| *a > 0.0)
+                .map_or("–".to_string(), |(a, f)| {
+                    format!("{:+.0} %", 100.0 * (f - a) / a)
+                });
+            let agrees = sa.zip(mc).map_or("–", |(s, m)| {
+                if s >= m.std_ci.0 && s <= m.std_ci.1 {
+                    "yes"
+                } else {
+                    "no"
+                }
+            });
+            let mc_text = mc.map_or("–".to_string(), |m| {
+                format!(
+                    "{} [{}, {}]",
+                    num(Some(m.std * ys)),
+                    num(Some(m.std_ci.0 * ys)),
+                    num(Some(m.std_ci.1 * ys))
+                )
+            });
+            let _ = write!(
+                h,
+                "<tr><td style=\"text-align:left\">{}</td><td style=\"text-align:left\">{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{vs}</td><td>{agrees}</td></tr>",
+                esc(&label(q, mode)),
+                esc(&place),
+                w * fs,
+                num(answer.map(|r| r.mean * ys)),
+                num(sa.map(|s| s * ys)),
+                num(sf.map(|s| s * ys)),
+                num(get(Method::SecondOrder).map(|r| r.std * ys)),
+                mc_text,
+            );
+        }
+        h.push_str("</table>");
+    }
+    h
+}
+
+/// A number to five significant digits, in fixed notation where that stays short.
+fn sig(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let exp = x.abs().log10().floor() as i32;
+    if (-3..5).contains(&exp) {
+        format!("{x:.*}", (4 - exp).max(0) as usize)
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
 /// Escapes text for HTML.
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -1023,14 +1207,16 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// `report.html`: the plots, the timing table beside the paper's Tables 1–2, the critical speeds
-/// and a short reading guide. `plots` are (file name, title) pairs in the same directory.
+/// `report.html`: the numeric summary per case, the timing table (beside the paper's Tables 1–2
+/// for its two examples), the critical speeds, a short reading guide and the plots (each an
+/// `<stem>.svg` in the same directory), in the display units `d`.
 pub fn report_html(
     model: &Model,
     a: &Analysis,
-    plots: &[(String, String)],
+    plots: &[&Plot],
     critical: &[crate::plots::CriticalSpeed],
     mc: Option<&McOptions>,
+    d: Display,
 ) -> String {
     let mut h = String::new();
     let _ = write!(
@@ -1051,10 +1237,13 @@ pub fn report_html(
     }
     let _ = writeln!(
         h,
-        "<p>Model file <code>{}</code>. Speeds {} points. SI units; speeds and frequencies in rad/s.</p>",
+        "<p>Model file <code>{}</code>. Speeds {} points. Speeds in {}, frequencies in {} here; the CSV and JSON files are in SI units (rad/s).</p>",
         esc(&model.file),
-        a.nominal.len()
+        a.nominal.len(),
+        d.speed.symbol(),
+        d.frequency.symbol()
     );
+    let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
     let _ = writeln!(
         h,
         "<h2>Tolerance cases</h2><table><tr><th>case</th><th>variable</th><th>nominal</th><th>tolerance (±, = 3σ for normal)</th></tr>"
@@ -1077,14 +1266,12 @@ pub fn report_html(
         h,
         "<h2>Timing</h2><table><tr><th></th><th>analytic, Taylor methods (s)</th><th>quadrature (s)</th><th>Monte Carlo (s)</th><th>ratio Monte Carlo / analytic</th><th>ratio Monte Carlo / quadrature</th></tr>"
     );
-    let _ = writeln!(
-        h,
-        "<tr><td>paper, pendulum (2007, 3000 samples)</td><td>0.703</td><td>–</td><td>448.281</td><td>638</td><td>–</td></tr>"
-    );
-    let _ = writeln!(
-        h,
-        "<tr><td>paper, governor (2007, 3000 samples)</td><td>2.188</td><td>–</td><td>2525.375</td><td>1154</td><td>–</td></tr>"
-    );
+    if let Some((example, analytic, mc, ratio)) = paper_timings(model) {
+        let _ = writeln!(
+            h,
+            "<tr><td>paper, {example} (2007 hardware, 3000 samples)</td><td>{analytic}</td><td>–</td><td>{mc}</td><td>{ratio}</td><td>–</td></tr>"
+        );
+    }
     let secs = |t: Option<f64>| t.map_or("not run".to_string(), |t| format!("{t:.3}"));
     let ratio = |b: Option<f64>| {
         a.monte_carlo_seconds
@@ -1120,18 +1307,21 @@ pub fn report_html(
     );
     let _ = writeln!(h, "{}", first_order_table(a));
     if !critical.is_empty() {
+        let u = d.speed.symbol();
         let _ = writeln!(
             h,
-            "<h2>Critical speeds</h2><table><tr><th>mode</th><th>speed (rad/s)</th><th>σ (rad/s), case {}</th></tr>",
+            "<h2>Critical speeds</h2><table><tr><th>mode</th><th>engine order</th><th>speed ({u})</th><th>σ ({u}), case {}</th></tr>",
             esc(&a.cases[0].name)
         );
+        let f = d.speed.per_rad_per_second();
         for c in critical {
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{:.4}</td><td>{:.4}</td></tr>",
+                "<tr><td>{}</td><td>{}×</td><td>{:.4}</td><td>{:.4}</td></tr>",
                 c.mode + 1,
-                c.speed,
-                c.std
+                c.order,
+                c.speed * f,
+                c.std * f
             );
         }
         let _ = writeln!(h, "</table>");
@@ -1153,16 +1343,16 @@ pub fn report_html(
 <li><b>analytic</b> is the answer to read: the quadrature where it ran (its <code>basis</code> says so), else the automatic Taylor choice (invariant near a change of class, else second order). Red marks in the band plots show the speeds where first order's σ is more than 10 % off.</li>\
 <li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample, with 95 % confidence intervals in <code>tolerance.csv</code> and counts of failed samples and of samples whose mode changed class. Where the distribution is a mixture (most samples overdamped, a few far out), a few thousand samples are far from converged; the quadrature is not.</li>\
 <li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
-<li>Bands are mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case and the order line.</li></ul>"
+<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case, the engine orders and the critical speeds where a mode crosses one.</li></ul>"
     );
     let _ = writeln!(h, "<h2>Plots</h2>");
-    for (file, title) in plots {
+    for p in plots {
         let _ = writeln!(
             h,
-            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
-            esc(file),
-            esc(title),
-            esc(title)
+            "<figure><img src=\"{}.svg\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+            esc(&p.stem),
+            esc(&p.title),
+            esc(&p.caption)
         );
     }
     let _ = writeln!(h, "</body></html>");

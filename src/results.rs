@@ -7,7 +7,8 @@ use crate::analyze::Analysis;
 use crate::compiled::Compiled;
 use crate::files::{FileError, ResultDir};
 use crate::montecarlo::McOptions;
-use crate::{plots, report};
+use crate::plots::{self, Display};
+use crate::report;
 
 /// What [`write()`] leaves for its caller to tell the user.
 #[derive(Debug, Default)]
@@ -30,12 +31,13 @@ pub fn csv_bytes(header: &[impl AsRef<[u8]>], rows: &[Vec<String>]) -> Vec<u8> {
 }
 
 /// Writes every file of the analysis `a` of `m` (run with the Monte Carlo `mc` and `threads`
-/// worker threads) into `dir` and commits it.
+/// worker threads) into `dir`, plots and report in the units `display`, and commits it.
 pub fn write(
     m: &Compiled,
     a: &Analysis,
     mc: Option<&McOptions>,
     threads: usize,
+    display: Display,
     mut dir: ResultDir,
 ) -> Result<Written, FileError> {
     let partial = a.cancelled || mc.is_some_and(|mc| a.interrupted(mc.samples));
@@ -50,9 +52,8 @@ pub fn write(
         "probabilities.csv",
         &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
     )?;
-    let (plots, critical) = plots::plots(m, a);
+    let (plots, critical) = plots::plots(m, a, display);
     let fonts = plots::fonts();
-    let mut files = Vec::new();
     let mut missing_png = Vec::new();
     for p in &plots {
         let svg = format!("{}.svg", p.stem);
@@ -61,11 +62,18 @@ pub fn write(
             Ok(png) => dir.write(&format!("{}.png", p.stem), &png)?,
             Err(e) => missing_png.push((p.stem.clone(), e.to_string())),
         }
-        files.push((svg, p.title.clone()));
     }
     dir.write(
         "report.html",
-        report::report_html(m, a, &files, &critical, mc).as_bytes(),
+        report::report_html(
+            m,
+            a,
+            &plots.iter().collect::<Vec<_>>(),
+            &critical,
+            mc,
+            display,
+        )
+        .as_bytes(),
     )?;
     let summary = report::summary_json(m, a, mc, threads);
     dir.write(

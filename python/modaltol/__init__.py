@@ -234,12 +234,16 @@ class Model:
         quadrature_tolerance: float = 1e-3,
         threads: int | None = None,
         output: str | PathLike[str] | None = None,
+        speed_unit: str = "rad/s",
+        frequency_unit: str = "rad/s",
     ) -> Analysis:
         """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
         per tolerance case, by first and second order, the quadrature (``analytic``: the
         answer to read) and Monte Carlo (``samples``, ``seed``, ``sampling`` = ``"random"``,
         ``"lhs"`` or ``"sobol"``; default the model's). With ``output``, also writes the CLI's
-        result directory (CSV, plots, report.html, summary.json). Ctrl-C stops it."""
+        result directory (CSV, plots, report.html, summary.json), its plots and report with
+        speeds in ``speed_unit`` and frequencies in ``frequency_unit`` (``"rad/s"``, ``"hz"``,
+        ``"rpm"``; the tables stay in rad/s). Ctrl-C stops it."""
         d = self._native.analyze(
             _speeds(speeds),
             _names(cases),
@@ -251,6 +255,8 @@ class Model:
             quadrature_tolerance,
             threads,
             None if output is None else str(output),
+            speed_unit,
+            frequency_unit,
         )
         return Analysis(
             tolerance=_frame(d["tolerance"]),

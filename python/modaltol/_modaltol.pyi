@@ -59,6 +59,8 @@ class NativeModel:
         quadrature_tolerance: float = 1e-3,
         threads: int | None = None,
         output: str | None = None,
+        speed_unit: str = "rad/s",
+        frequency_unit: str = "rad/s",
     ) -> dict[str, Any]: ...
 
 def load(path: str, parameters: dict[str, float] | None = None) -> NativeModel: ...

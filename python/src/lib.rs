@@ -16,6 +16,7 @@ use modaltol::compiled::Compiled;
 use modaltol::files::ResultDir;
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::montecarlo::{MAX_SAMPLES, McOptions};
+use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
@@ -158,6 +159,18 @@ fn speeds(spec: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
         return Err(bad(format!("{what}: no values")));
     }
     Ok(v)
+}
+
+/// A display unit for the plots and report.
+fn unit(name: &str, what: &str) -> PyResult<FrequencyUnit> {
+    match name {
+        "rad/s" => Ok(FrequencyUnit::RadPerSecond),
+        "hz" | "Hz" => Ok(FrequencyUnit::Hertz),
+        "rpm" => Ok(FrequencyUnit::Rpm),
+        _ => Err(bad(format!(
+            "{what} must be \"rad/s\", \"hz\" or \"rpm\", got {name:?}"
+        ))),
+    }
 }
 
 fn derivatives(how: &str) -> PyResult<Derivatives> {
@@ -478,7 +491,7 @@ impl NativeModel {
 
     /// The tolerance analysis (the CLI's `analyze`): tolerance and probability tables and the
     /// summary (JSON text); with `output`, also the CLI's result directory.
-    #[pyo3(signature = (speeds=None, cases=None, samples=None, seed=None, sampling=None, monte_carlo=true, quadrature=true, quadrature_tolerance=1e-3, threads=None, output=None))]
+    #[pyo3(signature = (speeds=None, cases=None, samples=None, seed=None, sampling=None, monte_carlo=true, quadrature=true, quadrature_tolerance=1e-3, threads=None, output=None, speed_unit="rad/s", frequency_unit="rad/s"))]
     #[allow(clippy::too_many_arguments)]
     fn analyze<'py>(
         &self,
@@ -493,8 +506,14 @@ impl NativeModel {
         quadrature_tolerance: f64,
         threads: Option<usize>,
         output: Option<PathBuf>,
+        speed_unit: &str,
+        frequency_unit: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
+        let display = Display {
+            speed: unit(speed_unit, "speed_unit")?,
+            frequency: unit(frequency_unit, "frequency_unit")?,
+        };
         let w = match speeds {
             Some(s) => self::speeds(s, "speeds")?,
             None => m
@@ -567,7 +586,7 @@ impl NativeModel {
         let used =
             threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         if let Some(dir) = dir {
-            py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, dir))
+            py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, display, dir))
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         }
         let d = PyDict::new(py);
