@@ -1151,7 +1151,9 @@ fn summary_table(model: &Model, a: &Analysis, critical: &[CriticalSpeed], d: Dis
                 .zip(sf)
                 .filter(|(a, _)| *a > 0.0)
                 .map_or("–".to_string(), |(a, f)| {
-                    format!("{:+.0} %", 100.0 * (f - a) / a)
+                    // No "-0 %": a difference that rounds to nothing is 0.
+                    let pct = (100.0 * (f - a) / a).round();
+                    format!("{:+.0} %", if pct == 0.0 { 0.0 } else { pct })
                 });
             let agrees = sa.zip(mc).map_or("–", |(s, m)| {
                 if s >= m.std_ci.0 && s <= m.std_ci.1 {
