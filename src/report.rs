@@ -5,7 +5,7 @@
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
 use crate::analyze::{Analysis, Method, Row};
-use crate::modal::C64;
+use crate::modal::{C64, Mode};
 use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::plots::{CriticalSpeed, Display, Plot};
@@ -31,24 +31,40 @@ fn opt(v: Option<f64>) -> String {
         .map_or(String::new(), |x| x.to_string())
 }
 
+/// The columns every per-mode table starts with: where, which mode, its character and roots.
+const MODE_COLUMNS: [&str; 10] = [
+    "speed",
+    "mode",
+    "status",
+    "damped_frequency",
+    "natural_frequency",
+    "damping_ratio",
+    "eigen_re",
+    "eigen_im",
+    "eigen2_re",
+    "eigen2_im",
+];
+
+/// The cells of [`MODE_COLUMNS`] for mode `i` (0-based) of a point at `speed`.
+fn mode_cells(speed: f64, i: usize, m: &Mode) -> Vec<String> {
+    vec![
+        speed.to_string(),
+        (i + 1).to_string(),
+        m.class.as_str().to_string(),
+        m.damped_frequency.to_string(),
+        m.natural_frequency.to_string(),
+        m.damping_ratio.to_string(),
+        m.root.lambda.re.to_string(),
+        m.root.lambda.im.to_string(),
+        m.partner.lambda.re.to_string(),
+        m.partner.lambda.im.to_string(),
+    ]
+}
+
 /// Header of the sweep CSV.
 pub fn sweep_header(model: &Model, cols: &SweepColumns) -> Vec<String> {
-    let mut h: Vec<String> = [
-        "speed",
-        "mode",
-        "status",
-        "damped_frequency",
-        "natural_frequency",
-        "damping_ratio",
-        "eigen_re",
-        "eigen_im",
-        "eigen2_re",
-        "eigen2_im",
-        "tuning_order",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
+    h.push("tuning_order".into());
     if cols.transfer {
         h.push("transfer_magnitude".into());
         h.push("transfer_phase".into());
@@ -94,19 +110,8 @@ pub fn sweep_rows(
             .iter()
             .enumerate()
             .map(|(i, m)| {
-                let mut r = vec![
-                    speed.to_string(),
-                    (i + 1).to_string(),
-                    m.class.as_str().to_string(),
-                    m.damped_frequency.to_string(),
-                    m.natural_frequency.to_string(),
-                    m.damping_ratio.to_string(),
-                    m.root.lambda.re.to_string(),
-                    m.root.lambda.im.to_string(),
-                    m.partner.lambda.re.to_string(),
-                    m.partner.lambda.im.to_string(),
-                    opt((speed != 0.0).then(|| m.damped_frequency / speed)),
-                ];
+                let mut r = mode_cells(speed, i, m);
+                r.push(opt((speed != 0.0).then(|| m.damped_frequency / speed)));
                 if cols.transfer {
                     r.push(opt(extras.transfer.map(|h| h.magnitude())));
                     r.push(opt(extras.transfer.map(|h| h.phase())));
@@ -173,21 +178,7 @@ pub fn display_shape(shape: &[C64]) -> Vec<C64> {
 /// its two roots, then its shape in the free coordinates, scaled by [`display_shape`]
 /// (`shape_re:<joint>`, `shape_im:<joint>`).
 pub fn modes_header(model: &Model) -> Vec<String> {
-    let mut h: Vec<String> = [
-        "speed",
-        "mode",
-        "status",
-        "damped_frequency",
-        "natural_frequency",
-        "damping_ratio",
-        "eigen_re",
-        "eigen_im",
-        "eigen2_re",
-        "eigen2_im",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
     for &i in &model.free() {
         let c = &model.coordinates[i].name;
         h.push(format!("shape_re:{c}"));
@@ -203,18 +194,7 @@ pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
         .zip(&p.shapes)
         .enumerate()
         .map(|(i, (m, shape))| {
-            let mut r = vec![
-                p.speed.to_string(),
-                (i + 1).to_string(),
-                m.class.as_str().to_string(),
-                m.damped_frequency.to_string(),
-                m.natural_frequency.to_string(),
-                m.damping_ratio.to_string(),
-                m.root.lambda.re.to_string(),
-                m.root.lambda.im.to_string(),
-                m.partner.lambda.re.to_string(),
-                m.partner.lambda.im.to_string(),
-            ];
+            let mut r = mode_cells(p.speed, i, m);
             let shape: Vec<C64> = shape.iter().copied().collect();
             for z in display_shape(&shape) {
                 r.push(z.re.to_string());

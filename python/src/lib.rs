@@ -248,8 +248,8 @@ impl NativeModel {
         self.m().dof()
     }
 
-    /// The parameters: name, nominal value, tolerance (absolute, in the parameter's unit),
-    /// tolerance as written, distribution.
+    /// The parameters: name, nominal value, tolerance (absolute, in the parameter's unit; NaN
+    /// where none), distribution.
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
         let d = PyDict::new(py);
