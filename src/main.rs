@@ -944,14 +944,10 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
             .into());
         }
         (Some(spec), None) => {
-            if spec.contains("order=") {
-                return Err(InputError(format!(
-                    "--transfer {spec}: `order` does not apply to frf (the excitation \
-                     frequencies are --freq)"
-                ))
-                .into());
-            }
-            (parse_transfer(&m, spec)?, output.map(PathBuf::from).or(out))
+            let tf = m
+                .parse_response(spec)
+                .map_err(|e| InputError(format!("--transfer {spec}: {e}")))?;
+            (tf, output.map(PathBuf::from).or(out))
         }
         (None, Some(inp)) => {
             let outp = output.ok_or_else(|| {

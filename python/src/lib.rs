@@ -222,6 +222,20 @@ impl NativeModel {
         })
     }
 
+    /// The speeds asked for, or the model's `[analysis] speed`.
+    fn speeds_or_model(&self, speeds: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+        match speeds {
+            Some(s) => self::speeds(s, "speeds"),
+            None => Ok(self
+                .m()
+                .analysis
+                .speed
+                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
+                .speeds()
+                .collect()),
+        }
+    }
+
     /// The nominal point at `speed`.
     fn point(&self, speed: f64, opt: &Options) -> PyResult<modaltol::sweep::Point> {
         if !speed.is_finite() {
@@ -336,15 +350,7 @@ impl NativeModel {
         independent: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
-        let w = match speeds {
-            Some(s) => self::speeds(s, "speeds")?,
-            None => m
-                .analysis
-                .speed
-                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
-                .speeds()
-                .collect(),
-        };
+        let w = self.speeds_or_model(speeds)?;
         let tf = self.transfer(transfer)?;
         let cols = SweepColumns {
             transfer: tf.is_some(),
@@ -463,7 +469,11 @@ impl NativeModel {
         wrt: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let tf = match transfer {
-            Some(_) => self.transfer(transfer)?,
+            Some(s) => Some(
+                self.m()
+                    .parse_response(s)
+                    .map_err(|e| bad(format!("transfer {s:?}: {e}")))?,
+            ),
             None => self.m().analysis.transfer,
         }
         .ok_or_else(|| {
@@ -514,15 +524,7 @@ impl NativeModel {
             speed: unit(speed_unit, "speed_unit")?,
             frequency: unit(frequency_unit, "frequency_unit")?,
         };
-        let w = match speeds {
-            Some(s) => self::speeds(s, "speeds")?,
-            None => m
-                .analysis
-                .speed
-                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
-                .speeds()
-                .collect(),
-        };
+        let w = self.speeds_or_model(speeds)?;
         let cases = m
             .tolerance_cases(&cases.unwrap_or_default())
             .map_err(|e| bad(format!("cases: {e}")))?;

@@ -234,6 +234,8 @@ def test_bad_arguments_are_value_errors(pendulum: modaltol.Model) -> None:
         pendulum.sensitivity(1.0, derivatives="symbolic")
     with pytest.raises(ValueError, match="finite"):
         pendulum.modal(float("inf"))
+    with pytest.raises(ValueError, match="order"):
+        pendulum.frf(1.0, "1:2:1", transfer="input=hinge,output=hinge,order=2")
 
 
 def test_a_failed_point_raises_solve_error(tmp_path: Path) -> None:

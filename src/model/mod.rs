@@ -507,6 +507,23 @@ impl Model {
         }
     }
 
+    /// The input and output of a frequency response, `input=NAME,output=NAME` (or `model`):
+    /// as [`Model::parse_transfer`], refusing `order`, which means nothing for a response over
+    /// a range of excitation frequencies.
+    pub fn parse_response(&self, spec: &str) -> Result<Transfer, String> {
+        if spec
+            .split(',')
+            .any(|p| p.split('=').next().map(str::trim) == Some("order"))
+        {
+            return Err(
+                "`order` does not apply to a frequency response (the excitation frequencies \
+                 are given as a range)"
+                    .into(),
+            );
+        }
+        self.parse_transfer(spec)
+    }
+
     /// A transfer function from a spec `input=NAME,output=NAME[,order=X]` (names of free
     /// coordinates or ports), or `model` for the model's `[analysis] transfer`.
     pub fn parse_transfer(&self, spec: &str) -> Result<Transfer, String> {
