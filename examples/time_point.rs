@@ -34,7 +34,7 @@ fn main() {
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let inst = model.program(&p, speed, &q).unwrap().at(&p, speed).unwrap();
     let linear = best(20000, || {
-        black_box(inst.linear(black_box(&q), &l, true));
+        black_box(inst.linear(black_box(&q), &l));
     });
     let residual = best(20000, || {
         black_box(inst.residual(black_box(&q), &l));

@@ -11,7 +11,12 @@
 //!   is `K`), `C` and `M`; `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`,
 //!   read off the derivatives of the `Φ` rows along the `q_R` lanes. Its further outputs, `Φ_R`
 //!   (whose derivatives give the change of `K` with `λ`) and the driven coordinates' rows (the
-//!   drive forces, values only), make that one pass everything a converged point needs.
+//!   drive forces, values only), make that one pass everything a converged point needs. (The
+//!   drive rows are a few value-only operations: one program with them serves every pass, where
+//!   a second program without them would cost its own pruning, ordering and seeding at every
+//!   recording, a large part of a big model's first point.)
+//!
+//! The program of `∂F/∂p` (the sensitivities) is ordered and seeded when first asked for.
 //!
 //! Everything that depends on the parameters and the speed only is evaluated once per point
 //! ([`Program::at`]). A recording that branched on a value, or that does not reproduce the direct
@@ -29,6 +34,7 @@ use crate::route::Equations;
 use crate::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::{DMatrix, DVector};
 use std::cell::RefCell;
+use std::sync::OnceLock;
 
 /// The recorded equations of one model (see the module documentation).
 #[derive(Debug, Clone)]
@@ -38,22 +44,17 @@ pub struct Program {
     free: Vec<usize>,
     m: usize,
     residual: Tape,
-    /// `full` with the drive rows.
-    full_drive: Tape,
-    /// `full` without them (the sweeps that do not report drive forces, Monte Carlo, and the
-    /// sensitivities' passes).
+    /// `full`, with the drive rows.
     full: Tape,
     /// Lanes `q_R` on `residual`.
     jacobian: Seeding,
-    /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full` and on `full_drive`.
+    /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
-    linear_drive: Seeding,
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
     driven: Vec<Seeding>,
     /// `residual` with only the speed static, and its lanes along each parameter (the
-    /// sensitivities' `∂F/∂p`).
-    parametric: Tape,
-    parameters: Seeding,
+    /// sensitivities' `∂F/∂p`), made when first needed.
+    parametric: OnceLock<(Tape, Seeding)>,
 }
 
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
@@ -124,14 +125,7 @@ impl Program {
             .specialise(&x, &rates, &(0..nf + m).collect::<Vec<_>>())?
             .finish(&(0..nf + m).collect::<Vec<_>>());
         let residual = recorded.split(&fixed);
-        // The parameters as inputs that move: one lane each.
-        let parametric = recorded.split(&[np]);
-        let parameters =
-            parametric.seeding(&(0..np).map(|k| (k, k)).collect::<Vec<_>>(), np, nf + m);
         let full = raw
-            .finish(&(0..differentiated).collect::<Vec<_>>())
-            .split(&fixed);
-        let full_drive = raw
             .finish(&(0..raw.n_outputs()).collect::<Vec<_>>())
             .split(&fixed);
         let seeds: Vec<(usize, usize)> = free
@@ -157,7 +151,6 @@ impl Program {
             .collect();
         // Derivatives of F and Φ_R; the drive rows are values only.
         let linear = full.seeding(&seeds, 3 * nf, differentiated);
-        let linear_drive = full_drive.seeding(&seeds, 3 * nf, differentiated);
         let driven = model
             .driven()
             .iter()
@@ -165,18 +158,15 @@ impl Program {
             .collect();
         let program = Program {
             driven,
-            parametric,
-            parameters,
+            parametric: OnceLock::new(),
             np,
             n,
             free,
             m,
             residual,
             full,
-            full_drive,
             jacobian,
             linear,
-            linear_drive,
         };
         program.reproduces(model, p, speed, q).then_some(program)
     }
@@ -232,13 +222,11 @@ impl Program {
         );
         let residual = self.residual.eval_static(&x);
         let full = self.full.eval_static(&x);
-        let full_drive = self.full_drive.eval_static(&x);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        (finite(&residual) && finite(&full) && finite(&full_drive)).then(|| Instance {
+        (finite(&residual) && finite(&full)).then(|| Instance {
             program: self,
             residual,
             full,
-            full_drive,
             x: RefCell::new(x),
             work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
         })
@@ -277,7 +265,6 @@ struct Work {
     values: Vec<f64>,
     jacobian: Forward<f64>,
     linear: Forward<f64>,
-    linear_drive: Forward<f64>,
     varied: Vec<[f64; 3]>,
 }
 
@@ -316,7 +303,6 @@ pub struct Instance<'a> {
     program: &'a Program,
     residual: Vec<f64>,
     full: Vec<f64>,
-    full_drive: Vec<f64>,
     /// The input vector, with the parameters and the speed in place.
     x: RefCell<Vec<f64>>,
     work: RefCell<Work>,
@@ -477,21 +463,15 @@ impl Instance<'_> {
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
     }
 
-    /// `F`, its Jacobian, `C` and `M` in one forward pass, and with `drive` the drive rows
-    /// ([`Linear::drive`] is empty without).
-    pub fn linear(&self, q: &[f64], lambda: &[f64], drive: bool) -> Linear {
+    /// `F`, its Jacobian, `C`, `M` and the drive rows in one forward pass.
+    pub fn linear(&self, q: &[f64], lambda: &[f64]) -> Linear {
         self.set(q, lambda);
         let pr = self.program;
         let mut work = self.work.borrow_mut();
         let x = self.x.borrow();
-        let (f, d) = if drive {
-            let w = &mut work.linear_drive;
-            pr.full_drive
-                .forward(&self.full_drive, &x, &pr.linear_drive, w)
-        } else {
-            pr.full
-                .forward(&self.full, &x, &pr.linear, &mut work.linear)
-        };
+        let (f, d) = pr
+            .full
+            .forward(&self.full, &x, &pr.linear, &mut work.linear);
         Linear::from_forward(f, &d, pr.free.len(), pr.m)
     }
 }
@@ -516,12 +496,16 @@ impl Program {
         lambda: &[f64],
     ) -> Vec<f64> {
         let x = inputs(p, speed, q, lambda, self.free.len());
-        let fixed = self.parametric.eval_static(&x);
-        with_buffer(|work| {
-            self.parametric
-                .forward(&fixed, &x, &self.parameters, work)
-                .1
-        })
+        let (parametric, parameters) = self.parametric.get_or_init(|| {
+            // The parameters as inputs that move: one lane each.
+            let (np, rows) = (self.np, self.free.len() + self.m);
+            let tape = self.residual.split(&[np]);
+            let seeds: Vec<(usize, usize)> = (0..np).map(|k| (k, k)).collect();
+            let seeding = tape.seeding(&seeds, np, rows);
+            (tape, seeding)
+        });
+        let fixed = parametric.eval_static(&x);
+        with_buffer(|work| parametric.forward(&fixed, &x, parameters, work).1)
     }
 
     /// `F`, its Jacobian, `C` and `M` over any [`Real`].
@@ -587,7 +571,7 @@ impl Equations<f64> for Instance<'_> {
         independent: &[usize],
         _stiffness: Option<&DMatrix<f64>>,
     ) -> Result<Linearization<f64>, LinearizeError> {
-        self.linear(q, lambda, false)
+        self.linear(q, lambda)
             .reduce(&self.program.free, independent)
     }
 }
@@ -598,7 +582,7 @@ impl Solvable for Instance<'_> {
     }
 
     fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
-        let lin = self.linear(q, lambda, drive);
+        let lin = self.linear(q, lambda);
         (
             lin.residual,
             lin.jacobian,
@@ -611,7 +595,7 @@ impl Solvable for Instance<'_> {
     /// multipliers ([`Linear::shift_multipliers`]).
     fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
         let (nf, m) = (self.program.free.len(), self.program.m);
-        let mut lin = self.linear(q, &vec![0.0; m], drive);
+        let mut lin = self.linear(q, &vec![0.0; m]);
         let lambda = least_squares(
             lin.jacobian.view((0, nf), (nf, m)).into_owned(),
             DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
@@ -630,7 +614,7 @@ impl Solvable for Instance<'_> {
 
     /// The recorded drive rows are those of the model's driven coordinates, in order.
     fn drive_rows(&self, q: &[f64], lambda: &[f64], _driven: &[usize]) -> Vec<f64> {
-        self.linear(q, lambda, true).drive
+        self.linear(q, lambda).drive
     }
 
     fn residual_at_drive_offsets(

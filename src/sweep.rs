@@ -225,8 +225,7 @@ fn analyse(
     };
     let linear = linear.with_ports(ports_at(model, p, eq.speed, &eq.q, &free)?);
     let modes = modes(&linear.m, &linear.c, &linear.k)?;
-    let basis = linear.basis.map(|v| C64::new(v, 0.0));
-    let shapes = modes.iter().map(|m| &basis * &m.root.right).collect();
+    let shapes = shapes(&linear.basis, &modes);
     Ok(Point {
         speed: eq.speed,
         equilibrium: eq,
@@ -237,6 +236,33 @@ fn analyse(
         switched_from: None,
         new_branch: false,
     })
+}
+
+/// Each mode's shape over all the coordinates, `basis · x` with `x` its right vector, summed over
+/// the basis's nonzero entries only: a tree's basis is a selection (one entry a row), so that
+/// this is O(n) a mode where the dense product is O(n²), a large part of a big model's point.
+fn shapes(basis: &DMatrix<f64>, modes: &[Mode]) -> Vec<DVector<C64>> {
+    let rows: Vec<Vec<(usize, f64)>> = basis
+        .row_iter()
+        .map(|r| {
+            r.iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(c, v)| (c, *v))
+                .collect()
+        })
+        .collect();
+    modes
+        .iter()
+        .map(|m| {
+            let x = &m.root.right;
+            DVector::from_iterator(
+                rows.len(),
+                rows.iter()
+                    .map(|r| r.iter().map(|&(c, v)| x[c] * v).sum::<C64>()),
+            )
+        })
+        .collect()
 }
 
 /// Fraction of the way from the unstable equilibrium to the stable one found beyond which the
