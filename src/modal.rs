@@ -142,7 +142,7 @@ pub fn modes(
 /// zero as the first-order form's rounding (a neutral mode, which that route classes).
 fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
     let d = linalg::symmetric_definite(m, k)?;
-    if d.mass_condition > MAX_MASS_CONDITION {
+    if d.mass_condition > MAX_DEFINITE_MASS_CONDITION {
         return None;
     }
     let scale = d
@@ -175,9 +175,19 @@ fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
     Some(modes)
 }
 
-/// Condition number of `M̂` above which the modes are refused (a coordinate moves next to no
-/// mass: the roots would be rounding).
+/// Condition number of `M̂` above which the first-order form's modes are refused (a coordinate
+/// moves next to no mass: the roots would be rounding). That form divides by `M̂`, so every
+/// root carries errors of `ε cond(M̂)` relative to the largest (1e-4 here).
 const MAX_MASS_CONDITION: f64 = 1e12;
+
+/// The same for the symmetric-definite route, which reduces by `K̂` where `M̂` is the worse
+/// conditioned ([`linalg::symmetric_definite`]): the low modes keep a few ε whatever
+/// `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the highest, depend
+/// on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts as singular
+/// where that smallest eigenvalue carries 1 % of rounding (its frequency then 0.5 %): a
+/// coordinate moving next to no mass. A chain of a thousand segments in joint coordinates
+/// (`cond(M̂)` 3.9e12, growing like n⁴) is within.
+const MAX_DEFINITE_MASS_CONDITION: f64 = 1e-2 / f64::EPSILON;
 
 /// The modes from the 2n×2n first-order form (any `M̂`, `Ĉ`, `K̂`; see the module
 /// documentation), unsorted.

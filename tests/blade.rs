@@ -122,3 +122,25 @@ fn a_three_hundred_twenty_segment_blade_solves_on_southwells_line() {
         w1 * w1
     );
 }
+
+#[test]
+fn a_thousand_segment_blade_converges_without_rounding_noise() {
+    // The benchmark's chain with a thousand segments: M̂ in joint coordinates has condition
+    // 3.9e12 (∝ n⁴). The lowest frequency at rest approaches the continuum's from below as h²,
+    // so its error at N = 1000 is (40/1000)² of the error at N = 40 (to the h⁴ term, below
+    // 1 % of it). Rounding of order ε cond(M̂) (what the eigensolve reduced by M̂'s Cholesky
+    // factor committed: the first frequency came out 1e-4 off, above the continuum at
+    // N = 800) would be 200 times that error.
+    let w10 = 1.875_104_068_711_961f64.powi(2) * (50.0f64 / 2.0).sqrt();
+    let error = |n: usize| {
+        let model =
+            Compiled::from_str(&chain::chain(n), "chain.toml").unwrap_or_else(|e| panic!("{e}"));
+        1.0 - first(&model, 0.0) / w10
+    };
+    let (e40, e1000) = (error(40), error(1000));
+    let predicted = e40 * (40.0f64 / 1000.0).powi(2);
+    assert!(
+        e1000 > 0.0 && (e1000 / predicted - 1.0).abs() < 0.02,
+        "error {e1000:e} at N = 1000, {predicted:e} predicted from N = 40 ({e40:e})"
+    );
+}
