@@ -143,9 +143,9 @@ pub struct Definite {
     pub mass_condition: f64,
 }
 
-/// Condition number of `M` up to which [`symmetric_definite`] reduces by `M` without looking
-/// at `K`'s.
-const WELL_CONDITIONED: f64 = 1e4;
+/// Condition number of a mass matrix up to which the modal solves divide by it without
+/// looking at the stiffness matrix's (see [`symmetric_definite`]).
+pub const WELL_CONDITIONED: f64 = 1e4;
 
 /// Solves `K x = μ M x` by LAPACK `dsygv`'s route (Golub & Van Loan, *Matrix Computations*,
 /// 4th ed., 2013, §8.7.2) on faer's blocked kernels: Cholesky `M = LLᵀ`, the symmetric

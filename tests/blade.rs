@@ -10,6 +10,7 @@ mod common;
 
 use common::solve;
 use modaltol::compiled::Compiled;
+use modaltol::modal::{C64, ModeClass};
 
 /// Uniform blade: length 1 m, μ = 2 kg/m, EI = 50 N·m², spinning about z, flapping along z.
 pub fn blade(n: usize) -> String {
@@ -143,4 +144,43 @@ fn a_thousand_segment_blade_converges_without_rounding_noise() {
         e1000 > 0.0 && (e1000 / predicted - 1.0).abs() < 0.02,
         "error {e1000:e} at N = 1000, {predicted:e} predicted from N = 40 ({e40:e})"
     );
+}
+
+#[test]
+fn a_long_chain_with_joint_damping_has_the_undamped_chains_frequencies() {
+    // Joint dampers proportional to the springs (c = α k) make Ĉ = α K̂ at rest (no gravity,
+    // no speed: K̂ is the springs alone), so each damped pair is λ = −αμ/2 ± i√(μ − (αμ/2)²)
+    // with μ = ω² of the undamped chain, solved by the symmetric route. The damped chain goes
+    // through the first-order form, which divided by M̂ (condition 1e9 at 160 segments): there
+    // its vectors overflowed and the point failed, and at 480 segments the first frequency
+    // was 4e-5 off with a positive real part.
+    let n = 160;
+    let alpha = 1e-4;
+    let undamped = chain::chain(n);
+    let damped = undamped
+        .replace(
+            "stiffness = \"2*EI/h\"\n",
+            &format!("stiffness = \"2*EI/h\"\ndamping = \"{alpha}*2*EI/h\"\n"),
+        )
+        .replace(
+            "stiffness = \"EI/h\"\n",
+            &format!("stiffness = \"EI/h\"\ndamping = \"{alpha}*EI/h\"\n"),
+        );
+    assert_eq!(damped.matches("damping").count(), n);
+    let load =
+        |text: &str| Compiled::from_str(text, "chain.toml").unwrap_or_else(|e| panic!("{e}"));
+    let reference = solve(&load(&undamped), 0.0, false);
+    let point = solve(&load(&damped), 0.0, false);
+    for (k, (u, d)) in reference.modes.iter().zip(&point.modes).take(6).enumerate() {
+        let mu = u.natural_frequency.powi(2);
+        let expected = C64::new(-alpha * mu / 2.0, (mu - (alpha * mu / 2.0).powi(2)).sqrt());
+        let got = d.root.lambda;
+        assert!(
+            (got - expected).norm() < 1e-9 * expected.norm()
+                && (got.re / expected.re - 1.0).abs() < 1e-6,
+            "mode {}: λ = {got} vs {expected}",
+            k + 1
+        );
+        assert_eq!(d.class, ModeClass::Underdamped);
+    }
 }
