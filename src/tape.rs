@@ -1069,15 +1069,19 @@ impl Tape {
         rows: bool,
     ) -> Seeding {
         static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
+        let inputs = seeds.iter().map(|s| s.0 + 1).max().unwrap_or(0);
+        let mut input_lanes = vec![Vec::new(); inputs];
+        for &(k, l) in seeds {
+            input_lanes[k].push(l as u32);
+        }
         let mut range = vec![(0u32, 0u32); self.ops.len()];
         for (i, op) in self.ops.iter().enumerate().skip(self.n_static) {
             range[i] = match *op {
-                Op::Input(k) => seeds
+                Op::Input(k) => input_lanes
+                    .get(k as usize)
+                    .map_or(&[][..], |v| &v[..])
                     .iter()
-                    .filter(|s| s.0 == k as usize)
-                    .fold((u32::MAX, 0), |(lo, hi), &(_, l)| {
-                        (lo.min(l as u32), hi.max(l as u32 + 1))
-                    }),
+                    .fold((u32::MAX, 0), |(lo, hi), &l| (lo.min(l), hi.max(l + 1))),
                 op => op
                     .args()
                     .into_iter()
@@ -1125,6 +1129,7 @@ impl Tape {
         Seeding {
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             seeds: seeds.to_vec(),
+            input_lanes,
             lanes,
             range,
             differentiated,
@@ -1255,7 +1260,7 @@ impl Tape {
         seeding: &Seeding,
         work: &mut Forward<S>,
     ) -> (Vec<S>, Vec<S>) {
-        let (seeds, lanes) = (&seeding.seeds[..], seeding.lanes);
+        let lanes = seeding.lanes;
         let stride = lanes + CHUNK - 1;
         let ns = self.n_static;
         let zero = S::from(0.0);
@@ -1301,8 +1306,8 @@ impl Tape {
                 Op::Input(k) => {
                     lanes.map(tan, [], |[]| zero);
                     if lanes.width > 0 {
-                        for &(_, l) in seeds.iter().filter(|s| s.0 == k as usize) {
-                            tan[lanes.at * stride + l] = S::from(1.0);
+                        for &l in &seeding.input_lanes[k as usize] {
+                            tan[lanes.at * stride + l as usize] = S::from(1.0);
                         }
                     }
                     x[k as usize]
@@ -1495,6 +1500,8 @@ impl<S> Default for Forward<S> {
 pub struct Seeding {
     id: usize,
     seeds: Vec<(usize, usize)>,
+    /// The lanes of each input (by input index; the seeds regrouped).
+    input_lanes: Vec<Vec<u32>>,
     lanes: usize,
     /// First lane and number of lanes of each operation.
     range: Vec<(u32, u32)>,
