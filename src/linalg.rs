@@ -141,6 +141,8 @@ pub struct Definite {
     pub vectors: DMatrix<f64>,
     /// The spectral condition number of `M`.
     pub mass_condition: f64,
+    /// Reduced by `K`'s Cholesky factor (`M` the worse conditioned), not by `M`'s.
+    pub by_stiffness: bool,
 }
 
 /// Condition number of a mass matrix up to which the modal solves divide by it without
@@ -220,6 +222,7 @@ pub fn symmetric_definite(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Definite
         values,
         vectors,
         mass_condition,
+        by_stiffness,
     })
 }
 

@@ -147,7 +147,12 @@ pub fn modes(
 /// zero as the first-order form's rounding (a neutral mode, which that route classes).
 fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
     let d = linalg::symmetric_definite(m, k)?;
-    if d.mass_condition > MAX_DEFINITE_MASS_CONDITION {
+    let limit = if d.by_stiffness {
+        MAX_MASS_CONDITION_BY_STIFFNESS
+    } else {
+        MAX_MASS_CONDITION
+    };
+    if d.mass_condition > limit {
         return None;
     }
     let scale = d
@@ -180,19 +185,19 @@ fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
     Some(modes)
 }
 
-/// Condition number of `M̂` above which the first-order form's modes are refused (a coordinate
-/// moves next to no mass: the roots would be rounding). That form divides by `M̂`, so every
-/// root carries errors of `ε cond(M̂)` relative to the largest (1e-4 here).
+/// Condition number of `M̂` above which the modes are refused where a route divides by `M̂` (a
+/// coordinate moves next to no mass: the roots would be rounding): every root then carries
+/// errors of `ε cond(M̂)` relative to the largest (1e-4 here).
 const MAX_MASS_CONDITION: f64 = 1e12;
 
-/// The same for the symmetric-definite route, which reduces by `K̂` where `M̂` is the worse
-/// conditioned ([`linalg::symmetric_definite`]): the low modes keep a few ε whatever
-/// `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the highest, depend
-/// on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts as singular
-/// where that smallest eigenvalue carries 1 % of rounding (its frequency then 0.5 %): a
-/// coordinate moving next to no mass. A chain of a thousand segments in joint coordinates
-/// (`cond(M̂)` 3.9e12, growing like n⁴) is within.
-const MAX_DEFINITE_MASS_CONDITION: f64 = 1e-2 / f64::EPSILON;
+/// The same where a route divides by `K̂` instead (`M̂` the worse conditioned; see
+/// [`linalg::symmetric_definite`] and [`first_order_modes`]): the low modes keep a few ε
+/// whatever `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the
+/// highest, depend on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts
+/// as singular where that smallest eigenvalue carries 1 % of rounding (its frequency then
+/// 0.5 %): a coordinate moving next to no mass. A chain of a thousand segments in joint
+/// coordinates (`cond(M̂)` 3.9e12, growing like n⁴) is within.
+const MAX_MASS_CONDITION_BY_STIFFNESS: f64 = 1e-2 / f64::EPSILON;
 
 /// The modes from the 2n×2n first-order form (any `M̂`, `Ĉ`, `K̂`; see the module
 /// documentation), unsorted.
@@ -221,9 +226,9 @@ fn first_order_modes(
         })
     };
     let condition = condition_of(m, "SVD of M̂")?;
-    // By K̂ where M̂ is the worse conditioned (see `swapped`).
+    // By K̂ where M̂ is the worse conditioned (see the function's documentation).
     let swapped = condition > linalg::WELL_CONDITIONED
-        && condition <= MAX_DEFINITE_MASS_CONDITION
+        && condition <= MAX_MASS_CONDITION_BY_STIFFNESS
         && condition_of(k, "SVD of K̂")? < condition;
     if !swapped && condition > MAX_MASS_CONDITION {
         return Err(ModalError::SingularMass { condition });
@@ -479,6 +484,24 @@ mod tests {
         let b = r(n);
         let k = (&b + b.transpose()) * 20.0 + DMatrix::identity(n, n) * 30.0;
         (m, k)
+    }
+
+    /// Where `K̂` is no better conditioned than `M̂`, both routes divide by `M̂`, and an `M̂` of
+    /// condition 1e13 is refused as singular (the 1 % limit is for the routes that divide by
+    /// `K̂`); with a well-conditioned `K̂` the same `M̂` is solved, its low mode exactly.
+    #[test]
+    fn the_relaxed_mass_condition_holds_only_where_k_is_the_divisor() {
+        let m = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1e-13]));
+        let stiff = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1e-14]));
+        for c in [DMatrix::zeros(2, 2), DMatrix::identity(2, 2) * 1e-20] {
+            assert!(
+                matches!(modes(&m, &c, &stiff), Err(ModalError::SingularMass { .. })),
+                "cond(K̂) 1e14 with Ĉ = {c}"
+            );
+        }
+        let k = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0]));
+        let out = modes(&m, &DMatrix::zeros(2, 2), &k).expect("solved by K̂");
+        assert!((out[0].natural_frequency - 2.0).abs() < 1e-14);
     }
 
     /// The undamped route against the first-order form: the same modes (frequencies, class,
