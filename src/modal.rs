@@ -327,19 +327,22 @@ fn first_order_modes(
             real.push(r);
         }
     }
-    // Pair real roots whose right vectors are most alike.
-    while real.len() >= 2 {
-        let (mut bi, mut bj, mut best) = (0, 1, -1.0);
-        for i in 0..real.len() {
-            for j in i + 1..real.len() {
-                let s = similarity(&real[i].right, &real[j].right);
-                if s > best {
-                    (bi, bj, best) = (i, j, s);
-                }
-            }
+    // Pair real roots whose right vectors are most alike: greedily, the most alike pair of
+    // those left first.
+    let rights: Vec<DVector<C64>> = real.iter().map(|r| r.right.clone()).collect();
+    let s = similarities(&rights, &rights);
+    let mut pairs: Vec<(usize, usize)> = (0..real.len())
+        .flat_map(|i| (i + 1..real.len()).map(move |j| (i, j)))
+        .collect();
+    // Stable: equal similarities in the order of the roots.
+    pairs.sort_by(|&(a, b), &(c, d)| s[(c, d)].total_cmp(&s[(a, b)]));
+    let mut real: Vec<Option<Root>> = real.into_iter().map(Some).collect();
+    for (i, j) in pairs {
+        if real[i].is_none() || real[j].is_none() {
+            continue;
         }
-        let b = real.remove(bj);
-        let a = real.remove(bi);
+        let (a, b) = (real[i].take(), real[j].take());
+        let (a, b) = (a.expect("unpaired"), b.expect("unpaired"));
         let (hi, lo) = if a.lambda.re >= b.lambda.re {
             (a, b)
         } else {
@@ -390,6 +393,34 @@ fn check_mode(mode: usize, m: &Mode) -> Result<(), ModalError> {
 pub fn similarity(a: &DVector<C64>, b: &DVector<C64>) -> f64 {
     let d = a.dotc(b).norm();
     d / (a.norm() * b.norm()).max(f64::MIN_POSITIVE)
+}
+
+/// [`similarity`] of every vector of `a` (rows) with every vector of `b` (columns), all of one
+/// length: the normalised vectors' products `Aᴴ B` by four real matrix products. Pairing and
+/// tracking compare every mode with every mode; one call each made that O(n³) with the
+/// norms recomputed in every call (a 480-segment chain with overdamped modes spent a minute
+/// pairing its real roots).
+pub fn similarities(a: &[DVector<C64>], b: &[DVector<C64>]) -> DMatrix<f64> {
+    let len = a.iter().chain(b).next().map_or(0, |v| v.len());
+    let parts = |v: &[DVector<C64>]| {
+        let scale: Vec<f64> = v
+            .iter()
+            .map(|x| {
+                let n = x.norm();
+                if n > 0.0 { 1.0 / n } else { 0.0 }
+            })
+            .collect();
+        (
+            DMatrix::from_fn(len, v.len(), |i, j| v[j][i].re * scale[j]),
+            DMatrix::from_fn(len, v.len(), |i, j| v[j][i].im * scale[j]),
+        )
+    };
+    let ((ar, ai), (br, bi)) = (parts(a), parts(b));
+    // Transposed first: `*` runs the blocked product, `tr_mul` a dot product per entry.
+    let (ar, ai) = (ar.transpose(), ai.transpose());
+    let re = &ar * &br + &ai * &bi;
+    let im = &ar * &bi - &ai * &br;
+    re.zip_map(&im, f64::hypot)
 }
 
 fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
@@ -450,10 +481,11 @@ pub fn permute<T>(items: Vec<T>, order: &[usize]) -> Vec<T> {
 /// nominal ones.
 pub fn match_shapes(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
     let n = prev.len();
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * n);
-    for (i, p) in prev.iter().enumerate() {
-        for (j, c) in cur.iter().enumerate() {
-            pairs.push((similarity(p, c), i, j));
+    let s = similarities(prev, cur);
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * cur.len());
+    for i in 0..n {
+        for j in 0..cur.len() {
+            pairs.push((s[(i, j)], i, j));
         }
     }
     pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -473,6 +505,38 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn all_similarities_at_once_agree_with_each_pair() {
+        // The products of normalised vectors against `similarity` of each pair, with a zero
+        // vector (similar to nothing), a parallel pair and vectors of very different sizes.
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut v = |scale: f64| {
+            DVector::from_fn(9, |_, _| {
+                C64::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
+            })
+        };
+        let mut a: Vec<DVector<C64>> = vec![v(1.0), v(1e-150), DVector::zeros(9), v(1e150)];
+        let b: Vec<DVector<C64>> = vec![v(3.0), a[0].map(|z| z * C64::new(0.0, -2.0)), v(1e-9)];
+        a.push(v(1.0));
+        let s = similarities(&a, &b);
+        assert_eq!(s.shape(), (5, 3));
+        for (i, x) in a.iter().enumerate() {
+            for (j, y) in b.iter().enumerate() {
+                let pairwise = if x.norm() > 0.0 {
+                    x.dotc(y).norm() / (x.norm() * y.norm())
+                } else {
+                    0.0
+                };
+                assert!((s[(i, j)] - pairwise).abs() < 1e-14, "{i} {j}");
+            }
+        }
+        assert!((s[(0, 1)] - 1.0).abs() < 1e-15);
+        assert!(
+            s.row(2).iter().all(|&v| v == 0.0),
+            "a zero vector is similar to nothing"
+        );
+    }
 
     /// A random symmetric positive definite `M` and a symmetric `K` with some negative
     /// eigenvalues (unstable modes), both of size n.

@@ -30,7 +30,7 @@ use crate::compiled::Compiled;
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
-use crate::modal::{C64, Mode, Root, similarity};
+use crate::modal::{C64, Mode, Root, similarities};
 use crate::model::{Channel, Transfer};
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
@@ -471,9 +471,10 @@ fn fd_quantities(
     let q = point(model, p, pt.speed, &pt.equilibrium.q, opt)?;
     let mut out = Vec::new();
     let mut same_class = true;
-    for (s0, m0) in pt.shapes.iter().zip(&pt.modes) {
+    let s = similarities(&pt.shapes, &q.shapes);
+    for (k, m0) in pt.modes.iter().enumerate() {
         let i = (0..q.shapes.len())
-            .max_by(|&i, &j| similarity(s0, &q.shapes[i]).total_cmp(&similarity(s0, &q.shapes[j])))
+            .max_by(|&i, &j| s[(k, i)].total_cmp(&s[(k, j)]))
             .unwrap_or(0);
         let m = &q.modes[i];
         same_class &= m.class == m0.class;
