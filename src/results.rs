@@ -9,6 +9,7 @@ use crate::files::{FileError, ResultDir};
 use crate::montecarlo::McOptions;
 use crate::plots::{self, Display};
 use crate::report;
+use rayon::prelude::*;
 
 /// What [`write()`] leaves for its caller to tell the user.
 #[derive(Debug, Default)]
@@ -54,13 +55,25 @@ pub fn write(
     )?;
     let (plots, critical) = plots::plots(m, a, display);
     let fonts = plots::fonts();
+    // Rendered on the run's threads (a big model's hundreds of plots took longer to render than
+    // its analysis), written in order.
+    let render = || -> Vec<Result<Vec<u8>, String>> {
+        plots
+            .par_iter()
+            .map(|p| plots::png(&p.svg, &fonts))
+            .collect()
+    };
+    let pngs = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+        Ok(pool) => pool.install(render),
+        Err(_) => render(),
+    };
     let mut missing_png = Vec::new();
-    for p in &plots {
+    for (p, png) in plots.iter().zip(pngs) {
         let svg = format!("{}.svg", p.stem);
         dir.write(&svg, p.svg.as_bytes())?;
-        match plots::png(&p.svg, &fonts) {
+        match png {
             Ok(png) => dir.write(&format!("{}.png", p.stem), &png)?,
-            Err(e) => missing_png.push((p.stem.clone(), e.to_string())),
+            Err(e) => missing_png.push((p.stem.clone(), e)),
         }
     }
     dir.write(
