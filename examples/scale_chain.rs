@@ -7,15 +7,17 @@
 //! Times are the best of 3 runs.
 //!
 //! `cargo run --release --example scale_chain -- [n …]` (default: 10 20 40 80 160; 320 runs in
-//! about two minutes).
+//! about two minutes); `… -- damped n`: one cold modal point of the chain with joint dampers,
+//! most of its modes overdamped.
 use modaltol::compiled::Compiled;
+use modaltol::modal::ModeClass;
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::time::Instant;
 
 #[path = "common/chain.rs"]
 mod common_chain;
-use common_chain::chain;
+use common_chain::{chain, with_joint_dampers};
 
 /// Peak resident memory of this process (MB), from `/proc/self/status`.
 fn peak_mb() -> f64 {
@@ -94,6 +96,30 @@ fn main() {
             let q0 = initial_guess(&model, &p, 5.0).unwrap();
             point(&model, &p, 5.0, &q0, &opt).unwrap();
         }
+        return;
+    }
+    if args.first().map(String::as_str) == Some("damped") {
+        // `damped n`: one cold modal point of the chain with a damper 10⁻³ k beside each
+        // spring, where most modes are overdamped (hundreds of real roots to pair at 480).
+        let n = args[1].parse().unwrap();
+        let text = with_joint_dampers(&chain(n), 1e-3);
+        let model = Compiled::from_str(&text, "chain.toml").unwrap();
+        let p = model.nominal();
+        let t = Instant::now();
+        let q0 = initial_guess(&model, &p, 5.0).unwrap();
+        let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
+        let overdamped = pt
+            .modes
+            .iter()
+            .filter(|m| m.class == ModeClass::Overdamped)
+            .count();
+        println!(
+            "{n} segments with joint dampers: cold modal point {:.3} s, {overdamped} of {} \
+             modes overdamped, peak {:.1} MB",
+            t.elapsed().as_secs_f64(),
+            pt.modes.len(),
+            peak_mb()
+        );
         return;
     }
     if args.first().map(String::as_str) == Some("one") {

@@ -157,15 +157,7 @@ fn a_long_chain_with_joint_damping_has_the_undamped_chains_frequencies() {
     let n = 160;
     let alpha = 1e-4;
     let undamped = chain::chain(n);
-    let damped = undamped
-        .replace(
-            "stiffness = \"2*EI/h\"\n",
-            &format!("stiffness = \"2*EI/h\"\ndamping = \"{alpha}*2*EI/h\"\n"),
-        )
-        .replace(
-            "stiffness = \"EI/h\"\n",
-            &format!("stiffness = \"EI/h\"\ndamping = \"{alpha}*EI/h\"\n"),
-        );
+    let damped = chain::with_joint_dampers(&undamped, alpha);
     assert_eq!(damped.matches("damping").count(), n);
     let load =
         |text: &str| Compiled::from_str(text, "chain.toml").unwrap_or_else(|e| panic!("{e}"));
@@ -203,15 +195,7 @@ fn an_overdamped_long_chain_pairs_each_modes_two_real_roots() {
     };
     let reference = by_frequency(solve(&load(&undamped), 0.0, false).modes);
     let alpha = 2.0 / reference[n / 3].natural_frequency;
-    let damped = undamped
-        .replace(
-            "stiffness = \"2*EI/h\"\n",
-            &format!("stiffness = \"2*EI/h\"\ndamping = \"{alpha}*2*EI/h\"\n"),
-        )
-        .replace(
-            "stiffness = \"EI/h\"\n",
-            &format!("stiffness = \"EI/h\"\ndamping = \"{alpha}*EI/h\"\n"),
-        );
+    let damped = chain::with_joint_dampers(&undamped, alpha);
     let modes = by_frequency(solve(&load(&damped), 0.0, false).modes);
     assert_eq!(modes.len(), n);
     let overdamped = modes

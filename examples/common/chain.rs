@@ -29,3 +29,16 @@ pub fn chain(n: usize) -> String {
     }
     s
 }
+
+/// The chain `text` of [`chain`] with a damper `α k` beside each joint spring `k` (so that
+/// `Ĉ = α K̂` at rest: proportional damping, every mode's roots in closed form).
+pub fn with_joint_dampers(text: &str, alpha: f64) -> String {
+    text.replace(
+        "stiffness = \"2*EI/h\"\n",
+        &format!("stiffness = \"2*EI/h\"\ndamping = \"{alpha}*2*EI/h\"\n"),
+    )
+    .replace(
+        "stiffness = \"EI/h\"\n",
+        &format!("stiffness = \"EI/h\"\ndamping = \"{alpha}*EI/h\"\n"),
+    )
+}
