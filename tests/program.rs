@@ -112,6 +112,32 @@ fn a_trace_specialised_to_constant_inputs_is_the_trace_recorded_with_them() {
     }
 }
 
+#[test]
+fn a_replay_that_folds_two_operations_into_one_keeps_both_and_their_values() {
+    // With z = 0, `(x + z·y)·x` folds to `x·x`, an operation the trace already has: the replay
+    // appends without hash-consing, so it keeps the duplicate (one operation more than the
+    // trace recorded with z = 0), and both outputs stay exact.
+    let f = |x: Var, y: Var, z: Var| vec![(x + z * y) * x, x * x + y];
+    let at = [0.7, 1.3, 0.0];
+    let all = record(&at, |v| Some(f(v[0], v[1], v[2]))).unwrap();
+    let direct = record(&at, |v| Some(f(v[0], v[1], Var::from(0.0))))
+        .unwrap()
+        .finish(&[0, 1]);
+    let replayed = all
+        .specialise(&at, &[(2, 0.0)], &[0, 1])
+        .unwrap()
+        .finish(&[0, 1]);
+    assert!(
+        replayed.len() <= direct.len() + 1,
+        "{replayed:?}\n{direct:?}"
+    );
+    for x in [[1.1, -0.4, 9.0], [-2.0, 0.3, -1.0]] {
+        let a = replayed.eval(&[], &x, &mut Vec::new());
+        assert_eq!(a, [x[0] * x[0], x[0] * x[0] + x[1]]);
+        assert_eq!(a, direct.eval(&[], &x, &mut Vec::new()));
+    }
+}
+
 /// A recurrence along 300 inputs: output k depends on inputs 0..=k.
 fn recurrence<T: modaltol::real::Real>(x: &[T]) -> Vec<T> {
     let mut c = x[0];
