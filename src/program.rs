@@ -46,8 +46,10 @@ pub struct Program {
     residual: Tape,
     /// `full`, with the drive rows.
     full: Tape,
-    /// Lanes `q_R` on `residual`.
-    jacobian: Seeding,
+    /// Lanes `q_R` on `residual`, made when first needed: Newton's Jacobians come from the
+    /// exact evaluation (`linear`), so only diagnoses use these (at 160 segments they cost a
+    /// twentieth of the recording).
+    jacobian: OnceLock<Seeding>,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
@@ -128,12 +130,6 @@ impl Program {
         let full = raw
             .finish(&(0..raw.n_outputs()).collect::<Vec<_>>())
             .split(&fixed);
-        let seeds: Vec<(usize, usize)> = free
-            .iter()
-            .enumerate()
-            .map(|(k, &i)| (np + 1 + i, k))
-            .collect();
-        let jacobian = residual.seeding(&seeds, nf, nf + m);
         // A coordinate's three lanes side by side: an operation depends on the rates of the
         // coordinates whose positions it depends on, so its lane range stays narrow (the
         // governor's pass is 43 % fewer lane operations than with `[q_R, q̇_R, q̈_R]` in blocks,
@@ -165,7 +161,7 @@ impl Program {
             m,
             residual,
             full,
-            jacobian,
+            jacobian: OnceLock::new(),
             linear,
         };
         program.reproduces(model, p, speed, q).then_some(program)
@@ -454,10 +450,17 @@ impl Instance<'_> {
         self.set(q, lambda);
         let pr = self.program;
         let mut work = self.work.borrow_mut();
+        let seeding = pr.jacobian.get_or_init(|| {
+            let seeds: Vec<(usize, usize)> = (pr.free.iter().enumerate())
+                .map(|(k, &i)| (pr.np + 1 + i, k))
+                .collect();
+            pr.residual
+                .seeding(&seeds, pr.free.len(), pr.free.len() + pr.m)
+        });
         let (f, d) = pr.residual.forward(
             &self.residual,
             &self.x.borrow(),
-            &pr.jacobian,
+            seeding,
             &mut work.jacobian,
         );
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
