@@ -134,40 +134,37 @@ pub enum Op {
     SubMul(u32, u32, u32),
 }
 
-/// Hash key of an operation (constants by their bits).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum Key {
-    Input(u32),
-    Bin(u8, u32, u32),
-    Un(u8, u32),
-    Const(u8, u32, u64),
-    Fun(Fun, u32),
-}
-
 impl Op {
-    fn key(self) -> Key {
+    /// Hash key of an operation: a code for its kind in the top byte, its first operand and
+    /// its other operand or constant (by its bits) below; the operands of `+` and `·` in
+    /// order. One `u128` is hashed in one step.
+    fn key(self) -> u128 {
+        let pack =
+            |code: u128, a: u32, rest: u64| (code << 120) | ((a as u128) << 64) | rest as u128;
+        let sorted = |code, a: u32, b: u32| pack(code, a.min(b), a.max(b) as u64);
+        let three = |code, a, b: u32, c: u32| pack(code, a, ((b as u64) << 32) | c as u64);
         match self {
-            Op::Input(k) => Key::Input(k),
-            Op::Const(c) => Key::Const(8, 0, c.to_bits()),
-            Op::Add(a, b) => Key::Bin(0, a.min(b), a.max(b)),
-            Op::Mul(a, b) => Key::Bin(1, a.min(b), a.max(b)),
-            Op::Sub(a, b) => Key::Bin(2, a, b),
-            Op::Div(a, b) => Key::Bin(3, a, b),
-            Op::Atan2(a, b) => Key::Bin(4, a, b),
-            Op::Powd(a, b) => Key::Bin(5, a, b),
-            Op::Neg(a) => Key::Un(0, a),
-            Op::Powi(a, n) => Key::Const(0, a, n as u64),
-            Op::AddC(a, c) => Key::Const(1, a, c.to_bits()),
-            Op::MulC(a, c) => Key::Const(2, a, c.to_bits()),
-            Op::DivC(a, c) => Key::Const(3, a, c.to_bits()),
-            Op::CSub(c, a) => Key::Const(4, a, c.to_bits()),
-            Op::CDiv(c, a) => Key::Const(5, a, c.to_bits()),
-            Op::Powf(a, c) => Key::Const(6, a, c.to_bits()),
-            Op::Log(a, c) => Key::Const(7, a, c.to_bits()),
-            Op::Fun(f, a) => Key::Fun(f, a),
-            Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
-                Key::Const(9, a, ((b as u64) << 32) | c as u64)
-            }
+            Op::Input(k) => pack(0, 0, k as u64),
+            Op::Const(c) => pack(1, 0, c.to_bits()),
+            Op::Add(a, b) => sorted(2, a, b),
+            Op::Mul(a, b) => sorted(3, a, b),
+            Op::Sub(a, b) => pack(4, a, b as u64),
+            Op::Div(a, b) => pack(5, a, b as u64),
+            Op::Atan2(a, b) => pack(6, a, b as u64),
+            Op::Powd(a, b) => pack(7, a, b as u64),
+            Op::Neg(a) => pack(8, a, 0),
+            Op::Powi(a, n) => pack(9, a, n as u32 as u64),
+            Op::AddC(a, c) => pack(10, a, c.to_bits()),
+            Op::MulC(a, c) => pack(11, a, c.to_bits()),
+            Op::DivC(a, c) => pack(12, a, c.to_bits()),
+            Op::CSub(c, a) => pack(13, a, c.to_bits()),
+            Op::CDiv(c, a) => pack(14, a, c.to_bits()),
+            Op::Powf(a, c) => pack(15, a, c.to_bits()),
+            Op::Log(a, c) => pack(16, a, c.to_bits()),
+            Op::Fun(f, a) => pack(17, a, f as u64),
+            Op::MulAdd(a, b, c) => three(18, a, b, c),
+            Op::MulSub(a, b, c) => three(19, a, b, c),
+            Op::SubMul(a, b, c) => three(20, a, b, c),
         }
     }
 
@@ -329,7 +326,7 @@ struct Recorder {
     ops: Vec<Op>,
     /// Hash-consing: the index of each distinct operation (foldhash: recording is hashing
     /// bound, and SipHash's resistance is not needed for keys made by the program itself).
-    seen: HashMap<Key, u32, foldhash::fast::FixedState>,
+    seen: HashMap<u128, u32, foldhash::fast::FixedState>,
     tainted: bool,
     /// Hash-consing on (off for a replay, see [`Tape::specialise`]).
     cse: bool,
