@@ -11,7 +11,7 @@ use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use modaltol::route::Direct;
 use modaltol::sweep::{Options, Sweep, initial_guess};
-use modaltol::tape::{Forward, Var, record};
+use modaltol::tape::{Forward, Tape, Var, record};
 use nalgebra::DMatrix;
 use num_dual::{Dual64, DualNum};
 use num_traits::Signed;
@@ -82,6 +82,21 @@ fn a_trace_folds_constants_shares_operations_and_differentiates() {
     assert_eq!(d1, d[..2]);
 }
 
+/// The first two outputs of `f(x, y, z)` traced at `(0.7, 1.3, 0)`: replayed with `z = 0` made
+/// a constant, and recorded with `z = 0` from the start (both finished), and the whole trace.
+fn replayed_and_recorded(f: impl Fn(Var, Var, Var) -> Vec<Var>) -> (Tape, Tape, Tape) {
+    let at = [0.7, 1.3, 0.0];
+    let all = record(&at, |v| Some(f(v[0], v[1], v[2]))).unwrap();
+    let direct = record(&at, |v| Some(f(v[0], v[1], Var::from(0.0))[..2].to_vec()))
+        .unwrap()
+        .finish(&[0, 1]);
+    let replayed = all
+        .specialise(&at, &[(2, 0.0)], &[0, 1])
+        .unwrap()
+        .finish(&[0, 1]);
+    (replayed, direct, all)
+}
+
 #[test]
 fn a_trace_specialised_to_constant_inputs_is_the_trace_recorded_with_them() {
     // One trace with z as an input, replayed with z = 0 (and one output dropped), against the
@@ -93,15 +108,7 @@ fn a_trace_specialised_to_constant_inputs_is_the_trace_recorded_with_them() {
             z * z + x,
         ]
     };
-    let at = [0.7, 1.3, 0.0];
-    let all = record(&at, |v| Some(f(v[0], v[1], v[2]))).unwrap();
-    let direct = record(&at, |v| Some(f(v[0], v[1], Var::from(0.0))[..2].to_vec()))
-        .unwrap()
-        .finish(&[0, 1]);
-    let replayed = all
-        .specialise(&at, &[(2, 0.0)], &[0, 1])
-        .unwrap()
-        .finish(&[0, 1]);
+    let (replayed, direct, all) = replayed_and_recorded(f);
     assert_eq!(replayed.len(), direct.len(), "{replayed:?}\n{direct:?}");
     assert!(replayed.len() < all.finish(&[0, 1]).len());
     for x in [[1.1, -0.4, 9.0], [-2.0, 0.3, -1.0]] {
@@ -118,15 +125,7 @@ fn a_replay_that_folds_two_operations_into_one_keeps_both_and_their_values() {
     // appends without hash-consing, so it keeps the duplicate (one operation more than the
     // trace recorded with z = 0), and both outputs stay exact.
     let f = |x: Var, y: Var, z: Var| vec![(x + z * y) * x, x * x + y];
-    let at = [0.7, 1.3, 0.0];
-    let all = record(&at, |v| Some(f(v[0], v[1], v[2]))).unwrap();
-    let direct = record(&at, |v| Some(f(v[0], v[1], Var::from(0.0))))
-        .unwrap()
-        .finish(&[0, 1]);
-    let replayed = all
-        .specialise(&at, &[(2, 0.0)], &[0, 1])
-        .unwrap()
-        .finish(&[0, 1]);
+    let (replayed, direct, _) = replayed_and_recorded(f);
     assert!(
         replayed.len() <= direct.len() + 1,
         "{replayed:?}\n{direct:?}"
