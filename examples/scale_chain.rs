@@ -8,7 +8,9 @@
 //!
 //! `cargo run --release --example scale_chain -- [n …]` (default: 10 20 40 80 160; 320 runs in
 //! about two minutes); `… -- damped n`: one cold modal point of the chain with joint dampers,
-//! most of its modes overdamped.
+//! most of its modes overdamped; `… -- record n` (or a model file instead of n): the cold point
+//! split into recording the program and the point after it (from the initial guess), and the
+//! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process.
 use modaltol::compiled::Compiled;
 use modaltol::modal::ModeClass;
 use modaltol::sensitivity::analytic;
@@ -119,6 +121,44 @@ fn main() {
             t.elapsed().as_secs_f64(),
             pt.modes.len(),
             peak_mb()
+        );
+        return;
+    }
+    if args.first().map(String::as_str) == Some("record") {
+        let text = match args[1].parse() {
+            Ok(n) => chain(n),
+            Err(_) => std::fs::read_to_string(&args[1]).unwrap(),
+        };
+        let rounds = if text.len() < 20_000 { 300 } else { 20 };
+        let time = |f: &mut dyn FnMut()| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        };
+        let [mut record, mut after, mut direct] = [f64::INFINITY; 3];
+        for _ in 0..rounds {
+            // A fresh model each round: `problem` records its program.
+            let model = Compiled::from_str(&text, "model.toml").unwrap();
+            let p = model.nominal();
+            let q0 = initial_guess(&model, &p, 5.0).unwrap();
+            record = record.min(time(&mut || {
+                model.problem(&p, 5.0, &q0, false).unwrap();
+            }));
+            after = after.min(time(&mut || {
+                point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
+            }));
+            let opt = Options {
+                direct: true,
+                ..Options::default()
+            };
+            direct = direct.min(time(&mut || {
+                point(&model, &p, 5.0, &q0, &opt).unwrap();
+            }));
+        }
+        println!(
+            "recording {record:.3} ms, point after it {after:.3} ms (cold point {:.3} ms), \
+             direct point {direct:.3} ms",
+            record + after
         );
         return;
     }
