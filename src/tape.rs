@@ -35,7 +35,7 @@ use std::ops::{
 };
 
 /// Elementary functions of one argument.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Fun {
     Recip,
     Sqrt,
