@@ -181,7 +181,7 @@ pub fn reduce<T: Real>(
         if phi_r.nrows() == 0 {
             a.clone()
         } else {
-            basis.transpose() * a * &basis
+            basis.tr_mul(&(a * &basis))
         }
     };
     Ok(Linearization {
