@@ -11,7 +11,7 @@ use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use modaltol::route::Direct;
 use modaltol::sweep::{Options, Sweep, initial_guess};
-use modaltol::tape::{Forward, Tape, Var, record};
+use modaltol::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::DMatrix;
 use num_dual::{Dual64, DualNum};
 use num_traits::Signed;
@@ -167,16 +167,22 @@ fn assert_recurrence_lanes(at: &[f64], d: &[f64], lanes: &[usize]) {
     }
 }
 
-#[test]
-fn a_forward_pass_over_more_lanes_than_a_block_runs_block_by_block_and_is_exact() {
-    let n = 300;
-    assert!(n > modaltol::tape::BLOCK);
+/// The recurrence of `n` inputs recorded at a fixed point, with a lane per input.
+fn recurrence_program(n: usize) -> (Vec<f64>, Tape, Seeding) {
     let at: Vec<f64> = (0..n).map(|k| 0.3 + 0.4 * (k as f64 * 0.7).sin()).collect();
     let tape = record(&at, |v| Some(recurrence(v)))
         .unwrap()
         .finish(&(0..n).collect::<Vec<_>>());
     let seeds: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
     let seeding = tape.seeding(&seeds, n, n);
+    (at, tape, seeding)
+}
+
+#[test]
+fn a_forward_pass_over_more_lanes_than_a_block_runs_block_by_block_and_is_exact() {
+    let n = 300;
+    assert!(n > modaltol::tape::BLOCK);
+    let (at, tape, seeding) = recurrence_program(n);
     let (v, d) = tape.forward(&[], &at, &seeding, &mut Forward::default());
     assert_eq!(v, recurrence(&at));
     // Columns in the first block, on both sides of the boundary and in the last.
@@ -188,12 +194,7 @@ fn a_forward_pass_whose_operations_share_rows_is_exact() {
     // Big enough that the tangent rows are shared between operations alive at different
     // times (the loop of big models, with its raw reads and writes).
     let n = 1000;
-    let at: Vec<f64> = (0..n).map(|k| 0.3 + 0.4 * (k as f64 * 0.7).sin()).collect();
-    let tape = record(&at, |v| Some(recurrence(v)))
-        .unwrap()
-        .finish(&(0..n).collect::<Vec<_>>());
-    let seeds: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
-    let seeding = tape.seeding(&seeds, n, n);
+    let (at, tape, seeding) = recurrence_program(n);
     assert!(seeding.shares_rows());
     let mut work = Forward::default();
     let (v, d) = tape.forward(&[], &at, &seeding, &mut work);
