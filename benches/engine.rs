@@ -1,5 +1,6 @@
 //! One modal point (equilibrium + linearisation + modes), the recorded program's passes there
-//! and a 501-point sweep of each example.
+//! and a 501-point sweep of each example, interpreted and with the program compiled to native
+//! code (`Program::native_after`; the same results, a long run's speed).
 //! Run with `cargo bench --bench engine`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -37,41 +38,58 @@ fn bench(c: &mut Criterion) {
         .unwrap()
         .equilibrium
         .q;
-        // The recorded program's passes at that point: the residual, Newton's Jacobian, and
-        // the exact evaluation (Jacobian, C and M in one pass).
-        if let Some(inst) = model
-            .program(&p, speed, &q0)
-            .and_then(|program| program.at(&p, speed))
-        {
-            let lambda = point(&model, &p, speed, &q0, &Options::default())
-                .unwrap()
-                .equilibrium
-                .lambda;
-            c.bench_function(&format!("{name}/pass/residual"), |b| {
-                b.iter(|| inst.residual(black_box(&q0), &lambda))
-            });
-            c.bench_function(&format!("{name}/pass/jacobian"), |b| {
-                b.iter(|| inst.residual_and_jacobian(black_box(&q0), &lambda))
-            });
-            c.bench_function(&format!("{name}/pass/linear"), |b| {
-                b.iter(|| inst.linear(black_box(&q0), &lambda))
-            });
+        let program = model.program(&p, speed, &q0);
+        for native in [false, true] {
+            if let Some(program) = program {
+                program.native_after(native.then_some(0));
+            }
+            let name = if native {
+                format!("{name}/native")
+            } else {
+                name.to_string()
+            };
+            passes(c, &model, &name, speed, to, &q0);
         }
-        c.bench_function(&format!("{name}/modal_point"), |b| {
-            b.iter(|| point(&model, &p, black_box(speed), &q0, &Options::default()).unwrap())
-        });
-        let mut g = c.benchmark_group(format!("{name}/sweep_501"));
-        g.sample_size(10);
-        g.bench_function("sweep", |b| {
-            b.iter(|| {
-                let mut s = Sweep::new(&model, p.clone(), Options::default());
-                for i in 0..501 {
-                    let _ = black_box(s.step(to * i as f64 / 500.0));
-                }
-            })
-        });
-        g.finish();
     }
+}
+
+/// The passes, a point and a sweep of one model, under `name`.
+fn passes(c: &mut Criterion, model: &Compiled, name: &str, speed: f64, to: f64, q0: &[f64]) {
+    let p = model.nominal();
+    // The recorded program's passes at that point: the residual, Newton's Jacobian, and
+    // the exact evaluation (Jacobian, C and M in one pass).
+    if let Some(inst) = model
+        .program(&p, speed, q0)
+        .and_then(|program| program.at(&p, speed))
+    {
+        let lambda = point(model, &p, speed, q0, &Options::default())
+            .unwrap()
+            .equilibrium
+            .lambda;
+        c.bench_function(&format!("{name}/pass/residual"), |b| {
+            b.iter(|| inst.residual(black_box(q0), &lambda))
+        });
+        c.bench_function(&format!("{name}/pass/jacobian"), |b| {
+            b.iter(|| inst.residual_and_jacobian(black_box(q0), &lambda))
+        });
+        c.bench_function(&format!("{name}/pass/linear"), |b| {
+            b.iter(|| inst.linear(black_box(q0), &lambda))
+        });
+    }
+    c.bench_function(&format!("{name}/modal_point"), |b| {
+        b.iter(|| point(model, &p, black_box(speed), q0, &Options::default()).unwrap())
+    });
+    let mut g = c.benchmark_group(format!("{name}/sweep_501"));
+    g.sample_size(10);
+    g.bench_function("sweep", |b| {
+        b.iter(|| {
+            let mut s = Sweep::new(model, p.clone(), Options::default());
+            for i in 0..501 {
+                let _ = black_box(s.step(to * i as f64 / 500.0));
+            }
+        })
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench);

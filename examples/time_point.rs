@@ -2,6 +2,7 @@
 //! mean) for the exact evaluation with drive rows, the residual, a cold modal point of a model
 //! at 1.595 rad/s and all its sensitivities there, in µs (the last two in the same rounds'
 //! conditions, so their ratio is not skewed by the machine's phases).
+//! The same with the program's passes compiled to native code (`Program::native_after`).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::compiled::Compiled;
 use modaltol::sensitivity::{TransferAt, analytic};
@@ -32,7 +33,10 @@ fn main() {
     let q0 = initial_guess(&model, &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
-    let inst = model.program(&p, speed, &q).unwrap().at(&p, speed).unwrap();
+    let program = model.program(&p, speed, &q).unwrap();
+    // Interpreted first: the rounds below would otherwise compile the passes midway.
+    program.native_after(None);
+    let inst = program.at(&p, speed).unwrap();
     let linear = best(20000, || {
         black_box(inst.linear(black_box(&q), &l));
     });
@@ -59,5 +63,26 @@ fn main() {
         wrt.len(),
         sens * 1e6,
         sens / cold
+    );
+    program.native_after(Some(0));
+    let t = Instant::now();
+    inst.linear(&q, &l);
+    let compile = t.elapsed().as_secs_f64();
+    let native_linear = best(20000, || {
+        black_box(inst.linear(black_box(&q), &l));
+    });
+    let native_residual = best(20000, || {
+        black_box(inst.residual(black_box(&q), &l));
+    });
+    let native_cold = best(5000, || {
+        black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
+    });
+    println!(
+        "native code (compiled in {:.1} ms): exact evaluation {:.2} µs, residual {:.2} µs, \
+         modal point {:.2} µs",
+        compile * 1e3,
+        native_linear * 1e6,
+        native_residual * 1e6,
+        native_cold * 1e6
     );
 }

@@ -24,6 +24,9 @@
 // Folding compares with exact constants (0, 1, −1) on purpose.
 #![allow(clippy::float_cmp)]
 
+mod native;
+pub use native::NativePass;
+
 use crate::real::Real;
 use num_dual::{Dual, DualNum, DualStruct, Mappable};
 use num_traits::{FromPrimitive, Inv, Num, One, Signed, Zero};
@@ -1387,7 +1390,18 @@ impl Tape {
             };
             val[i] = v;
         }
-        let nd = seeding.differentiated;
+        self.read_outputs(val, tan, seeding, stride)
+    }
+
+    /// The outputs' values and the differentiated outputs' lanes after a forward pass.
+    fn read_outputs<S: Real>(
+        &self,
+        val: &[S],
+        tan: &[S],
+        seeding: &Seeding,
+        stride: usize,
+    ) -> (Vec<S>, Vec<S>) {
+        let (nd, lanes, zero) = (seeding.differentiated, seeding.lanes, S::from(0.0));
         let mut values = Vec::with_capacity(self.outputs.len());
         let mut derivs = Vec::with_capacity(nd * lanes);
         for (k, o) in self.outputs.iter().enumerate() {
