@@ -37,15 +37,21 @@ fn main() {
     // Interpreted first: the rounds below would otherwise compile the passes midway.
     program.native_after(None);
     let inst = program.at(&p, speed).unwrap();
-    let linear = best(20000, || {
-        black_box(inst.linear(black_box(&q), &l));
-    });
-    let residual = best(20000, || {
-        black_box(inst.residual(black_box(&q), &l));
-    });
-    let cold = best(5000, || {
-        black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
-    });
+    // Exact evaluation, residual and a cold modal point (s).
+    let passes = || {
+        [
+            best(20000, || {
+                black_box(inst.linear(black_box(&q), &l));
+            }),
+            best(20000, || {
+                black_box(inst.residual(black_box(&q), &l));
+            }),
+            best(5000, || {
+                black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
+            }),
+        ]
+    };
+    let [linear, residual, cold] = passes();
     let tf = model
         .analysis
         .transfer
@@ -68,15 +74,7 @@ fn main() {
     let t = Instant::now();
     inst.linear(&q, &l);
     let compile = t.elapsed().as_secs_f64();
-    let native_linear = best(20000, || {
-        black_box(inst.linear(black_box(&q), &l));
-    });
-    let native_residual = best(20000, || {
-        black_box(inst.residual(black_box(&q), &l));
-    });
-    let native_cold = best(5000, || {
-        black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
-    });
+    let [native_linear, native_residual, native_cold] = passes();
     println!(
         "native code (compiled in {:.1} ms): exact evaluation {:.2} µs, residual {:.2} µs, \
          modal point {:.2} µs",

@@ -18,16 +18,6 @@ use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-const EXAMPLES: [&str; 7] = [
-    "rotating_pendulum.toml",
-    "governor.toml",
-    "spinning_universal_pendulum.toml",
-    "multi_arm_governor.toml",
-    "multi_arm_governor_13_variables.toml",
-    "spinning_spatial_fourbar.toml",
-    "rotor_on_rubber_mounts.toml",
-];
-
 /// Numbers that broke things before, and their neighbours.
 const EXTREMES: [&str; 22] = [
     "0",
@@ -250,7 +240,10 @@ fn mutated_models_through_the_whole_pipeline() {
         }
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let texts: Vec<String> = EXAMPLES.iter().map(|e| common::example_text(e)).collect();
+    let texts: Vec<String> = common::EXAMPLES
+        .iter()
+        .map(|e| common::example_text(e))
+        .collect();
     let t0 = Instant::now();
     let mut runs = 0;
     while t0.elapsed() < budget {

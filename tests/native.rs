@@ -3,22 +3,11 @@
 
 mod common;
 
-use common::example;
+use common::{EXAMPLES, example};
 use modaltol::program::Linear;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// Every shipped example whose program is recorded.
-const EXAMPLES: [&str; 7] = [
-    "rotating_pendulum.toml",
-    "governor.toml",
-    "spinning_universal_pendulum.toml",
-    "multi_arm_governor.toml",
-    "multi_arm_governor_13_variables.toml",
-    "rotor_on_rubber_mounts.toml",
-    "spinning_spatial_fourbar.toml",
-];
 
 /// The same bits, or both NaN (a NaN's payload may differ).
 fn same(a: &[f64], b: &[f64]) -> bool {

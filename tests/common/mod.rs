@@ -6,6 +6,17 @@ use modaltol::modal::C64;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
 
+/// The shipped example models but the rotating blade (a chain of many segments).
+pub const EXAMPLES: [&str; 7] = [
+    "rotating_pendulum.toml",
+    "governor.toml",
+    "spinning_universal_pendulum.toml",
+    "multi_arm_governor.toml",
+    "multi_arm_governor_13_variables.toml",
+    "spinning_spatial_fourbar.toml",
+    "rotor_on_rubber_mounts.toml",
+];
+
 /// Path of a shipped example model.
 pub fn example_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
