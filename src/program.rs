@@ -257,7 +257,7 @@ impl Program {
     /// Compile the `f64` passes to native code after `evaluations` more exact evaluations and
     /// residuals of the program (`None`: never; `Some(0)`: at the next). The default is
     /// [`NATIVE_AFTER`] evaluations; the results are the same either way, only the time
-    /// differs (timings compare the two with this).
+    /// differs (timings compare the two with this). `None` also turns compiled code off.
     pub fn native_after(&self, evaluations: Option<usize>) {
         let at = evaluations.map_or(usize::MAX, |n| {
             n.saturating_add(self.tier.evaluations.load(Ordering::Relaxed))
@@ -265,21 +265,36 @@ impl Program {
         self.tier.after.store(at, Ordering::Relaxed);
     }
 
-    /// Is the exact evaluation native code now (see [`Program::native_after`])?
+    /// Does the exact evaluation run as native code now (see [`Program::native_after`])?
     pub fn is_native(&self) -> bool {
-        self.tier.native.get().is_some_and(|n| n.full.is_some())
+        self.tier.after.load(Ordering::Relaxed) != usize::MAX
+            && self.tier.native.get().is_some_and(|n| n.full.is_some())
     }
 
-    /// The native code, counting one evaluation; compiled here once they reach the threshold.
+    /// The native code, counting one evaluation; compiled here once they reach the threshold
+    /// (`None` while interpreted, and always where [`Program::native_after`] said never).
     fn native(&self) -> Option<&Native> {
+        let after = self.tier.after.load(Ordering::Relaxed);
+        if after == usize::MAX {
+            return None;
+        }
         if let Some(native) = self.tier.native.get() {
             return Some(native);
         }
         let count = self.tier.evaluations.fetch_add(1, Ordering::Relaxed);
-        (count >= self.tier.after.load(Ordering::Relaxed)).then(|| {
-            self.tier.native.get_or_init(|| Native {
-                full: self.full.compile_forward(&self.linear),
-                residual: self.residual.compile_eval(),
+        (count >= after).then(|| {
+            self.tier.native.get_or_init(|| {
+                // Cranelift reports what it cannot compile as errors (then `None`); should it
+                // panic all the same, the run goes on interpreted.
+                let compile = |f: &dyn Fn() -> Option<NativePass>| {
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+                        .ok()
+                        .flatten()
+                };
+                Native {
+                    full: compile(&|| self.full.compile_forward(&self.linear)),
+                    residual: compile(&|| self.residual.compile_eval()),
+                }
             })
         })
     }

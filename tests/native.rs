@@ -72,6 +72,8 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
             );
         }
         assert!(program.is_native(), "{name}: its program is compiled");
+        program.native_after(None);
+        assert!(!program.is_native(), "{name}: compiled code turned off");
         // Some states are finite, some not: both kinds were compared.
         assert!(
             interpreted
