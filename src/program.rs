@@ -63,7 +63,7 @@ pub struct Program {
 }
 
 /// Evaluations of a program after which its `f64` passes are compiled to native code
-/// ([`crate::tape::NativePass`]): compiling takes 10–150 ms and saves 3–20 µs an evaluation
+/// ([`crate::tape::NativePass`]): compiling takes 10–400 ms and saves 1–14 µs an evaluation
 /// on the shipped examples, so a single point or a sweep stays interpreted and a Monte Carlo
 /// run or a quadrature switches early in its course. The compiled passes give the same
 /// results to the bit.
@@ -283,18 +283,9 @@ impl Program {
         }
         let count = self.tier.evaluations.fetch_add(1, Ordering::Relaxed);
         (count >= after).then(|| {
-            self.tier.native.get_or_init(|| {
-                // Cranelift reports what it cannot compile as errors (then `None`); should it
-                // panic all the same, the run goes on interpreted.
-                let compile = |f: &dyn Fn() -> Option<NativePass>| {
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-                        .ok()
-                        .flatten()
-                };
-                Native {
-                    full: compile(&|| self.full.compile_forward(&self.linear)),
-                    residual: compile(&|| self.residual.compile_eval()),
-                }
+            self.tier.native.get_or_init(|| Native {
+                full: self.full.compile_forward(&self.linear),
+                residual: self.residual.compile_eval(),
             })
         })
     }

@@ -6,7 +6,7 @@
 //! arithmetic and stores at offsets fixed when the program and its seeding were made. The
 //! governor's exact evaluation takes 2.0 instead of 4.3 µs and its residual 0.3 instead of
 //! 1.3 µs, the 12-arm governor's 25 and 2.4 instead of 39 and 8.5 µs; compiling takes
-//! 10–300 ms, so a [`Program`](crate::program::Program) compiles its
+//! 10–400 ms, so a [`Program`](crate::program::Program) compiles its
 //! passes only after many evaluations (a Monte Carlo run, a quadrature, a long sweep).
 //!
 //! The compiled code does exactly what the interpreter does, operation by operation and lane by
@@ -127,7 +127,16 @@ impl Tape {
         (self.ops.len() <= MOST_LANE_WORK).then(|| self.compile(None))?
     }
 
+    /// The pass compiled, or `None` where Cranelift reports an error; should it panic all
+    /// the same, `None` too (the run goes on interpreted).
     fn compile(&self, seeding: Option<&Seeding>) -> Option<NativePass> {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.emit(seeding)))
+            .ok()
+            .flatten()
+    }
+
+    /// [`Tape::compile`]'s work.
+    fn emit(&self, seeding: Option<&Seeding>) -> Option<NativePass> {
         let stride = seeding.map_or(0, |s| s.lanes + CHUNK - 1);
         // Every offset is an `i32` of bytes.
         let bytes = (self.ops.len() + 1) * (stride + 1) * 8;
