@@ -136,7 +136,7 @@ impl Compiled {
         let recorded = (!direct)
             .then(|| self.program(p, speed, q0).and_then(|pr| pr.at(p, speed)))
             .flatten();
-        Ok(match recorded {
+        let mut problem = match recorded {
             Some(instance) => Problem::new(
                 Box::new(instance),
                 steady_speeds(&self.model, p, speed)?,
@@ -153,6 +153,8 @@ impl Compiled {
                     names,
                 )
             }
-        })
+        };
+        problem.symmetric = self.model.steady_by_symmetry(p, speed);
+        Ok(problem)
     }
 }

@@ -264,6 +264,9 @@ pub struct Problem<'a> {
     pub qd: Vec<f64>,
     /// Number of constraint equations.
     m: usize,
+    /// Driven coordinates on which `F` cannot depend, by the model's symmetry
+    /// ([`crate::model::Model::steady_by_symmetry`]): the steady-state check skips them.
+    pub symmetric: Vec<usize>,
 }
 
 impl<'a> Problem<'a> {
@@ -282,6 +285,7 @@ impl<'a> Problem<'a> {
             names,
             qd,
             route,
+            symmetric: Vec::new(),
         }
     }
 
@@ -508,7 +512,8 @@ impl<'a> Problem<'a> {
     /// equilibrium drift and there is no steady state. Checked by `F` itself at three other
     /// values of each driven coordinate. With `F = 0` at the solution, that is four conditions:
     /// a dependence through one revolution's sine and cosine (gravity off a spin axis) cannot
-    /// vanish at all four, wherever it is stationary.
+    /// vanish at all four, wherever it is stationary. Coordinates on which `F` cannot depend by
+    /// the model's symmetry (`symmetric`) are not evaluated.
     fn check_steady(
         &self,
         q: &[f64],
@@ -519,6 +524,9 @@ impl<'a> Problem<'a> {
         let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
         const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
         for (d, &c) in self.driven.iter().enumerate() {
+            if self.symmetric.contains(&c) {
+                continue;
+            }
             let change = self
                 .route
                 .residual_at_drive_offsets(q, lambda, d, c, OFFSETS);

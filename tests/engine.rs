@@ -11,7 +11,8 @@ use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, constraints_at, evaluate};
 use modaltol::modal::ModeClass;
 use modaltol::model::Model;
-use modaltol::sweep::{Options, Sweep, point};
+use modaltol::route::{Direct, Equations};
+use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use nalgebra::DMatrix;
 use num_dual::{Dual2, Dual64};
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -452,6 +453,84 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
     // A sweep reports it per speed and goes on.
     let mut sweep = Sweep::new(&model, p, Options::default());
     assert!(sweep.step(1.0).is_err() && sweep.step(2.0).is_err());
+}
+
+/// Where the model's structure proves that `F` cannot depend on a driven coordinate (a spin on
+/// the ground turning its part of the mechanism alone, gravity along its axis), the
+/// steady-state check is skipped: `F` evaluated directly is indeed the same at any value of
+/// that coordinate, at states away from equilibrium too.
+#[test]
+fn a_spin_proved_symmetric_leaves_the_equations_unchanged() {
+    let mut proved = Vec::new();
+    for name in common::EXAMPLES {
+        let model = example(name);
+        let p = model.nominal();
+        let speed = 1.3;
+        let direct = Direct::new(System::new(&model, &p, speed).unwrap(), model.free());
+        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let lambda: Vec<f64> = (0..model.n_constraints())
+            .map(|k| 1.0 - 0.3 * k as f64)
+            .collect();
+        for c in model.steady_by_symmetry(&p, speed) {
+            proved.push(name);
+            for state in 0..4 {
+                let q: Vec<f64> = (q0.iter().enumerate())
+                    .map(|(i, v)| v + 0.1 * ((3 * i + 7 * state) % 5) as f64 - 0.2)
+                    .collect();
+                let f0 = direct.residual(&q, &lambda);
+                let scale = f0.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+                for turn in [0.3, 1.0, 2.5, -2.0, 100.0] {
+                    let mut turned = q.clone();
+                    turned[c] += turn;
+                    let f = direct.residual(&turned, &lambda);
+                    let change = f
+                        .iter()
+                        .zip(&f0)
+                        .fold(0.0f64, |s, (a, b)| s.max((a - b).abs()));
+                    assert!(change <= 1e-12 * scale, "{name}: {change} of {scale}");
+                }
+            }
+        }
+    }
+    // Not vacuous: the governors and the pendulums are proved; the rotor, whose spin rides on
+    // its rubber mounts, is not.
+    for name in [
+        "governor.toml",
+        "multi_arm_governor.toml",
+        "rotating_pendulum.toml",
+        "spinning_universal_pendulum.toml",
+    ] {
+        assert!(proved.contains(&name), "{name} not proved symmetric");
+    }
+    assert!(!proved.contains(&"rotor_on_rubber_mounts.toml"));
+}
+
+/// A spring from the ground to the spinning rod breaks the symmetry: it is not proved, and
+/// the check by evaluation finds the dependence. A spring between two bodies that spin
+/// together keeps it.
+#[test]
+fn a_spring_to_the_ground_is_checked_by_evaluation() {
+    let spring = |body1: &str| {
+        format!(
+            "{}\n[[forces]]\nname = \"tie\"\ntype = \"spring_damper\"\nbody1 = \"{body1}\"\n\
+             point1 = [0.4, -1.0, 0]\nbody2 = \"rod\"\npoint2 = [0, -1.0, 0]\nstiffness = 50\n",
+            example_text("rotating_pendulum.toml")
+        )
+    };
+    let tied = Compiled::from_str(&spring("ground"), "tied.toml").unwrap();
+    let p = tied.nominal();
+    assert!(tied.steady_by_symmetry(&p, 2.0).is_empty());
+    let direct = Options {
+        direct: true,
+        ..Options::default()
+    };
+    for opt in [Options::default(), direct] {
+        let err = point(&tied, &p, 2.0, &[0.3, 0.5], &opt).expect_err("no steady state");
+        assert!(err.to_string().contains("no steady state"), "{err}");
+    }
+    let braced = Compiled::from_str(&spring("shaft"), "braced.toml").unwrap();
+    assert_eq!(braced.steady_by_symmetry(&p, 2.0), vec![0]);
+    point(&braced, &p, 2.0, &[0.3, 0.5], &Options::default()).unwrap();
 }
 
 #[test]

@@ -8,6 +8,7 @@
 pub mod admissible;
 pub mod expr;
 pub mod schema;
+mod symmetry;
 mod validate;
 
 pub use admissible::Defect;
