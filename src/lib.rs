@@ -13,6 +13,7 @@ pub mod analyze;
 pub mod cancel;
 pub mod compiled;
 pub mod cuts;
+pub mod dual4;
 pub mod equilibrium;
 pub mod files;
 pub mod forces;

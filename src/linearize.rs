@@ -54,6 +54,27 @@ pub struct Linearization<T: Real> {
 }
 
 impl<T: Real> Linearization<T> {
+    /// The same linearisation with every number mapped by `f` (one direction of a
+    /// [`crate::dual4::Dual4`] linearisation, say).
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Linearization<U> {
+        Linearization {
+            free: self.free.clone(),
+            independent: self.independent.clone(),
+            basis: self.basis.map(f),
+            m_full: self.m_full.map(f),
+            c_full: self.c_full.map(f),
+            k_full: self.k_full.map(f),
+            m: self.m.map(f),
+            c: self.c.map(f),
+            k: self.k.map(f),
+            ports: self
+                .ports
+                .iter()
+                .map(|b| b.iter().map(|&v| f(v)).collect())
+                .collect(),
+        }
+    }
+
     /// Attaches the ports' vectors `b` over the free coordinates, reduced to `Rᵀ b`.
     pub fn with_ports(mut self, full: Vec<Vec<T>>) -> Self {
         self.ports = full

@@ -34,8 +34,8 @@ use crate::route::Equations;
 use crate::tape::{Forward, NativePass, Seeding, Tape, Var, record};
 use nalgebra::{DMatrix, DVector};
 use std::cell::RefCell;
-use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock, RwLock};
 
 /// The recorded equations of one model (see the module documentation).
 #[derive(Debug, Clone)]
@@ -55,9 +55,10 @@ pub struct Program {
     linear: Seeding,
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
     driven: Vec<Seeding>,
-    /// `residual` with only the speed static, and its lanes along each parameter (the
-    /// sensitivities' `∂F/∂p`), made when first needed.
-    parametric: OnceLock<(Tape, Seeding)>,
+    /// For each set of parameters the sensitivities were asked along (a few per run):
+    /// `residual` with the other parameters and the speed static, and its lanes along those
+    /// (`∂F/∂p`), made when first needed.
+    parametric: Parametric,
     /// When the `f64` passes run as native code.
     tier: Tier,
 }
@@ -68,6 +69,21 @@ pub struct Program {
 /// run or a quadrature switches early in its course. The compiled passes give the same
 /// results to the bit.
 pub const NATIVE_AFTER: usize = 20_000;
+
+/// The program of `∂F/∂p` along a set of parameters, and its lanes.
+type ParameterPass = Arc<(Tape, Seeding)>;
+
+/// The programs of `∂F/∂p` along sets of parameters, with those sets.
+#[derive(Debug, Default)]
+struct Parametric(RwLock<Vec<(Vec<usize>, ParameterPass)>>);
+
+impl Clone for Parametric {
+    fn clone(&self) -> Self {
+        Parametric(RwLock::new(
+            self.0.read().unwrap_or_else(|e| e.into_inner()).clone(),
+        ))
+    }
+}
 
 /// The native code of a [`Program`] and when it is made.
 #[derive(Debug)]
@@ -202,7 +218,7 @@ impl Program {
             .collect();
         let program = Program {
             driven,
-            parametric: OnceLock::new(),
+            parametric: Parametric::default(),
             np,
             n,
             free,
@@ -590,27 +606,39 @@ impl Program {
         self.residual.eval(&fixed, &x, &mut Vec::new())
     }
 
-    /// `∂F/∂p` at parameters `p`, `speed`, `q` and `λ`: one forward pass along every parameter
-    /// (rows of `F` × parameters, row-major), where one dual-number residual per parameter
-    /// would give one column each.
+    /// `∂F/∂p_b` for the parameters `b` of `wrt` at parameters `p`, `speed`, `q` and `λ`: one
+    /// forward pass along them (rows of `F` × `wrt`, row-major), where one dual-number residual
+    /// per parameter would give one column each. What depends on the other parameters only is
+    /// evaluated without lanes, once per call.
     pub fn parameter_derivatives(
         &self,
         p: &[f64],
         speed: f64,
         q: &[f64],
         lambda: &[f64],
+        wrt: &[usize],
     ) -> Vec<f64> {
         let x = inputs(p, speed, q, lambda, self.free.len());
-        let (parametric, parameters) = self.parametric.get_or_init(|| {
-            // The parameters as inputs that move: one lane each.
-            let (np, rows) = (self.np, self.free.len() + self.m);
-            let tape = self.residual.split(&[np]);
-            let seeds: Vec<(usize, usize)> = (0..np).map(|k| (k, k)).collect();
-            let seeding = tape.seeding(&seeds, np, rows);
-            (tape, seeding)
+        let known = |sets: &[(Vec<usize>, ParameterPass)]| {
+            sets.iter().find(|(w, _)| w == wrt).map(|(_, t)| t.clone())
+        };
+        let read = known(&self.parametric.0.read().unwrap_or_else(|e| e.into_inner()));
+        let pass = read.unwrap_or_else(|| {
+            // The parameters of `wrt` as inputs that move: one lane each.
+            let fixed: Vec<usize> = (0..=self.np).filter(|k| !wrt.contains(k)).collect();
+            let tape = self.residual.split(&fixed);
+            let seeds: Vec<(usize, usize)> = wrt.iter().enumerate().map(|(l, &k)| (k, l)).collect();
+            let seeding = tape.seeding(&seeds, wrt.len(), self.free.len() + self.m);
+            let pass = Arc::new((tape, seeding));
+            let mut sets = self.parametric.0.write().unwrap_or_else(|e| e.into_inner());
+            if known(&sets).is_none() {
+                sets.push((wrt.to_vec(), pass.clone()));
+            }
+            pass
         });
-        let fixed = parametric.eval_static(&x);
-        with_buffer(|work| parametric.forward(&fixed, &x, parameters, work).1)
+        let (tape, seeding) = &*pass;
+        let fixed = tape.eval_static(&x);
+        with_buffer(|work| tape.forward(&fixed, &x, seeding, work).1)
     }
 
     /// `F`, its Jacobian, `C` and `M` over any [`Real`] (without the constraints' curvature).

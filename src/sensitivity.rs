@@ -27,6 +27,7 @@
 //! dynamic systems*, AIAA J. 37 (1999).
 
 use crate::compiled::Compiled;
+use crate::dual4::{Directional, Dual4};
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
@@ -322,7 +323,9 @@ pub fn frequency_response(
 }
 
 /// `M̂, Ĉ, K̂` (and `R`) over dual numbers for each design variable in `wrt`: the equilibrium
-/// shift by the implicit function theorem, then one dual-number linearisation.
+/// shift by the implicit function theorem, then the linearisation over dual numbers along
+/// `(b, dq*/db, dλ/db)`. Up to four variables share one evaluation over [`Dual4`], whose parts
+/// are bit for bit one `Dual64` evaluation each (a variable alone takes a `Dual64`).
 pub fn dual_linearizations(
     model: &Compiled,
     p: &[f64],
@@ -331,55 +334,112 @@ pub fn dual_linearizations(
 ) -> Result<Vec<DualLinearization>, PointError> {
     let speed = pt.speed;
     let eq = &pt.equilibrium;
-    let jac = eq.jacobian.clone();
-    let lu = jac.lu();
-    let free = &pt.linear.free;
+    let lu = eq.jacobian.clone().lu();
     // ∂F/∂p for all parameters in one pass where the model has a recorded program.
-    let np = p.len();
     let dp = model
         .program(p, speed, &eq.q)
-        .map(|program| program.parameter_derivatives(p, speed, &eq.q, &eq.lambda));
+        .map(|program| program.parameter_derivatives(p, speed, &eq.q, &eq.lambda, wrt));
+    let at = Shift {
+        model,
+        p,
+        pt,
+        lu: &lu,
+        dp: dp.as_deref(),
+        wrt,
+    };
     let mut out = Vec::with_capacity(wrt.len());
-    for &b in wrt {
-        let pd: Vec<Dual64> = p
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| Dual64::new(v, if i == b { 1.0 } else { 0.0 }))
-            .collect();
-        let equations = model.equations(&pd, Dual64::from_re(speed), &eq.q)?;
-        let q0: Vec<Dual64> = eq.q.iter().map(|&v| Dual64::from_re(v)).collect();
-        let rhs = match &dp {
-            Some(dp) => {
-                DVector::from_iterator(dp.len() / np, (0..dp.len() / np).map(|r| -dp[r * np + b]))
-            }
-            None => {
-                let l0: Vec<Dual64> = eq.lambda.iter().map(|&v| Dual64::from_re(v)).collect();
-                let fb = equations.residual(&q0, &l0);
-                DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.eps))
-            }
-        };
-        let dx = lu.solve(&rhs).ok_or(PointError::Equilibrium(
-            crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
-        ))?;
-        let mut q = q0.clone();
-        let mut dq = vec![0.0; eq.q.len()];
-        for (k, &i) in free.iter().enumerate() {
-            q[i] = Dual64::new(eq.q[i], dx[k]);
-            dq[i] = dx[k];
+    for group in wrt.chunks(4) {
+        match group.len() {
+            1 => at.linearizations::<Dual64>(group, &mut out)?,
+            _ => at.linearizations::<Dual4<f64>>(group, &mut out)?,
         }
-        let lambda: Vec<Dual64> = (0..eq.lambda.len())
-            .map(|k| Dual64::new(eq.lambda[k], dx[free.len() + k]))
-            .collect();
-        let linear = equations
-            .linearize(&q, &lambda, &pt.linear.independent, None)?
-            .with_ports(ports_at(model, &pd, Dual64::from_re(speed), &q, free)?);
-        out.push(DualLinearization {
-            param: b,
-            linear,
-            d_equilibrium: dq,
-        });
     }
     Ok(out)
+}
+
+/// What [`dual_linearizations`] shares between its groups of variables.
+struct Shift<'a> {
+    model: &'a Compiled,
+    p: &'a [f64],
+    pt: &'a Point,
+    /// Newton's Jacobian at the solution, factorised.
+    lu: &'a nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    /// `∂F/∂p` (rows of `F` × the variables), where the model has a recorded program.
+    dp: Option<&'a [f64]>,
+    /// All the variables (the columns of `dp`).
+    wrt: &'a [usize],
+}
+
+impl Shift<'_> {
+    /// The dual linearisations of the variables `group` (at most `D::DIRECTIONS`), direction
+    /// `k` along variable `group[k]`, appended to `out`.
+    fn linearizations<D: Directional>(
+        &self,
+        group: &[usize],
+        out: &mut Vec<DualLinearization>,
+    ) -> Result<(), PointError> {
+        let (pt, eq) = (self.pt, &self.pt.equilibrium);
+        let (speed, free, nw) = (pt.speed, &pt.linear.free, self.wrt.len());
+        let seeded = |values: &[f64], slope: &dyn Fn(usize, usize) -> f64| -> Vec<D> {
+            (0..values.len())
+                .map(|i| {
+                    D::seeded(
+                        values[i],
+                        |k| if k < group.len() { slope(k, i) } else { 0.0 },
+                    )
+                })
+                .collect()
+        };
+        let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
+        let equations = self.model.equations(&pd, D::from(speed), &eq.q)?;
+        let rhs: Vec<DVector<f64>> = match self.dp {
+            Some(dp) => {
+                let rows = dp.len() / nw;
+                (group.iter())
+                    .map(|&b| {
+                        let c = self
+                            .wrt
+                            .iter()
+                            .position(|&w| w == b)
+                            .expect("b is a variable");
+                        DVector::from_iterator(rows, (0..rows).map(|r| -dp[r * nw + c]))
+                    })
+                    .collect()
+            }
+            None => {
+                let q0: Vec<D> = eq.q.iter().map(|&v| D::from(v)).collect();
+                let l0: Vec<D> = eq.lambda.iter().map(|&v| D::from(v)).collect();
+                let fb = equations.residual(&q0, &l0);
+                (0..group.len())
+                    .map(|k| DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.part(k))))
+                    .collect()
+            }
+        };
+        let dx = (rhs.iter().map(|r| self.lu.solve(r)))
+            .collect::<Option<Vec<_>>>()
+            .ok_or(PointError::Equilibrium(
+                crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
+            ))?;
+        let mut dq = vec![vec![0.0; eq.q.len()]; group.len()];
+        for (k, &i) in free.iter().enumerate() {
+            for (d, x) in dq.iter_mut().zip(&dx) {
+                d[i] = x[k];
+            }
+        }
+        let q = seeded(&eq.q, &|k, i| dq[k][i]);
+        let lambda = seeded(&eq.lambda, &|k, i| dx[k][free.len() + i]);
+        let linear = equations
+            .linearize(&q, &lambda, &pt.linear.independent, None)?
+            .with_ports(ports_at(self.model, &pd, D::from(speed), &q, free)?);
+        for (k, (&b, d_equilibrium)) in group.iter().zip(dq).enumerate() {
+            out.push(DualLinearization {
+                param: b,
+                linear: linear.map(|v| Dual64::new(v.re(), v.part(k))),
+                d_equilibrium,
+            });
+        }
+        Ok(())
+    }
 }
 
 /// d|H|/db and d(arg H)/db from `H` over dual numbers; `None` where the derivative does not

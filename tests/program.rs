@@ -261,9 +261,15 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             let sys = System::new(&model, &p, speed).unwrap();
             let direct = Direct::new(sys.clone(), free.clone());
             let inst = program.at(&p, speed).unwrap();
-            // ∂F/∂p in one pass against one dual-number residual per parameter.
+            // ∂F/∂p in one pass against one dual-number residual per parameter: along all the
+            // parameters, and along some of them in another order.
             let np = p.len();
-            let dp = program.parameter_derivatives(&p, speed, &q, &lambda);
+            let all: Vec<usize> = (0..np).collect();
+            let some: Vec<usize> = (0..np).rev().step_by(2).collect();
+            let (dp, dsome) = (
+                program.parameter_derivatives(&p, speed, &q, &lambda, &all),
+                program.parameter_derivatives(&p, speed, &q, &lambda, &some),
+            );
             for b in 0..np {
                 let pd: Vec<Dual64> = p
                     .iter()
@@ -281,6 +287,10 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
                         "{name}: ∂F_{r}/∂p_{b} {a} vs {}",
                         v.eps
                     );
+                    if let Some(c) = some.iter().position(|&k| k == b) {
+                        let a = dsome[r * some.len() + c];
+                        assert!(close(a, v.eps, fs), "{name}: ∂F_{r}/∂p_{b} {a} (some)");
+                    }
                 }
             }
             let qd = sys.steady_speeds();

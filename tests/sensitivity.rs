@@ -272,3 +272,35 @@ fn gyroscopic_example_needs_the_left_eigenvector() {
         "the symmetric formula φᵀ(…)φ should be visibly wrong here, off by only {worst_symmetric}"
     );
 }
+
+/// Up to four variables share one pass over `Dual4`: each variable's derivatives are bit for
+/// bit those of a pass of its own over `Dual64` (all the parameters of three examples: groups
+/// of four and a remainder; the 13-variable governor's fourteen parameters make 4, 4, 4, 2).
+#[test]
+fn variables_sharing_a_pass_get_the_bits_of_passes_of_their_own() {
+    use modaltol::sensitivity::dual_linearizations;
+    for file in [
+        "governor.toml",
+        "spinning_universal_pendulum.toml",
+        "multi_arm_governor_13_variables.toml",
+    ] {
+        let model = example(file);
+        let p = model.nominal();
+        let pt = common::at(&model, 1.3, &Options::default());
+        let wrt: Vec<usize> = (0..p.len()).rev().collect();
+        let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();
+        assert_eq!(together.len(), wrt.len());
+        for (shared, &b) in together.iter().zip(&wrt) {
+            let alone = dual_linearizations(&model, &p, &pt, &[b])
+                .unwrap()
+                .remove(0);
+            assert_eq!(shared.param, b);
+            // The `Debug` text tells every bit apart, `-0.0` from `0.0` included.
+            assert_eq!(
+                format!("{:?} {:?}", shared.linear, shared.d_equilibrium),
+                format!("{:?} {:?}", alone.linear, alone.d_equilibrium),
+                "{file}: parameter {b}"
+            );
+        }
+    }
+}
