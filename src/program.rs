@@ -53,8 +53,9 @@ pub struct Program {
     jacobian: OnceLock<Seeding>,
     /// Lanes `(q_k, q̇_k, q̈_k)` for each free coordinate `k` on `full`.
     linear: Seeding,
-    /// For each driven coordinate, what depends on it in `residual` (the steady-state check).
-    driven: Vec<Seeding>,
+    /// For each driven coordinate, what depends on it in `residual` (the steady-state check),
+    /// made when first needed (a drive proved steady by symmetry never needs it).
+    driven: OnceLock<Vec<Seeding>>,
     /// For each set of parameters the sensitivities were asked along (a few per run):
     /// `residual` with the other parameters and the speed static, and its lanes along those
     /// (`∂F/∂p`), made when first needed.
@@ -211,13 +212,8 @@ impl Program {
             .collect();
         // Derivatives of F and Φ_R; the drive rows are values only.
         let linear = full.seeding(&seeds, 3 * nf, differentiated);
-        let driven = model
-            .driven()
-            .iter()
-            .map(|&i| residual.seeding(&[(np + 1 + i, 0)], 1, nf + m))
-            .collect();
         let program = Program {
-            driven,
+            driven: OnceLock::new(),
             parametric: Parametric::default(),
             np,
             n,
@@ -543,7 +539,16 @@ impl Instance<'_> {
     ) -> [f64; 3] {
         self.set(q, lambda);
         let pr = self.program;
-        let seeding = &pr.driven[d];
+        let seeding = &pr.driven.get_or_init(|| {
+            let (np, n) = (pr.np, pr.n);
+            (0..n)
+                .filter(|i| !pr.free.contains(i))
+                .map(|i| {
+                    pr.residual
+                        .seeding(&[(np + 1 + i, 0)], 1, pr.free.len() + pr.m)
+                })
+                .collect()
+        })[d];
         let c = seeding.seeds()[0].0 - pr.np - 1;
         let values = offsets.map(|o| q[c] + o);
         let mut work = self.work.borrow_mut();
