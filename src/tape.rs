@@ -1430,6 +1430,13 @@ impl Tape {
 /// vectorises; the lane ranges are mostly 1 to 4 wide).
 const CHUNK: usize = 4;
 
+/// Scalars too wide to move a chunk of lanes as one array ([`crate::dual4::Dual4`], 40 bytes:
+/// three operands' chunks are 480 bytes, which the compiler copies through memory, eight times
+/// the time of the pass lane by lane). `f64` and `Dual64` keep their chunks.
+const fn wide<S>() -> bool {
+    std::mem::size_of::<S>() > 16
+}
+
 /// The lanes one operation of [`Tape::forward`] writes: `width` lanes from `lo` of tangent row
 /// `at`, in rows of `stride` (the lanes plus room for the last chunk); `slot` gives each
 /// operation's row.
@@ -1459,6 +1466,16 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
                 return;
             }
             let mut k = 0;
+            if wide::<S>() {
+                // Lane by lane (see [`wide`]).
+                while k < self.width {
+                    for (j, o) in out[k..k + CHUNK].iter_mut().enumerate() {
+                        *o = f(base.map(|b| head[b + k + j]));
+                    }
+                    k += CHUNK;
+                }
+                return;
+            }
             while k < self.width {
                 let chunk: [[S; CHUNK]; K] = base.map(|b| {
                     head[b + k..b + k + CHUNK]
@@ -1487,6 +1504,20 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
         );
         let p = tan.as_mut_ptr();
         let mut k = 0;
+        if wide::<S>() {
+            // Lane by lane (see [`wide`]): lane `j` of the output is written after lane `j` of
+            // every operand is read, so an operand sharing the output's row is still read
+            // before it changes.
+            while k < self.width {
+                for j in k..k + CHUNK {
+                    // SAFETY: as for the chunks below, one element at a time.
+                    let value = f(base.map(|b| unsafe { std::ptr::read(p.add(b + j)) }));
+                    unsafe { std::ptr::write(p.add(out + j), value) };
+                }
+                k += CHUNK;
+            }
+            return;
+        }
         while k < self.width {
             // SAFETY: every chunk read and written lies in `tan` by the assertion above and is
             // aligned as `S` is (an array has its element's alignment); no reference into

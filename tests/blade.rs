@@ -227,3 +227,27 @@ fn an_overdamped_long_chain_pairs_each_modes_two_real_roots() {
         );
     }
 }
+
+/// The three parameters of a 40-segment blade share one `Dual4` pass of its program, whose
+/// tangent rows are shared between operations alive at different times (the loop of big
+/// programs, lane by lane for so wide a scalar): each parameter's derivatives are bit for bit
+/// those of a `Dual64` pass of its own.
+#[test]
+fn a_big_program_shares_its_sensitivity_pass_to_the_bit() {
+    use modaltol::sensitivity::dual_linearizations;
+    let model = Compiled::from_str(&blade(40), "blade40.toml").unwrap();
+    let p = model.nominal();
+    let pt = solve(&model, 5.0, false);
+    let wrt = [0, 1, 2];
+    let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();
+    for (shared, &b) in together.iter().zip(&wrt) {
+        let alone = dual_linearizations(&model, &p, &pt, &[b])
+            .unwrap()
+            .remove(0);
+        assert!(
+            format!("{:?} {:?}", shared.linear, shared.d_equilibrium)
+                == format!("{:?} {:?}", alone.linear, alone.d_equilibrium),
+            "parameter {b}"
+        );
+    }
+}
