@@ -10,9 +10,12 @@
 //! about two minutes); `… -- damped n`: one cold modal point of the chain with joint dampers,
 //! most of its modes overdamped; `… -- record n` (or a model file instead of n): the cold point
 //! split into recording the program and the point after it (from the initial guess), and the
-//! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process.
+//! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process;
+//! `… -- hessians n`: the gradients and Hessians along the chain's parameters at one point.
 use modaltol::compiled::Compiled;
+use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
+use modaltol::output::outputs;
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::time::Instant;
@@ -159,6 +162,30 @@ fn main() {
             "recording {record:.3} ms, point after it {after:.3} ms (cold point {:.3} ms), \
              direct point {direct:.3} ms",
             record + after
+        );
+        return;
+    }
+    if args.first().map(String::as_str) == Some("hessians") {
+        // `hessians n`: the gradients and Hessians of every output along the chain's
+        // parameters at one point (the second-order method's passes), best of 3.
+        let n = args[1].parse().unwrap();
+        let model = Compiled::from_str(&chain(n), "chain.toml").unwrap();
+        let p = model.nominal();
+        let q0 = initial_guess(&model, &p, 5.0).unwrap();
+        let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
+        let wrt: Vec<usize> = (0..p.len()).collect();
+        let outs = outputs(pt.modes.len(), false);
+        let best = (0..3)
+            .map(|_| {
+                let t = Instant::now();
+                hessians(&model, &p, &pt, &wrt, &outs, None).unwrap();
+                t.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min);
+        println!(
+            "{n} segments: gradients and Hessians along {} parameters {:.2} ms",
+            wrt.len(),
+            best * 1e3
         );
         return;
     }

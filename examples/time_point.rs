@@ -1,10 +1,13 @@
 //! Timing for A/B comparisons on a noisy machine: the best of 15 rounds (not criterion's
 //! mean) for the exact evaluation with drive rows, the residual, a cold modal point of a model
 //! at 1.595 rad/s and all its sensitivities there, in µs (the last two in the same rounds'
-//! conditions, so their ratio is not skewed by the machine's phases).
+//! conditions, so their ratio is not skewed by the machine's phases), then the gradients and
+//! Hessians of every output along the toleranced parameters (best of 15 rounds of 100).
 //! The same with the program's passes compiled to native code (`Program::native_after`).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::compiled::Compiled;
+use modaltol::hessian::hessians;
+use modaltol::output::outputs;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -69,6 +72,16 @@ fn main() {
         wrt.len(),
         sens * 1e6,
         sens / cold
+    );
+    // Gradients and Hessians of every output (the second-order method's passes).
+    let outs = outputs(pt.modes.len(), tf.is_some());
+    let second = best(100, || {
+        black_box(hessians(&model, &p, &pt, &wrt, &outs, tf).unwrap());
+    });
+    println!(
+        "gradients and Hessians ({} variables) {:.2} µs",
+        wrt.len(),
+        second * 1e6
     );
     program.native_after(Some(0));
     let t = Instant::now();

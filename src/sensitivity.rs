@@ -337,7 +337,7 @@ pub fn dual_linearizations(
     let speed = pt.speed;
     let eq = &pt.equilibrium;
     let lu = eq.jacobian.clone().lu();
-    // ∂F/∂p for all parameters in one pass where the model has a recorded program.
+    // ∂F/∂p along all the variables in one pass where the model has a recorded program.
     let dp = model
         .program(p, speed, &eq.q)
         .map(|program| program.parameter_derivatives(p, speed, &eq.q, &eq.lambda, wrt));
