@@ -188,13 +188,10 @@ impl Program {
         let rates: Vec<(usize, f64)> = (np + 1 + n..np + 1 + n + 2 * nf)
             .map(|k| (k, 0.0))
             .collect();
-        let recorded = raw
+        let residual = raw
             .specialise(&x, &rates, &(0..nf + m).collect::<Vec<_>>())?
-            .finish(&(0..nf + m).collect::<Vec<_>>());
-        let residual = recorded.split(&fixed);
-        let full = raw
-            .finish(&(0..raw.n_outputs()).collect::<Vec<_>>())
-            .split(&fixed);
+            .finish_split(&(0..nf + m).collect::<Vec<_>>(), &fixed);
+        let full = raw.finish_split(&(0..raw.n_outputs()).collect::<Vec<_>>(), &fixed);
         // A coordinate's three lanes side by side: an operation depends on the rates of the
         // coordinates whose positions it depends on, so its lane range stays narrow (the
         // governor's pass is 43 % fewer lane operations than with `[q_R, q̇_R, q̈_R]` in blocks,

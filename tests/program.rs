@@ -137,6 +137,52 @@ fn a_replay_that_folds_two_operations_into_one_keeps_both_and_their_values() {
     }
 }
 
+#[test]
+fn a_finished_and_split_program_is_the_trace_fused_and_reordered() {
+    // Products used once by a sum or a difference (fused), a product used twice and one that
+    // is an output (not fused), a sum of two products (one of them fused), a product shared
+    // with an output left out (fused: pruned first), and parts that depend on the fixed input
+    // 0 alone (placed first).
+    let f = |v: &[Var], all: bool| {
+        let (p, x, y) = (v[0], v[1], v[2]);
+        let pp = p * p + p.sin();
+        let shared = x * y;
+        let out = y * pp;
+        let mut outputs = vec![
+            x * pp + y,
+            shared + shared * x - out,
+            (y * y + x * x) + (pp - x.cos() * pp),
+            out,
+        ];
+        if all {
+            outputs.push((shared + y * y).exp());
+        }
+        Some(outputs)
+    };
+    let at = [0.3, 0.7, 1.3];
+    let raw = record(&at, |v| f(v, true)).expect("no branch");
+    let keep = [0, 1, 2, 3];
+    let needed = record(&at, |v| f(v, false)).unwrap().len();
+    let finished = raw.finish(&keep);
+    let split = raw.finish_split(&keep, &[0]);
+    // p·p, x·pp, shared·x, one of y·y and x·x, cos x·pp.
+    assert_eq!(finished.len(), needed - 5, "{finished:?}");
+    assert_eq!(split.len(), finished.len());
+    // Input 0, sin p and p·p + sin p.
+    assert_eq!(split.eval_static(&at).len(), 3, "{split:?}");
+    for point in [[0.3, -1.1, 0.4], [-0.8, 2.5, -0.9]] {
+        let all = raw.eval(&[], &point, &mut Vec::new());
+        let want: Vec<f64> = keep.iter().map(|&k| all[k]).collect();
+        assert_eq!(finished.eval(&[], &point, &mut Vec::new()), want);
+        let fixed = split.eval_static(&point);
+        assert_eq!(split.eval(&fixed, &point, &mut Vec::new()), want);
+        // Split again by another input: the same values.
+        let again = split.split(&[1]);
+        let fixed = again.eval_static(&point);
+        assert_eq!(again.eval(&fixed, &point, &mut Vec::new()), want);
+    }
+}
+
 /// A recurrence along 300 inputs: output k depends on inputs 0..=k.
 fn recurrence<T: modaltol::real::Real>(x: &[T]) -> Vec<T> {
     let mut c = x[0];
