@@ -1163,37 +1163,24 @@ impl Tape {
                     .map_or(&[][..], |v| &v[..])
                     .iter()
                     .fold((u32::MAX, 0), |(lo, hi), &l| (lo.min(l), hi.max(l + 1))),
-                op => op
-                    .args()
-                    .into_iter()
-                    .flatten()
-                    .fold((u32::MAX, 0), |(lo, hi), a| {
+                op => {
+                    let (args, k) = op.operands();
+                    args[..k].iter().fold((u32::MAX, 0), |(lo, hi), &a| {
                         let (l, h) = range[a as usize];
                         if l >= h {
                             (lo, hi)
                         } else {
                             (lo.min(l), hi.max(h))
                         }
-                    }),
+                    })
+                }
             };
             if range[i].0 >= range[i].1 {
                 range[i] = (0, 0);
             }
         }
         // The operations the differentiated outputs need.
-        let mut live = vec![false; self.ops.len()];
-        for o in &self.outputs[..differentiated] {
-            if let Var::Node(i, _) = *o {
-                live[i as usize] = true;
-            }
-        }
-        for i in (0..self.ops.len()).rev() {
-            if live[i] {
-                for a in self.ops[i].args().into_iter().flatten() {
-                    live[a as usize] = true;
-                }
-            }
-        }
+        let live = self.live(&(0..differentiated).collect::<Vec<_>>());
         // As (first lane, width).
         for (r, &live) in range.iter_mut().zip(&live) {
             *r = if live { (r.0, r.1 - r.0) } else { (0, 0) };
@@ -1237,7 +1224,8 @@ impl Tape {
         let mut last: Vec<Option<usize>> = vec![None; n];
         for (i, op) in self.ops.iter().enumerate() {
             if range[i].1 > 0 {
-                for a in op.args().into_iter().flatten() {
+                let (args, k) = op.operands();
+                for &a in &args[..k] {
                     last[a as usize] = Some(i);
                 }
             }
