@@ -171,7 +171,9 @@ impl Op {
         }
     }
 
-    /// The operation with its operands renumbered by `f`.
+    /// The operation with its operands renumbered by `f` (inlined: returned through memory,
+    /// the copy that follows stalled on its pieces, a third of a recording's pruning).
+    #[inline(always)]
     fn map(self, f: impl Fn(u32) -> u32) -> Op {
         match self {
             Op::Input(k) => Op::Input(k),
@@ -333,19 +335,62 @@ fn unreachable_input<S: Real>() -> S {
 }
 
 /// A traced scalar: a constant, or the result of recorded operation `index` (with its value at
-/// the tracing point, for [`DualStruct::re`]).
+/// the tracing point, for [`DualStruct::re`]). Read it through [`Var::term`].
+///
+/// Two fields, an operation's index (`CONST` for a constant) and the value, so that it travels
+/// in two registers: as an enum of three fields it was passed and returned through memory, and
+/// the whole-value copies after its field-by-field writes stalled the trace and the replay.
+#[derive(Clone, Copy)]
+pub struct Var {
+    node: u32,
+    value: f64,
+}
+
+/// What a [`Var`] is.
 #[derive(Debug, Clone, Copy)]
-pub enum Var {
+pub enum Term {
     Const(f64),
     Node(u32, f64),
 }
 
+/// [`Var::node`] of a constant.
+const CONST: u32 = u32::MAX;
+
 impl Var {
-    /// Value at the tracing point.
-    pub fn value(self) -> f64 {
-        match self {
-            Var::Const(c) | Var::Node(_, c) => c,
+    /// A constant.
+    #[allow(non_snake_case)]
+    #[inline(always)]
+    pub const fn Const(value: f64) -> Var {
+        Var { node: CONST, value }
+    }
+
+    /// The result of recorded operation `index`, with its value at the tracing point.
+    #[allow(non_snake_case)]
+    #[inline(always)]
+    pub const fn Node(index: u32, value: f64) -> Var {
+        Var { node: index, value }
+    }
+
+    /// A constant or an operation's result.
+    #[inline(always)]
+    pub fn term(self) -> Term {
+        if self.node == CONST {
+            Term::Const(self.value)
+        } else {
+            Term::Node(self.node, self.value)
         }
+    }
+
+    /// Value at the tracing point.
+    #[inline(always)]
+    pub fn value(self) -> f64 {
+        self.value
+    }
+}
+
+impl fmt::Debug for Var {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.term().fmt(f)
     }
 }
 
@@ -394,28 +439,28 @@ fn taint() {
 }
 
 fn unary(a: Var, f: impl Fn(f64) -> f64, op: impl Fn(u32) -> Op) -> Var {
-    match a {
-        Var::Const(x) => Var::Const(f(x)),
-        Var::Node(i, x) => push(op(i), f(x)),
+    match a.term() {
+        Term::Const(x) => Var::Const(f(x)),
+        Term::Node(i, x) => push(op(i), f(x)),
     }
 }
 
 impl Add for Var {
     type Output = Var;
     fn add(self, b: Var) -> Var {
-        match (self, b) {
-            (Var::Const(x), Var::Const(y)) => Var::Const(x + y),
-            (Var::Node(..), Var::Const(c)) | (Var::Const(c), Var::Node(..)) if c == 0.0 => {
-                if let Var::Node(..) = self {
+        match (self.term(), b.term()) {
+            (Term::Const(x), Term::Const(y)) => Var::Const(x + y),
+            (Term::Node(..), Term::Const(c)) | (Term::Const(c), Term::Node(..)) if c == 0.0 => {
+                if let Term::Node(..) = self.term() {
                     self
                 } else {
                     b
                 }
             }
-            (Var::Node(i, x), Var::Const(c)) | (Var::Const(c), Var::Node(i, x)) => {
+            (Term::Node(i, x), Term::Const(c)) | (Term::Const(c), Term::Node(i, x)) => {
                 push(Op::AddC(i, c), x + c)
             }
-            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Add(i, j), x + y),
+            (Term::Node(i, x), Term::Node(j, y)) => push(Op::Add(i, j), x + y),
         }
     }
 }
@@ -423,13 +468,13 @@ impl Add for Var {
 impl Sub for Var {
     type Output = Var;
     fn sub(self, b: Var) -> Var {
-        match (self, b) {
-            (Var::Const(x), Var::Const(y)) => Var::Const(x - y),
-            (Var::Node(..), Var::Const(0.0)) => self,
-            (Var::Node(i, x), Var::Const(c)) => push(Op::AddC(i, -c), x - c),
-            (Var::Const(0.0), Var::Node(..)) => -b,
-            (Var::Const(c), Var::Node(i, y)) => push(Op::CSub(c, i), c - y),
-            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Sub(i, j), x - y),
+        match (self.term(), b.term()) {
+            (Term::Const(x), Term::Const(y)) => Var::Const(x - y),
+            (Term::Node(..), Term::Const(0.0)) => self,
+            (Term::Node(i, x), Term::Const(c)) => push(Op::AddC(i, -c), x - c),
+            (Term::Const(0.0), Term::Node(..)) => -b,
+            (Term::Const(c), Term::Node(i, y)) => push(Op::CSub(c, i), c - y),
+            (Term::Node(i, x), Term::Node(j, y)) => push(Op::Sub(i, j), x - y),
         }
     }
 }
@@ -437,9 +482,9 @@ impl Sub for Var {
 impl Mul for Var {
     type Output = Var;
     fn mul(self, b: Var) -> Var {
-        match (self, b) {
-            (Var::Const(x), Var::Const(y)) => Var::Const(x * y),
-            (Var::Node(i, x), Var::Const(c)) | (Var::Const(c), Var::Node(i, x)) => {
+        match (self.term(), b.term()) {
+            (Term::Const(x), Term::Const(y)) => Var::Const(x * y),
+            (Term::Node(i, x), Term::Const(c)) | (Term::Const(c), Term::Node(i, x)) => {
                 if c == 0.0 {
                     Var::Const(0.0)
                 } else if c == 1.0 {
@@ -450,7 +495,7 @@ impl Mul for Var {
                     push(Op::MulC(i, c), x * c)
                 }
             }
-            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Mul(i, j), x * y),
+            (Term::Node(i, x), Term::Node(j, y)) => push(Op::Mul(i, j), x * y),
         }
     }
 }
@@ -458,13 +503,13 @@ impl Mul for Var {
 impl Div for Var {
     type Output = Var;
     fn div(self, b: Var) -> Var {
-        match (self, b) {
-            (Var::Const(x), Var::Const(y)) => Var::Const(x / y),
-            (Var::Node(..), Var::Const(1.0)) => self,
-            (Var::Node(i, x), Var::Const(c)) => push(Op::DivC(i, c), x / c),
-            (Var::Const(0.0), Var::Node(_, y)) => Var::Const(0.0 / y),
-            (Var::Const(c), Var::Node(i, y)) => push(Op::CDiv(c, i), c / y),
-            (Var::Node(i, x), Var::Node(j, y)) => push(Op::Div(i, j), x / y),
+        match (self.term(), b.term()) {
+            (Term::Const(x), Term::Const(y)) => Var::Const(x / y),
+            (Term::Node(..), Term::Const(1.0)) => self,
+            (Term::Node(i, x), Term::Const(c)) => push(Op::DivC(i, c), x / c),
+            (Term::Const(0.0), Term::Node(_, y)) => Var::Const(0.0 / y),
+            (Term::Const(c), Term::Node(i, y)) => push(Op::CDiv(c, i), c / y),
+            (Term::Node(i, x), Term::Node(j, y)) => push(Op::Div(i, j), x / y),
         }
     }
 }
@@ -564,9 +609,9 @@ impl Zero for Var {
         Var::Const(0.0)
     }
     fn is_zero(&self) -> bool {
-        match self {
-            Var::Const(c) => *c == 0.0,
-            Var::Node(..) => {
+        match self.term() {
+            Term::Const(c) => c == 0.0,
+            Term::Node(..) => {
                 taint();
                 self.value() == 0.0
             }
@@ -596,19 +641,19 @@ impl Signed for Var {
         Var::Const((self.value() - other.value()).max(0.0))
     }
     fn signum(&self) -> Var {
-        if let Var::Node(..) = self {
+        if let Term::Node(..) = self.term() {
             taint();
         }
         Var::Const(self.value().signum())
     }
     fn is_positive(&self) -> bool {
-        if let Var::Node(..) = self {
+        if let Term::Node(..) = self.term() {
             taint();
         }
         self.value().is_sign_positive()
     }
     fn is_negative(&self) -> bool {
-        if let Var::Node(..) = self {
+        if let Term::Node(..) = self.term() {
             taint();
         }
         self.value().is_sign_negative()
@@ -700,20 +745,20 @@ impl DualNum for Var {
         (self.sin(), self.cos())
     }
     fn atan2(&self, other: Var) -> Var {
-        match (*self, other) {
-            (Var::Const(y), Var::Const(x)) => Var::Const(y.atan2(x)),
-            (a, b) => {
-                let (i, j) = (node(a), node(b));
-                push(Op::Atan2(i, j), a.value().atan2(b.value()))
+        match (self.term(), other.term()) {
+            (Term::Const(y), Term::Const(x)) => Var::Const(y.atan2(x)),
+            _ => {
+                let (i, j) = (node(*self), node(other));
+                push(Op::Atan2(i, j), self.value().atan2(other.value()))
             }
         }
     }
     fn powd(&self, exp: Var) -> Var {
-        match (*self, exp) {
-            (Var::Const(x), Var::Const(y)) => Var::Const(x.powf(y)),
-            (a, b) => {
-                let (i, j) = (node(a), node(b));
-                push(Op::Powd(i, j), a.value().powf(b.value()))
+        match (self.term(), exp.term()) {
+            (Term::Const(x), Term::Const(y)) => Var::Const(x.powf(y)),
+            _ => {
+                let (i, j) = (node(*self), node(exp));
+                push(Op::Powd(i, j), self.value().powf(exp.value()))
             }
         }
     }
@@ -739,11 +784,11 @@ impl DualNum for Var {
 /// The index of `v` as an operand (a constant gets a node of its own; only the rare
 /// two-argument functions with one constant argument need that).
 fn node(v: Var) -> u32 {
-    match v {
-        Var::Node(i, _) => i,
-        Var::Const(c) => match push(Op::Const(c), c) {
-            Var::Node(i, _) => i,
-            Var::Const(_) => 0,
+    match v.term() {
+        Term::Node(i, _) => i,
+        Term::Const(c) => match push(Op::Const(c), c).term() {
+            Term::Node(i, _) => i,
+            Term::Const(_) => 0,
         },
     }
 }
@@ -838,7 +883,7 @@ impl Tape {
         let mut uses = vec![0u32; n];
         let mut user = vec![u32::MAX; n];
         for &o in keep {
-            if let Var::Node(i, _) = self.outputs[o] {
+            if let Term::Node(i, _) = self.outputs[o].term() {
                 uses[i as usize] += 1;
             }
         }
@@ -914,9 +959,9 @@ impl Tape {
         let rest: Vec<Op> = rest.into_iter().map(|op| op.map(renumber)).collect();
         let outputs = keep
             .iter()
-            .map(|&o| match self.outputs[o] {
-                Var::Node(i, v) => Var::Node(renumber(new_index[i as usize]), v),
-                c => c,
+            .map(|&o| match self.outputs[o].term() {
+                Term::Node(i, v) => Var::Node(renumber(new_index[i as usize]), v),
+                Term::Const(c) => Var::Const(c),
             })
             .collect();
         first.extend(rest);
@@ -962,9 +1007,9 @@ impl Tape {
             }
             Some(
                 keep.iter()
-                    .map(|&o| match self.outputs[o] {
-                        Var::Node(i, _) => work[i as usize],
-                        c => c,
+                    .map(|&o| match self.outputs[o].term() {
+                        Term::Node(i, _) => work[i as usize],
+                        Term::Const(c) => Var::Const(c),
                     })
                     .collect(),
             )
@@ -975,7 +1020,7 @@ impl Tape {
     fn live(&self, keep: &[usize]) -> Vec<bool> {
         let mut live = vec![false; self.ops.len()];
         for &o in keep {
-            if let Var::Node(i, _) = self.outputs[o] {
+            if let Term::Node(i, _) = self.outputs[o].term() {
                 live[i as usize] = true;
             }
         }
@@ -1027,9 +1072,9 @@ impl Tape {
         }
         self.outputs
             .iter()
-            .map(|o| match *o {
-                Var::Const(c) => S::from(c),
-                Var::Node(i, _) => work[i as usize],
+            .map(|o| match o.term() {
+                Term::Const(c) => S::from(c),
+                Term::Node(i, _) => work[i as usize],
             })
             .collect()
     }
@@ -1099,9 +1144,9 @@ impl Tape {
         }
         self.outputs
             .iter()
-            .map(|o| match *o {
-                Var::Const(c) => [c; L],
-                Var::Node(i, _) => work[i as usize],
+            .map(|o| match o.term() {
+                Term::Const(c) => [c; L],
+                Term::Node(i, _) => work[i as usize],
             })
             .collect()
     }
@@ -1231,7 +1276,7 @@ impl Tape {
             }
         }
         for o in &self.outputs[..differentiated] {
-            if let Var::Node(i, _) = *o {
+            if let Term::Node(i, _) = o.term() {
                 last[i as usize] = Some(usize::MAX);
             }
         }
@@ -1455,14 +1500,14 @@ impl Tape {
         let mut values = Vec::with_capacity(self.outputs.len());
         let mut derivs = Vec::with_capacity(nd * lanes);
         for (k, o) in self.outputs.iter().enumerate() {
-            match *o {
-                Var::Const(c) => {
+            match o.term() {
+                Term::Const(c) => {
                     values.push(S::from(c));
                     if k < nd {
                         derivs.extend(std::iter::repeat_n(zero, lanes));
                     }
                 }
-                Var::Node(i, _) => {
+                Term::Node(i, _) => {
                     let i = i as usize;
                     values.push(val[i]);
                     if k < nd {

@@ -21,7 +21,7 @@
 //!
 //! Cranelift: <https://cranelift.dev>, the code generator of Wasmtime.
 
-use super::{CHUNK, Op, Seeding, Tape, Var};
+use super::{CHUNK, Op, Seeding, Tape, Term};
 use cranelift_codegen::ir::{
     AbiParam, InstBuilder, MemFlagsData, StackSlotData, StackSlotKind, UserFuncName, Value, types,
 };
@@ -294,9 +294,9 @@ impl Tape {
         }
         self.outputs
             .iter()
-            .map(|o| match *o {
-                Var::Const(c) => c,
-                Var::Node(i, _) => work[i as usize],
+            .map(|o| match o.term() {
+                Term::Const(c) => c,
+                Term::Node(i, _) => work[i as usize],
             })
             .collect()
     }
