@@ -10,7 +10,8 @@
 //! * operations on constants are folded (`x·0`, `x·1`, `x+0`, the zero parts of the duals),
 //! * identical operations on identical operands are recorded once (hash-consing), so the pose
 //!   products shared by all the dual passes appear once,
-//! * operations that no output needs are dropped ([`Tape::prune`]).
+//! * operations that no output needs are dropped, and products used once by a sum are fused
+//!   with it ([`Tape::finish`]).
 //!
 //! The program is then evaluated over `f64` for values, or over any dual number for exact
 //! derivatives: no derivative is written by hand here either, the dual numbers differentiate the
