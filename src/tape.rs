@@ -228,29 +228,10 @@ impl Op {
     }
 
     /// Operands.
+    #[inline(always)]
     fn args(self) -> [Option<u32>; 3] {
-        match self {
-            Op::Input(_) | Op::Const(_) => [None, None, None],
-            Op::MulAdd(a, b, c) | Op::MulSub(a, b, c) | Op::SubMul(a, b, c) => {
-                [Some(a), Some(b), Some(c)]
-            }
-            Op::Add(a, b)
-            | Op::Sub(a, b)
-            | Op::Mul(a, b)
-            | Op::Div(a, b)
-            | Op::Atan2(a, b)
-            | Op::Powd(a, b) => [Some(a), Some(b), None],
-            Op::Neg(a)
-            | Op::AddC(a, _)
-            | Op::MulC(a, _)
-            | Op::DivC(a, _)
-            | Op::CSub(_, a)
-            | Op::CDiv(_, a)
-            | Op::Fun(_, a)
-            | Op::Powi(a, _)
-            | Op::Powf(a, _)
-            | Op::Log(a, _) => [Some(a), None, None],
-        }
+        let (a, k) = self.operands();
+        std::array::from_fn(|i| (i < k).then_some(a[i]))
     }
 
     /// The operation applied to operand values `a` and `b` (`b` unused by the one-operand
