@@ -5,7 +5,8 @@
 //! [`evaluate_rows`] the direct route runs) once per model with the parameters, the speed, the
 //! coordinates, the free coordinates' rates and the multipliers as inputs:
 //!
-//! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in);
+//! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in), made when
+//!   the residual is evaluated often (see [`SPECIALISE_AFTER`]);
 //! * `full`: the same rows with `q̇_R` and `q̈_R` as inputs, so that one forward pass with the
 //!   lanes `(q_k, q̇_k, q̈_k)` of each free coordinate gives Newton's Jacobian (whose `q_R` block
 //!   is `K`), `C` and `M`; `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`,
@@ -33,7 +34,7 @@ use crate::real::Real;
 use crate::route::Equations;
 use crate::tape::{Forward, NativePass, Seeding, Tape, Var, record};
 use nalgebra::{DMatrix, DVector};
-use std::cell::RefCell;
+use std::cell::{OnceCell, RefCell};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock, RwLock};
 
@@ -44,9 +45,11 @@ pub struct Program {
     n: usize,
     free: Vec<usize>,
     m: usize,
-    residual: Tape,
+    residual: Residual,
     /// `full`, with the drive rows.
     full: Tape,
+    /// The inputs the trace was recorded at (where `residual` is replayed).
+    recorded_at: Vec<f64>,
     /// Lanes `q_R` on `residual`, made when first needed: Newton's Jacobians come from the
     /// exact evaluation (`linear`), so only diagnoses use these (at 160 segments they cost a
     /// twentieth of the recording).
@@ -70,6 +73,33 @@ pub struct Program {
 /// run or a quadrature switches early in its course. The compiled passes give the same
 /// results to the bit.
 pub const NATIVE_AFTER: usize = 20_000;
+
+/// Residuals evaluated through `full` before `residual` is made from it. Until then a residual
+/// is `full`'s value pass at zero rates: the rates' terms evaluated and added as zeros, where
+/// `residual` folds them away (a third of `full`'s operations on a chain, more on the shipped
+/// examples). Making `residual` costs about as many of those passes as this, and a single cold
+/// point evaluates two or three residuals, a sweep or a Monte Carlo run thousands: the first
+/// pay nothing, the second pay this once (the rent-or-buy rule). Both give the same values to
+/// the bit (the folded terms are zeros, and `F`'s signed zeros are made `+0`), so when a run
+/// switches does not change its results.
+pub const SPECIALISE_AFTER: usize = 64;
+
+/// The program of `F` alone at zero rates, made from `full` when first needed.
+#[derive(Debug)]
+struct Residual {
+    tape: OnceLock<Tape>,
+    /// Residuals evaluated through `full` so far.
+    through_full: AtomicUsize,
+}
+
+impl Clone for Residual {
+    fn clone(&self) -> Self {
+        Residual {
+            tape: self.tape.clone(),
+            through_full: AtomicUsize::new(self.through_full.load(Ordering::Relaxed)),
+        }
+    }
+}
 
 /// The program of `∂F/∂p` along a set of parameters, and its lanes.
 type ParameterPass = Arc<(Tape, Seeding)>;
@@ -185,12 +215,6 @@ impl Program {
         // rates are zero: replayed with them as constants, so that all they multiply folds.
         let raw = record(&x, |v| trace(model, v))?;
         let differentiated = nf + m + m * nf;
-        let rates: Vec<(usize, f64)> = (np + 1 + n..np + 1 + n + 2 * nf)
-            .map(|k| (k, 0.0))
-            .collect();
-        let residual = raw
-            .specialise(&x, &rates, &(0..nf + m).collect::<Vec<_>>())?
-            .finish_split(&(0..nf + m).collect::<Vec<_>>(), &fixed);
         let full = raw.finish_split(&(0..raw.n_outputs()).collect::<Vec<_>>(), &fixed);
         // A coordinate's three lanes side by side: an operation depends on the rates of the
         // coordinates whose positions it depends on, so its lane range stays narrow (the
@@ -216,7 +240,11 @@ impl Program {
             n,
             free,
             m,
-            residual,
+            residual: Residual {
+                tape: OnceLock::new(),
+                through_full: AtomicUsize::new(0),
+            },
+            recorded_at: x,
             full,
             jacobian: OnceLock::new(),
             linear,
@@ -263,6 +291,38 @@ impl Program {
         })
     }
 
+    /// `residual`, made now where it is not yet (see [`SPECIALISE_AFTER`]): `full` replayed with
+    /// the rates as zeros, then pruned to `F` and ordered.
+    fn residual_tape(&self) -> &Tape {
+        self.residual.tape.get_or_init(|| {
+            let (np, n, nf) = (self.np, self.n, self.free.len());
+            let rates: Vec<(usize, f64)> = (np + 1 + n..np + 1 + n + 2 * nf)
+                .map(|k| (k, 0.0))
+                .collect();
+            let keep: Vec<usize> = (0..nf + self.m).collect();
+            let fixed: Vec<usize> = (0..=np).collect();
+            // A replay does not branch; were it to, `full` pruned to `F` is a residual too.
+            self.full
+                .specialise(&self.recorded_at, &rates, &keep)
+                .unwrap_or_else(|| self.full.clone())
+                .finish_split(&keep, &fixed)
+        })
+    }
+
+    /// The program of `F` alone, where it is made yet (see [`SPECIALISE_AFTER`]).
+    pub fn residual_program(&self) -> Option<&Tape> {
+        self.residual.tape.get()
+    }
+
+    /// `residual` where it is made or due, counting one more residual through `full` where not.
+    fn specialised(&self) -> Option<&Tape> {
+        if let Some(tape) = self.residual.tape.get() {
+            return Some(tape);
+        }
+        let count = self.residual.through_full.fetch_add(1, Ordering::Relaxed);
+        (count >= SPECIALISE_AFTER).then(|| self.residual_tape())
+    }
+
     /// Compile the `f64` passes to native code after `evaluations` more exact evaluations and
     /// residuals of the program (`None`: never; `Some(0)`: at the next). The default is
     /// [`NATIVE_AFTER`] evaluations; the results are the same either way, only the time
@@ -294,7 +354,7 @@ impl Program {
         (count >= after).then(|| {
             self.tier.native.get_or_init(|| Native {
                 full: self.full.compile_forward(&self.linear),
-                residual: self.residual.compile_eval(),
+                residual: self.residual_tape().compile_eval(),
             })
         })
     }
@@ -310,12 +370,10 @@ impl Program {
             &vec![0.0; self.m],
             self.free.len(),
         );
-        let residual = self.residual.eval_static(&x);
         let full = self.full.eval_static(&x);
-        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        (finite(&residual) && finite(&full)).then(|| Instance {
+        full.iter().all(|x| x.is_finite()).then(|| Instance {
             program: self,
-            residual,
+            residual: OnceCell::new(),
             full,
             x: RefCell::new(x),
             work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
@@ -391,7 +449,8 @@ fn inputs<S: Real>(p: &[S], speed: S, q: &[S], lambda: &[S], nf: usize) -> Vec<S
 #[derive(Debug)]
 pub struct Instance<'a> {
     program: &'a Program,
-    residual: Vec<f64>,
+    /// The static values of `residual`, once it is used.
+    residual: OnceCell<Vec<f64>>,
     full: Vec<f64>,
     /// The input vector, with the parameters and the speed in place.
     x: RefCell<Vec<f64>>,
@@ -512,17 +571,33 @@ impl Instance<'_> {
         x[ol..ol + pr.m].copy_from_slice(lambda);
     }
 
-    /// `F(q_R, λ)`.
+    /// The values of the residual program's static operations here.
+    fn residual_static(&self) -> &[f64] {
+        self.residual
+            .get_or_init(|| self.program.residual_tape().eval_static(&self.x.borrow()))
+    }
+
+    /// `F(q_R, λ)`: through `full` until the residual program is made ([`SPECIALISE_AFTER`]).
     pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
         self.set(q, lambda);
         let mut work = self.work.borrow_mut();
         let (pr, x) = (self.program, self.x.borrow());
-        match pr.native().and_then(|n| n.residual.as_ref()) {
-            Some(pass) => pr
-                .residual
-                .eval_native(pass, &self.residual, &x, &mut work.values),
-            None => pr.residual.eval(&self.residual, &x, &mut work.values),
+        let mut f = match pr.specialised() {
+            None => {
+                let mut f = pr.full.eval(&self.full, &x, &mut work.values);
+                f.truncate(pr.free.len() + pr.m);
+                f
+            }
+            Some(tape) => match pr.native().and_then(|n| n.residual.as_ref()) {
+                Some(pass) => tape.eval_native(pass, self.residual_static(), &x, &mut work.values),
+                None => tape.eval(self.residual_static(), &x, &mut work.values),
+            },
+        };
+        // The folded terms are zeros, which can only change the sign of a zero: `-0 + 0 = +0`.
+        for v in &mut f {
+            *v += 0.0;
         }
+        f
     }
 
     /// `F` at the values `q_c + offsets[l]` of the `d`-th driven coordinate `c` (the other
@@ -541,7 +616,7 @@ impl Instance<'_> {
             (0..n)
                 .filter(|i| !pr.free.contains(i))
                 .map(|i| {
-                    pr.residual
+                    pr.residual_tape()
                         .seeding(&[(np + 1 + i, 0)], 1, pr.free.len() + pr.m)
                 })
                 .collect()
@@ -549,8 +624,8 @@ impl Instance<'_> {
         let c = seeding.seeds()[0].0 - pr.np - 1;
         let values = offsets.map(|o| q[c] + o);
         let mut work = self.work.borrow_mut();
-        let f = pr.residual.eval_varied(
-            &self.residual,
+        let f = pr.residual_tape().eval_varied(
+            self.residual_static(),
             &self.x.borrow(),
             seeding,
             values,
@@ -568,11 +643,11 @@ impl Instance<'_> {
             let seeds: Vec<(usize, usize)> = (pr.free.iter().enumerate())
                 .map(|(k, &i)| (pr.np + 1 + i, k))
                 .collect();
-            pr.residual
+            pr.residual_tape()
                 .seeding(&seeds, pr.free.len(), pr.free.len() + pr.m)
         });
-        let (f, d) = pr.residual.forward(
-            &self.residual,
+        let (f, d) = pr.residual_tape().forward(
+            self.residual_static(),
             &self.x.borrow(),
             seeding,
             &mut work.jacobian,
@@ -604,8 +679,9 @@ impl Program {
     /// seeded in the parameters give the equations' derivatives with respect to them).
     pub fn residual_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Vec<S> {
         let x = inputs(p, speed, q, lambda, self.free.len());
-        let fixed = self.residual.eval_static(&x);
-        self.residual.eval(&fixed, &x, &mut Vec::new())
+        let tape = self.residual_tape();
+        let fixed = tape.eval_static(&x);
+        tape.eval(&fixed, &x, &mut Vec::new())
     }
 
     /// `∂F/∂p_b` for the parameters `b` of `wrt` at parameters `p`, `speed`, `q` and `λ`: one
@@ -628,7 +704,7 @@ impl Program {
         let pass = read.unwrap_or_else(|| {
             // The parameters of `wrt` as inputs that move: one lane each.
             let fixed: Vec<usize> = (0..=self.np).filter(|k| !wrt.contains(k)).collect();
-            let tape = self.residual.split(&fixed);
+            let tape = self.residual_tape().split(&fixed);
             let seeds: Vec<(usize, usize)> = wrt.iter().enumerate().map(|(l, &k)| (k, l)).collect();
             let seeding = tape.seeding(&seeds, wrt.len(), self.free.len() + self.m);
             let pass = Arc::new((tape, seeding));

@@ -9,6 +9,7 @@ use modaltol::equilibrium::Solvable;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
+use modaltol::program::SPECIALISE_AFTER;
 use modaltol::route::Direct;
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Seeding, Tape, Var, record};
@@ -290,6 +291,44 @@ fn states(name: &str) -> Vec<State> {
         out.push((p, speed, q, lambda));
     }
     out
+}
+
+#[test]
+fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() {
+    for name in EXAMPLES {
+        let model = example(name);
+        let p0 = model.nominal();
+        let q0 = initial_guess(&model, &p0, 1.0).unwrap();
+        let program = model.program(&p0, 1.0, &q0).unwrap();
+        // The model's states, and the reference configuration at rest (exact zeros).
+        let mut at = states(name);
+        at.push((
+            p0.clone(),
+            0.0,
+            vec![0.0; q0.len()],
+            vec![0.0; model.n_constraints()],
+        ));
+        let residuals = || {
+            at.iter()
+                .map(|(p, speed, q, lambda)| program.at(p, *speed).unwrap().residual(q, lambda))
+                .collect::<Vec<_>>()
+        };
+        // The first residuals run through the program with the rates (the recording's check
+        // among them), the later ones through the program of `F` alone.
+        let before = residuals();
+        assert!(program.residual_program().is_none(), "{name}");
+        let inst = program.at(&p0, 1.0).unwrap();
+        let lambda = vec![0.5; model.n_constraints()];
+        for _ in 0..SPECIALISE_AFTER {
+            inst.residual(&q0, &lambda);
+        }
+        assert!(program.residual_program().is_some(), "{name}");
+        let after = residuals();
+        for (b, a) in before.iter().zip(&after) {
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(b), bits(a), "{name}");
+        }
+    }
 }
 
 #[test]
