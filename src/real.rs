@@ -64,6 +64,29 @@ pub fn mul3_t<T: Real>(a: &M3<T>, b: &M3<T>) -> M3<T> {
     M3::from_fn(|i, j| a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)])
 }
 
+/// `aᵀ x` for a 3×3 matrix and a 3-vector, written out.
+#[inline]
+pub fn mulv_t<T: Real>(a: &M3<T>, x: &V3<T>) -> V3<T> {
+    V3::new(
+        a[(0, 0)] * x.x + a[(1, 0)] * x.y + a[(2, 0)] * x.z,
+        a[(0, 1)] * x.x + a[(1, 1)] * x.y + a[(2, 1)] * x.z,
+        a[(0, 2)] * x.x + a[(1, 2)] * x.y + a[(2, 2)] * x.z,
+    )
+}
+
+/// `axial(aᵀ b)` (see [`axial`]), from the six entries of `aᵀ b` it reads.
+pub fn axial_tn<T: Real>(a: &M3<T>, b: &M3<T>) -> V3<T> {
+    // (aᵀ b)_ij = a_·i · b_·j.
+    let e =
+        |i: usize, j: usize| a[(0, i)] * b[(0, j)] + a[(1, i)] * b[(1, j)] + a[(2, i)] * b[(2, j)];
+    let h = cst::<T>(0.5);
+    V3::new(
+        (e(2, 1) - e(1, 2)) * h,
+        (e(0, 2) - e(2, 0)) * h,
+        (e(1, 0) - e(0, 1)) * h,
+    )
+}
+
 /// `a x` for a 3×3 matrix and a 3-vector, written out.
 #[inline]
 pub fn mulv<T: Real>(a: &M3<T>, x: &V3<T>) -> V3<T> {

@@ -6,8 +6,9 @@
 //! ```
 //!
 //! equal to the velocity-transformation form `M* = B_Rᵀ M B_R`, `Q* = B_Rᵀ Q − B_Rᵀ M Ḃ q̇`
-//! (Kim & Yoo 2007, eqs. 9–12). One pass over `Dual2` numbers along `q(t) = q + q̇ t + q̈ t²/2`
-//! gives every body's velocity and acceleration (`ω̃ = Ȧ Aᵀ`, `α̃ = skew(Ä Aᵀ)`); one pass over
+//! (Kim & Yoo 2007, eqs. 9–12). Each joint's relative pose over `Dual2` numbers along
+//! `q(t) = q + q̇ t + q̈ t²/2` gives its relative velocity and acceleration, which one pass from
+//! the root composes into every body's (`motions`); one pass over
 //! `Dual` numbers per coordinate, through its own joint alone, gives the partial velocities `J_v = ∂r_cm/∂q_i` and
 //! `J_ω = axial(∂A/∂q_i Aᵀ)` as the twist of its joint's child (see [`Partials`]), and the
 //! constraint Jacobian `Φ_q`; the projection `r_i = s_iᵀ W_i` pairs that twist with the wrench on
@@ -16,7 +17,9 @@
 
 use super::System;
 use super::kinematics::{Pose, poses};
-use crate::real::{D1, D2, M3, Real, V3, axial, cst, lift1, lift2, mul3, mul3_t, mulv};
+use crate::real::{
+    D1, D2, M3, Real, V3, axial, axial_tn, cst, lift1, lift2, mul3, mul3_t, mulv, mulv_t,
+};
 use nalgebra::DMatrix;
 use num_dual::{Dual, Dual2};
 
@@ -144,8 +147,8 @@ pub struct Partials<T: Real> {
     /// The derivatives of every force element's components (see [`EndPartials`]).
     pub de: Vec<EndPartials<T>>,
     pub phi_q: DMatrix<T>,
-    /// Rotation of every body at `q`.
-    pub rot: Vec<M3<T>>,
+    /// Pose of every body at `q`.
+    pub pose: Vec<Pose<T>>,
     /// Centre of mass of every body at `q`.
     pub cm: Vec<V3<T>>,
 }
@@ -157,7 +160,12 @@ impl<T: Real> Partials<T> {
             twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
             de: self.de.iter().map(|e| e.map(f)).collect(),
             phi_q: self.phi_q.map(f),
-            rot: self.rot.iter().map(|r| r.map(f)).collect(),
+            pose: (self.pose.iter())
+                .map(|p| Pose {
+                    rot: p.rot.map(f),
+                    trans: p.trans.map(f),
+                })
+                .collect(),
             cm: self.cm.iter().map(|x| x.map(f)).collect(),
         }
     }
@@ -192,7 +200,7 @@ pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usiz
     let mut first = vec![V3::from_element(cst::<T>(0.0)); nb];
     let mut second = vec![M3::from_element(cst::<T>(0.0)); nb];
     for (b, body) in sys.bodies.iter().enumerate() {
-        let (m, x, a) = (body.mass.re, j.cm[b], &j.rot[b]);
+        let (m, x, a) = (body.mass.re, j.cm[b], &j.pose[b].rot);
         mass[b] = m;
         first[b] = x * m;
         second[b] = mul3_t(&mul3(a, &body.inertia.map(|x| x.re)), a)
@@ -450,13 +458,122 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         twist,
         de,
         phi_q,
-        rot: p0.iter().map(|p| p.rot.map(|c| c.re)).collect(),
+        pose: (p0.iter())
+            .map(|p| Pose {
+                rot: p.rot.map(|c| c.re),
+                trans: p.trans.map(|c| c.re),
+            })
+            .collect(),
         cm: p0
             .iter()
             .zip(&partial.bodies)
             .map(|(p, b)| p.apply(&b.cm).map(|c| c.re))
             .collect(),
     }
+}
+
+/// A body's velocity and acceleration: angular in its own axes, `ω` and `α` with `Ȧ = A ω̃` and
+/// `Ä = A (α̃ + ω̃²)` for its rotation `A`, and the first and second rates `ḋ`, `d̈` of its pose's
+/// translation (global axes).
+#[derive(Debug, Clone, Copy)]
+struct Motion<T: Real> {
+    w: V3<T>,
+    a: V3<T>,
+    d: V3<T>,
+    dd: V3<T>,
+}
+
+/// Every body's [`Motion`] at `(q, q̇, q̈)` from its pose at `q`, in one pass from the root
+/// (the forward pass of the recursive Newton–Euler algorithm: Featherstone, *Rigid Body Dynamics
+/// Algorithms*, Springer 2008, §5.3, with the angular quantities in the bodies' own axes). Each joint's relative pose `(R, t)` is evaluated over
+/// second-order dual numbers in time, alone; its rates `ω_r = axial(RᵀṘ)`, `α_r = axial(RᵀR̈)`,
+/// `ṫ`, `ẗ` are composed with the parent's (pose `A_p`):
+///
+/// ```text
+/// ω = Rᵀω_p + ω_r        α = Rᵀα_p + (Rᵀω_p) × ω_r + α_r
+/// ḋ = ḋ_p + A_p (ω_p × t + ṫ)
+/// d̈ = d̈_p + A_p (α_p × t + ω_p × (ω_p × t) + 2 ω_p × ṫ + ẗ)
+/// ```
+///
+/// Composing whole poses over dual numbers down the tree (`A = A_p R` with its rates) costs
+/// twice the operations: 3×3 products of rates where these are 3-vectors.
+fn motions<T: Real>(
+    l: &Lifted<T>,
+    pose: &[Pose<T>],
+    q: &[T],
+    qd: &[T],
+    qdd: &[T],
+) -> Vec<Motion<T>> {
+    let zero = V3::from_element(cst::<T>(0.0));
+    let rest = Motion {
+        w: zero,
+        a: zero,
+        d: zero,
+        dd: zero,
+    };
+    let mut out = vec![rest; l.base.bodies.len()];
+    for j in &l.time.joints {
+        let qt: Vec<D2<T>> = (j.coords.clone())
+            .map(|i| Dual2::new(q[i], qd[i], qdd[i]))
+            .collect();
+        let rel = j.kind.relative(&j.geometry, &qt);
+        let r = rel.rot.map(|c| c.re);
+        let (w_r, a_r) = (
+            axial_tn(&r, &rel.rot.map(|c| c.v1)),
+            axial_tn(&r, &rel.rot.map(|c| c.v2)),
+        );
+        let t = rel.trans.map(|c| c.re);
+        let (td, tdd) = (rel.trans.map(|c| c.v1), rel.trans.map(|c| c.v2));
+        let (p, a_p) = match j.parent {
+            Some(b) => (out[b], pose[b].rot),
+            None => (rest, M3::identity()),
+        };
+        let w_p = mulv_t(&r, &p.w);
+        let spin = p.w.cross(&td);
+        out[j.child] = Motion {
+            w: w_p + w_r,
+            a: mulv_t(&r, &p.a) + w_p.cross(&w_r) + a_r,
+            d: p.d + mulv(&a_p, &(p.w.cross(&t) + td)),
+            dd: p.dd
+                + mulv(
+                    &a_p,
+                    &(p.a.cross(&t) + p.w.cross(&p.w.cross(&t)) + spin + spin + tdd),
+                ),
+        };
+    }
+    out
+}
+
+/// The poses with their first rates (dual parts) of the bodies that force elements join (the
+/// others as they are, without rates): what the elements' deformations and their rates need.
+fn moving_poses<T: Real>(
+    sys: &System<T>,
+    pose: &[Pose<T>],
+    motion: &[Motion<T>],
+) -> Vec<Pose<D1<T>>> {
+    let mut ends = vec![false; pose.len()];
+    for e in &sys.forces {
+        for b in [e.geometry.body1, e.geometry.body2].into_iter().flatten() {
+            ends[b] = true;
+        }
+    }
+    (pose.iter().zip(motion).zip(ends))
+        .map(|((p, m), end)| {
+            let zero = cst::<T>(0.0);
+            let (rot_d, trans_d) = if end {
+                let w = &m.w;
+                // Ȧ = A ω̃.
+                let wx = M3::new(zero, -w.z, w.y, w.z, zero, -w.x, -w.y, w.x, zero);
+                (mul3(&p.rot, &wx), m.d)
+            } else {
+                (M3::from_element(zero), V3::from_element(zero))
+            };
+            Pose {
+                rot: p.rot.zip_map(&rot_d, Dual::new),
+                trans: p.trans.zip_map(&trans_d, Dual::new),
+            }
+        })
+        .collect()
 }
 
 /// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
@@ -486,32 +603,26 @@ pub fn evaluate_with<T: Real>(
 ) -> Dynamics<T> {
     let sys = &l.base;
     let n = sys.n;
-    // Time pass: velocities and accelerations of every body.
-    let qt: Vec<D2<T>> = (0..n).map(|i| Dual2::new(q[i], qd[i], qdd[i])).collect();
-    let pt = poses(&l.time, &qt);
-    // The wrench of every body's inertia and weight about the origin.
+    let motion = motions(l, &j.pose, q, qd, qdd);
+    // The wrench of every body's inertia and weight about the origin: the moment about the
+    // centre of mass `A (I α + ω × I ω)` with `I` the inertia in the reference configuration.
     let mut wrench = Vec::with_capacity(sys.bodies.len());
     for (b, body) in sys.bodies.iter().enumerate() {
-        let x = pt[b].apply(&l.time.bodies[b].cm);
-        let acc = x.map(|c| c.v2);
-        let a = pt[b].rot.map(|c| c.re);
-        let ad = pt[b].rot.map(|c| c.v1);
-        let add = pt[b].rot.map(|c| c.v2);
-        let omega = axial(&mul3_t(&ad, &a));
-        let alpha = axial(&mul3_t(&add, &a));
-        let iw = mul3_t(&mul3(&a, &body.inertia), &a);
+        let (m, pose, x) = (&motion[b], &j.pose[b], j.cm[b]);
+        let x0 = body.cm;
+        let acc = mulv(&pose.rot, &(m.a.cross(&x0) + m.w.cross(&m.w.cross(&x0)))) + m.dd;
         let force = (acc - sys.gravity) * body.mass;
-        let h = mulv(&iw, &omega);
-        let moment = mulv(&iw, &alpha) + omega.cross(&h);
+        let h = mulv(&body.inertia, &m.w);
+        let moment = mulv(&pose.rot, &(mulv(&body.inertia, &m.a) + m.w.cross(&h)));
         wrench.push(Screw {
-            w: moment + x.map(|c| c.re).cross(&force),
+            w: moment + x.cross(&force),
             v: force,
         });
     }
-    // Each element's components over the time pass (the values and their rates), applied to
-    // its end bodies as the wrenches whose power on a twist is the element's.
+    // Each element's components over the poses with their rates (the values and their rates),
+    // applied to its end bodies as the wrenches whose power on a twist is the element's.
     let mut element_force = Vec::new();
-    let deformation = element_deformations(&l.time, &pt);
+    let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.pose, &motion));
     let mut e = deformation.iter();
     // Derivatives per coordinate, paired with the forces after the projection.
     let mut direct = Vec::new();
@@ -519,8 +630,9 @@ pub fn evaluate_with<T: Real>(
         let first = element_force.len();
         for c in 0..el.free.len() {
             let d = e.next().expect("one deformation per component");
-            element_force
-                .push(el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.v1 + el.preload[c]);
+            element_force.push(
+                el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.eps + el.preload[c],
+            );
         }
         match partials {
             EndPartials::Bodies(g) => {
@@ -533,10 +645,7 @@ pub fn evaluate_with<T: Real>(
             EndPartials::Coordinates(_) => direct.push((first, partials)),
         }
     }
-    let phi: Vec<T> = constraint_values(&l.time, &pt)
-        .iter()
-        .map(|c| c.re)
-        .collect();
+    let phi = constraint_values(sys, &j.pose);
     // The wrench on each body and those below it (children before parents).
     for jt in sys.joints.iter().rev() {
         if let Some(p) = jt.parent {
