@@ -76,13 +76,14 @@ pub const NATIVE_AFTER: usize = 20_000;
 
 /// Residuals evaluated through `full` before `residual` is made from it. Until then a residual
 /// is `full`'s value pass at zero rates: the rates' terms evaluated and added as zeros, where
-/// `residual` folds them away (a third of `full`'s operations on a chain, more on the shipped
-/// examples). Making `residual` costs about as many of those passes as this, and a single cold
-/// point evaluates two or three residuals, a sweep or a Monte Carlo run thousands: the first
-/// pay nothing, the second pay this once (the rent-or-buy rule). Both give the same values to
-/// the bit (the folded terms are zeros, and `F`'s signed zeros are made `+0`), so when a run
-/// switches does not change its results.
-pub const SPECIALISE_AFTER: usize = 64;
+/// `residual` folds them away, so such a pass costs about 1.4 residuals. Making `residual` costs
+/// 9–15 of those passes (the shipped examples and chains of 40 and 160 segments), so it pays
+/// back after 30–50 residuals. A single cold point evaluates two or three residuals, a sweep or
+/// a Monte Carlo run thousands: the first never pay for it, the second pay once, at about the
+/// break-even (the rent-or-buy rule). Both give the same values to the bit (the folded terms
+/// are zeros, and `F`'s signed zeros are made `+0`), so when a run switches does not change its
+/// results.
+pub const SPECIALISE_AFTER: usize = 32;
 
 /// The program of `F` alone at zero rates, made from `full` when first needed.
 #[derive(Debug)]
@@ -211,8 +212,8 @@ impl Program {
         let nf = free.len();
         let x = inputs(p, speed, q, &vec![1.0; m], nf);
         let fixed: Vec<usize> = (0..=np).collect();
-        // One trace with every output; the three programs are cut from it. The residual's
-        // rates are zero: replayed with them as constants, so that all they multiply folds.
+        // One trace with every output; `full` is cut from it now, the residual's own program
+        // from `full` when residuals are many (`residual_tape`).
         let raw = record(&x, |v| trace(model, v))?;
         let differentiated = nf + m + m * nf;
         let full = raw.finish_split(&(0..raw.n_outputs()).collect::<Vec<_>>(), &fixed);
