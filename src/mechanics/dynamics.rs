@@ -411,16 +411,23 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         qi[i] = Dual::new(q[i], cst(1.0));
         let rel = j.kind.relative(&j.geometry, &qi[j.coords.clone()]);
         qi[i] = lift1(q[i]);
-        let pose = match j.parent {
-            Some(p) => p0[p].then(&rel),
-            None => rel,
+        // The relative twist in the parent's axes (`ω_r = axial(Ṙ Rᵀ)`, the translation's rate
+        // `ṫ`), turned by the parent's rotation `A_p`: `ω = A_p ω_r`, and the velocity of the
+        // point at the origin `v = A_p ṫ − ω × d` with `d` the child's translation.
+        let r = rel.rot.map(|c| c.re);
+        let w_r = axial(&mul3_t(&rel.rot.map(|c| c.eps), &r));
+        let t_d = rel.trans.map(|c| c.eps);
+        let (w, t_d) = match j.parent {
+            Some(p) => {
+                let a_p = p0[p].rot.map(|c| c.re);
+                (mulv(&a_p, &w_r), mulv(&a_p, &t_d))
+            }
+            None => (w_r, t_d),
         };
-        let a = pose.rot.map(|c| c.re);
-        let w = axial(&mul3_t(&pose.rot.map(|c| c.eps), &a));
-        let t = pose.trans.map(|c| c.re);
+        let d = p0[j.child].trans.map(|c| c.re);
         twist[i] = Some(Screw {
             w,
-            v: pose.trans.map(|c| c.eps) - w.cross(&t),
+            v: t_d - w.cross(&d),
         });
     }
     let de = partial
