@@ -22,6 +22,14 @@ impl<T: Real> Pose<T> {
         }
     }
 
+    /// The same motion over another scalar (`f` maps each number).
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Pose<U> {
+        Pose {
+            rot: self.rot.map(f),
+            trans: self.trans.map(f),
+        }
+    }
+
     /// Current position of a point given in the reference configuration.
     pub fn apply(&self, x0: &V3<T>) -> V3<T> {
         mulv(&self.rot, x0) + self.trans

@@ -160,12 +160,7 @@ impl<T: Real> Partials<T> {
             twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
             de: self.de.iter().map(|e| e.map(f)).collect(),
             phi_q: self.phi_q.map(f),
-            pose: (self.pose.iter())
-                .map(|p| Pose {
-                    rot: p.rot.map(f),
-                    trans: p.trans.map(f),
-                })
-                .collect(),
+            pose: self.pose.iter().map(|p| p.map(f)).collect(),
             cm: self.cm.iter().map(|x| x.map(f)).collect(),
         }
     }
@@ -465,12 +460,7 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         twist,
         de,
         phi_q,
-        pose: (p0.iter())
-            .map(|p| Pose {
-                rot: p.rot.map(|c| c.re),
-                trans: p.trans.map(|c| c.re),
-            })
-            .collect(),
+        pose: p0.iter().map(|p| p.map(|c| c.re)).collect(),
         cm: p0
             .iter()
             .zip(&partial.bodies)
@@ -484,17 +474,22 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
 /// translation (global axes).
 #[derive(Debug, Clone, Copy)]
 struct Motion<T: Real> {
+    /// `ω`.
     w: V3<T>,
+    /// `α`.
     a: V3<T>,
+    /// `ḋ`.
     d: V3<T>,
+    /// `d̈`.
     dd: V3<T>,
 }
 
 /// Every body's [`Motion`] at `(q, q̇, q̈)` from its pose at `q`, in one pass from the root
-/// (the forward pass of the recursive Newton–Euler algorithm: Featherstone, *Rigid Body Dynamics
-/// Algorithms*, Springer 2008, §5.3, with the angular quantities in the bodies' own axes). Each joint's relative pose `(R, t)` is evaluated over
-/// second-order dual numbers in time, alone; its rates `ω_r = axial(RᵀṘ)`, `α_r = axial(RᵀR̈)`,
-/// `ṫ`, `ẗ` are composed with the parent's (pose `A_p`):
+/// (the forward pass of the recursive Newton–Euler algorithm: Featherstone, *Rigid Body
+/// Dynamics Algorithms*, Springer 2008, §5.3, with the angular quantities in the bodies' own
+/// axes). Each joint's relative pose `(R, t)` is evaluated over second-order dual numbers in
+/// time, alone; its rates `ω_r = axial(RᵀṘ)`, `α_r = axial(RᵀR̈)`, `ṫ`, `ẗ` are composed with
+/// the parent's (pose `A_p`):
 ///
 /// ```text
 /// ω = Rᵀω_p + ω_r        α = Rᵀα_p + (Rᵀω_p) × ω_r + α_r
