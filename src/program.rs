@@ -32,7 +32,7 @@ use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use crate::model::Model;
 use crate::real::Real;
 use crate::route::Equations;
-use crate::tape::{Forward, NativePass, Seeding, Tape, Var, record};
+use crate::tape::{Forward, NativePass, Rows, Seeding, Tape, Var, record};
 use nalgebra::{DMatrix, DVector};
 use std::cell::{OnceCell, RefCell};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -495,23 +495,49 @@ pub struct Linear<S: Real = f64> {
 impl<S: Real> Linear<S> {
     /// From a forward pass with [`Program::linear`]'s lanes over the `full` program's outputs
     /// (`F`, then the entries of `Φ_R`), with the constraints' curvature when `curvature`.
-    fn from_forward(mut f: Vec<S>, d: &[S], nf: usize, m: usize, curvature: bool) -> Self {
-        let lanes = 3 * nf;
-        let at = |r: usize, l: usize| d[r * lanes + l];
+    fn from_forward(mut f: Vec<S>, d: &Rows<'_, S>, nf: usize, m: usize, curvature: bool) -> Self {
         let nd = (f.len() - nf - m - m * nf) / (1 + m);
         let phi_d = DMatrix::from_row_slice(m, nd, &f[f.len() - m * nd..]);
         let drive = f[nf + m + m * nf..nf + m + m * nf + nd].to_vec();
         f.truncate(nf + m);
+        // The lanes of coordinate `c` are `3c` (`q_c`), `3c + 1` (`q̇_c`), `3c + 2` (`q̈_c`).
+        let zero = S::from(0.0);
+        let mut jacobian = DMatrix::from_element(nf + m, nf + m, zero);
+        let mut damping = DMatrix::from_element(nf, nf, zero);
+        let mut mass = DMatrix::from_element(nf, nf, zero);
+        for r in 0..nf + m {
+            let row = d.row(r);
+            for c in 0..nf {
+                jacobian[(r, c)] = row[3 * c];
+                if r < nf {
+                    damping[(r, c)] = row[3 * c + 1];
+                    mass[(r, c)] = row[3 * c + 2];
+                } else {
+                    // `Φ_R`'s transpose: the multipliers' columns of the `r` rows.
+                    jacobian[(c, r)] = row[3 * c];
+                }
+            }
+        }
+        let curvature = (0..if curvature { m } else { 0 })
+            .map(|k| {
+                let mut h = DMatrix::from_element(nf, nf, zero);
+                for j in 0..nf {
+                    let row = d.row(nf + m + k * nf + j);
+                    for i in 0..nf {
+                        h[(j, i)] = row[3 * i];
+                    }
+                }
+                h
+            })
+            .collect();
         Linear {
             drive,
             phi_d,
             residual: f,
-            jacobian: jacobian(d, lanes, 3, nf, m),
-            damping: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 1)),
-            mass: DMatrix::from_fn(nf, nf, |r, c| at(r, 3 * c + 2)),
-            curvature: (0..if curvature { m } else { 0 })
-                .map(|k| DMatrix::from_fn(nf, nf, |j, i| at(nf + m + k * nf + j, 3 * i)))
-                .collect(),
+            jacobian,
+            damping,
+            mass,
+            curvature,
         }
     }
 
@@ -540,17 +566,30 @@ impl Linear {
             delta.len(),
             "multipliers are shifted on an evaluation with the constraints' curvature"
         );
+        let curvature = std::mem::take(&mut self.curvature);
         let nf = self.mass.nrows();
-        for (k, (&dk, h)) in delta.iter().zip(&self.curvature).enumerate() {
+        self.shift(delta, nf, |k, j| &curvature[k].as_slice()[j..]);
+        self.curvature = curvature;
+    }
+
+    /// [`Linear::shift_multipliers`] with the curvature `∂²Φ_k/∂q_j∂q_i` at
+    /// `row(k, j)[stride · i]`.
+    fn shift<'h>(&mut self, delta: &[f64], stride: usize, row: impl Fn(usize, usize) -> &'h [f64]) {
+        let nf = self.mass.nrows();
+        let rows = self.jacobian.nrows();
+        for (k, &dk) in delta.iter().enumerate() {
             for j in 0..nf {
                 self.residual[j] += self.jacobian[(j, nf + k)] * dk;
             }
             for (j, v) in self.drive.iter_mut().enumerate() {
                 *v += self.phi_d[(k, j)] * dk;
             }
-            for i in 0..nf {
-                for j in 0..nf {
-                    self.jacobian[(j, i)] += h[(j, i)] * dk;
+            // The `q_R` block (column-major: entry `(j, i)` at `j + rows · i`).
+            let jac = self.jacobian.as_mut_slice();
+            for j in 0..nf {
+                let h = row(k, j);
+                for i in 0..nf {
+                    jac[j + rows * i] += h[stride * i] * dk;
                 }
             }
         }
@@ -656,8 +695,29 @@ impl Instance<'_> {
         (f, jacobian(&d, pr.free.len(), 1, pr.free.len(), pr.m))
     }
 
-    /// `F`, its Jacobian, `C`, `M` and the drive rows in one forward pass.
+    /// `F`, its Jacobian, `C`, `M`, the constraints' curvature and the drive rows in one
+    /// forward pass.
     pub fn linear(&self, q: &[f64], lambda: &[f64]) -> Linear {
+        self.full_pass(q, lambda, |f, d| {
+            Linear::from_forward(f, d, self.program.free.len(), self.program.m, true)
+        })
+    }
+
+    /// [`Instance::linear`] without the curvature (which only a shift of the multipliers
+    /// reads).
+    fn linear_plain(&self, q: &[f64], lambda: &[f64]) -> Linear {
+        self.full_pass(q, lambda, |f, d| {
+            Linear::from_forward(f, d, self.program.free.len(), self.program.m, false)
+        })
+    }
+
+    /// `full`'s forward pass with [`Program::linear`]'s lanes at `(q, λ)`, read by `read`.
+    fn full_pass<R>(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        read: impl FnOnce(Vec<f64>, &Rows<'_, f64>) -> R,
+    ) -> R {
         self.set(q, lambda);
         let pr = self.program;
         let mut work = self.work.borrow_mut();
@@ -669,9 +729,9 @@ impl Instance<'_> {
             }
             None => pr
                 .full
-                .forward(&self.full, &x, &pr.linear, &mut work.linear),
+                .forward_rows(&self.full, &x, &pr.linear, &mut work.linear),
         };
-        Linear::from_forward(f, &d, pr.free.len(), pr.m, true)
+        read(f, &d)
     }
 }
 
@@ -724,8 +784,10 @@ impl Program {
     pub fn linear_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Linear<S> {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let fixed = self.full.eval_static(&x);
-        let (f, d) = with_buffer(|work| self.full.forward(&fixed, &x, &self.linear, work));
-        Linear::from_forward(f, &d, self.free.len(), self.m, false)
+        with_buffer(|work| {
+            let (f, d) = self.full.forward_rows(&fixed, &x, &self.linear, work);
+            Linear::from_forward(f, &d, self.free.len(), self.m, false)
+        })
     }
 }
 
@@ -783,7 +845,7 @@ impl Equations<f64> for Instance<'_> {
         independent: &[usize],
         _stiffness: Option<&DMatrix<f64>>,
     ) -> Result<Linearization<f64>, LinearizeError> {
-        self.linear(q, lambda)
+        self.linear_plain(q, lambda)
             .reduce(&self.program.free, independent)
     }
 }
@@ -794,7 +856,7 @@ impl Solvable for Instance<'_> {
     }
 
     fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
-        let lin = self.linear(q, lambda);
+        let lin = self.linear_plain(q, lambda);
         (
             lin.residual,
             lin.jacobian,
@@ -807,12 +869,16 @@ impl Solvable for Instance<'_> {
     /// multipliers ([`Linear::shift_multipliers`]).
     fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
         let (nf, m) = (self.program.free.len(), self.program.m);
-        let mut lin = self.linear(q, &vec![0.0; m]);
-        let lambda = least_squares(
-            lin.jacobian.view((0, nf), (nf, m)).into_owned(),
-            DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
-        );
-        lin.shift_multipliers(&lambda);
+        let (lambda, lin) = self.full_pass(q, &vec![0.0; m], |f, d| {
+            let mut lin = Linear::from_forward(f, d, nf, m, false);
+            let lambda = least_squares(
+                lin.jacobian.view((0, nf), (nf, m)).into_owned(),
+                DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
+            );
+            // The curvature read where the pass left it, not gathered into matrices first.
+            lin.shift(&lambda, 3, |k, j| d.row(nf + m + k * nf + j));
+            (lambda, lin)
+        });
         (
             lambda,
             (
@@ -826,7 +892,7 @@ impl Solvable for Instance<'_> {
 
     /// The recorded drive rows are those of the model's driven coordinates, in order.
     fn drive_rows(&self, q: &[f64], lambda: &[f64], _driven: &[usize]) -> Vec<f64> {
-        self.linear(q, lambda).drive
+        self.linear_plain(q, lambda).drive
     }
 
     fn residual_at_drive_offsets(

@@ -31,6 +31,7 @@ pub use native::NativePass;
 use crate::real::Real;
 use num_dual::{Dual, DualNum, DualStruct, Mappable};
 use num_traits::{FromPrimitive, Inv, Num, One, Signed, Zero};
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::fmt;
@@ -1319,8 +1320,9 @@ impl Tape {
 
     /// Forward mode with several directions (lanes) at once: values of every output and first
     /// derivatives of the seeding's differentiated outputs along its directions. Returns the
-    /// outputs' values and those derivatives (`differentiated × lanes`, row-major). The local derivative of each elementary
-    /// function comes from evaluating it over a dual number; the lanes carry the chain rule.
+    /// outputs' values and those derivatives (`differentiated × lanes`, row-major). The local
+    /// derivative of each elementary function comes from evaluating it over a dual number; the
+    /// lanes carry the chain rule.
     pub fn forward<S: Real>(
         &self,
         fixed: &[S],
@@ -1328,6 +1330,23 @@ impl Tape {
         seeding: &Seeding,
         work: &mut Forward<S>,
     ) -> (Vec<S>, Vec<S>) {
+        let (values, rows) = self.forward_rows(fixed, x, seeding, work);
+        let mut derivs = Vec::with_capacity(rows.len() * seeding.lanes);
+        for k in 0..rows.len() {
+            derivs.extend_from_slice(rows.row(k));
+        }
+        (values, derivs)
+    }
+
+    /// [`Tape::forward`], the derivatives read where the pass left them (copying them out
+    /// took about 2 of the 30 µs of the 12-arm governor's exact evaluation, `perf`).
+    pub fn forward_rows<'w, S: Real>(
+        &self,
+        fixed: &[S],
+        x: &[S],
+        seeding: &Seeding,
+        work: &'w mut Forward<S>,
+    ) -> (Vec<S>, Rows<'w, S>) {
         if !seeding.blocks.is_empty() {
             let (nd, lanes) = (seeding.differentiated, seeding.lanes);
             let mut derivs = vec![S::from(0.0); nd * lanes];
@@ -1341,13 +1360,22 @@ impl Tape {
                 }
                 values = v;
             }
-            return (values, derivs);
+            return (
+                values,
+                Rows {
+                    start: (0..nd).map(|r| r * lanes).collect(),
+                    lanes,
+                    tan: Cow::Owned(derivs),
+                },
+            );
         }
+        let stride = seeding.lanes + CHUNK - 1;
         if seeding.slots.reuse {
-            self.forward_with::<S, true>(fixed, x, seeding, work)
+            self.forward_with::<S, true>(fixed, x, seeding, work, stride);
         } else {
-            self.forward_with::<S, false>(fixed, x, seeding, work)
+            self.forward_with::<S, false>(fixed, x, seeding, work, stride);
         }
+        self.read_outputs(&work.val, &work.tan, seeding, stride)
     }
 
     /// [`Tape::forward`] with rows shared or not (two compiled loops: the small programs'
@@ -1358,12 +1386,11 @@ impl Tape {
         x: &[S],
         seeding: &Seeding,
         work: &mut Forward<S>,
-    ) -> (Vec<S>, Vec<S>) {
-        let lanes = seeding.lanes;
-        let stride = lanes + CHUNK - 1;
+        stride: usize,
+    ) {
         let ns = self.n_static;
         let zero = S::from(0.0);
-        work.val.clear();
+        // Every operation writes its value below: no clearing.
         work.val.resize(self.ops.len(), zero);
         work.val[..ns].copy_from_slice(&fixed[..ns]);
         // A row holds zeros outside what its operation wrote (`dirty`); a row taken over by
@@ -1379,7 +1406,11 @@ impl Tape {
         let (val, tan, dirty) = (&mut work.val, &mut work.tan, &mut work.dirty);
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
             let (lo, w) = seeding.range[i];
-            let at = seeding.slots.slot[i];
+            let at = if REUSE {
+                seeding.slots.slot[i]
+            } else {
+                i as u32
+            };
             if REUSE && w > 0 {
                 let (lo, w) = (lo as usize, w as usize);
                 let written = if w == 1 {
@@ -1470,39 +1501,68 @@ impl Tape {
             };
             val[i] = v;
         }
-        self.read_outputs(val, tan, seeding, stride)
     }
 
-    /// The outputs' values and the differentiated outputs' lanes after a forward pass.
-    fn read_outputs<S: Real>(
+    /// The outputs' values and where the differentiated outputs' lanes are after a forward
+    /// pass (a constant output's in the zero row after the last).
+    fn read_outputs<'w, S: Real>(
         &self,
         val: &[S],
-        tan: &[S],
+        tan: &'w [S],
         seeding: &Seeding,
         stride: usize,
-    ) -> (Vec<S>, Vec<S>) {
-        let (nd, lanes, zero) = (seeding.differentiated, seeding.lanes, S::from(0.0));
-        let mut values = Vec::with_capacity(self.outputs.len());
-        let mut derivs = Vec::with_capacity(nd * lanes);
-        for (k, o) in self.outputs.iter().enumerate() {
-            match o.term() {
-                Term::Const(c) => {
-                    values.push(S::from(c));
-                    if k < nd {
-                        derivs.extend(std::iter::repeat_n(zero, lanes));
+    ) -> (Vec<S>, Rows<'w, S>) {
+        let zero_row = seeding.slots.rows * stride;
+        let mut start = Vec::with_capacity(seeding.differentiated);
+        let values = (self.outputs.iter().enumerate())
+            .map(|(k, o)| {
+                let (value, row) = match o.term() {
+                    Term::Const(c) => (S::from(c), zero_row),
+                    Term::Node(i, _) => {
+                        let i = i as usize;
+                        (val[i], seeding.slots.slot[i] as usize * stride)
                     }
+                };
+                if k < seeding.differentiated {
+                    start.push(row);
                 }
-                Term::Node(i, _) => {
-                    let i = i as usize;
-                    values.push(val[i]);
-                    if k < nd {
-                        let row = seeding.slots.slot[i] as usize * stride;
-                        derivs.extend_from_slice(&tan[row..row + lanes]);
-                    }
-                }
-            }
-        }
-        (values, derivs)
+                value
+            })
+            .collect();
+        (
+            values,
+            Rows {
+                start,
+                lanes: seeding.lanes,
+                tan: Cow::Borrowed(tan),
+            },
+        )
+    }
+}
+
+/// The derivatives of a forward pass's differentiated outputs (see [`Tape::forward_rows`]):
+/// output `k`'s lanes are `row(k)`.
+pub struct Rows<'w, S: Clone> {
+    /// Where each output's lanes start in `tan`.
+    start: Vec<usize>,
+    lanes: usize,
+    tan: Cow<'w, [S]>,
+}
+
+impl<S: Clone> Rows<'_, S> {
+    /// Number of differentiated outputs.
+    pub fn len(&self) -> usize {
+        self.start.len()
+    }
+
+    /// Are there none?
+    pub fn is_empty(&self) -> bool {
+        self.start.is_empty()
+    }
+
+    /// The lanes of output `k`.
+    pub fn row(&self, k: usize) -> &[S] {
+        &self.tan[self.start[k]..self.start[k] + self.lanes]
     }
 }
 
@@ -1536,8 +1596,9 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
     /// is freed after the operation's row is taken).
     #[inline(always)]
     fn map<S: Copy, const K: usize>(&self, tan: &mut [S], args: [u32; K], f: impl Fn([S; K]) -> S) {
-        let base = args.map(|a| self.slot[a as usize] as usize * self.stride + self.lo);
         if !REUSE {
+            // One row per operation: an operand's row is its index.
+            let base = args.map(|a| a as usize * self.stride + self.lo);
             // Every operand's row is before the operation's own.
             let (head, rest) = tan.split_at_mut(self.at * self.stride);
             let out = &mut rest[self.lo..];
@@ -1569,6 +1630,7 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
             }
             return;
         }
+        let base = args.map(|a| self.slot[a as usize] as usize * self.stride + self.lo);
         let out = self.at * self.stride + self.lo;
         if self.width == 1 {
             tan[out] = f(base.map(|b| tan[b]));

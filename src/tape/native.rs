@@ -224,16 +224,16 @@ impl Tape {
         })
     }
 
-    /// [`Tape::forward`] over `f64` through `pass`, compiled by [`Tape::compile_forward`] from
+    /// [`Tape::forward_rows`] over `f64` through `pass`, compiled by [`Tape::compile_forward`] from
     /// this program and `seeding`: the same results to the bit.
-    pub fn forward_native(
+    pub fn forward_native<'w>(
         &self,
         pass: &NativePass,
         fixed: &[f64],
         x: &[f64],
         seeding: &Seeding,
-        work: &mut super::Forward<f64>,
-    ) -> (Vec<f64>, Vec<f64>) {
+        work: &'w mut super::Forward<f64>,
+    ) -> (Vec<f64>, super::Rows<'w, f64>) {
         assert!(
             pass.ops == self.ops.len()
                 && pass.seeding == Some(seeding.id)
