@@ -15,7 +15,7 @@
 //! Kim, Yoo (2007), *Analytical tolerance analysis of the modal characteristics of multibody
 //! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
 
-use crate::linalg::least_squares;
+use crate::linalg::{Lu, least_squares};
 use crate::mechanics::dynamics::evaluate_rows;
 use crate::real::{D1, lift1};
 use crate::route::{Direct, Equations};
@@ -354,7 +354,7 @@ impl<'a> Problem<'a> {
                     (l, e, true)
                 }
             };
-        let mut lu = jac.clone().lu();
+        let mut lu = Lu::new(jac.clone());
         // Size of the last step (relative), for the contraction test.
         let mut last_step = f64::INFINITY;
         let mut converged = false;
@@ -366,15 +366,13 @@ impl<'a> Problem<'a> {
                 return Err(EquilibriumError::NotFinite { iterations });
             }
             iterations += 1;
-            let step = lu
-                .solve(&DVector::from_column_slice(&f))
-                .filter(|s| s.iter().all(|v| v.is_finite()));
+            let step = lu.solve(&f).filter(|s| s.iter().all(|v| v.is_finite()));
             let Some(step) = step else {
                 if fresh {
                     return Err(EquilibriumError::SingularJacobian { iterations });
                 }
                 (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
-                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                (lu, fresh, last_step) = (Lu::new(jac.clone()), true, f64::INFINITY);
                 continue;
             };
             let q_scale = 1.0 + self.free.iter().fold(0.0f64, |s, &i| s.max(q[i].abs()));
@@ -423,13 +421,13 @@ impl<'a> Problem<'a> {
                 if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
                     apply(&mut q, &mut lambda, 1.0);
                     (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
-                    (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                    (lu, fresh, last_step) = (Lu::new(jac.clone()), true, f64::INFINITY);
                     continue;
                 }
                 // Steps that do not contract fast: evaluate the Jacobian here.
                 if size > 0.5 * last_step {
                     (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
-                    (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                    (lu, fresh, last_step) = (Lu::new(jac.clone()), true, f64::INFINITY);
                     continue;
                 }
             }
@@ -451,7 +449,7 @@ impl<'a> Problem<'a> {
             }
             if !decreased && !fresh {
                 (f, jac, rates, drive) = self.evaluate(&q, &lambda, drive_wanted);
-                (lu, fresh, last_step) = (jac.clone().lu(), true, f64::INFINITY);
+                (lu, fresh, last_step) = (Lu::new(jac.clone()), true, f64::INFINITY);
                 continue;
             }
             (q, lambda, f) = (q_new, l_new, f_new);
