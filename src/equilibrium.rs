@@ -15,7 +15,7 @@
 //! Kim, Yoo (2007), *Analytical tolerance analysis of the modal characteristics of multibody
 //! systems in dynamic equilibrium*, eq. 13; Nocedal & Wright, *Numerical Optimization*, §11.
 
-use crate::linalg::{Lu, least_squares};
+use crate::linalg::{Lu, amax, least_squares};
 use crate::mechanics::dynamics::evaluate_rows;
 use crate::real::{D1, lift1};
 use crate::route::{Direct, Equations};
@@ -395,7 +395,7 @@ impl<'a> Problem<'a> {
             // F satisfied to rounding while the exact Jacobian's steps stay above the tolerance:
             // the steps are rounding noise through a (nearly) singular Jacobian, and Newton
             // would wander to its iteration limit. After a few such evaluations, say so.
-            if fresh && norm(&f) <= ROUNDING_FLOOR * (1.0 + jac.amax() * q_scale.max(l_scale)) {
+            if fresh && norm(&f) <= ROUNDING_FLOOR * (1.0 + amax(&jac) * q_scale.max(l_scale)) {
                 at_floor += 1;
                 if at_floor >= 3 {
                     return Err(EquilibriumError::NotIsolated {
@@ -518,8 +518,12 @@ impl<'a> Problem<'a> {
         lambda: &[f64],
         jac: &DMatrix<f64>,
     ) -> Result<(), EquilibriumError> {
-        let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
-        let tol = 1e-8 * jac.amax().max(1.0) * x_scale;
+        // Scaled by the Jacobian and the unknowns, found only when a drive is checked (a model
+        // whose drives are all steady by symmetry never needs it).
+        let tol = || {
+            let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
+            1e-8 * amax(jac).max(1.0) * x_scale
+        };
         const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
         for (d, &c) in self.driven.iter().enumerate() {
             if self.symmetric.contains(&c) {
@@ -529,7 +533,7 @@ impl<'a> Problem<'a> {
                 .route
                 .residual_at_drive_offsets(q, lambda, d, c, OFFSETS);
             let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
-            if change > tol {
+            if change > tol() {
                 return Err(EquilibriumError::NoSteadyState {
                     coordinate: self.names[c].to_string(),
                     sensitivity: change,
