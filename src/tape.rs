@@ -1184,6 +1184,7 @@ impl Tape {
         let inputs = seeds.iter().map(|s| s.0 + 1).max().unwrap_or(0);
         let mut input_lanes = vec![Vec::new(); inputs];
         for &(k, l) in seeds {
+            assert!(l < lanes, "a seed's lane is one of the seeding's lanes");
             input_lanes[k].push(l as u32);
         }
         let mut range = vec![(0u32, 0u32); self.ops.len()];
@@ -1196,6 +1197,11 @@ impl Tape {
                     .fold((u32::MAX, 0), |(lo, hi), &l| (lo.min(l), hi.max(l + 1))),
                 op => {
                     let (args, k) = op.operands();
+                    // The forward pass reads operands unchecked on this (see `forward_with`).
+                    assert!(
+                        args[..k].iter().all(|&a| (a as usize) < i),
+                        "every operand precedes its operation"
+                    );
                     args[..k].iter().fold((u32::MAX, 0), |(lo, hi), &a| {
                         let (l, h) = range[a as usize];
                         if l >= h {
@@ -1403,7 +1409,23 @@ impl Tape {
             work.dirty.resize(rows, (0, 0));
             work.seeding = seeding.id;
         }
+        // What the unchecked reads and writes below rely on, besides every operand preceding its
+        // operation (kept by the tape's constructors, asserted when a seeding is made) and the
+        // lanes' ranges lying within the lanes (asserted there too).
+        assert!(
+            seeding.range.len() == self.ops.len()
+                && (REUSE || seeding.slots.rows == self.ops.len())
+                && stride == seeding.lanes + CHUNK - 1,
+            "a seeding of this program"
+        );
         let (val, tan, dirty) = (&mut work.val, &mut work.tan, &mut work.dirty);
+        // An operand's value. SAFETY: `val` holds a value for every operation (resized above)
+        // and an operand precedes its operation, so it is in bounds and written already.
+        macro_rules! v {
+            ($a:expr) => {
+                unsafe { *val.get_unchecked($a as usize) }
+            };
+        }
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
             let (lo, w) = seeding.range[i];
             let at = if REUSE {
@@ -1448,41 +1470,41 @@ impl Tape {
                 }
                 Op::Add(a, b) => {
                     lanes.map(tan, [a, b], |[x, y]| x + y);
-                    val[a as usize] + val[b as usize]
+                    v!(a) + v!(b)
                 }
                 Op::Sub(a, b) => {
                     lanes.map(tan, [a, b], |[x, y]| x - y);
-                    val[a as usize] - val[b as usize]
+                    v!(a) - v!(b)
                 }
                 Op::Mul(a, b) => {
-                    let (va, vb) = (val[a as usize], val[b as usize]);
+                    let (va, vb) = (v!(a), v!(b));
                     lanes.map(tan, [a, b], |[x, y]| x * vb + va * y);
                     va * vb
                 }
                 Op::Neg(a) => {
                     lanes.map(tan, [a], |[x]| -x);
-                    -val[a as usize]
+                    -v!(a)
                 }
                 Op::AddC(a, c) => {
                     lanes.map(tan, [a], |[x]| x);
-                    val[a as usize] + c
+                    v!(a) + c
                 }
                 Op::MulC(a, c) => {
                     lanes.map(tan, [a], |[x]| x * c);
-                    val[a as usize] * c
+                    v!(a) * c
                 }
                 Op::MulAdd(a, b, c) => {
-                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
                     lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y + z);
                     va * vb + vc
                 }
                 Op::MulSub(a, b, c) => {
-                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
                     lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y - z);
                     va * vb - vc
                 }
                 Op::SubMul(a, b, c) => {
-                    let (va, vb, vc) = (val[a as usize], val[b as usize], val[c as usize]);
+                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
                     lanes.map(tan, [a, b, c], |[x, y, z]| z - (x * vb + va * y));
                     vc - va * vb
                 }
@@ -1499,7 +1521,8 @@ impl Tape {
                     v
                 }
             };
-            val[i] = v;
+            // SAFETY: `i` is an operation's index and `val` holds one value for each.
+            unsafe { *val.get_unchecked_mut(i) = v };
         }
     }
 
@@ -1596,55 +1619,34 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
     /// is freed after the operation's row is taken).
     #[inline(always)]
     fn map<S: Copy, const K: usize>(&self, tan: &mut [S], args: [u32; K], f: impl Fn([S; K]) -> S) {
-        if !REUSE {
-            // One row per operation: an operand's row is its index.
-            let base = args.map(|a| a as usize * self.stride + self.lo);
-            // Every operand's row is before the operation's own.
-            let (head, rest) = tan.split_at_mut(self.at * self.stride);
-            let out = &mut rest[self.lo..];
-            if self.width == 1 {
-                out[0] = f(base.map(|b| head[b]));
-                return;
-            }
-            let mut k = 0;
-            if wide::<S>() {
-                // Lane by lane (see [`wide`]).
-                while k < self.width {
-                    for (j, o) in out[k..k + CHUNK].iter_mut().enumerate() {
-                        *o = f(base.map(|b| head[b + k + j]));
-                    }
-                    k += CHUNK;
-                }
-                return;
-            }
-            while k < self.width {
-                let chunk: [[S; CHUNK]; K] = base.map(|b| {
-                    head[b + k..b + k + CHUNK]
-                        .try_into()
-                        .expect("a chunk is CHUNK long")
-                });
-                for (j, o) in out[k..k + CHUNK].iter_mut().enumerate() {
-                    *o = f(chunk.map(|c| c[j]));
-                }
-                k += CHUNK;
-            }
-            return;
-        }
-        let base = args.map(|a| self.slot[a as usize] as usize * self.stride + self.lo);
-        let out = self.at * self.stride + self.lo;
-        if self.width == 1 {
-            tan[out] = f(base.map(|b| tan[b]));
-            return;
-        }
-        // Raw reads and writes: this loop indexed through slices spends twice the time of the
-        // one above (the 12-arm governor's exact evaluation with shared rows 95–113 µs, with
-        // these 65–68 µs). One check per operation keeps it in bounds.
         let chunks = self.width.div_ceil(CHUNK) * CHUNK;
-        assert!(
-            out + chunks <= tan.len() && base.iter().all(|&b| b + chunks <= tan.len()),
-            "a forward pass's lanes stay in their rows"
-        );
+        let (base, out) = if REUSE {
+            let base = args.map(|a| self.slot[a as usize] as usize * self.stride + self.lo);
+            let out = self.at * self.stride + self.lo;
+            // Raw reads and writes: this loop indexed through slices spends twice the time
+            // (the 12-arm governor's exact evaluation with shared rows 95–113 µs, with these
+            // 65–68 µs). One check per operation keeps it in bounds.
+            assert!(
+                out + chunks <= tan.len() && base.iter().all(|&b| b + chunks <= tan.len()),
+                "a forward pass's lanes stay in their rows"
+            );
+            (base, out)
+        } else {
+            // One row per operation: an operand's row is its index, below the operation's own.
+            // In bounds without a check: `forward_with` asserted a row per operation and one
+            // zero row, every operand precedes its operation, and a range of lanes rounded up
+            // to whole chunks ends within the row's `stride = lanes + CHUNK − 1`.
+            (
+                args.map(|a| a as usize * self.stride + self.lo),
+                self.at * self.stride + self.lo,
+            )
+        };
         let p = tan.as_mut_ptr();
+        if self.width == 1 {
+            // SAFETY: in bounds as said above; no reference into `tan` is alive.
+            unsafe { std::ptr::write(p.add(out), f(base.map(|b| std::ptr::read(p.add(b))))) };
+            return;
+        }
         let mut k = 0;
         if wide::<S>() {
             // Lane by lane (see [`wide`]): lane `j` of the output is written after lane `j` of
@@ -1661,7 +1663,7 @@ impl<const REUSE: bool> Lanes<'_, REUSE> {
             return;
         }
         while k < self.width {
-            // SAFETY: every chunk read and written lies in `tan` by the assertion above and is
+            // SAFETY: every chunk read and written lies in `tan` (as said above) and is
             // aligned as `S` is (an array has its element's alignment); no reference into
             // `tan` is alive meanwhile, and each chunk is copied out before the output's is
             // written, so an operand sharing the output's row would still read its old values.
