@@ -518,12 +518,12 @@ impl<'a> Problem<'a> {
         lambda: &[f64],
         jac: &DMatrix<f64>,
     ) -> Result<(), EquilibriumError> {
-        // Scaled by the Jacobian and the unknowns, found only when a drive is checked (a model
-        // whose drives are all steady by symmetry never needs it).
-        let tol = || {
+        // Scaled by the Jacobian and the unknowns, found once and only when a drive is checked
+        // (a model whose drives are all steady by symmetry never needs it).
+        let tol = std::cell::LazyCell::new(|| {
             let x_scale = 1.0 + q.iter().chain(lambda).fold(0.0f64, |s, v| s.max(v.abs()));
             1e-8 * amax(jac).max(1.0) * x_scale
-        };
+        });
         const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
         for (d, &c) in self.driven.iter().enumerate() {
             if self.symmetric.contains(&c) {
@@ -533,7 +533,7 @@ impl<'a> Problem<'a> {
                 .route
                 .residual_at_drive_offsets(q, lambda, d, c, OFFSETS);
             let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
-            if change > tol() {
+            if change > *tol {
                 return Err(EquilibriumError::NoSteadyState {
                     coordinate: self.names[c].to_string(),
                     sensitivity: change,
