@@ -10,12 +10,14 @@
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
+use crate::modal::ModeClass;
 use crate::model::Case;
 use crate::montecarlo::{self, Block, McOptions, McStat, TreeFold};
+use crate::output::Missing;
 use crate::quadrature::{self, Event, QuadOptions, QuadStat};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{
-    KINK_SIGMAS, LocalModel, Output, Quantity, Spread, discriminant, first_order, invariant,
+    KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat, discriminant, first_order, invariant,
     local_model, outputs, second_order,
 };
 use std::sync::Mutex;
@@ -73,6 +75,8 @@ pub struct Row {
     pub quantiles: Option<[f64; 3]>,
     /// Error estimates of the mean and σ (quadrature).
     pub errors: Option<(f64, f64)>,
+    /// Why the method gives no mean and σ here (`mean`, `std` are then NaN).
+    pub missing: Option<Missing>,
 }
 
 /// Probability of a change of character at one speed, by one method.
@@ -406,6 +410,11 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                         basis: None,
                         quantiles: st.quantiles,
                         errors: None,
+                        missing: (!st.mean.is_finite()).then(|| {
+                            nominal[si]
+                                .as_ref()
+                                .map_or(Missing::NoValue, |pt| no_value(pt, o))
+                        }),
                     });
                 }
             }
@@ -431,7 +440,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
 }
 
 /// First-order, second-order, (for ω_d) invariant, quadrature and the `analytic` rows of one
-/// speed and case.
+/// speed and case; a method that gives no value says why in its row.
 fn analytic_rows(
     speed: f64,
     case: usize,
@@ -440,91 +449,125 @@ fn analytic_rows(
     quad: Option<&[Option<QuadStat>]>,
 ) -> Vec<Row> {
     let mut rows = Vec::new();
-    let row = |o: &Output, method, mean: f64, std: f64, shares, basis| Row {
-        speed,
-        quantity: o.quantity,
-        mode: o.mode,
-        case,
-        method,
-        mean,
-        std,
-        mc: None,
-        shares,
-        basis,
-        quantiles: None,
-        errors: None,
+    let row = |o: &Output, method, stat: Result<Stat, Missing>, shares, basis| {
+        let (mean, std, missing) = match stat {
+            Ok(st) => (st.mean, st.std, None),
+            Err(e) => (f64::NAN, f64::NAN, Some(e)),
+        };
+        Row {
+            speed,
+            quantity: o.quantity,
+            mode: o.mode,
+            case,
+            method,
+            mean,
+            std,
+            mc: None,
+            shares,
+            basis,
+            quantiles: None,
+            errors: None,
+            missing,
+        }
     };
     for (k, o) in lm.outputs.iter().enumerate() {
         let v = lm.value[k];
-        let (fo, so) = match &lm.grad[k] {
-            Some(g) => {
-                let (st, shares) = first_order(v, g, s);
-                rows.push(row(
-                    o,
-                    Method::FirstOrder,
-                    st.mean,
-                    st.std,
-                    Some(shares),
-                    None,
-                ));
-                let so = lm.hess[k].as_ref().map(|h| second_order(v, g, h, s));
-                (Some(st), so)
-            }
-            None => {
-                rows.push(row(o, Method::FirstOrder, f64::NAN, f64::NAN, None, None));
-                (None, None)
-            }
-        };
-        let so_ms = so.map_or((f64::NAN, f64::NAN), |st| (st.mean, st.std));
-        rows.push(row(o, Method::SecondOrder, so_ms.0, so_ms.1, None, None));
+        let fo = lm.grad[k].clone().map(|g| first_order(v, &g, s));
+        let shares = fo.as_ref().ok().map(|(_, shares)| shares.clone());
+        let fo = fo.map(|(st, _)| st);
+        rows.push(row(o, Method::FirstOrder, fo.clone(), shares, None));
+        let so = lm.grad[k]
+            .clone()
+            .and_then(|g| lm.hess[k].clone().map(|h| second_order(v, &g, &h, s)));
+        rows.push(row(o, Method::SecondOrder, so.clone(), None, None));
         let mut choice = so
+            .clone()
             .map(|st| (Method::SecondOrder, st))
             .or(fo.map(|st| (Method::FirstOrder, st)));
         if let (Quantity::DampedFrequency, Some(m)) = (o.quantity, o.mode) {
             let (d, g, h) = &lm.disc[m];
-            let inv = g.as_ref().map(|g| {
-                let dst = discriminant(*d, g, h.as_ref(), s);
-                (invariant(*d, g, h.as_ref(), s), dst)
+            let inv = g.clone().map(|g| {
+                let h = h.as_ref().ok();
+                (invariant(*d, &g, h, s), discriminant(*d, &g, h, s))
             });
-            let ms = inv.map_or((f64::NAN, f64::NAN), |(st, _)| (st.mean, st.std));
-            rows.push(row(o, Method::Invariant, ms.0, ms.1, None, None));
-            if let Some((st, dst)) = inv
-                && (choice.is_none() || dst.mean.abs() < KINK_SIGMAS * dst.std)
+            rows.push(row(
+                o,
+                Method::Invariant,
+                inv.clone().map(|(st, _)| st),
+                None,
+                None,
+            ));
+            if let Ok((st, dst)) = inv
+                && (choice.is_err() || dst.mean.abs() < KINK_SIGMAS * dst.std)
             {
-                choice = Some((Method::Invariant, st));
+                choice = Ok((Method::Invariant, st));
             }
         }
-        let q = quad.and_then(|q| q.get(k).copied().flatten());
-        if let Some(q) = q {
+        let q = quad.map(|q| {
+            q.get(k)
+                .copied()
+                .flatten()
+                .ok_or_else(|| quadrature_missing(lm, k))
+        });
+        if let Some(q) = &q {
+            let stat = q.clone().map(|q| Stat {
+                mean: q.mean,
+                std: q.std,
+            });
             rows.push(Row {
-                quantiles: Some(q.quantiles),
-                errors: Some((q.mean_error, q.std_error)),
-                ..row(o, Method::Quadrature, q.mean, q.std, None, None)
+                quantiles: q.as_ref().ok().map(|q| q.quantiles),
+                errors: q.as_ref().ok().map(|q| (q.mean_error, q.std_error)),
+                ..row(o, Method::Quadrature, stat, None, None)
             });
         }
         let answer = match q {
-            Some(q) => Row {
+            Some(Ok(q)) => Row {
                 quantiles: Some(q.quantiles),
                 errors: Some((q.mean_error, q.std_error)),
                 ..row(
                     o,
                     Method::Analytic,
-                    q.mean,
-                    q.std,
+                    Ok(Stat {
+                        mean: q.mean,
+                        std: q.std,
+                    }),
                     None,
                     Some(Method::Quadrature),
                 )
             },
-            None => {
-                let (basis, mean, std) = choice.map_or((None, f64::NAN, f64::NAN), |(m, st)| {
-                    (Some(m), st.mean, st.std)
-                });
-                row(o, Method::Analytic, mean, std, None, basis)
-            }
+            _ => match choice {
+                Ok((m, st)) => row(o, Method::Analytic, Ok(st), None, Some(m)),
+                Err(e) => row(o, Method::Analytic, Err(e), None, None),
+            },
         };
         rows.push(answer);
     }
     rows
+}
+
+/// Why a sampling method has no value for output `o` at a speed whose nominal point is `pt`:
+/// the output has none there either (the damping ratio of a rigid-body mode), or no sample
+/// gave one.
+fn no_value(pt: &Point, o: &Output) -> Missing {
+    match (
+        o.quantity,
+        o.mode.and_then(|m| pt.modes.get(m).map(|x| (m, x))),
+    ) {
+        (Quantity::DampingRatio, Some((mode, m))) if m.class == ModeClass::Rigid => {
+            Missing::RigidDamping { mode }
+        }
+        _ => Missing::NoValue,
+    }
+}
+
+/// Why the quadrature has no value for output `k`: the output has none at the nominal point
+/// either (the damping ratio of a rigid-body mode), or no node gave one.
+fn quadrature_missing(lm: &LocalModel, k: usize) -> Missing {
+    match (lm.outputs[k].quantity, lm.outputs[k].mode, &lm.grad[k]) {
+        (Quantity::DampingRatio, Some(_), Err(e @ Missing::RigidDamping { .. })) => e.clone(),
+        (Quantity::TransferMagnitude, _, Err(e @ Missing::TransferUnbounded)) => e.clone(),
+        _ => Missing::NoValue,
+    }
 }
 
 /// Monte Carlo probabilities of character at one speed from the event counts of its

@@ -35,8 +35,8 @@
 use crate::compiled::Compiled;
 use crate::frf::transfer;
 use crate::mechanics::ports::ports_at;
-use crate::modal::{C64, Root};
-use crate::output::{Output, Quantity};
+use crate::modal::{C64, Root, Smoothness, smoothness};
+use crate::output::{Missing, Output, Quantity};
 use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
@@ -81,18 +81,21 @@ impl Jet for Dual2_64 {
 }
 
 /// First and second derivatives at one point: per output (as [`crate::output::outputs`]
-/// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; `None` where the
-/// output is not differentiable there (roots coalescing, `H` through zero).
+/// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; where an output is
+/// not differentiable there (roots coalescing or repeated, a rigid-body mode, `H` through zero),
+/// the reason instead.
 #[derive(Debug, Clone)]
 pub struct Hessians {
-    pub gradients: Vec<Option<Vec<f64>>>,
-    pub outputs: Vec<Option<DMatrix<f64>>>,
-    pub discriminant_gradients: Vec<Option<Vec<f64>>>,
-    pub discriminant: Vec<Option<DMatrix<f64>>>,
+    pub gradients: Vec<Result<Vec<f64>, Missing>>,
+    pub outputs: Vec<Result<DMatrix<f64>, Missing>>,
+    pub discriminant_gradients: Vec<Result<Vec<f64>, Missing>>,
+    pub discriminant: Vec<Result<DMatrix<f64>, Missing>>,
 }
 
-/// Second-order expansion of one root `λ(b)` by two chord iterations on the bordered eigen
-/// equations; `None` when the root is not simple.
+/// Second-order expansion of one simple root `λ(b)` by two chord iterations on the bordered
+/// eigen equations (whether the root is simple is decided beforehand, by
+/// [`crate::modal::smoothness`], scale-invariantly); `None` only where the bordered Jacobian
+/// is exactly singular.
 fn root_expansion<J: Jet>(
     root: &Root,
     (m, c, k): (&DMatrix<J>, &DMatrix<J>, &DMatrix<J>),
@@ -110,13 +113,7 @@ fn root_expansion<J: Jet>(
     j0.view_mut((0, 0), (n, n)).copy_from(&p0);
     j0.view_mut((0, n), (n, 1)).copy_from(&dp0);
     j0.view_mut((n, 0), (1, n)).copy_from(&w.transpose());
-    let scale = j0.iter().fold(0.0f64, |s, z| s.max(z.norm()));
     let lu = j0.lu();
-    // A (nearly) singular bordered Jacobian: a multiple root, not differentiable.
-    let det = lu.determinant().norm();
-    if det.is_nan() || det <= 1e-10 * scale.powi(n as i32 + 1) {
-        return None;
-    }
     let lift = |z: C64| Complex::new(J::from(z.re), J::from(z.im));
     let mut x: Vec<Complex<J>> = x0.iter().map(|&z| lift(z)).collect();
     let mut lambda = lift(l0);
@@ -154,20 +151,22 @@ fn root_expansion<J: Jet>(
 }
 
 /// The outputs `outs` and each mode's discriminant as jets: the pipeline at `pt` evaluated with
-/// the parameters `seeded` (`None` where an output is not differentiable there).
-type Jets<J> = (Vec<Option<J>>, Vec<Option<J>>);
+/// the parameters `seeded` (the reason where an output is not differentiable there).
+type Jets<J> = (Vec<Result<J, Missing>>, Vec<Result<J, Missing>>);
 
 fn expand<J: Jet>(
     model: &Compiled,
     seeded: &[J],
     pt: &Point,
+    smooth: &[Smoothness],
     outs: &[Output],
     tf: Option<TransferAt>,
 ) -> Result<Jets<J>, PointError> {
     let eq = &pt.equilibrium;
     let free = &pt.linear.free;
     let nf = free.len();
-    let lu = eq.jacobian.clone().lu();
+    // Equilibria are factorised balanced: a model's scale does not cost the steps accuracy.
+    let lu = eq.factor();
     let equations = model.equations(seeded, J::from(pt.speed), &eq.q)?;
     let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
     let mut lambda: Vec<J> = eq.lambda.iter().map(|&v| J::from(v)).collect();
@@ -176,7 +175,7 @@ fn expand<J: Jet>(
         let f = equations.residual(&q, &lambda);
         for pk in 1..J::PARTS {
             let rhs = DVector::from_iterator(f.len(), f.iter().map(|v| v.part(pk)));
-            let d = lu.solve(&rhs).ok_or(PointError::Equilibrium(
+            let d = lu.solve(rhs.as_slice()).ok_or(PointError::Equilibrium(
                 crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
             ))?;
             for (k, &i) in free.iter().enumerate() {
@@ -194,57 +193,79 @@ fn expand<J: Jet>(
         .with_ports(ports_at(model, seeded, J::from(pt.speed), &q, free)?);
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
-    // Per mode: ω_d, ζ and D (ω_d and ζ not where the roots coalesce, as in
-    // [`crate::sensitivity`]).
-    let mut mode_values = Vec::with_capacity(pt.modes.len());
-    for md in &pt.modes {
-        let (l1, l2) = (md.root.lambda, md.partner.lambda);
-        let scale = l1.norm().max(l2.norm()).max(1e-300);
-        let separate = (l1 - l2).norm() > 1e-6 * scale;
-        let r1 = root_expansion(&md.root, mats).filter(|_| separate);
-        let r2 = root_expansion(&md.partner, mats).filter(|_| separate);
-        let roots = r1.zip(r2);
-        let invariants = if one_dof {
-            let (m0, c0, k0) = (lin.m[(0, 0)], lin.c[(0, 0)], lin.k[(0, 0)]);
-            Some((-c0 / m0, k0 / m0))
-        } else {
-            roots.map(|(l1, l2)| ((l1 + l2).re, (l1 * l2).re))
-        };
-        let wd = r1.map(|l1| {
-            if md.root.lambda.im > 0.0 {
-                l1.im
+    // Per mode: ω_d, ζ and D, or why not.
+    let mode_values: Vec<[Result<J, Missing>; 3]> = pt
+        .modes
+        .iter()
+        .zip(smooth)
+        .enumerate()
+        .map(|(i, (md, &why))| {
+            let not = Missing::Mode { mode: i, why };
+            let roots = match why {
+                Smoothness::Rigid => {
+                    return [
+                        Err(not.clone()),
+                        Err(Missing::RigidDamping { mode: i }),
+                        Err(not),
+                    ];
+                }
+                Smoothness::Repeated { .. } => {
+                    return [Err(not.clone()), Err(not.clone()), Err(not)];
+                }
+                // Coalescing roots are not differentiable one by one; their sum and product
+                // are, and for one degree of freedom come straight from the matrices.
+                Smoothness::Coalescing => Err(not),
+                Smoothness::Simple => root_expansion(&md.root, mats)
+                    .zip(root_expansion(&md.partner, mats))
+                    .ok_or(Missing::SingularExpansion { mode: i }),
+            };
+            let invariants = if one_dof {
+                let (m0, c0, k0) = (lin.m[(0, 0)], lin.c[(0, 0)], lin.k[(0, 0)]);
+                Ok((-c0 / m0, k0 / m0))
             } else {
-                J::from(0.0)
-            }
-        });
-        let zeta = roots.and(invariants).map(|(s, pr)| {
-            let pr = if pr.re() < 0.0 { -pr } else { pr };
-            -s / (pr.sqrt() * 2.0)
-        });
-        let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
-        mode_values.push((wd, zeta, d));
-    }
+                roots.clone().map(|(l1, l2)| ((l1 + l2).re, (l1 * l2).re))
+            };
+            let wd = roots.map(|(l1, _)| {
+                if md.root.lambda.im > 0.0 {
+                    l1.im
+                } else {
+                    J::from(0.0)
+                }
+            });
+            let zeta = invariants.clone().map(|(s, pr)| {
+                let pr = if pr.re() < 0.0 { -pr } else { pr };
+                -s / (pr.sqrt() * 2.0)
+            });
+            let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
+            [wd, zeta, d]
+        })
+        .collect();
     // |H| is not differentiable where H passes through zero, unless H vanishes identically
     // to this order (a transfer that symmetry makes zero): then |H| ≡ 0.
-    let h = tf.and_then(|t| {
-        let h = transfer(&lin, t.input, t.output, t.omega)?;
+    let h = tf.map(|t| {
+        let h = transfer(&lin, t.input, t.output, t.omega).ok_or(Missing::TransferUnbounded)?;
         let zero = (0..J::PARTS).all(|k| h.re.part(k) == 0.0 && h.im.part(k) == 0.0);
         if h.magnitude().re() > 0.0 {
-            Some(h.magnitude())
+            Ok(h.magnitude())
+        } else if zero {
+            Ok(J::from(0.0))
         } else {
-            zero.then(|| J::from(0.0))
+            Err(Missing::TransferZero)
         }
     });
     let outputs = outs
         .iter()
         .map(|o| match (o.quantity, o.mode) {
-            (Quantity::DampedFrequency, Some(k)) => mode_values.get(k).and_then(|x| x.0),
-            (Quantity::DampingRatio, Some(k)) => mode_values.get(k).and_then(|x| x.1),
-            (Quantity::TransferMagnitude, _) => h,
-            _ => None,
+            (Quantity::DampedFrequency, Some(k)) => mode_values[k][0].clone(),
+            (Quantity::DampingRatio, Some(k)) => mode_values[k][1].clone(),
+            (Quantity::TransferMagnitude, _) => h.clone().unwrap_or(Err(Missing::NoValue)),
+            _ => Err(Missing::NoValue),
         })
         .collect();
-    Ok((outputs, mode_values.iter().map(|x| x.2).collect()))
+    Ok((
+        outputs,
+        mode_values.into_iter().map(|[_, _, d]| d).collect(),
+    ))
 }
 
 /// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
@@ -261,29 +282,45 @@ pub fn hessians(
 ) -> Result<Hessians, PointError> {
     let nv = vars.len();
     let nm = pt.modes.len();
-    let mut grad: Vec<Option<Vec<f64>>> = vec![Some(vec![0.0; nv]); outs.len()];
-    let mut dgrad: Vec<Option<Vec<f64>>> = vec![Some(vec![0.0; nv]); nm];
-    let mut hess: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); outs.len()];
-    let mut dhess: Vec<Option<DMatrix<f64>>> = vec![Some(DMatrix::zeros(nv, nv)); nm];
+    let smooth = smoothness(&pt.modes);
+    let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
+    let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
+    let mut hess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
+    let mut dhess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); nm];
+    /// Stores one gradient entry and one Hessian entry (both halves), or the first reason why
+    /// not.
     fn put(
-        g: Option<&mut Option<Vec<f64>>>,
-        h: &mut Option<DMatrix<f64>>,
+        g: Option<&mut Result<Vec<f64>, Missing>>,
+        h: &mut Result<DMatrix<f64>, Missing>,
         (a, b): (usize, usize),
-        first: Option<f64>,
-        second: Option<f64>,
+        first: Result<f64, Missing>,
+        second: Result<f64, Missing>,
     ) {
-        if let Some(g) = g {
-            match (g.as_mut(), first) {
-                (Some(v), Some(x)) if x.is_finite() => v[a] = x,
-                _ => *g = None,
+        let finite = |x: Result<f64, Missing>| {
+            x.and_then(|x| {
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(Missing::NotFinite)
+                }
+            })
+        };
+        if let Some(g) = g
+            && let Ok(v) = g
+        {
+            match finite(first) {
+                Ok(x) => v[a] = x,
+                Err(e) => *g = Err(e),
             }
         }
-        match (h.as_mut(), second) {
-            (Some(m), Some(x)) if x.is_finite() => {
-                m[(a, b)] = x;
-                m[(b, a)] = x;
+        if let Ok(m) = h {
+            match finite(second) {
+                Ok(x) => {
+                    m[(a, b)] = x;
+                    m[(b, a)] = x;
+                }
+                Err(e) => *h = Err(e),
             }
-            _ => *h = None,
         }
     }
     for a in 0..nv {
@@ -292,14 +329,14 @@ pub fn hessians(
             .enumerate()
             .map(|(i, &v)| Dual2_64::new(v, if i == vars[a] { 1.0 } else { 0.0 }, 0.0))
             .collect();
-        let (o, d) = expand(model, &seeded, pt, outs, tf)?;
+        let (o, d) = expand(model, &seeded, pt, &smooth, outs, tf)?;
         for (k, v) in o.iter().enumerate() {
             put(
                 Some(&mut grad[k]),
                 &mut hess[k],
                 (a, a),
-                v.map(|x| x.v1),
-                v.map(|x| x.v2),
+                v.clone().map(|x| x.v1),
+                v.clone().map(|x| x.v2),
             );
         }
         for (k, v) in d.iter().enumerate() {
@@ -307,8 +344,8 @@ pub fn hessians(
                 Some(&mut dgrad[k]),
                 &mut dhess[k],
                 (a, a),
-                v.map(|x| x.v1),
-                v.map(|x| x.v2),
+                v.clone().map(|x| x.v1),
+                v.clone().map(|x| x.v2),
             );
         }
         for b in a + 1..nv {
@@ -321,12 +358,24 @@ pub fn hessians(
                     Hd::new(v, e1, e2, 0.0)
                 })
                 .collect();
-            let (o, d) = expand(model, &seeded, pt, outs, tf)?;
+            let (o, d) = expand(model, &seeded, pt, &smooth, outs, tf)?;
             for (k, v) in o.iter().enumerate() {
-                put(None, &mut hess[k], (a, b), None, v.map(|x| x.eps1eps2));
+                put(
+                    None,
+                    &mut hess[k],
+                    (a, b),
+                    Ok(0.0),
+                    v.clone().map(|x| x.eps1eps2),
+                );
             }
             for (k, v) in d.iter().enumerate() {
-                put(None, &mut dhess[k], (a, b), None, v.map(|x| x.eps1eps2));
+                put(
+                    None,
+                    &mut dhess[k],
+                    (a, b),
+                    Ok(0.0),
+                    v.clone().map(|x| x.eps1eps2),
+                );
             }
         }
     }

@@ -356,6 +356,24 @@ impl Lu {
         Lu { lu: a, swaps }
     }
 
+    /// The smallest magnitude on `U`'s diagonal over the largest (0 for a zero matrix or a
+    /// zero pivot): a cheap sign of (near) singularity.
+    pub fn pivot_ratio(&self) -> f64 {
+        let n = self.lu.nrows();
+        let (lo, hi) = (0..n)
+            .map(|i| self.lu[(i, i)].abs())
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+        if n == 0 {
+            1.0
+        } else if hi > 0.0 {
+            lo / hi
+        } else {
+            0.0
+        }
+    }
+
     /// `x` with `A x = b`, or `None` where `U` has a zero on its diagonal.
     pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
         let n = self.lu.nrows();

@@ -150,8 +150,9 @@ enum Command {
     /// Sweep the operating speed: one CSV row per (speed, mode).
     ///
     /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
-    /// (underdamped|overdamped|unstable|failed), damped_frequency, natural_frequency (rad/s),
-    /// damping_ratio, eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
+    /// (underdamped|overdamped|unstable|rigid|failed; rigid: a zero root, no frequency and no
+    /// damping ratio), damped_frequency, natural_frequency (rad/s), damping_ratio (empty for a
+    /// rigid mode), eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
     /// partner root), tuning_order (ω_d/Ω: the engine order the mode sits at, as an absorber
     /// is tuned; empty at Ω = 0); with --transfer: transfer_magnitude (output unit per input unit, e.g.
     /// rad/(N·m) or m/N), transfer_phase (rad); with --sensitivity, for every design variable P:
@@ -174,11 +175,13 @@ enum Command {
     /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
     /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
     /// basis (the method an "analytic" row took), q05, q50, q95 (quantiles: quadrature and
-    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates),
-    /// share:<parameter>; SI units, rad/s for speeds and frequencies), DIR/probabilities.csv
+    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates), partial, reason
+    /// (why a row has no mean and σ), share:<parameter>; SI units, rad/s for speeds and
+    /// frequencies), DIR/probabilities.csv
     /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
     /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
-    /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures),
+    /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
+    /// rows without a value grouped with their reasons under "unfilled"),
     /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
     /// probabilities, variance shares, a Campbell diagram with engine orders 1–3 and the
     /// critical speeds marked) and DIR/report.html (a summary of σ by method at the largest σ,
@@ -517,6 +520,9 @@ fn write_outputs(
             "modaltol: {} speed(s) failed; see summary.json",
             a.failures.len()
         );
+    }
+    for line in report::unfilled_lines(a) {
+        eprintln!("modaltol: note: {line}");
     }
     if partial {
         eprintln!(

@@ -11,8 +11,33 @@
 //! ω_n = √|λ₁ λ₂|,  ζ = −(λ₁ + λ₂) / (2 ω_n),  ω_d = |Im λ| (0 when the roots are real)
 //! ```
 //!
-//! and a class: `unstable` if a root has positive real part, else `underdamped` or
-//! `overdamped`. All frequencies in rad/s.
+//! and a class: `rigid` if a root is zero to within the system's own scale (see below),
+//! else `unstable` if a root has positive real part, else `underdamped` or `overdamped`. All
+//! frequencies in rad/s.
+//!
+//! **Rigid-body modes.** A coordinate that no force holds (a rod spinning freely about its own
+//! axis on a ball joint, a cone that may precess to any azimuth) gives a zero root, which
+//! rounding turns into a tiny number of either sign: a double zero root splits by about
+//! `√ε` times the scale of `K̂`'s terms. Read as it stands, that tiny root called such a mode
+//! unstable (`+1.6e-7`), underdamped at `2e-6` rad/s, or gave ζ = 5e8. A mode is rigid where
+//! its smaller root's right vector `x` carries no stiffness to within the scale at which `K̂`
+//! is formed:
+//!
+//! ```text
+//! |xᴴK̂x| / xᴴx ≤ ZERO_ROOT² · K_s,   K_s = max(‖K̂‖, ‖M̂‖ Ω², ‖Ĉ‖² / ‖M̂‖)
+//! ```
+//!
+//! (max-abs norms, Ω the operating speed: `K̂`'s largest entry, the centrifugal terms, the
+//! gyroscopic ones; `ZERO_ROOT²` = 1e-12). That root is set to exactly zero, and so is its
+//! partner where it is as small as a double zero root splits (`|λ|² m_x ≤ ZERO_ROOT² K_s`,
+//! `m_x = |xᴴM̂x|/xᴴx`); a damped rigid-body mode keeps its decay `−c/m`. The test is a
+//! Rayleigh quotient, so the eigenvector's own rounding enters squared; it is invariant under
+//! scaling all masses, dampers and springs together and under a change of time unit, and
+//! holds mode by mode, so that a long chain's low modes (whose frequencies lie decades below its
+//! highest) stay what they are, and a pendulum with a hinge damper is unstable from 3·10⁻¹²
+//! rad/s past its bifurcation on (its slow root `−k/c` is not mistaken for a zero one). A
+//! rigid mode has ω_d = ω_n = 0, an undefined damping ratio (NaN here, an empty cell or `–` in
+//! the outputs), and counts neither as unstable nor in any stability statement.
 //!
 //! An undamped, non-gyroscopic system (`Ĉ = 0` exactly, `M̂` and `K̂` symmetric: a blade
 //! flapping, a chain of pendulums in one plane) is solved as the n×n symmetric-definite pencil
@@ -43,6 +68,9 @@ pub enum ModeClass {
     Underdamped,
     Overdamped,
     Unstable,
+    /// A zero root (see the module documentation): no frequency, no damping ratio, neither
+    /// stable nor unstable.
+    Rigid,
 }
 
 impl ModeClass {
@@ -51,6 +79,7 @@ impl ModeClass {
             ModeClass::Underdamped => "underdamped",
             ModeClass::Overdamped => "overdamped",
             ModeClass::Unstable => "unstable",
+            ModeClass::Rigid => "rigid",
         }
     }
 }
@@ -102,10 +131,6 @@ pub enum ModalError {
         re: f64,
         im: f64,
     },
-    #[error(
-        "mode {mode} has zero natural frequency (λ₁λ₂ = 0): K̂ is singular, the equilibrium is neutral"
-    )]
-    ZeroFrequency { mode: usize },
 }
 
 /// Relative size below which an imaginary part counts as zero (roots are then real).
@@ -113,11 +138,14 @@ const IM_TOL: f64 = 1e-9;
 /// Relative size above which a positive real part makes a root unstable.
 const RE_TOL: f64 = 1e-10;
 
-/// Solves the damped eigenproblem and groups the roots into modes, sorted by ω_n.
+/// Solves the damped eigenproblem and groups the roots into modes, sorted by ω_n (rigid-body
+/// modes first). `speed` is the operating speed (rad/s): its centrifugal terms `‖M̂‖Ω²` are
+/// part of the scale against which a root counts as zero (see the module documentation).
 pub fn modes(
     m: &DMatrix<f64>,
     c: &DMatrix<f64>,
     k: &DMatrix<f64>,
+    speed: f64,
 ) -> Result<Vec<Mode>, ModalError> {
     if m.iter()
         .chain(c.iter())
@@ -136,6 +164,12 @@ pub fn modes(
         None if m.nrows() == 1 => scalar_modes(m[(0, 0)], c[(0, 0)], k[(0, 0)])?,
         None => first_order_modes(m, c, k)?,
     };
+    let test = RigidTest::new(m, c, k, speed);
+    for md in &mut out {
+        if let Some(rigid) = test.rigid(md) {
+            *md = rigid;
+        }
+    }
     out.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
     for (i, m) in out.iter().enumerate() {
         check_mode(i + 1, m)?;
@@ -187,6 +221,88 @@ fn undamped_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Vec<Mode>> {
         })
         .collect();
     Some(modes)
+}
+
+/// A mode is rigid where its stiffness is below `ZERO_ROOT²` = 1e-12 of the scale of `K̂`'s
+/// terms (see the module documentation): `K̂` formed with a cancellation of up to 4·10³ ε
+/// (a spinning cone's two neutral directions came out at 7e-18 and 6e-15 of it), while a mode
+/// whose stiffness is a millionth of the largest (soft mounts under a stiff shaft) is 10⁶
+/// times above. A double zero root split by rounding lies within `ZERO_ROOT` of the mode's
+/// frequency scale `√(K_s/m_x)`.
+const ZERO_ROOT: f64 = 1e-6;
+
+/// The test for zero roots (see the module documentation), with the scales computed once.
+struct RigidTest<'a> {
+    m: &'a DMatrix<f64>,
+    k: &'a DMatrix<f64>,
+    /// `K_s`, the scale of `K̂`'s terms.
+    stiffness: f64,
+    /// No root above this can be zero, whatever its mode's mass: the smaller root of
+    /// `m_x λ² + c_x λ + k_x` is at most `√(k_x/m_x)`, and `m_x ≥ λ_min(M̂) ≥ ‖M̂‖/cond(M̂)`
+    /// with `cond(M̂)` at most what any route accepts, so that only the lowest modes of a big
+    /// model pay for the Rayleigh quotients.
+    candidate: f64,
+}
+
+impl<'a> RigidTest<'a> {
+    fn new(m: &'a DMatrix<f64>, c: &DMatrix<f64>, k: &'a DMatrix<f64>, speed: f64) -> Self {
+        let (nm, nc, nk) = (linalg::amax(m), linalg::amax(c), linalg::amax(k));
+        let gyroscopic = if nm > 0.0 { nc * nc / nm } else { 0.0 };
+        let stiffness = nk.max(nm * speed * speed).max(gyroscopic);
+        let candidate = if nm > 0.0 {
+            ZERO_ROOT * (stiffness * MAX_MASS_CONDITION_BY_STIFFNESS / nm).sqrt()
+        } else {
+            0.0
+        };
+        RigidTest {
+            m,
+            k,
+            stiffness,
+            candidate,
+        }
+    }
+
+    /// The Rayleigh quotient `|xᴴAx| / xᴴx` of a real matrix.
+    fn rayleigh(a: &DMatrix<f64>, x: &DVector<C64>) -> f64 {
+        let (xr, xi) = (x.map(|z| z.re), x.map(|z| z.im));
+        let (ar, ai) = (a * &xr, a * &xi);
+        // xᴴAx = xrᵀA xr + xiᵀA xi + i(xrᵀA xi − xiᵀA xr).
+        C64::new(xr.dot(&ar) + xi.dot(&ai), xr.dot(&ai) - xi.dot(&ar)).norm() / x.norm_squared()
+    }
+
+    /// The mode as a rigid-body mode if its smaller root is zero: the mode's stiffness
+    /// `|xᴴK̂x|/xᴴx` at most `ZERO_ROOT²` of `K_s`. That root is set to zero, and so is the
+    /// other where it is as small as a double zero root splits (`|λ|² m_x ≤ ZERO_ROOT² K_s`);
+    /// a damped rigid-body mode keeps its decay `−c_x/m_x`.
+    fn rigid(&self, md: &Mode) -> Option<Mode> {
+        let (small, other) = if md.root.lambda.norm() <= md.partner.lambda.norm() {
+            (&md.root, &md.partner)
+        } else {
+            (&md.partner, &md.root)
+        };
+        let l = small.lambda.norm();
+        if l.is_nan() || l > self.candidate {
+            return None;
+        }
+        let floor = ZERO_ROOT * ZERO_ROOT * self.stiffness;
+        if Self::rayleigh(self.k, &small.right) > floor {
+            return None;
+        }
+        let lo = other.lambda.norm();
+        let double = lo * lo * Self::rayleigh(self.m, &other.right) <= floor;
+        let zero = |r: &Root| Root {
+            lambda: C64::new(0.0, 0.0),
+            ..r.clone()
+        };
+        Some(Mode {
+            root: zero(small),
+            partner: if double { zero(other) } else { other.clone() },
+            damped_frequency: 0.0,
+            natural_frequency: 0.0,
+            damping_ratio: f64::NAN,
+            class: ModeClass::Rigid,
+        })
+    }
 }
 
 /// Condition number of `M̂` above which the modes are refused where a route divides by `M̂` (a
@@ -422,10 +538,7 @@ fn check_mode(mode: usize, m: &Mode) -> Result<(), ModalError> {
     if !m.natural_frequency.is_finite() || !m.damped_frequency.is_finite() {
         return Err(bad("the natural frequency"));
     }
-    if m.natural_frequency == 0.0 {
-        return Err(ModalError::ZeroFrequency { mode });
-    }
-    if !m.damping_ratio.is_finite() {
+    if m.class != ModeClass::Rigid && !m.damping_ratio.is_finite() {
         return Err(bad("the damping ratio"));
     }
     for v in [
@@ -439,6 +552,72 @@ fn check_mode(mode: usize, m: &Mode) -> Result<(), ModalError> {
         }
     }
     Ok(())
+}
+
+/// Whether a mode's roots are differentiable functions of the system's parameters at a point,
+/// and if not, why. Derivatives (first-order sensitivities, the Taylor methods' gradients and
+/// Hessians) exist for a root exactly where it is simple; one test for all of them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Smoothness {
+    /// Both roots are simple: every quantity of the mode is differentiable.
+    Simple,
+    /// The mode's two roots coincide (it is changing between underdamped and overdamped): ω_d
+    /// has a kink there; the pair's sum and product stay smooth.
+    Coalescing,
+    /// A root coincides with a root of another mode (0-based index), as two modes of a
+    /// symmetric rotor at rest do: neither is differentiable.
+    Repeated { other: usize },
+    /// A rigid-body mode (a zero root): no frequency or damping ratio to differentiate.
+    Rigid,
+}
+
+impl std::fmt::Display for Smoothness {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Smoothness::Simple => write!(f, "simple roots"),
+            Smoothness::Coalescing => write!(
+                f,
+                "its two roots coincide (changing between underdamped and overdamped)"
+            ),
+            Smoothness::Repeated { other } => {
+                write!(f, "a root repeated in mode {} (a double root)", other + 1)
+            }
+            Smoothness::Rigid => write!(f, "a rigid-body mode (zero root)"),
+        }
+    }
+}
+
+/// Relative distance below which two roots count as one: `|λ − μ| ≤ SIMPLE_GAP · max(|λ|, |μ|)`.
+/// The roots carry rounding of about `ε cond`; their derivatives grow like the inverse of
+/// the gap, so that within a millionth they would carry more rounding than information.
+pub const SIMPLE_GAP: f64 = 1e-6;
+
+/// Each mode's [`Smoothness`] among all the roots of `modes`: scale-invariant (relative gaps
+/// only), so that scaling every mass, damper and spring of a model leaves it unchanged.
+pub fn smoothness(modes: &[Mode]) -> Vec<Smoothness> {
+    let close = |a: C64, b: C64| (a - b).norm() <= SIMPLE_GAP * a.norm().max(b.norm());
+    let roots = |m: &Mode| [m.root.lambda, m.partner.lambda];
+    modes
+        .iter()
+        .enumerate()
+        .map(|(i, md)| {
+            if md.class == ModeClass::Rigid {
+                return Smoothness::Rigid;
+            }
+            let repeated = modes.iter().enumerate().find(|(j, other)| {
+                *j != i
+                    && other.class != ModeClass::Rigid
+                    && roots(md)
+                        .iter()
+                        .any(|&a| roots(other).iter().any(|&b| close(a, b)))
+            });
+            match repeated {
+                Some((other, _)) => Smoothness::Repeated { other },
+                None if close(md.root.lambda, md.partner.lambda) => Smoothness::Coalescing,
+                None => Smoothness::Simple,
+            }
+        })
+        .collect()
 }
 
 /// |aᴴ b| / (|a| |b|): 1 for parallel vectors.
@@ -637,12 +816,15 @@ mod tests {
         let stiff = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1e-14]));
         for c in [DMatrix::zeros(2, 2), DMatrix::identity(2, 2) * 1e-20] {
             assert!(
-                matches!(modes(&m, &c, &stiff), Err(ModalError::SingularMass { .. })),
+                matches!(
+                    modes(&m, &c, &stiff, 0.0),
+                    Err(ModalError::SingularMass { .. })
+                ),
                 "cond(K̂) 1e14 with Ĉ = {c}"
             );
         }
         let k = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0]));
-        let out = modes(&m, &DMatrix::zeros(2, 2), &k).expect("solved by K̂");
+        let out = modes(&m, &DMatrix::zeros(2, 2), &k, 0.0).expect("solved by K̂");
         assert!((out[0].natural_frequency - 2.0).abs() < 1e-14);
     }
 
@@ -703,19 +885,22 @@ mod tests {
         }
         assert!(compared > 100, "{compared}");
         // Critical damping: a double root, reported as one overdamped mode of equal roots.
-        let out = modes(&one(2.0), &one(4.0), &one(2.0)).expect("solved");
+        let out = modes(&one(2.0), &one(4.0), &one(2.0), 0.0).expect("solved");
         assert_eq!(out[0].class, ModeClass::Overdamped);
         assert_eq!(out[0].root.lambda, C64::new(-1.0, 0.0));
         assert_eq!(out[0].partner.lambda, C64::new(-1.0, 0.0));
-        // A singular mass and a zero stiffness are refused as by the first-order form.
+        // A singular mass is refused as by the first-order form; a zero stiffness is a
+        // rigid-body mode (its damped root −ĉ/m̂ kept as the partner).
         assert!(matches!(
-            modes(&one(0.0), &one(1.0), &one(1.0)),
+            modes(&one(0.0), &one(1.0), &one(1.0), 0.0),
             Err(ModalError::SingularMass { .. })
         ));
-        assert!(matches!(
-            modes(&one(1.0), &one(1.0), &one(0.0)),
-            Err(ModalError::ZeroFrequency { mode: 1 })
-        ));
+        let rigid = modes(&one(1.0), &one(1.0), &one(0.0), 0.0).expect("solved");
+        assert_eq!(rigid[0].class, ModeClass::Rigid);
+        assert_eq!(rigid[0].root.lambda, C64::new(0.0, 0.0));
+        assert_eq!(rigid[0].partner.lambda, C64::new(-1.0, 0.0));
+        assert_eq!(rigid[0].natural_frequency.to_bits(), 0f64.to_bits());
+        assert!(rigid[0].damping_ratio.is_nan());
     }
 
     /// The undamped route against the first-order form: the same modes (frequencies, class,
@@ -757,7 +942,7 @@ mod tests {
                 );
             }
             // With `M` and `K` passed to `modes`, the undamped route is the one taken.
-            let out = modes(&m, &c, &k).unwrap();
+            let out = modes(&m, &c, &k, 0.0).unwrap();
             assert!(out.iter().all(|x| x.damping_ratio == 0.0));
         }
     }
@@ -775,7 +960,7 @@ mod tests {
         // A damped pencil goes to the first-order form: its damping ratios are not zero.
         let c = DMatrix::identity(6, 6) * 0.3;
         assert!(
-            modes(&m, &c, &k)
+            modes(&m, &c, &k, 0.0)
                 .unwrap()
                 .iter()
                 .all(|x| x.damping_ratio != 0.0)

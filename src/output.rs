@@ -2,6 +2,8 @@
 //! A module of their own so that the derivative code ([`crate::hessian`]) and the statistics
 //! ([`crate::tolerance`]) both name them without depending on each other.
 
+use crate::modal::Smoothness;
+
 /// Output kinds whose spread is propagated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {
@@ -47,4 +49,59 @@ pub fn outputs(modes: usize, transfer: bool) -> Vec<Output> {
         });
     }
     out
+}
+
+/// Why an output has no derivative, or a method no statistic, at a point: every empty cell of
+/// a result carries one (in `tolerance.csv`, `summary.json`, the report and on stderr).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Missing {
+    /// The mode's roots are not differentiable here (see [`Smoothness`]), or (for ω_d) its
+    /// two roots coincide, where ω_d has a kink.
+    Mode { mode: usize, why: Smoothness },
+    /// The damping ratio of a rigid-body mode is undefined (it has no frequency).
+    RigidDamping { mode: usize },
+    /// `|H|` passes through zero here, where it is not differentiable.
+    TransferZero,
+    /// `H` is unbounded at the excitation frequency (an undamped resonance) or overflows.
+    TransferUnbounded,
+    /// A derivative came out infinite or NaN (an overflow in the expansion).
+    NotFinite,
+    /// The bordered eigen-equations of a mode's root are exactly singular (a multiple root
+    /// that the relative test did not see).
+    SingularExpansion { mode: usize },
+    /// The point's derivatives failed (the reason given).
+    Failed(String),
+    /// No node or sample of a sampling method gave a value.
+    NoValue,
+    /// Not asked for (a first-order local model has no Hessians).
+    NotComputed,
+}
+
+impl std::fmt::Display for Missing {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Missing::Mode { mode, why } => {
+                write!(f, "not differentiable: mode {} has {why}", mode + 1)
+            }
+            Missing::RigidDamping { mode } => write!(
+                f,
+                "undefined: mode {} is a rigid-body mode (no frequency, no damping ratio)",
+                mode + 1
+            ),
+            Missing::TransferZero => write!(f, "not differentiable: |H| passes through zero"),
+            Missing::TransferUnbounded => write!(
+                f,
+                "undefined: H is unbounded at the excitation frequency (an undamped resonance)"
+            ),
+            Missing::NotFinite => write!(f, "a derivative overflows double precision"),
+            Missing::SingularExpansion { mode } => write!(
+                f,
+                "not differentiable: the eigen-equations of mode {} are singular (a multiple root)",
+                mode + 1
+            ),
+            Missing::Failed(e) => write!(f, "derivatives failed: {e}"),
+            Missing::NoValue => write!(f, "no node or sample gave a value"),
+            Missing::NotComputed => write!(f, "not computed"),
+        }
+    }
 }

@@ -478,7 +478,7 @@ fn directions(
             .grad
             .iter()
             .flatten()
-            .chain(lm.disc.iter().filter_map(|(_, g, _)| g.as_ref()));
+            .chain(lm.disc.iter().filter_map(|(_, g, _)| g.as_ref().ok()));
         for g in grads {
             let gb = DVector::from_iterator(d, active.iter().map(|&k| g[k]));
             let gz = jac.transpose() * gb;
@@ -973,9 +973,21 @@ impl Context<'_> {
     /// zero at a static bifurcation) from each side, averaged; the middle if neither has one.
     fn switch_point(&self, left: &Stencil, right: &Stencil, a: f64, b: f64) -> f64 {
         let mut c = vec![0.0; self.store.width];
+        // Rigid-body modes (`p` exactly zero on both sides, [`crate::modal::ModeClass::Rigid`])
+        // would make the product zero everywhere: they are left out.
+        let rigid: Vec<bool> = (0..self.modes)
+            .map(|m| {
+                [left, right]
+                    .iter()
+                    .all(|st| st.rows.iter().all(|r| r[2 * m + 1] == 0.0))
+            })
+            .collect();
         let mut g = |st: &Stencil, t: f64| {
             st.eval(t, &mut c);
-            (0..self.modes).map(|m| c[2 * m + 1]).product::<f64>()
+            (0..self.modes)
+                .filter(|&m| !rigid[m])
+                .map(|m| c[2 * m + 1])
+                .product::<f64>()
         };
         let roots: Vec<f64> = [left, right]
             .into_iter()
@@ -1025,10 +1037,12 @@ impl Context<'_> {
             st.eval(0.5 * (x0 + x1), &mut c);
             let unstable =
                 (0..modes).any(|m| growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0);
+            // Overdamped: two real roots of one sign, both negative (`p > 0`); a rigid-body
+            // mode (a zero root, `p = 0` exactly) is neither overdamped nor unstable.
             let overdamped: Vec<bool> = (0..modes)
                 .map(|m| {
                     let (s, p) = (c[2 * m], c[2 * m + 1]);
-                    p - 0.25 * s * s <= 0.0 && !(growth(s, p) > 0.0 || p < 0.0)
+                    p - 0.25 * s * s <= 0.0 && p > 0.0 && growth(s, p) <= 0.0
                 })
                 .collect();
             for (&x, &wx) in GL_X.iter().zip(&GL_W) {

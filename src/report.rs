@@ -26,6 +26,16 @@ pub struct SweepColumns {
     pub wrt: Vec<usize>,
 }
 
+/// `x` with `decimals` decimals, or `–` where it is undefined (the damping ratio of a
+/// rigid-body mode).
+fn fixed(x: f64, decimals: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.decimals$}")
+    } else {
+        "–".into()
+    }
+}
+
 fn opt(v: Option<f64>) -> String {
     v.filter(|x| x.is_finite())
         .map_or(String::new(), |x| x.to_string())
@@ -53,7 +63,7 @@ fn mode_cells(speed: f64, i: usize, m: &Mode) -> Vec<String> {
         m.class.as_str().to_string(),
         m.damped_frequency.to_string(),
         m.natural_frequency.to_string(),
-        m.damping_ratio.to_string(),
+        opt(Some(m.damping_ratio)),
         m.root.lambda.re.to_string(),
         m.root.lambda.im.to_string(),
         m.partner.lambda.re.to_string(),
@@ -254,7 +264,7 @@ pub fn sensitivity_rows(model: &Model, pt: &Point, s: &Sensitivity) -> Vec<Vec<S
                 m.class.as_str().to_string(),
                 m.damped_frequency.to_string(),
                 m.natural_frequency.to_string(),
-                m.damping_ratio.to_string(),
+                opt(Some(m.damping_ratio)),
                 opt(s.transfer_magnitude),
                 model.parameters[v.param].name.clone(),
                 b.to_string(),
@@ -363,12 +373,12 @@ pub fn sensitivity_table(
     for (i, m) in pt.modes.iter().enumerate() {
         let _ = writeln!(
             out,
-            "\nmode {} ({}): ω_d = {:.8} rad/s, ω_n = {:.8} rad/s, ζ = {:.6}",
+            "\nmode {} ({}): ω_d = {:.8} rad/s, ω_n = {:.8} rad/s, ζ = {}",
             i + 1,
             m.class.as_str(),
             m.damped_frequency,
             m.natural_frequency,
-            m.damping_ratio
+            fixed(m.damping_ratio, 6)
         );
         let pw = s
             .variables
@@ -561,12 +571,12 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
     for (i, m) in p.modes.iter().enumerate() {
         let _ = writeln!(
             s,
-            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12.6} {:>12.6} {:+12.6}i",
+            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i",
             i + 1,
             m.class.as_str(),
             m.damped_frequency,
             m.natural_frequency,
-            m.damping_ratio,
+            fixed(m.damping_ratio, 6),
             m.root.lambda.re,
             m.root.lambda.im
         );
@@ -712,6 +722,7 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
         "mean_error",
         "std_error",
         "partial",
+        "reason",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -725,7 +736,8 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
 }
 
 /// Rows of `tolerance.csv`: one per (speed, quantity, mode, case, method). Empty cells where a
-/// method gives no answer (an output not differentiable there) or a column does not apply.
+/// method gives no answer (its `reason` says why: an output not differentiable there, a
+/// rigid-body mode's damping ratio) or a column does not apply.
 /// `partial` (a column of every row) says the run was interrupted: the Monte Carlo rows cover
 /// fewer samples than asked.
 pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
@@ -763,6 +775,7 @@ pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
                 None => v.extend(std::iter::repeat_n(String::new(), 2)),
             }
             v.push(partial.to_string());
+            v.push(r.missing.as_ref().map_or(String::new(), |m| m.to_string()));
             match &r.shares {
                 Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
@@ -899,7 +912,113 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
             "note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
             "example": example, "analytic_seconds": analytic, "monte_carlo_seconds": mc, "ratio": ratio})),
         "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
+        "unfilled": unfilled(a).iter().map(|u| json!({
+            "case": a.cases[u.case].name, "method": u.method.as_str(), "quantity": u.quantity.as_str(),
+            "mode": u.mode.map(|m| m + 1), "reason": u.reason, "rows": u.speeds.len(),
+            "speeds": u.speeds})).collect::<Vec<_>>(),
     })
+}
+
+/// Rows of one method for one output and case that have no value, for one reason.
+#[derive(Debug, Clone)]
+pub struct Unfilled {
+    pub case: usize,
+    pub method: Method,
+    pub quantity: Quantity,
+    pub mode: Option<usize>,
+    pub reason: String,
+    /// The speeds (rad/s) of those rows, in the rows' order.
+    pub speeds: Vec<f64>,
+}
+
+/// Every row without a value, grouped by case, method, output and reason, in the rows' order.
+pub fn unfilled(a: &Analysis) -> Vec<Unfilled> {
+    let mut out: Vec<Unfilled> = Vec::new();
+    for r in &a.rows {
+        let Some(m) = &r.missing else { continue };
+        let reason = m.to_string();
+        let same = |u: &Unfilled| {
+            u.case == r.case
+                && u.method == r.method
+                && u.quantity == r.quantity
+                && u.mode == r.mode
+                && u.reason == reason
+        };
+        match out.iter_mut().find(|u| same(u)) {
+            Some(u) => u.speeds.push(r.speed),
+            None => out.push(Unfilled {
+                case: r.case,
+                method: r.method,
+                quantity: r.quantity,
+                mode: r.mode,
+                reason,
+                speeds: vec![r.speed],
+            }),
+        }
+    }
+    out
+}
+
+/// Groups of [`unfilled`] shown on stderr at most (`summary.json` and the report list all).
+const UNFILLED_LINES: usize = 12;
+
+/// The rows without a value in a few lines: per method and reason, how many rows, which
+/// outputs and speeds (empty when every row has a value).
+pub fn unfilled_lines(a: &Analysis) -> Vec<String> {
+    let groups = unfilled(a);
+    // Per (method, reason): rows, outputs, speed range, cases.
+    let mut merged: Vec<(Method, String, usize, Vec<String>, f64, f64)> = Vec::new();
+    for u in &groups {
+        let output = u.mode.map_or(u.quantity.as_str().to_string(), |m| {
+            format!("{} of mode {}", u.quantity.as_str(), m + 1)
+        });
+        let lo = u.speeds.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = u.speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        match merged
+            .iter_mut()
+            .find(|x| x.0 == u.method && x.1 == u.reason)
+        {
+            Some(x) => {
+                x.2 += u.speeds.len();
+                if !x.3.contains(&output) {
+                    x.3.push(output);
+                }
+                x.4 = x.4.min(lo);
+                x.5 = x.5.max(hi);
+            }
+            None => merged.push((
+                u.method,
+                u.reason.clone(),
+                u.speeds.len(),
+                vec![output],
+                lo,
+                hi,
+            )),
+        }
+    }
+    let mut lines: Vec<String> = merged
+        .iter()
+        .take(UNFILLED_LINES)
+        .map(|(method, reason, rows, outputs, lo, hi)| {
+            let speeds = if lo.to_bits() == hi.to_bits() {
+                format!("at {lo} rad/s")
+            } else {
+                format!("between {lo} and {hi} rad/s")
+            };
+            format!(
+                "{}: {rows} row(s) without a value ({}; {speeds}): {reason}",
+                method.as_str(),
+                outputs.join(", ")
+            )
+        })
+        .collect();
+    if merged.len() > UNFILLED_LINES {
+        lines.push(format!(
+            "… and {} more groups of rows without a value (summary.json lists them all)",
+            merged.len() - UNFILLED_LINES
+        ));
+    }
+    lines
 }
 
 /// Per case, the Monte Carlo samples that are not physically admissible, by reason.
@@ -1129,7 +1248,7 @@ fn summary_table(model: &Model, a: &Analysis, critical: &[CriticalSpeed], d: Dis
             let mc = get(Method::MonteCarlo).and_then(|r| r.mc);
             let vs = sa
                 .zip(sf)
-                .filter(|(a, _)| *a > 0.0)
+                .filter(|(a, f)| *a > 0.0 && a.is_finite() && f.is_finite())
                 .map_or("–".to_string(), |(a, f)| {
                     // No "-0 %": a difference that rounds to nothing is 0.
                     let pct = (100.0 * (f - a) / a).round();
@@ -1165,6 +1284,41 @@ fn summary_table(model: &Model, a: &Analysis, critical: &[CriticalSpeed], d: Dis
         }
         h.push_str("</table>");
     }
+    h
+}
+
+/// The rows without a value, per case, method, output and reason, with their speeds.
+fn unfilled_table(a: &Analysis) -> String {
+    let groups = unfilled(a);
+    if groups.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from(
+        "<h2>Rows without a value</h2><p>Where a method gives no mean and σ, and why          (<code>tolerance.csv</code>'s <code>reason</code> column; speeds in rad/s).</p>         <table><tr><th>case</th><th>method</th><th>output</th><th>rows</th><th>speeds</th>         <th>reason</th></tr>",
+    );
+    for u in &groups {
+        let output = u.mode.map_or(u.quantity.as_str().to_string(), |m| {
+            format!("{} mode {}", u.quantity.as_str(), m + 1)
+        });
+        let lo = u.speeds.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = u.speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let speeds = if lo.to_bits() == hi.to_bits() {
+            format!("{lo}")
+        } else {
+            format!("{lo}–{hi}")
+        };
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>             <td style=\"text-align:left\">{}</td></tr>",
+            esc(&a.cases[u.case].name),
+            u.method.as_str(),
+            esc(&output),
+            u.speeds.len(),
+            speeds,
+            esc(&u.reason)
+        );
+    }
+    h.push_str("</table>");
     h
 }
 
@@ -1315,6 +1469,7 @@ pub fn report_html(
         }
         let _ = writeln!(h, "</ul>");
     }
+    h.push_str(&unfilled_table(a));
     let _ = writeln!(
         h,
         "<h2>Reading guide</h2><ul>\

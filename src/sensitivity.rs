@@ -19,7 +19,9 @@
 //! 4. `H(jω)` evaluated over the same dual numbers: `d|H| = Re(H̄ dH)/|H|`.
 //!
 //! Where roots coalesce (a mode changing between underdamped and overdamped) the derivative of
-//! ω_d does not exist; such entries carry [`Status::NotDifferentiable`] instead of a number.
+//! ω_d does not exist, nor those of a root repeated in two modes or of a rigid-body mode; such
+//! entries carry [`Status::NotDifferentiable`] instead of a number
+//! ([`crate::modal::smoothness`] says why).
 //! [`finite_difference`] re-runs the whole pipeline at perturbed values as a cross-check.
 //!
 //! # Reference
@@ -31,7 +33,7 @@ use crate::dual4::{Directional, Dual4};
 use crate::frf::{Complex, transfer};
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
-use crate::modal::{C64, Mode, Root, similarities};
+use crate::modal::{C64, Mode, Root, Smoothness, similarities, smoothness};
 use crate::model::{Channel, Transfer};
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
@@ -109,12 +111,17 @@ pub fn nominal_transfer(pt: &Point, t: &TransferAt) -> Option<Complex<f64>> {
 }
 
 /// Derivatives of a mode from the derivatives of its two roots; `invariants`, when given, are
-/// the exact derivatives of `λ₁ + λ₂` and `λ₁ λ₂` (used instead of the roots' sums).
-fn mode_derivative(m: &Mode, d1: C64, d2: C64, invariants: Option<(f64, f64)>) -> ModeSensitivity {
+/// the exact derivatives of `λ₁ + λ₂` and `λ₁ λ₂` (used instead of the roots' sums). `Ok` only
+/// where the mode's roots are simple ([`Smoothness::Simple`]: not coalescing, not repeated in
+/// another mode, not a rigid-body mode) and the derivatives finite.
+fn mode_derivative(
+    m: &Mode,
+    smooth: Smoothness,
+    (d1, d2): (C64, C64),
+    invariants: Option<(f64, f64)>,
+) -> ModeSensitivity {
     let (l1, l2) = (m.root.lambda, m.partner.lambda);
-    let gap = (l1 - l2).norm();
-    let scale = l1.norm().max(l2.norm()).max(1e-300);
-    let status = if gap <= 1e-6 * scale || !d1.re.is_finite() || !d2.re.is_finite() {
+    let status = if smooth != Smoothness::Simple || !d1.re.is_finite() || !d2.re.is_finite() {
         Status::NotDifferentiable
     } else {
         Status::Ok
@@ -336,7 +343,7 @@ pub fn dual_linearizations(
 ) -> Result<Vec<DualLinearization>, PointError> {
     let speed = pt.speed;
     let eq = &pt.equilibrium;
-    let lu = eq.jacobian.clone().lu();
+    let lu = eq.factor();
     // ∂F/∂p along all the variables in one pass where the model has a recorded program.
     let dp = model
         .program(p, speed, &eq.q)
@@ -368,7 +375,7 @@ struct Shift<'a> {
     p: &'a [f64],
     pt: &'a Point,
     /// Newton's Jacobian at the solution, factorised.
-    lu: &'a nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    lu: &'a crate::equilibrium::Factor,
     /// `∂F/∂p` (rows of `F` × the variables), where the model has a recorded program.
     dp: Option<&'a [f64]>,
     /// All the variables (the columns of `dp`).
@@ -420,7 +427,7 @@ impl Shift<'_> {
                     .collect()
             }
         };
-        let dx = (rhs.iter().map(|r| self.lu.solve(r)))
+        let dx = (rhs.iter().map(|r| self.lu.solve(r.as_slice())))
             .collect::<Option<Vec<_>>>()
             .ok_or(PointError::Equilibrium(
                 crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
@@ -475,6 +482,7 @@ pub fn analytic(
     let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
     let mut variables = Vec::with_capacity(wrt.len());
     let roots = RootDerivatives::new(&pt.modes, &pt.linear.m, &pt.linear.c);
+    let smooth = smoothness(&pt.modes);
     for DualLinearization {
         param: b,
         linear: lin,
@@ -491,11 +499,9 @@ pub fn analytic(
             let dp = (dk[(0, 0)] * m0 - k0 * dm[(0, 0)]) / (m0 * m0);
             (ds, dp)
         });
-        let modes = pt
-            .modes
-            .iter()
+        let modes = (pt.modes.iter().zip(&smooth))
             .zip(roots.along((&dm, &dc, &dk)))
-            .map(|(md, (d1, d2))| mode_derivative(md, d1, d2, invariants))
+            .map(|((md, &why), d)| mode_derivative(md, why, d, invariants))
             .collect();
         let (dmag, dphase) = match (tf, nominal) {
             (Some(t), Some(_)) => transfer(&lin, t.input, t.output, t.omega)

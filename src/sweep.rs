@@ -224,7 +224,7 @@ fn analyse(
             .linearize(&eq.q, &eq.lambda, &independent, Some(&stiffness))?,
     };
     let linear = linear.with_ports(ports_at(model, p, eq.speed, &eq.q, &free)?);
-    let modes = modes(&linear.m, &linear.c, &linear.k)?;
+    let modes = modes(&linear.m, &linear.c, &linear.k, eq.speed)?;
     let shapes = shapes(&linear.basis, &modes);
     Ok(Point {
         speed: eq.speed,

@@ -27,7 +27,9 @@
 
 use crate::compiled::Compiled;
 use crate::hessian::hessians;
+use crate::modal::{Smoothness, smoothness};
 use crate::model::{Case, Distribution, Transfer};
+use crate::output::Missing;
 use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
@@ -47,8 +49,12 @@ pub fn value(pt: &Point, o: &Output, tf: Option<TransferAt>) -> Option<f64> {
     .filter(|v| v.is_finite())
 }
 
-/// A scalar's value, gradient and Hessian (`None` where they do not exist).
-pub type Expansion = (f64, Option<Vec<f64>>, Option<DMatrix<f64>>);
+/// A scalar's value, gradient and Hessian (each, where it does not exist, the reason).
+pub type Expansion = (
+    f64,
+    Result<Vec<f64>, Missing>,
+    Result<DMatrix<f64>, Missing>,
+);
 
 /// Outputs, gradients and Hessians at one speed.
 #[derive(Debug, Clone)]
@@ -56,10 +62,13 @@ pub struct LocalModel {
     /// Design variables (parameter indices), the order of gradients and Hessians.
     pub vars: Vec<usize>,
     pub outputs: Vec<Output>,
+    /// NaN where the output has no value (the damping ratio of a rigid-body mode, |H| at an
+    /// undamped resonance).
     pub value: Vec<f64>,
-    /// `None` where the output is not differentiable (a mode changing class).
-    pub grad: Vec<Option<Vec<f64>>>,
-    pub hess: Vec<Option<DMatrix<f64>>>,
+    /// The reason where the output is not differentiable (a mode changing class, a repeated
+    /// root, a rigid-body mode, |H| through zero).
+    pub grad: Vec<Result<Vec<f64>, Missing>>,
+    pub hess: Vec<Result<DMatrix<f64>, Missing>>,
     /// Per mode: the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` (ω_d = √max(0, D)), its gradient
     /// and Hessian.
     pub disc: Vec<Expansion>,
@@ -67,8 +76,8 @@ pub struct LocalModel {
 
 type FirstOrder = (
     Vec<f64>,
-    Vec<Option<Vec<f64>>>,
-    Vec<(f64, Option<Vec<f64>>)>,
+    Vec<Result<Vec<f64>, Missing>>,
+    Vec<(f64, Result<Vec<f64>, Missing>)>,
 );
 
 fn first(
@@ -80,27 +89,51 @@ fn first(
     tf: Option<TransferAt>,
 ) -> Result<FirstOrder, PointError> {
     let s = analytic(model, p, pt, vars, tf)?;
+    let smooth = smoothness(&pt.modes);
+    let finite = |g: Vec<f64>| {
+        if g.iter().all(|x| x.is_finite()) {
+            Ok(g)
+        } else {
+            Err(Missing::NotFinite)
+        }
+    };
     let mut values = Vec::with_capacity(outs.len());
     let mut grads = Vec::with_capacity(outs.len());
     for o in outs {
         values.push(value(pt, o, tf).unwrap_or(f64::NAN));
-        let g: Option<Vec<f64>> = s
+        let g: Result<Vec<f64>, Missing> = s
             .variables
             .iter()
             .map(|v| match (o.quantity, o.mode) {
-                (Quantity::TransferMagnitude, _) => v.d_transfer_magnitude,
+                (Quantity::TransferMagnitude, _) => {
+                    v.d_transfer_magnitude
+                        .ok_or(if s.transfer_magnitude.is_some() {
+                            Missing::TransferZero
+                        } else {
+                            Missing::TransferUnbounded
+                        })
+                }
                 (q, Some(m)) => {
                     let ms = &v.modes[m];
-                    (ms.status == Status::Ok).then_some(if q == Quantity::DampedFrequency {
-                        ms.d_damped_frequency
+                    if smooth[m] == Smoothness::Rigid && q == Quantity::DampingRatio {
+                        Err(Missing::RigidDamping { mode: m })
+                    } else if ms.status == Status::Ok {
+                        Ok(if q == Quantity::DampedFrequency {
+                            ms.d_damped_frequency
+                        } else {
+                            ms.d_damping_ratio
+                        })
                     } else {
-                        ms.d_damping_ratio
-                    })
+                        Err(Missing::Mode {
+                            mode: m,
+                            why: smooth[m],
+                        })
+                    }
                 }
-                _ => None,
+                _ => Err(Missing::NoValue),
             })
-            .collect::<Option<Vec<f64>>>()
-            .filter(|g| g.iter().all(|x| x.is_finite()));
+            .collect::<Result<Vec<f64>, Missing>>()
+            .and_then(finite);
         grads.push(g);
     }
     let discs = pt
@@ -115,7 +148,14 @@ fn first(
                 .iter()
                 .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
                 .collect();
-            (d, g.iter().all(|x| x.is_finite()).then_some(g))
+            let g = match smooth[k] {
+                Smoothness::Rigid | Smoothness::Repeated { .. } => Err(Missing::Mode {
+                    mode: k,
+                    why: smooth[k],
+                }),
+                _ => finite(g),
+            };
+            (d, g)
         })
         .collect();
     Ok((values, grads, discs))
@@ -148,11 +188,20 @@ pub fn local_model(
         let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
         return Ok(LocalModel {
             vars: vars.to_vec(),
-            hess: vec![None; outs.len()],
+            hess: grad
+                .iter()
+                .map(|g| g.clone().and(Err(Missing::NotComputed)))
+                .collect(),
             outputs: outs,
             value,
             grad,
-            disc: disc0.into_iter().map(|(v, g)| (v, g, None)).collect(),
+            disc: disc0
+                .into_iter()
+                .map(|(v, g)| {
+                    let h = g.clone().and(Err(Missing::NotComputed));
+                    (v, g, h)
+                })
+                .collect(),
         });
     }
     // Gradients and Hessians together from the second-order passes.
