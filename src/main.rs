@@ -15,7 +15,7 @@ use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, TransferAt};
 use modaltol::shard::ShardFile;
 use modaltol::study::SweepStudy;
-use modaltol::sweep::{Options, initial_guess, point};
+use modaltol::sweep::{Options, initial_guess, point_at};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
@@ -132,6 +132,18 @@ impl From<DisplayArgs> for modaltol::plots::Display {
     }
 }
 
+/// Which equilibrium to report where several exist at a speed.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum BranchArg {
+    /// Where the equilibrium Newton reaches is unstable (a root with positive real part:
+    /// static divergence or flutter), step off it along its unstable modes' shapes, both ways
+    /// at growing amplitudes, and report the stable equilibrium found (default).
+    Stable,
+    /// Report the equilibrium Newton reaches, stable or not (to see how an unstable one
+    /// diverges).
+    AsGiven,
+}
+
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum Derivatives {
     /// Exact, by automatic differentiation through the equilibrium (default).
@@ -160,7 +172,9 @@ enum Command {
     /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
     /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
     /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
-    /// iterations (Newton), message (why a speed failed, or a branch switch).
+    /// iterations (Newton), branch (stable|switched|unstable: whether the equilibrium continued
+    /// from the previous speed was kept, or a stable one found instead), message (why a speed
+    /// failed, why the branch was switched or left unstable, a change of stability).
     Sweep(SweepArgs),
     /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
     /// the design variables at one speed, through the move of the equilibrium.
@@ -222,6 +236,11 @@ struct ModalArgs {
     /// Independent coordinates (joint names, comma separated), overriding the model.
     #[arg(long, value_delimiter = ',')]
     independent: Option<Vec<String>>,
+    /// Which equilibrium to report, Newton starting from the model's initial guess: every
+    /// format says which was taken and why (text: `branch:`, JSON: "branch", CSV: the
+    /// `branch` and `message` columns).
+    #[arg(long, value_enum, default_value = "stable")]
+    branch: BranchArg,
     /// Write to this file instead of stdout.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -237,6 +256,11 @@ struct SweepArgs {
     /// Independent coordinates (joint names, comma separated), overriding the model.
     #[arg(long, value_delimiter = ',')]
     independent: Option<Vec<String>>,
+    /// Which equilibrium to follow: `stable` switches to a stable one where the one continued
+    /// from the previous speed has lost its stability (the `branch` column says `switched`
+    /// and the message why); `as-given` follows the continued one, stable or not.
+    #[arg(long, value_enum, default_value = "stable")]
+    branch: BranchArg,
     /// Transfer function `input=NAME,output=NAME[,order=K]` (NAME a free joint coordinate or a
     /// [[ports]] entry): generalised force (or port force/torque) on `input`,
     /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
@@ -604,6 +628,7 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
         speed,
         format,
         independent: ind,
+        branch,
         output,
     } = args;
     let m = load(&model, set)?;
@@ -612,11 +637,12 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
     }
     let opt = Options {
         independent: independent(&m, &ind)?,
+        no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
     let p = m.nominal();
-    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let result = point(&m, &p, speed, &q0, &opt);
+    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let result = point_at(&m, &p, speed, &opt);
     let mut w = Sink::to(&output)?;
     match format {
         Format::Json => writeln!(
@@ -644,6 +670,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
         model,
         speed,
         independent: ind,
+        branch,
         transfer: tspec,
         sensitivity: sens,
         wrt,
@@ -671,6 +698,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
     };
     let opt = Options {
         independent: independent(&m, &ind)?,
+        no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
     let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
@@ -729,8 +757,8 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
         None => m.analysis.transfer,
     };
     let p = m.nominal();
-    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point(&m, &p, speed, &q0, &Options::default())
+    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let s = sensitivity::sensitivities(
         &m,
@@ -985,8 +1013,8 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
     let p = m.nominal();
-    let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point(&m, &p, speed, &q0, &Options::default())
+    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let rows =
         sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())

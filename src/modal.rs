@@ -159,12 +159,12 @@ pub fn modes(
         .all(|&v| v == 0.0)
         .then(|| undamped_modes(m, k))
         .flatten();
+    let test = RigidTest::new(m, c, k, speed);
     let mut out = match undamped {
         Some(out) => out,
         None if m.nrows() == 1 => scalar_modes(m[(0, 0)], c[(0, 0)], k[(0, 0)])?,
-        None => first_order_modes(m, c, k)?,
+        None => first_order_modes(m, c, k, &test)?,
     };
-    let test = RigidTest::new(m, c, k, speed);
     for md in &mut out {
         if let Some(rigid) = test.rigid(md) {
             *md = rigid;
@@ -270,6 +270,36 @@ impl<'a> RigidTest<'a> {
         C64::new(xr.dot(&ar) + xi.dot(&ai), xr.dot(&ai) - xi.dot(&ar)).norm() / x.norm_squared()
     }
 
+    /// Is `r` a zero root: within [`RigidTest::candidate`], its vector carrying no stiffness
+    /// (`|xᴴK̂x|/xᴴx ≤ ZERO_ROOT² K_s`) and as small as a double zero root splits
+    /// (`|λ|² m_x ≤ ZERO_ROOT² K_s`)?
+    fn zero(&self, r: &Root) -> bool {
+        let (l, floor) = (r.lambda.norm(), ZERO_ROOT * ZERO_ROOT * self.stiffness);
+        l <= self.candidate
+            && Self::rayleigh(self.k, &r.right) <= floor
+            && l * l * Self::rayleigh(self.m, &r.right) <= floor
+    }
+
+    /// An orthonormal basis (columns) of `K̂`'s null space: its right singular vectors whose
+    /// singular values are at most `ZERO_ROOT² K_s`; `None` where the decomposition fails.
+    fn null_space(&self) -> Option<DMatrix<f64>> {
+        let svd = linalg::svd(self.k.clone(), false, true)?;
+        let vt = svd.v_t?;
+        let floor = ZERO_ROOT * ZERO_ROOT * self.stiffness;
+        let rows: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&i| svd.singular_values[i] <= floor)
+            .collect();
+        Some(DMatrix::from_fn(vt.ncols(), rows.len(), |i, j| {
+            vt[(rows[j], i)]
+        }))
+    }
+
+    /// The share of `x`'s squared norm in the span of the orthonormal columns of `null`.
+    fn share(null: &DMatrix<f64>, x: &DVector<C64>) -> f64 {
+        let (xr, xi) = (x.map(|z| z.re), x.map(|z| z.im));
+        (null.tr_mul(&xr).norm_squared() + null.tr_mul(&xi).norm_squared()) / x.norm_squared()
+    }
+
     /// The mode as a rigid-body mode if its smaller root is zero: the mode's stiffness
     /// `|xᴴK̂x|/xᴴx` at most `ZERO_ROOT²` of `K_s`. That root is set to zero, and so is the
     /// other where it is as small as a double zero root splits (`|λ|² m_x ≤ ZERO_ROOT² K_s`);
@@ -333,6 +363,7 @@ fn first_order_modes(
     m: &DMatrix<f64>,
     c: &DMatrix<f64>,
     k: &DMatrix<f64>,
+    rigid: &RigidTest,
 ) -> Result<Vec<Mode>, ModalError> {
     let n = m.nrows();
     let condition_of = |a: &DMatrix<f64>, what| {
@@ -448,14 +479,38 @@ fn first_order_modes(
         }
     }
     // Pair real roots whose right vectors are most alike: greedily, the most alike pair of
-    // those left first.
+    // those left first. Where several directions are held by nothing (a rod spinning about its
+    // own axis on a cone that may precess), rounding often gives their zero roots one shared
+    // vector (a pair snapped to the real axis), more alike to each other than to the
+    // directions' decays `−c/m`, whose vectors lie in `K̂`'s null space too: each zero root
+    // is paired with such a decay first (each rigid direction is one mode, its zero and its
+    // decay), so that two zeros and two decays do not make a double-zero rigid mode and a
+    // spurious overdamped one.
     let rights: Vec<DVector<C64>> = real.iter().map(|r| r.right.clone()).collect();
     let s = similarities(&rights, &rights);
+    let zero: Vec<bool> = real.iter().map(|r| rigid.zero(r)).collect();
+    let decay: Vec<bool> = match zero
+        .iter()
+        .any(|&z| z)
+        .then(|| rigid.null_space())
+        .flatten()
+    {
+        Some(null) => (real.iter().zip(&zero))
+            .map(|(r, &z)| !z && RigidTest::share(&null, &r.right) >= 0.5)
+            .collect(),
+        None => vec![false; real.len()],
+    };
+    // 1 for a zero root and a decay of the null space, else 0.
+    let rank = |a: usize, b: usize| u8::from((zero[a] && decay[b]) || (zero[b] && decay[a]));
     let mut pairs: Vec<(usize, usize)> = (0..real.len())
         .flat_map(|i| (i + 1..real.len()).map(move |j| (i, j)))
         .collect();
     // Stable: equal similarities in the order of the roots.
-    pairs.sort_by(|&(a, b), &(c, d)| s[(c, d)].total_cmp(&s[(a, b)]));
+    pairs.sort_by(|&(a, b), &(c, d)| {
+        rank(c, d)
+            .cmp(&rank(a, b))
+            .then(s[(c, d)].total_cmp(&s[(a, b)]))
+    });
     let mut real: Vec<Option<Root>> = real.into_iter().map(Some).collect();
     for (i, j) in pairs {
         if real[i].is_none() || real[j].is_none() {
@@ -845,7 +900,9 @@ mod tests {
                         continue;
                     }
                     let fast = scalar_modes(m, c, k).expect("solved");
-                    let general = first_order_modes(&one(m), &one(c), &one(k)).expect("solved");
+                    let (mm, cc, kk) = (one(m), one(c), one(k));
+                    let test = RigidTest::new(&mm, &cc, &kk, 0.0);
+                    let general = first_order_modes(&mm, &cc, &kk, &test).expect("solved");
                     assert_eq!((fast.len(), general.len()), (1, 1));
                     let (a, b) = (&fast[0], &general[0]);
                     let scale = a.root.lambda.norm().max(a.partner.lambda.norm());
@@ -911,7 +968,8 @@ mod tests {
             let (m, k) = pencil(n, seed);
             let c = DMatrix::zeros(n, n);
             let mut fast = undamped_modes(&m, &k).expect("symmetric definite");
-            let mut general = first_order_modes(&m, &c, &k).unwrap();
+            let mut general =
+                first_order_modes(&m, &c, &k, &RigidTest::new(&m, &c, &k, 0.0)).unwrap();
             for v in [&mut fast, &mut general] {
                 v.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
             }

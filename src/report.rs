@@ -99,6 +99,7 @@ pub fn sweep_header(model: &Model, cols: &SweepColumns) -> Vec<String> {
             .map(|&i| format!("drive:{}", model.coordinates[i].name)),
     );
     h.push("iterations".into());
+    h.push("branch".into());
     h.push("message".into());
     h
 }
@@ -156,7 +157,8 @@ pub fn sweep_rows(
                         .map(|&d| p.equilibrium.drive_force[d].to_string()),
                 );
                 r.push(p.equilibrium.iterations.to_string());
-                r.push(p.note.clone().unwrap_or_default());
+                r.push(p.branch.as_str().into());
+                r.push(point_message(p));
                 r
             })
             .collect(),
@@ -194,7 +196,20 @@ pub fn modes_header(model: &Model) -> Vec<String> {
         h.push(format!("shape_re:{c}"));
         h.push(format!("shape_im:{c}"));
     }
+    h.push("branch".into());
+    h.push("message".into());
     h
+}
+
+/// What a point's rows say beside their numbers: which branch and why where it is not simply
+/// the stable equilibrium reached, then any note (a change of stability).
+fn point_message(p: &Point) -> String {
+    let branch = (p.branch.as_str() != "stable").then(|| p.branch.to_string());
+    branch
+        .into_iter()
+        .chain(p.note.clone())
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Rows of the modes table at the point `p` (see [`modes_header`]).
@@ -210,6 +225,8 @@ pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
                 r.push(z.re.to_string());
                 r.push(z.im.to_string());
             }
+            r.push(p.branch.as_str().into());
+            r.push(point_message(p));
             r
         })
         .collect()
@@ -493,6 +510,8 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
         "C": matrix(&p.linear.c),
         "K": matrix(&p.linear.k),
         "modes": modes,
+        "branch": {"kind": p.branch.as_str(), "origin": p.branch.origin, "detail": p.branch.kind,
+                   "reason": p.branch.to_string()},
         "note": p.note,
     })
 }
@@ -614,8 +633,9 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
         }
         let _ = writeln!(s);
     }
+    let _ = writeln!(s, "\nbranch: {}: {}", p.branch.as_str(), p.branch);
     if let Some(n) = &p.note {
-        let _ = writeln!(s, "\nnote: {n}");
+        let _ = writeln!(s, "note: {n}");
     }
     s
 }

@@ -45,6 +45,136 @@ pub struct Point {
     /// This point is on another branch than the previous speed's: the branch followed lost
     /// its stability and the sweep switched (see [`Sweep::step`]).
     pub new_branch: bool,
+    /// Which equilibrium this is and why it is the one reported.
+    pub branch: Branch,
+}
+
+/// Where Newton started from.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Origin {
+    /// The model's initial guess (the joints' `initial` values).
+    InitialGuess,
+    /// The solution at the previous speed of a sweep (extrapolated).
+    Continued { speed: f64 },
+    /// Coordinates the caller gave.
+    Given,
+}
+
+impl std::fmt::Display for Origin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Origin::InitialGuess => write!(f, "the model's initial guess"),
+            Origin::Continued { speed } => write!(f, "the solution at {speed} rad/s"),
+            Origin::Given => write!(f, "the coordinates given"),
+        }
+    }
+}
+
+/// Which equilibrium a point is on. Where a mechanism has several equilibria at a speed (a
+/// pendulum past its bifurcation: hanging, and tilted either way), the one reported depends on
+/// where Newton starts; this says which and why, in every output.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Branch {
+    /// Where Newton started from.
+    pub origin: Origin,
+    pub kind: BranchKind,
+}
+
+/// Whether the equilibrium reached is the one reported.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum BranchKind {
+    /// The equilibrium Newton reached is stable.
+    Stable,
+    /// The equilibrium Newton reached is unstable through its mode `mode` (0-based, among that
+    /// equilibrium's modes, which are not reported) with the root `re + i·im`; the stable one
+    /// found by stepping `amplitude` (rad or m at the largest coordinate) along that mode's
+    /// shape (its real or imaginary part, `sign`) is reported instead.
+    Switched {
+        mode: usize,
+        re: f64,
+        im: f64,
+        imaginary_part: bool,
+        sign: f64,
+        amplitude: f64,
+    },
+    /// The equilibrium Newton reached is unstable through `mode` (0-based, among the point's
+    /// modes) and reported as it is:
+    /// `searched` says whether a stable one was looked for along the unstable modes (and none
+    /// found) or not (switching off, [`Options::no_branch_switch`]).
+    Unstable {
+        mode: usize,
+        re: f64,
+        im: f64,
+        searched: bool,
+    },
+}
+
+impl Branch {
+    /// `stable`, `switched` or `unstable`.
+    pub fn as_str(&self) -> &'static str {
+        match self.kind {
+            BranchKind::Stable => "stable",
+            BranchKind::Switched { .. } => "switched",
+            BranchKind::Unstable { .. } => "unstable",
+        }
+    }
+}
+
+impl std::fmt::Display for Branch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let root = |mode: Option<usize>, re: f64, im: f64| {
+            let how = if im == 0.0 {
+                "a positive real root: static divergence"
+            } else {
+                "a complex pair with positive real part: flutter"
+            };
+            let which = mode.map_or("a mode".to_string(), |k| format!("mode {}", k + 1));
+            format!("{which} has λ = {re:.6e} {im:+.6e}i, {how}")
+        };
+        match self.kind {
+            BranchKind::Stable => {
+                write!(f, "the equilibrium reached from {} is stable", self.origin)
+            }
+            BranchKind::Switched {
+                mode: _,
+                re,
+                im,
+                imaginary_part,
+                sign,
+                amplitude,
+            } => write!(
+                f,
+                "the equilibrium reached from {} is unstable ({}); switched to the stable \
+                 equilibrium found by stepping {amplitude} along {}{} of that mode's shape",
+                self.origin,
+                root(None, re, im),
+                if sign < 0.0 { "minus " } else { "" },
+                if imaginary_part {
+                    "the imaginary part"
+                } else {
+                    "the real part"
+                },
+            ),
+            BranchKind::Unstable {
+                mode,
+                re,
+                im,
+                searched,
+            } => write!(
+                f,
+                "the equilibrium reached from {} is unstable ({}); {}",
+                self.origin,
+                root(Some(mode), re, im),
+                if searched {
+                    "no stable equilibrium was found along its unstable modes' shapes"
+                } else {
+                    "reported as reached (no search for a stable branch)"
+                }
+            ),
+        }
+    }
 }
 
 impl Point {
@@ -90,6 +220,61 @@ pub fn point(
     point_from(model, p, speed, q0, Start::default(), opt)
 }
 
+/// Solves one operating point from the model's initial guess (what `modal` reports).
+pub fn point_at(
+    model: &Compiled,
+    p: &[f64],
+    speed: f64,
+    opt: &Options,
+) -> Result<Point, PointError> {
+    let q0 = initial_guess(model, p, speed)?;
+    let mut pt = point(model, p, speed, &q0, opt)?;
+    pt.branch.origin = Origin::InitialGuess;
+    Ok(pt)
+}
+
+/// Amplitudes (rad or m at the largest coordinate of a mode's shape) of the steps off an
+/// unstable equilibrium from which Newton looks for a stable one, nearest first.
+const SEARCH_AMPLITUDES: [f64; 6] = [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0];
+
+/// The directions to search along for a stable equilibrium: the real and imaginary parts of
+/// each unstable mode's shape in the free coordinates (a flutter mode's two parts span its
+/// plane of motion: a conical pendulum's two tilts), largest growth first, each scaled to a
+/// largest entry of 1; with the mode, its root and which part.
+fn search_directions(first: &Point) -> Vec<(usize, C64, bool, Vec<f64>)> {
+    let mut unstable: Vec<usize> = (0..first.modes.len())
+        .filter(|&k| first.modes[k].class == ModeClass::Unstable)
+        .collect();
+    unstable.sort_by(|&a, &b| {
+        let re = |k: usize| {
+            first.modes[k]
+                .root
+                .lambda
+                .re
+                .max(first.modes[k].partner.lambda.re)
+        };
+        re(b).total_cmp(&re(a))
+    });
+    let mut out = Vec::new();
+    for k in unstable {
+        let z = &first.shapes[k];
+        let top = z.iter().fold(0.0f64, |s, v| s.max(v.norm()));
+        for imaginary in [false, true] {
+            let d: Vec<f64> = z
+                .iter()
+                .map(|v| if imaginary { v.im } else { v.re })
+                .collect();
+            let big = d.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            // A part that is only rounding of the other gives no new direction.
+            if big > 1e-3 * top {
+                let root = first.modes[k].root.lambda;
+                out.push((k, root, imaginary, d.iter().map(|v| v / big).collect()));
+            }
+        }
+    }
+    out
+}
+
 /// As [`point`], with more to start Newton from (see [`Start`]).
 pub fn point_from(
     model: &Compiled,
@@ -121,78 +306,102 @@ pub fn point_from(
             equations: model.n_constraints(),
         }
     })?;
-    let first = analyse(model, p, &problem, eq, opt)?;
-    if first.stable() || opt.no_branch_switch {
+    let mut first = analyse(model, p, &problem, eq, opt)?;
+    if first.stable() {
         return Ok(first);
     }
-    // A real root with positive real part: look for the stable branch along its shape.
-    let Some(idx) = first
-        .modes
-        .iter()
-        .position(|m| m.class == ModeClass::Unstable && m.root.lambda.im == 0.0)
-    else {
-        return Ok(first);
+    // The most unstable mode, for the record.
+    let worst = (0..first.modes.len())
+        .filter(|&k| first.modes[k].class == ModeClass::Unstable)
+        .max_by(|&a, &b| {
+            let re = |k: usize| first.modes[k].root.lambda.re;
+            re(a).total_cmp(&re(b))
+        })
+        .map(|k| (k, first.modes[k].root.lambda));
+    let unstable = |searched: bool| {
+        let (mode, root) = worst.unwrap_or_default();
+        BranchKind::Unstable {
+            mode,
+            re: root.re,
+            im: root.im,
+            searched,
+        }
     };
-    let shape: Vec<f64> = first.shapes[idx].iter().map(|z| z.re).collect();
-    let smax = shape.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-    if smax == 0.0 {
+    let directions = search_directions(&first);
+    if opt.no_branch_switch || directions.is_empty() {
+        first.branch.kind = unstable(!opt.no_branch_switch);
+        first.branch.kind = unstable(false);
         return Ok(first);
     }
-    let dir: Vec<f64> = shape.iter().map(|v| v / smax).collect();
     let free = &first.linear.free;
     // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep that
     // fell onto the unstable equilibrium returns to its own branch), else the side of the
     // model's initial guess (then the positive side).
-    let side = |q: &[f64]| -> f64 {
+    let guess = initial_guess(model, p, speed)?;
+    let side = |q: &[f64], dir: &[f64]| -> f64 {
         free.iter()
             .enumerate()
             .map(|(k, &i)| dir[k] * (q[i] - first.equilibrium.q[i]))
             .sum()
     };
-    let mut lean = side(q0);
-    if lean.abs() <= 1e-9 {
-        lean = side(&initial_guess(model, p, speed)?);
-    }
-    let signs = if lean < -1e-9 {
-        [-1.0, 1.0]
-    } else {
-        [1.0, -1.0]
-    };
     // A stable equilibrium on the side stepped to is taken at once; one that Newton reached
     // across the unstable equilibrium only if no step finds one on its own side.
     let mut across = None;
-    for amp in [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0] {
-        for s in signs {
-            let mut q = first.equilibrium.q.clone();
-            for (k, &i) in free.iter().enumerate() {
-                q[i] += s * amp * dir[k];
+    for amp in SEARCH_AMPLITUDES {
+        for (k, root, imaginary_part, dir) in &directions {
+            let mut lean = side(q0, dir);
+            if lean.abs() <= 1e-9 {
+                lean = side(&guess, dir);
             }
-            let Ok(eq) = problem.solve(speed, &q, Start::default(), opt.newton) else {
-                continue;
+            let signs = if lean < -1e-9 {
+                [-1.0, 1.0]
+            } else {
+                [1.0, -1.0]
             };
-            let moved = free.iter().fold(0.0f64, |m, &i| {
-                m.max((eq.q[i] - first.equilibrium.q[i]).abs())
-            });
-            if moved < 1e-7 {
-                continue;
-            }
-            let own_side = side(&eq.q) * s > 0.0;
-            if let Ok(pt) = analyse(model, p, &problem, eq, opt)
-                && pt.stable()
-            {
-                let pt = Point {
-                    switched_from: Some(first.equilibrium.q.clone()),
-                    new_branch: true,
-                    note: Some("the equilibrium continued from the previous speed is unstable (static divergence); switched to the stable branch".into()),
-                    ..pt
-                };
-                if own_side {
-                    return Ok(pt);
+            for s in signs {
+                let mut q = first.equilibrium.q.clone();
+                for (j, &i) in free.iter().enumerate() {
+                    q[i] += s * amp * dir[j];
                 }
-                across.get_or_insert(pt);
+                let Ok(eq) = problem.solve(speed, &q, Start::default(), opt.newton) else {
+                    continue;
+                };
+                let moved = free.iter().fold(0.0f64, |m, &i| {
+                    m.max((eq.q[i] - first.equilibrium.q[i]).abs())
+                });
+                if moved < 1e-7 {
+                    continue;
+                }
+                let own_side = side(&eq.q, dir) * s > 0.0;
+                if let Ok(pt) = analyse(model, p, &problem, eq, opt)
+                    && pt.stable()
+                {
+                    let kind = BranchKind::Switched {
+                        mode: *k,
+                        re: root.re,
+                        im: root.im,
+                        imaginary_part: *imaginary_part,
+                        sign: s,
+                        amplitude: amp,
+                    };
+                    let pt = Point {
+                        switched_from: Some(first.equilibrium.q.clone()),
+                        new_branch: true,
+                        branch: Branch {
+                            kind,
+                            ..first.branch.clone()
+                        },
+                        ..pt
+                    };
+                    if own_side {
+                        return Ok(pt);
+                    }
+                    across.get_or_insert(pt);
+                }
             }
         }
     }
+    first.branch.kind = unstable(true);
     Ok(across.unwrap_or(first))
 }
 
@@ -235,6 +444,10 @@ fn analyse(
         note: None,
         switched_from: None,
         new_branch: false,
+        branch: Branch {
+            origin: Origin::Given,
+            kind: BranchKind::Stable,
+        },
     })
 }
 
@@ -277,6 +490,7 @@ struct Guess {
     q: Vec<f64>,
     lambda: Option<Vec<f64>>,
     jacobian: Option<DMatrix<f64>>,
+    origin: Origin,
 }
 
 /// A converged state kept for continuation.
@@ -392,6 +606,9 @@ impl<'a> Sweep<'a> {
                     q,
                     lambda: predict(&nodes[..=order], |s| &s.lambda),
                     jacobian,
+                    origin: Origin::Continued {
+                        speed: nodes[0].speed,
+                    },
                 });
             }
         }
@@ -405,6 +622,7 @@ impl<'a> Sweep<'a> {
                 q: s1.q.clone(),
                 lambda: Some(s1.lambda.clone()),
                 jacobian: Some(s1.jacobian.clone()),
+                origin: Origin::Continued { speed: s1.speed },
             })
         })
         .flatten();
@@ -413,6 +631,7 @@ impl<'a> Sweep<'a> {
                 q,
                 lambda: None,
                 jacobian: None,
+                origin: Origin::InitialGuess,
             })
         });
         for guess in predicted.into_iter().chain(last).map(Ok).chain(fallback) {
@@ -424,7 +643,8 @@ impl<'a> Sweep<'a> {
             };
             let q0 = &guess.q;
             result = point_from(self.model, &self.params, speed, q0, start, &self.options);
-            if result.is_ok() {
+            if let Ok(pt) = &mut result {
+                pt.branch.origin = guess.origin;
                 break;
             }
         }
@@ -458,6 +678,11 @@ impl<'a> Sweep<'a> {
             let order = match_shapes(prev, &pt.shapes);
             pt.modes = permute(std::mem::take(&mut pt.modes), &order);
             pt.shapes = permute(std::mem::take(&mut pt.shapes), &order);
+            if let BranchKind::Unstable { mode, .. } = &mut pt.branch.kind
+                && let Some(j) = order.iter().position(|&k| k == *mode)
+            {
+                *mode = j;
+            }
         }
         if let Some(was) = self.last_stable
             && was != pt.stable()

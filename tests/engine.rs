@@ -103,7 +103,12 @@ fn pendulum_hanging_position_loses_stability_at_sqrt_3g_over_2l() {
     sweep.step(3.83).unwrap();
     let out = sweep.step(3.84).unwrap();
     assert!(out.equilibrium.q[1] > 0.05 && out.stable());
-    assert!(out.note.unwrap().contains("stable branch"));
+    assert_eq!(out.branch.as_str(), "switched");
+    assert!(
+        (out.branch.to_string()).contains("static divergence"),
+        "{}",
+        out.branch
+    );
 }
 
 /// Governor by hand: arm angle φ from the downward spindle axis, the planar effective potential

@@ -72,6 +72,10 @@ class ModalPoint:
     ``M``, ``C``, ``K`` are M̂, Ĉ, K̂ in the independent coordinates (``independent``);
     ``modes`` has one row per mode (frequencies in rad/s, damping ratio, both roots) and its
     shape in the free coordinates as complex columns ``shape:<joint>`` (largest component 1).
+    ``branch`` is ``"stable"``, ``"switched"`` (the equilibrium reached from the initial guess
+    was unstable; a stable one found along its unstable modes is reported) or ``"unstable"``,
+    and ``branch_reason`` says why in a sentence. A rigid-body mode (status ``rigid``: a zero
+    root) has no damping ratio (NaN).
     """
 
     speed: float
@@ -83,6 +87,8 @@ class ModalPoint:
     drive: dict[str, float]
     iterations: int
     note: str | None
+    branch: str
+    branch_reason: str
     modes: pd.DataFrame
 
 
@@ -148,6 +154,7 @@ class Model:
         wrt: str | Iterable[str] | None = None,
         derivatives: str = "ad",
         independent: str | Iterable[str] | None = None,
+        branch: str = "stable",
     ) -> pd.DataFrame:
         """Sweep the operating speed: one row per (speed, mode), the CLI's ``sweep`` columns.
 
@@ -155,7 +162,9 @@ class Model:
         ``transfer``: ``"input=NAME,output=NAME[,order=K]"`` adds |H| and its phase.
         ``sensitivity``: add d(…)/d(P) for the design variables ``wrt`` (default: those with a
         tolerance), computed ``"ad"`` (exact) or ``"fd"``. A failed speed has status
-        ``failed`` and its reason in ``message``.
+        ``failed`` and its reason in ``message``. ``branch``: ``"stable"`` switches to a stable
+        equilibrium where the one followed loses its stability, ``"as-given"`` follows it
+        (the ``branch`` column says which, ``message`` why).
         """
         return _frame(
             self._native.sweep(
@@ -165,14 +174,21 @@ class Model:
                 _names(wrt),
                 derivatives,
                 _names(independent),
+                branch,
             )
         )
 
     def modal(
-        self, speed: float, *, independent: str | Iterable[str] | None = None
+        self,
+        speed: float,
+        *,
+        independent: str | Iterable[str] | None = None,
+        branch: str = "stable",
     ) -> ModalPoint:
-        """Equilibrium, M̂, Ĉ, K̂ and the damped modes at ``speed`` (rad/s)."""
-        d = self._native.modal(float(speed), _names(independent))
+        """Equilibrium, M̂, Ĉ, K̂ and the damped modes at ``speed`` (rad/s), Newton starting
+        from the model's initial guess; ``branch="as-given"`` reports the equilibrium reached
+        even where it is unstable (default ``"stable"``: a stable one is looked for)."""
+        d = self._native.modal(float(speed), _names(independent), branch)
         modes = _frame(d["modes"])
         for name in d["free"]:
             re, im = f"shape_re:{name}", f"shape_im:{name}"
@@ -187,6 +203,8 @@ class Model:
             drive=d["drive"],
             iterations=d["iterations"],
             note=d["note"],
+            branch=d["branch"],
+            branch_reason=d["branch_reason"],
             modes=modes,
         )
 

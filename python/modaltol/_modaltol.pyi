@@ -31,8 +31,11 @@ class NativeModel:
         wrt: list[str] | None = None,
         derivatives: str = "ad",
         independent: list[str] | None = None,
+        branch: str = "stable",
     ) -> Columns: ...
-    def modal(self, speed: float, independent: list[str] | None = None) -> dict[str, Any]: ...
+    def modal(
+        self, speed: float, independent: list[str] | None = None, branch: str = "stable"
+    ) -> dict[str, Any]: ...
     def sensitivity(
         self,
         speed: float,

@@ -21,7 +21,7 @@ use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::study::SweepStudy;
-use modaltol::sweep::{Options, initial_guess, point};
+use modaltol::sweep::{Options, initial_guess, point_at};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -209,8 +209,20 @@ impl NativeModel {
             .map_err(|e| bad(format!("wrt: {e}")))
     }
 
-    fn options(&self, independent: Option<Vec<String>>) -> PyResult<Options> {
+    /// With the branch to report: `"stable"` (switch to a stable equilibrium where the one
+    /// reached is unstable) or `"as-given"`.
+    fn options_on(&self, independent: Option<Vec<String>>, branch: &str) -> PyResult<Options> {
+        let no_branch_switch = match branch {
+            "stable" => false,
+            "as-given" => true,
+            other => {
+                return Err(bad(format!(
+                    "branch must be \"stable\" or \"as-given\", got {other:?}"
+                )));
+            }
+        };
         Ok(Options {
+            no_branch_switch,
             independent: independent
                 .map(|n| {
                     self.m()
@@ -242,8 +254,8 @@ impl NativeModel {
             return Err(bad(format!("speed must be finite, got {speed}")));
         }
         let p = self.model.nominal();
-        let q0 = initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
-        point(&self.model, &p, speed, &q0, opt)
+        initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
+        point_at(&self.model, &p, speed, opt)
             .map_err(|e| SolveError::new_err(format!("speed {speed:?} rad/s failed: {e}")))
     }
 }
@@ -337,7 +349,7 @@ impl NativeModel {
     }
 
     /// The speed sweep's table (the CLI's `sweep` columns).
-    #[pyo3(signature = (speeds=None, transfer=None, sensitivity=false, wrt=None, derivatives="ad", independent=None))]
+    #[pyo3(signature = (speeds=None, transfer=None, sensitivity=false, wrt=None, derivatives="ad", independent=None, branch="stable"))]
     #[allow(clippy::too_many_arguments)]
     fn sweep<'py>(
         &self,
@@ -348,6 +360,7 @@ impl NativeModel {
         wrt: Option<Vec<String>>,
         derivatives: &str,
         independent: Option<Vec<String>>,
+        branch: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
         let w = self.speeds_or_model(speeds)?;
@@ -360,7 +373,7 @@ impl NativeModel {
                 Vec::new()
             },
         };
-        let opt = self.options(independent)?;
+        let opt = self.options_on(independent, branch)?;
         let how = self::derivatives(derivatives)?;
         let cancel = Cancel::new();
         let model = &*self.model;
@@ -380,14 +393,15 @@ impl NativeModel {
     }
 
     /// Equilibrium, M̂, Ĉ, K̂ and the modes at one speed.
-    #[pyo3(signature = (speed, independent=None))]
+    #[pyo3(signature = (speed, independent=None, branch="stable"))]
     fn modal<'py>(
         &self,
         py: Python<'py>,
         speed: f64,
         independent: Option<Vec<String>>,
+        branch: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let opt = self.options(independent)?;
+        let opt = self.options_on(independent, branch)?;
         let pt = py.detach(|| self.point(speed, &opt))?;
         let m = self.m();
         let d = PyDict::new(py);
@@ -418,6 +432,8 @@ impl NativeModel {
         d.set_item("drive", drive)?;
         d.set_item("iterations", pt.equilibrium.iterations)?;
         d.set_item("note", pt.note.clone())?;
+        d.set_item("branch", pt.branch.as_str())?;
+        d.set_item("branch_reason", pt.branch.to_string())?;
         d.set_item(
             "modes",
             table(py, &report::modes_header(m), &report::modes_rows(&pt))?,
