@@ -629,15 +629,19 @@ pub enum Smoothness {
 impl std::fmt::Display for Smoothness {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Smoothness::Simple => write!(f, "simple roots"),
+            Smoothness::Simple => write!(f, "its roots are simple"),
             Smoothness::Coalescing => write!(
                 f,
-                "its two roots coincide (changing between underdamped and overdamped)"
+                "its two roots coincide (it is changing between underdamped and overdamped)"
             ),
             Smoothness::Repeated { other } => {
-                write!(f, "a root repeated in mode {} (a double root)", other + 1)
+                write!(
+                    f,
+                    "a root of it is repeated in mode {} (a double root)",
+                    other + 1
+                )
             }
-            Smoothness::Rigid => write!(f, "a rigid-body mode (zero root)"),
+            Smoothness::Rigid => write!(f, "it is a rigid-body mode (a zero root)"),
         }
     }
 }

@@ -81,7 +81,7 @@ impl std::fmt::Display for Missing {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Missing::Mode { mode, why } => {
-                write!(f, "not differentiable: mode {} has {why}", mode + 1)
+                write!(f, "not differentiable: mode {}: {why}", mode + 1)
             }
             Missing::RigidDamping { mode } => write!(
                 f,

@@ -1,8 +1,9 @@
 //! Fuzzing of the whole pipeline through the real binary: mutated example models through
 //! `check`, `modal`, a short `sweep` and a short `analyze`, each under a deadline.
 //!
-//! A run passes when nothing panics, nothing hangs, every exit code is 0, 1 or 2, and no output
-//! holds a non-finite number outside a row whose status is `failed`. The mutations aim at the
+//! A run passes when nothing panics, nothing hangs, every exit code is 0, 1 or 2, no output
+//! holds a non-finite number outside a row whose status is `failed`, and every row of
+//! `tolerance.csv` without a mean says why (and only those). The mutations aim at the
 //! defect classes found before: extreme and degenerate numbers in place of any number of the
 //! model, non-finite expressions, deleted and duplicated lines, random bytes.
 //!
@@ -141,6 +142,26 @@ fn check_csv(text: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks `tolerance.csv`: a row without a mean says why (its `reason`), and only such a row.
+fn check_reasons(text: &str) -> Result<(), String> {
+    let mut rows = csv::Reader::from_reader(text.as_bytes());
+    let header = rows.headers().map_err(|e| e.to_string())?.clone();
+    let col = |n: &str| {
+        header
+            .iter()
+            .position(|h| h == n)
+            .ok_or(format!("no column {n}"))
+    };
+    let (mean, reason) = (col("mean")?, col("reason")?);
+    for row in rows.records() {
+        let row = row.map_err(|e| e.to_string())?;
+        if row[mean].is_empty() == row[reason].is_empty() {
+            return Err(format!("a row's mean and reason: {row:?}"));
+        }
+    }
+    Ok(())
+}
+
 /// Runs one model through the pipeline; `Err` says what went wrong.
 fn pipeline(model: &Path, out: &Path, analyze: bool) -> Result<(), String> {
     let m = model.to_str().unwrap();
@@ -185,6 +206,7 @@ fn pipeline(model: &Path, out: &Path, analyze: bool) -> Result<(), String> {
         )?;
         if let Ok(text) = std::fs::read_to_string(out.join("tolerance.csv")) {
             check_csv(&text).map_err(|e| format!("analyze: {e}"))?;
+            check_reasons(&text).map_err(|e| format!("analyze: {e}"))?;
         }
     }
     Ok(())

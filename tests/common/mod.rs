@@ -7,8 +7,9 @@ use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
 
 /// The shipped example models but the rotating blade (a chain of many segments).
-pub const EXAMPLES: [&str; 7] = [
+pub const EXAMPLES: [&str; 8] = [
     "rotating_pendulum.toml",
+    "conical_pendulum.toml",
     "governor.toml",
     "spinning_universal_pendulum.toml",
     "multi_arm_governor.toml",
