@@ -603,16 +603,20 @@ impl Model {
     }
 
     /// Free coordinates named as the independent ones (coordinate indices): as many as the
-    /// degrees of freedom, each a free joint coordinate.
+    /// degrees of freedom, each a free joint coordinate, each once (the rule the model file's
+    /// `independent` follows; a repeated name would leave a degree of freedom without one).
     pub fn independent_coordinates(&self, names: &[String]) -> Result<Vec<usize>, String> {
-        let out = names
-            .iter()
-            .map(|n| {
-                self.coordinate(n)
-                    .filter(|&i| !self.coordinates[i].driven)
-                    .ok_or_else(|| format!("'{n}' is not a free joint coordinate of the model"))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut out: Vec<usize> = Vec::with_capacity(names.len());
+        for n in names {
+            let i = self
+                .coordinate(n)
+                .filter(|&i| !self.coordinates[i].driven)
+                .ok_or_else(|| format!("'{n}' is not a free joint coordinate of the model"))?;
+            if out.contains(&i) {
+                return Err(format!("'{n}' is named twice"));
+            }
+            out.push(i);
+        }
         if out.len() != self.dof() {
             return Err(format!(
                 "{} coordinate(s) named but the model has {} degree(s) of freedom",
