@@ -13,7 +13,7 @@ use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, TransferAt};
-use modaltol::shard::ShardFile;
+use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point};
 use std::io::{IsTerminal, Write};
@@ -188,6 +188,11 @@ enum Command {
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`.
+    ///
+    /// Every shard must come from the same model (with the same --set), tolerance cases,
+    /// speeds, samples, seed, sampling and quadrature options: a shard computed from anything
+    /// else is refused, naming the file and what differs. The quadrature runs with the
+    /// options the shards' run was given.
     Merge(MergeArgs),
     /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
     /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
@@ -863,7 +868,9 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
         let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
-        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, mc, &range, (*k, *n)) else {
+        let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
+        let run = RunSettings::new(&range, &mc, tolerance, *n);
+        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
             eprintln!(
                 "modaltol: interrupted; {} not written (a shard is complete or absent)",
                 path.display()
@@ -906,7 +913,11 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
         cases,
-        quadrature: Some(QuadOptions::default()),
+        // The quadrature of the run the shards belong to.
+        quadrature: first.quadrature.map(|tolerance| QuadOptions {
+            tolerance,
+            threads: None,
+        }),
         monte_carlo: Some(mc),
         split: Split::Merged(states),
         threads: None,

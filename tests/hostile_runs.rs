@@ -244,30 +244,119 @@ fn impossible_monte_carlo_samples_count_as_failed_with_their_reason() {
     assert!(rows > 0);
 }
 
+/// The settings of the shard runs below.
+const SHARD_RUN: [&str; 6] = ["--speed", "0:3:1", "--samples", "300", "--case", "L3"];
+
+/// Runs `analyze --shard K/3` of `model` with `extra` options into `dir`, returns its path.
+fn shard(dir: &Path, model: &str, k: usize, extra: &[&str]) -> String {
+    let out = dir.to_str().unwrap();
+    let spec = format!("{k}/3");
+    let mut args = vec!["analyze", model, "-o", out, "--shard", &spec];
+    args.extend(SHARD_RUN);
+    args.extend(extra);
+    let o = run(&args);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    dir.join(format!("shard-{k}-of-3.json"))
+        .display()
+        .to_string()
+}
+
 /// Runs `analyze --shard K/3` for K = 1..3 into `dir` and returns the shard paths.
 fn shards(dir: &Path, model: &str) -> Vec<String> {
-    (1..=3)
-        .map(|k| {
-            let o = run(&[
-                "analyze",
-                model,
-                "-o",
-                dir.to_str().unwrap(),
-                "--speed",
-                "0:3:1",
-                "--samples",
-                "300",
-                "--case",
-                "L3",
-                "--shard",
-                &format!("{k}/3"),
-            ]);
-            assert_eq!(o.code, Some(0), "{}", o.stderr);
-            dir.join(format!("shard-{k}-of-3.json"))
-                .display()
-                .to_string()
-        })
-        .collect()
+    (1..=3).map(|k| shard(dir, model, k, &[])).collect()
+}
+
+/// `merge --model MODEL -o DIR/merged --case L3 SHARDS…`.
+fn merge(dir: &Path, model: &str, shards: &[String]) -> Run {
+    let out = dir.join("merged");
+    let mut args = vec!["merge", "--model", model, "-o", out.to_str().unwrap()];
+    args.extend(["--case", "L3"]);
+    args.extend(shards.iter().map(String::as_str));
+    run(&args)
+}
+
+#[test]
+fn a_shard_of_another_model_or_run_is_refused_naming_what_differs() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let good = shards(dir.path(), m);
+    // One shard each from a model whose gravity, geometry, an expression or a parameter
+    // differs, or from a run with other options: refused, naming the file and what differs.
+    let elsewhere = dir.path().join("other");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let gravity = variant(
+        &elsewhere,
+        "rotating_pendulum.toml",
+        "g.toml",
+        &[("-9.80665", "-7")],
+    );
+    let damping = variant(
+        &elsewhere,
+        "rotating_pendulum.toml",
+        "c.toml",
+        &[("damping = \"c\"", "damping = \"c*1.1\"")],
+    );
+    for (k, model, extra, what) in [
+        (2, gravity.as_str(), &[][..], "gravity"),
+        (3, damping.as_str(), &[][..], "joints"),
+        (1, m, &["--set", "L=1.1"][..], "parameters"),
+        (2, m, &["--no-quadrature"][..], "quadrature"),
+        (3, m, &["--sampling", "sobol"][..], "sampling"),
+    ] {
+        let odd = shard(&elsewhere, model, k, extra);
+        let mut set = good.clone();
+        set[k - 1] = odd;
+        let o = merge(dir.path(), m, &set);
+        assert_eq!(o.code, Some(2), "{what}: merged; {}", o.stderr);
+        assert!(
+            o.stderr.contains(&format!("other/shard-{k}-of-3.json")) && o.stderr.contains(what),
+            "{what}: {}",
+            o.stderr
+        );
+    }
+    assert_eq!(merge(dir.path(), m, &good).code, Some(0));
+}
+
+#[test]
+fn merged_shards_run_the_quadrature_their_run_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let whole = dir.path().join("whole");
+    let mut args = vec![
+        "analyze",
+        m,
+        "-o",
+        whole.to_str().unwrap(),
+        "--no-quadrature",
+    ];
+    args.extend(SHARD_RUN);
+    assert_eq!(run(&args).code, Some(0));
+    let set: Vec<String> = (1..=3)
+        .map(|k| shard(dir.path(), m, k, &["--no-quadrature"]))
+        .collect();
+    let o = merge(dir.path(), m, &set);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    // The same rows and numbers, but the Monte Carlo quantiles (which need every sample's
+    // value, and which a merge leaves empty); and no quadrature rows.
+    let rows = |d: &Path| -> Vec<Vec<String>> {
+        let mut r = csv::Reader::from_path(d.join("tolerance.csv")).unwrap();
+        let h = r.headers().unwrap().clone();
+        let method = h.iter().position(|c| c == "method").unwrap();
+        let q = h.iter().position(|c| c == "q05").unwrap();
+        r.records()
+            .map(|x| {
+                let mut v: Vec<String> = x.unwrap().iter().map(String::from).collect();
+                assert_ne!(v[method], "quadrature");
+                if v[method] == "monte_carlo" {
+                    v[q..q + 3].iter_mut().for_each(String::clear);
+                }
+                v
+            })
+            .collect()
+    };
+    assert!(rows(&whole) == rows(&dir.path().join("merged")));
 }
 
 #[test]
