@@ -13,6 +13,7 @@ use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, TransferAt};
+use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point};
@@ -301,7 +302,7 @@ struct AnalyzeArgs {
     #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<u64>)]
     seed: Option<u64>,
     /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
-    /// not depend on it); default: all cores.
+    /// not depend on it): 1 to 1024; default: all cores.
     #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     threads: Option<usize>,
     /// Skip the Monte Carlo.
@@ -441,6 +442,15 @@ fn model_or_governor(model: &Option<PathBuf>, set: &[(String, f64)]) -> Result<C
         )
         .map_err(|e| InputError(e.to_string()).into()),
     }
+}
+
+/// `--threads`, checked ([`settings::threads`]): a count out of bounds is bad input, one the
+/// operating system refuses a failure.
+fn checked_threads(threads: Option<usize>) -> Result<Option<usize>> {
+    settings::threads(threads).map_err(|e| match e {
+        ThreadsError::Refused { .. } => Failed(format!("--threads: {e}")).into(),
+        _ => InputError(format!("--threads {e}")).into(),
+    })
 }
 
 /// The model's tolerance cases, or one made of the parameters' own tolerances.
@@ -606,9 +616,7 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
         output,
     } = args;
     let m = load(&model, set)?;
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let opt = Options {
         independent: independent(&m, &ind)?,
         ..Default::default()
@@ -719,9 +727,7 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
         output,
     } = args;
     let m = load(&model, set)?;
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
     let tf = match tspec.as_deref() {
         Some(s) => Some(parse_transfer(&m, s)?),
@@ -785,12 +791,9 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         cases: only,
         display,
     } = args;
-    if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
-        return Err(InputError(
-            "--quadrature-tolerance must be a relative error in (0, 1), e.g. 1e-3".into(),
-        )
-        .into());
-    }
+    settings::quadrature_tolerance(quadrature_tolerance)
+        .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
+    let threads = checked_threads(threads)?;
     let m = model_or_governor(&model, set)?;
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
@@ -798,15 +801,10 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
             InputError("no --speed given and the model has no [analysis] speed".into())
         })?,
     };
+    settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
     let cases = tolerance_cases(&m, &only)?;
-    if let Some(n) = samples
-        && !(2..=modaltol::montecarlo::MAX_SAMPLES).contains(&n)
-    {
-        return Err(InputError(format!(
-            "--samples must lie in 2..={} (got {n})",
-            modaltol::montecarlo::MAX_SAMPLES
-        ))
-        .into());
+    if let Some(n) = samples {
+        settings::samples(n).map_err(|e| InputError(format!("--samples {e}")))?;
     }
     let mc = (!no_monte_carlo).then(|| McOptions {
         samples: samples.unwrap_or(m.analysis.samples),
@@ -822,22 +820,14 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
     let split = match &shard {
         None => Split::Whole,
         Some(spec) => {
-            let bad = || InputError(format!("--shard '{spec}': expected K/N with 1 ≤ K ≤ N"));
-            let (k, n) = spec.split_once('/').ok_or_else(bad)?;
-            let (k, n): (usize, usize) = (
-                k.trim().parse().map_err(|_| bad())?,
-                n.trim().parse().map_err(|_| bad())?,
-            );
-            if k == 0 || k > n {
-                return Err(bad().into());
-            }
+            let (k, n) = settings::shard(spec).map_err(|e| InputError(format!("--shard {e}")))?;
             if mc.is_none() {
                 return Err(InputError(
                     "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo".into(),
                 )
                 .into());
             }
-            Split::Shard(k - 1, n)
+            Split::Shard(k, n)
         }
     };
     // Fail early where the results cannot be written.
@@ -904,6 +894,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     let (first, states) =
         modaltol::shard::read_all(&m, &cases, &shards).map_err(|e| InputError(e.to_string()))?;
     let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
+    settings::analysis_speeds(range.len()).map_err(InputError)?;
     let mc = McOptions {
         samples: first.samples,
         seed: first.seed,
@@ -984,9 +975,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
             (tf, output.map(PathBuf::from).or(out))
         }
     };
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
     let p = m.nominal();

@@ -454,6 +454,20 @@ fn bounded_inputs_are_refused_quickly() {
         t,
     );
     assert_eq!(o.code, Some(2), "{}", o.stderr);
+    // 10⁹ speeds of an analysis (all held in memory): refused before they are made.
+    let o = run_limited(
+        &[
+            "analyze",
+            m,
+            "-o",
+            out.to_str().unwrap(),
+            "--speed",
+            "0:999999999:1",
+        ],
+        t,
+    );
+    assert_eq!(o.code, Some(2), "{}", o.stderr);
+    assert!(o.stderr.contains("1000000000 speeds"), "{}", o.stderr);
     let big = variant(
         dir.path(),
         "rotating_pendulum.toml",
@@ -497,6 +511,55 @@ fn bounded_inputs_are_refused_quickly() {
     let o = run_limited(&["check", dotted.to_str().unwrap()], t);
     assert_eq!(o.code, Some(2));
     assert!(o.stderr.contains("dotted.toml:1:"), "{}", o.stderr);
+}
+
+/// Runs the binary with `args` under `ulimit -v KB` (the address space a container or a batch
+/// job may grant).
+fn run_with_address_space(kb: usize, args: &[&str]) -> Run {
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c")
+        .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_modaltol"))
+        .args(args);
+    common::command_with_deadline(cmd, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn thread_counts_are_bounded_and_a_refusal_of_the_system_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    let analyze = |threads: &'static str| {
+        vec![
+            "analyze",
+            m,
+            "-o",
+            o,
+            "--speed",
+            "0:1:1",
+            "--samples",
+            "20",
+            "--threads",
+            threads,
+        ]
+    };
+    for (threads, why) in [("0", "at least 1"), ("3000", "more than the 1024")] {
+        let o = run_limited(&analyze(threads), Duration::from_secs(10));
+        assert_eq!(o.code, Some(2), "--threads {threads}: {}", o.stderr);
+        assert!(o.stderr.contains(why), "--threads {threads}: {}", o.stderr);
+    }
+    // Within the bound but more than 1.5 GB of address space holds (their stacks): the
+    // system's refusal, reported before anything is computed; never a panic.
+    let o = run_with_address_space(1_500_000, &analyze("1000"));
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(
+        o.stderr.contains("cannot start 1000 worker threads") && !o.stderr.contains("panicked"),
+        "{}",
+        o.stderr
+    );
+    assert!(!out.exists(), "a result was written");
 }
 
 #[test]
