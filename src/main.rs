@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
-use modaltol::files::{AtomicFile, ResultDir, write_atomically};
+use modaltol::files::{AtomicFile, Inputs, ResultDir};
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
@@ -543,6 +543,20 @@ fn write_outputs(
     Ok(())
 }
 
+/// An output named that is one of the run's inputs: bad arguments, refused before anything
+/// is computed or written.
+fn refuse_input(inputs: &Inputs, output: &std::path::Path) -> Result<()> {
+    inputs
+        .refuse_output(output)
+        .map_err(|e| InputError(format!("{e}: {}", e.source)).into())
+}
+
+/// Where `analyze` writes: a shard's file, or the whole run's directory.
+enum Destination {
+    Shard(AtomicFile, PathBuf),
+    Directory(ResultDir),
+}
+
 /// Where a command's table goes: a file written beside its target and renamed into place by
 /// [`Sink::finish`] (a failed or killed run leaves the earlier file untouched), or stdout.
 enum Sink {
@@ -566,9 +580,13 @@ impl Write for Sink {
 }
 
 impl Sink {
-    fn to(output: &Option<PathBuf>) -> Result<Sink> {
+    /// The file `output` (refused where it is one of `inputs`), or stdout.
+    fn to(output: &Option<PathBuf>, inputs: &Inputs) -> Result<Sink> {
         Ok(match output {
-            Some(p) => Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?)),
+            Some(p) => {
+                refuse_input(inputs, p)?;
+                Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?))
+            }
             None => Sink::Stdout(std::io::BufWriter::new(std::io::stdout().lock())),
         })
     }
@@ -599,7 +617,7 @@ fn run(cli: Cli) -> Result<()> {
 fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
     let CheckArgs { model } = args;
     let m = load(&model, set)?;
-    let mut w = Sink::to(&None)?;
+    let mut w = Sink::to(&None, &Inputs::default())?;
     write!(w, "{}", report::check_summary(&m))?;
     w.finish()?;
 
@@ -621,10 +639,10 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
         independent: independent(&m, &ind)?,
         ..Default::default()
     };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = m.nominal();
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let result = point(&m, &p, speed, &q0, &opt);
-    let mut w = Sink::to(&output)?;
     match format {
         Format::Json => writeln!(
             w,
@@ -681,7 +699,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
         ..Default::default()
     };
     let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
-    let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
+    let mut csv = csv::Writer::from_writer(Sink::to(&output, &Inputs::new(&[&model]))?);
     csv.write_record(report::sweep_header(&m, &cols))?;
     let n = range.len();
     // Long sweeps (sensitivities at each speed, or many speeds) report their progress.
@@ -733,6 +751,7 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
         Some(s) => Some(parse_transfer(&m, s)?),
         None => m.analysis.transfer,
     };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = m.nominal();
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point(&m, &p, speed, &q0, &Options::default())
@@ -751,7 +770,6 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
     } else {
         "fd"
     };
-    let mut w = Sink::to(&output)?;
     match format {
         Format::Json => writeln!(
             w,
@@ -831,13 +849,19 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         }
     };
     // Fail early where the results cannot be written.
-    let dir = match split {
-        Split::Shard(..) => {
+    let inputs = Inputs::new(&model.iter().collect::<Vec<_>>());
+    let destination = match split {
+        Split::Shard(k, n) => {
             std::fs::create_dir_all(&output)
                 .with_context(|| format!("{}: cannot create the directory", output.display()))?;
-            None
+            let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+            refuse_input(&inputs, &path)?;
+            Destination::Shard(AtomicFile::create(&path)?, path)
         }
-        _ => Some(ResultDir::create(&output)?),
+        _ => {
+            refuse_input(&inputs, &output)?;
+            Destination::Directory(ResultDir::create(&output)?.protect(inputs)?)
+        }
     };
     // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
     let quadrature =
@@ -857,7 +881,9 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
     install_interrupt_handler(&opt.cancel);
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
-        let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+        let Destination::Shard(mut f, path) = destination else {
+            unreachable!("a shard's destination is its file")
+        };
         let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
         let run = RunSettings::new(&range, &mc, tolerance, *n);
         let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
@@ -867,14 +893,18 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
             );
             return Err(Interrupted.into());
         };
-        write_atomically(&path, file.to_json().as_bytes())?;
+        f.write_all(file.to_json().as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        f.commit()?;
         eprintln!(
             "modaltol: wrote {}; combine the shards with `modaltol merge`",
             path.display()
         );
         return Ok(());
     }
-    let dir = dir.expect("a result directory");
+    let Destination::Directory(dir) = destination else {
+        unreachable!("a whole run's destination is a directory")
+    };
     write_outputs(&m, &a, mc.as_ref(), threads, display.into(), dir, &output)?;
 
     Ok(())
@@ -914,7 +944,11 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
         threads: None,
         cancel: Cancel::new(),
     };
-    let dir = ResultDir::create(&output)?;
+    let mut inputs: Vec<&PathBuf> = model.iter().collect();
+    inputs.extend(&shards);
+    let inputs = Inputs::new(&inputs);
+    refuse_input(&inputs, &output)?;
+    let dir = ResultDir::create(&output)?.protect(inputs)?;
     let a = analyze(&m, &opt, &progress_printer());
     write_outputs(&m, &a, Some(&mc), None, display.into(), dir, &output)?;
 
@@ -978,6 +1012,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
+    let mut csv = csv::Writer::from_writer(Sink::to(&file, &Inputs::new(&[&model]))?);
     let p = m.nominal();
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point(&m, &p, speed, &q0, &Options::default())
@@ -985,7 +1020,6 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     let rows =
         sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())
             .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
-    let mut csv = csv::Writer::from_writer(Sink::to(&file)?);
     csv.write_record(report::frf_header(&m, &wrt))?;
     for row in report::frf_rows(&rows) {
         csv.write_record(&row)?;

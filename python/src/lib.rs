@@ -573,7 +573,7 @@ impl NativeModel {
         // Fail early where the results cannot be written.
         let dir = output
             .as_ref()
-            .map(|o| ResultDir::create(o).map_err(|e| bad(e.to_string())))
+            .map(|o| ResultDir::create(o).map_err(|e| bad(format!("{e}: {}", e.source))))
             .transpose()?;
         let opt = AnalyzeOptions {
             speeds: w,
@@ -599,7 +599,7 @@ impl NativeModel {
             threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         if let Some(dir) = dir {
             py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, display, dir))
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+                .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
         }
         let d = PyDict::new(py);
         d.set_item(
