@@ -1,5 +1,6 @@
 //! The `modaltol` command line: a thin layer over the library that parses arguments, reads the
-//! model, writes results and maps errors to exit codes (2: bad input, 1: other failures).
+//! model, writes results and maps errors to exit codes (2: bad input, 1: other failures, 130
+//! and 143: interrupted by SIGINT or SIGTERM).
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -17,8 +18,26 @@ use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point};
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::iterator::Signals;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+
+/// Writes a line to stderr, best effort: progress and notes must not stop a run whose stderr
+/// cannot be written (closed, a full disk), as `eprintln!` would by panicking.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
+/// [`note!`] without the newline (a progress line rewritten in place).
+macro_rules! note_inline {
+    ($($arg:tt)*) => {{
+        let _ = write!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 /// Analytical tolerance analysis of the modal characteristics of multibody systems in dynamic
 /// equilibrium.
@@ -30,7 +49,17 @@ use std::path::PathBuf;
 /// Units: SI throughout. Speeds and frequencies in rad/s, angles in rad, translations in m,
 /// drive forces in N·m (revolute) or N (prismatic).
 #[derive(Parser)]
-#[command(name = "modaltol", version, about, long_about)]
+#[command(
+    name = "modaltol",
+    version,
+    about,
+    long_about,
+    after_long_help = "Exit codes: 0 success (also when a reader closes the pipe); 1 the \
+        computation failed, or an I/O error (a closed stdout, a full disk); 2 bad input (model \
+        or arguments); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM: the command stops \
+        at its next check, an analysis writes its partial result (flagged), a file is never \
+        written cut; the same signal again stops it at once."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -381,10 +410,11 @@ struct FrfArgs {
 /// The governor example, built into the binary so `analyze` runs with no model file.
 const EMBEDDED_GOVERNOR: &str = include_str!("../examples/governor.toml");
 
-/// The run was interrupted after writing a partial result: exit code 130.
+/// The run was interrupted (SIGINT, SIGTERM); the message says what was written: exit code
+/// 128 + the signal's number.
 #[derive(Debug, thiserror::Error)]
-#[error("interrupted; the outputs hold a partial result")]
-struct Interrupted;
+#[error("interrupted; {0}")]
+struct Interrupted(String);
 
 /// The computation asked for failed (its reason is the message): exit code 1.
 #[derive(Debug, thiserror::Error)]
@@ -469,9 +499,9 @@ fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
     move |stage: &str, done: usize, total: usize| {
         if terminal {
             if done == total || done.is_multiple_of(16) {
-                eprint!("\r{stage}: {done}/{total}          ");
+                note_inline!("\r{stage}: {done}/{total}          ");
                 if done == total {
-                    eprintln!();
+                    note!();
                 }
             }
             return;
@@ -480,21 +510,63 @@ fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
         let mut last = last.lock().unwrap_or_else(|e| e.into_inner());
         if last.0 != stage || last.1 != tenth {
             *last = (stage.to_string(), tenth);
-            eprintln!("{stage}: {done}/{total}");
+            note!("{stage}: {done}/{total}");
         }
     }
 }
 
-/// Ctrl-C cancels `cancel`: the Monte Carlo stops after its current chunk; what was done is
-/// written, flagged as partial, and the exit code is 130.
-fn install_interrupt_handler(cancel: &Cancel) {
+/// The signal that interrupted the run (0: none).
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// SIGINT (Ctrl-C) and SIGTERM (what Slurm and Kubernetes send at a time limit) cancel
+/// `cancel`, in every command alike: the run stops at its next check (a sweep before its next
+/// speed, the Monte Carlo after its current chunk), writes what may be written (an analysis's
+/// partial result, flagged; never a cut file) and exits with 128 + the signal's number (130,
+/// 143). The same signal again ends the process at once (the next run into the same place
+/// removes what it left).
+fn handle_interrupts(cancel: &Cancel) {
+    let Ok(mut signals) = Signals::new([SIGINT, SIGTERM]) else {
+        return; // the default actions then stay: the process ends at the signal
+    };
     let cancel = cancel.clone();
-    let _ = ctrlc::set_handler(move || {
-        eprintln!(
-            "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
-        );
-        cancel.cancel();
+    std::thread::spawn(move || {
+        for signal in signals.forever() {
+            if SIGNAL.swap(signal, Ordering::SeqCst) != 0 {
+                std::process::exit(128 + signal);
+            }
+            let name = if signal == SIGTERM {
+                "SIGTERM"
+            } else {
+                "SIGINT"
+            };
+            note!(
+                "\nmodaltol: {name}: stopping at the next check and writing what is complete \
+                 (again to stop at once)"
+            );
+            cancel.cancel();
+        }
     });
+}
+
+/// Stops a command that a signal cancelled before it writes its output `output` (stdout
+/// where `None`), which is then not written.
+fn stop_if_cancelled(cancel: &Cancel, output: &Option<PathBuf>) -> Result<()> {
+    if !cancel.is_cancelled() {
+        return Ok(());
+    }
+    Err(Interrupted(match output {
+        Some(f) => format!("{} not written", f.display()),
+        None => "nothing written".into(),
+    })
+    .into())
+}
+
+/// The exit code of a run that a signal interrupted: 128 + its number.
+fn interrupted_code() -> Option<i32> {
+    match SIGNAL.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(128 + s),
+    }
 }
 
 /// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
@@ -510,10 +582,10 @@ fn write_outputs(
     let used = threads.unwrap_or_else(rayon::current_num_threads);
     let written = modaltol::results::write(m, a, mc, used, display, dir)?;
     for (stem, e) in &written.missing_png {
-        eprintln!("modaltol: no PNG for {stem}: {e}");
+        note!("modaltol: no PNG for {stem}: {e}");
     }
     let partial = written.partial;
-    eprintln!(
+    note!(
         "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
         a.analytic_seconds,
         a.quadrature_seconds
@@ -525,20 +597,20 @@ fn write_outputs(
         output.display()
     );
     for w in report::inadmissible_warnings(a) {
-        eprintln!("modaltol: warning: {w}");
+        note!("modaltol: warning: {w}");
     }
     if !a.failures.is_empty() {
-        eprintln!(
+        note!(
             "modaltol: {} speed(s) failed; see summary.json",
             a.failures.len()
         );
     }
     if partial {
-        eprintln!(
+        note!(
             "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
             a.samples_done
         );
-        return Err(Interrupted.into());
+        return Err(Interrupted("the outputs hold a partial result".into()).into());
     }
     Ok(())
 }
@@ -587,6 +659,12 @@ impl Sink {
                 refuse_input(inputs, p)?;
                 Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?))
             }
+            None if STDOUT_CLOSED.load(Ordering::SeqCst) => {
+                return Err(Failed(
+                    "stdout is closed: nothing could be written (give -o FILE)".into(),
+                )
+                .into());
+            }
             None => Sink::Stdout(std::io::BufWriter::new(std::io::stdout().lock())),
         })
     }
@@ -601,15 +679,16 @@ impl Sink {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli, cancel: &Cancel) -> Result<()> {
+    let set = &cli.set;
     match cli.command {
-        Command::Check(args) => check_command(args, &cli.set),
-        Command::Modal(args) => modal_command(args, &cli.set),
-        Command::Sweep(args) => sweep_command(args, &cli.set),
-        Command::Sensitivity(args) => sensitivity_command(args, &cli.set),
-        Command::Analyze(args) => analyze_command(args, &cli.set),
-        Command::Merge(args) => merge_command(args, &cli.set),
-        Command::Frf(args) => frf_command(args, &cli.set),
+        Command::Check(args) => check_command(args, set),
+        Command::Modal(args) => modal_command(args, set, cancel),
+        Command::Sweep(args) => sweep_command(args, set, cancel),
+        Command::Sensitivity(args) => sensitivity_command(args, set, cancel),
+        Command::Analyze(args) => analyze_command(args, set, cancel),
+        Command::Merge(args) => merge_command(args, set, cancel),
+        Command::Frf(args) => frf_command(args, set, cancel),
     }
 }
 
@@ -625,7 +704,7 @@ fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol modal` (see its `--help`).
-fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
+fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let ModalArgs {
         model,
         speed,
@@ -643,6 +722,7 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
     let p = m.nominal();
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let result = point(&m, &p, speed, &q0, &opt);
+    stop_if_cancelled(cancel, &output)?;
     match format {
         Format::Json => writeln!(
             w,
@@ -664,7 +744,7 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol sweep` (see its `--help`).
-fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
+fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let SweepArgs {
         model,
         speed,
@@ -706,6 +786,14 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
     let progress = (sens || n >= 2000).then(progress_printer);
     let mut failed = 0usize;
     for (i, w) in range.speeds().enumerate() {
+        if cancel.is_cancelled() {
+            // Streamed rows stay on stdout; a file is complete or absent.
+            return Err(Interrupted(match &output {
+                Some(f) => format!("{} not written ({i} of {n} speeds done)", f.display()),
+                None => format!("after {i} of {n} speeds"),
+            })
+            .into());
+        }
         let (r, extras) = study.step(w);
         if r.is_err() {
             failed += 1;
@@ -725,7 +813,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
         .into());
     }
     if failed > 0 {
-        eprintln!(
+        note!(
             "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
         );
     }
@@ -734,7 +822,11 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol sensitivity` (see its `--help`).
-fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<()> {
+fn sensitivity_command(
+    args: SensitivityArgs,
+    set: &[(String, f64)],
+    cancel: &Cancel,
+) -> Result<()> {
     let SensitivityArgs {
         model,
         speed,
@@ -765,6 +857,7 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
         how(derivatives),
     )
     .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    stop_if_cancelled(cancel, &output)?;
     let method = if derivatives == Derivatives::Ad {
         "ad"
     } else {
@@ -793,7 +886,7 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
 }
 
 /// `modaltol analyze` (see its `--help`).
-fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
+fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let AnalyzeArgs {
         model,
         output,
@@ -876,9 +969,8 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         monte_carlo: mc,
         split,
         threads,
-        cancel: Cancel::new(),
+        cancel: cancel.clone(),
     };
-    install_interrupt_handler(&opt.cancel);
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
         let Destination::Shard(mut f, path) = destination else {
@@ -887,16 +979,16 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
         let run = RunSettings::new(&range, &mc, tolerance, *n);
         let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
-            eprintln!(
-                "modaltol: interrupted; {} not written (a shard is complete or absent)",
+            return Err(Interrupted(format!(
+                "{} not written (a shard is complete or absent)",
                 path.display()
-            );
-            return Err(Interrupted.into());
+            ))
+            .into());
         };
         f.write_all(file.to_json().as_bytes())
             .with_context(|| format!("{}: cannot write", path.display()))?;
         f.commit()?;
-        eprintln!(
+        note!(
             "modaltol: wrote {}; combine the shards with `modaltol merge`",
             path.display()
         );
@@ -911,7 +1003,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol merge` (see its `--help`).
-fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
+fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let MergeArgs {
         model,
         output,
@@ -942,7 +1034,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
         monte_carlo: Some(mc),
         split: Split::Merged(states),
         threads: None,
-        cancel: Cancel::new(),
+        cancel: cancel.clone(),
     };
     let mut inputs: Vec<&PathBuf> = model.iter().collect();
     inputs.extend(&shards);
@@ -956,7 +1048,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol frf` (see its `--help`).
-fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
+fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let FrfArgs {
         model,
         speed,
@@ -989,7 +1081,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
             let outp = output.ok_or_else(|| {
                 InputError("--input needs --output (the response); or use --transfer".into())
             })?;
-            eprintln!(
+            note!(
                 "modaltol: note: `--input {inp} --output {outp}` is the older spelling of \
                  `--transfer input={inp},output={outp}`; -o/--output now names the CSV file"
             );
@@ -1017,9 +1109,11 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point(&m, &p, speed, &q0, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
-    let rows =
-        sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())
-            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    // Stops at the frequency after a signal.
+    let frequencies = range.speeds().take_while(|_| !cancel.is_cancelled());
+    let rows = sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, frequencies)
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    stop_if_cancelled(cancel, &file)?;
     csv.write_record(report::frf_header(&m, &wrt))?;
     for row in report::frf_rows(&rows) {
         csv.write_record(&row)?;
@@ -1029,9 +1123,30 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     Ok(())
 }
 
+/// Was stdout closed when the process started (`modaltol … >&-`)? Rust's runtime opens
+/// `/dev/null` in its place before `main`, and whatever is written there vanishes without a
+/// word; so this is looked at before the runtime starts (an ELF initialiser), and a command
+/// that would write to stdout refuses to run instead.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+#[cfg(target_os = "linux")]
+#[used]
+#[unsafe(link_section = ".init_array")]
+static NOTE_A_CLOSED_STDOUT: extern "C" fn() = {
+    extern "C" fn note() {
+        // SAFETY: F_GETFD reads a descriptor's flags and nothing else; a closed one is EBADF.
+        let closed = unsafe { libc::fcntl(1, libc::F_GETFD) } == -1;
+        STDOUT_CLOSED.store(closed, Ordering::SeqCst);
+    }
+    note
+};
+
 fn main() {
     let cli = Cli::parse();
-    if let Err(e) = run(cli) {
+    let cancel = Cancel::new();
+    handle_interrupts(&cancel);
+    let result = run(cli, &cancel);
+    if let Err(e) = result {
         // A reader that stopped reading (`… | head`) is not an error of ours.
         let pipe = |io: &std::io::Error| io.kind() == std::io::ErrorKind::BrokenPipe;
         let broken_pipe = e.chain().any(|c| {
@@ -1045,14 +1160,18 @@ fn main() {
         if broken_pipe {
             std::process::exit(0);
         }
-        eprintln!("modaltol: error: {e:#}");
+        note!("modaltol: error: {e:#}");
         let code = if e.downcast_ref::<InputError>().is_some() {
             2
         } else if e.downcast_ref::<Interrupted>().is_some() {
-            130
+            interrupted_code().unwrap_or(130)
         } else {
             1
         };
+        std::process::exit(code);
+    }
+    // A signal that came when nothing was left to stop still ends the run as interrupted.
+    if let Some(code) = interrupted_code() {
         std::process::exit(code);
     }
 }
