@@ -99,8 +99,10 @@ enum Format {
     Table,
     /// Everything, for scripts.
     Json,
-    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate)
-    /// or of derivatives (`sensitivity`: one row per mode and design variable).
+    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate;
+    /// at a speed that fails, one row per degree of freedom with status `failed`) or of
+    /// derivatives (`sensitivity`: one row per mode and design variable); the last column,
+    /// `message`, says why a speed failed or |H| has no value (a resonance, an overflow).
     Csv,
 }
 
@@ -189,7 +191,9 @@ enum Command {
     /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
     /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
     /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
-    /// iterations (Newton), message (why a speed failed, or a branch switch).
+    /// iterations (Newton), message (why a speed failed, a branch switch, or why |H| has no
+    /// value: "resonance" where an undamped mode sits at the excitation frequency,
+    /// "overflow" where a number is beyond floating point).
     Sweep(SweepArgs),
     /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
     /// the design variables at one speed, through the move of the equilibrium.
@@ -230,7 +234,7 @@ enum Command {
     ///
     /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
     /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
-    /// derivative).
+    /// derivative), message (why H has no value where it has none: "resonance", "overflow").
     Frf(FrfArgs),
 }
 
@@ -731,7 +735,10 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
         )?,
         Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
         Format::Csv => {
-            let rows = result.as_ref().map(report::modes_rows).unwrap_or_default();
+            let rows = match &result {
+                Ok(pt) => report::modes_rows(pt),
+                Err(e) => report::modes_failed_rows(&m, speed, e),
+            };
             write_csv(&mut w, &report::modes_header(&m), &rows)?
         }
     }
@@ -848,15 +855,10 @@ fn sensitivity_command(
     let q0 = initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point(&m, &p, speed, &q0, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
-    let s = sensitivity::sensitivities(
-        &m,
-        &p,
-        &pt,
-        &wrt,
-        tf.map(|t| TransferAt::at_speed(&t, speed)),
-        how(derivatives),
-    )
-    .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let at = tf.map(|t| TransferAt::at_speed(&t, speed));
+    let s = sensitivity::sensitivities(&m, &p, &pt, &wrt, at, how(derivatives))
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let why = report::transfer_defect_at(&pt, at.as_ref());
     stop_if_cancelled(cancel, &output)?;
     let method = if derivatives == Derivatives::Ad {
         "ad"
@@ -867,17 +869,19 @@ fn sensitivity_command(
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::sensitivity_json(&m, speed, method, &pt, &s))?
+            serde_json::to_string_pretty(&report::sensitivity_json(
+                &m, speed, method, &pt, &s, why
+            ))?
         )?,
         Format::Table => write!(
             w,
             "{}",
-            report::sensitivity_table(&m, speed, method, &pt, &s)
+            report::sensitivity_table(&m, speed, method, &pt, &s, why)
         )?,
         Format::Csv => write_csv(
             &mut w,
             &report::SENSITIVITY_HEADER,
-            &report::sensitivity_rows(&m, &pt, &s),
+            &report::sensitivity_rows(&m, &pt, &s, why),
         )?,
     }
     w.finish()?;
@@ -1115,7 +1119,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<
         .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     stop_if_cancelled(cancel, &file)?;
     csv.write_record(report::frf_header(&m, &wrt))?;
-    for row in report::frf_rows(&rows) {
+    for row in report::frf_rows(&pt.linear, &rows) {
         csv.write_record(&row)?;
     }
     csv.into_inner().map_err(|e| e.into_error())?.finish()?;

@@ -833,14 +833,14 @@ fn modal_and_sensitivity_as_csv_name_the_shapes_and_give_elasticities() {
         assert!(header.contains(&format!("shape_re:{c}").as_str()), "{s}");
     }
     // The largest shape component is 1.
-    let row: Vec<f64> = s
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .skip(10)
-        .map(|x| x.parse().unwrap())
+    let cells: Vec<&str> = s.lines().nth(1).unwrap().split(',').collect();
+    let row: Vec<f64> = header
+        .iter()
+        .zip(&cells)
+        .filter(|(h, _)| h.starts_with("shape_"))
+        .map(|(_, x)| x.parse().unwrap())
         .collect();
+    assert_eq!(header.last(), Some(&"message"));
     let largest = row.chunks(2).map(|z| z[0].hypot(z[1])).fold(0.0, f64::max);
     assert!((largest - 1.0).abs() < 1e-12, "{s}");
     let o = run(&["sensitivity", gov, "--speed", "1.595", "--format", "csv"]);

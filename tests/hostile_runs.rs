@@ -563,6 +563,48 @@ fn thread_counts_are_bounded_and_a_refusal_of_the_system_is_reported() {
 }
 
 #[test]
+fn a_failed_modal_point_gives_its_reason_in_every_format() {
+    for name in common::EXAMPLES {
+        let m = common::example_path(name);
+        let m = m.to_str().unwrap();
+        let model = common::example(name);
+        let mut reasons = Vec::new();
+        for format in ["table", "json", "csv"] {
+            let o = run(&["modal", m, "--speed", "1e308", "--format", format]);
+            assert_eq!(o.code, Some(1), "{name} {format}: {}", o.stderr);
+            let reason = o
+                .stderr
+                .split("failed: ")
+                .nth(1)
+                .unwrap()
+                .trim()
+                .to_string();
+            assert!(
+                o.stdout.to_lowercase().contains("failed") && o.stdout.contains(&reason),
+                "{name} {format}: {}",
+                o.stdout
+            );
+            reasons.push(reason);
+            if format == "csv" {
+                let mut r = csv::Reader::from_reader(o.stdout.as_bytes());
+                let header = r.headers().unwrap().clone();
+                let message = header.iter().position(|h| h == "message").unwrap();
+                let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+                assert_eq!(rows.len(), model.dof().max(1), "{name}");
+                for row in rows {
+                    assert_eq!(&row[2], "failed");
+                    assert_eq!(row[message], reasons[0], "{name}");
+                }
+            }
+        }
+        assert!(
+            reasons.iter().all(|r| r == &reasons[0] && !r.is_empty()),
+            "{reasons:?}"
+        );
+    }
+}
+
+#[test]
 fn exit_codes_and_messages_name_what_went_wrong() {
     let dir = tempfile::tempdir().unwrap();
     let m = common::example_path("rotating_pendulum.toml");

@@ -456,16 +456,13 @@ impl NativeModel {
         let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
             let pt = self.point(speed, &Options::default())?;
             let p = self.model.nominal();
-            let s = sensitivity::sensitivities(
-                &self.model,
-                &p,
-                &pt,
-                &wrt,
-                tf.map(|t| TransferAt::at_speed(&t, speed)),
-                how,
-            )
-            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
-            Ok(report::sensitivity_rows(self.m(), &pt, &s))
+            let at = tf.map(|t| TransferAt::at_speed(&t, speed));
+            let s =
+                sensitivity::sensitivities(&self.model, &p, &pt, &wrt, at, how).map_err(|e| {
+                    SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}"))
+                })?;
+            let why = report::transfer_defect_at(&pt, at.as_ref());
+            Ok(report::sensitivity_rows(self.m(), &pt, &s, why))
         })?;
         table(py, &report::SENSITIVITY_HEADER, &rows)
     }
@@ -510,7 +507,7 @@ impl NativeModel {
                 freqs,
             )
             .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
-            Ok(report::frf_rows(&r))
+            Ok(report::frf_rows(&pt.linear, &r))
         })??;
         table(py, &header, &rows)
     }
