@@ -413,6 +413,14 @@ impl ResultDir {
             }
         };
         let staging = staging.map_err(fail(target, "cannot create the results directory"))?;
+        // Files renamed in one by one need a writable target: known now, not after the run.
+        let one_by_one = place == Staging::Inside
+            || (exists && !owned_by(&resolved, Manifest::read(&resolved).as_ref()));
+        if one_by_one {
+            use rustix::fs::{Access, access};
+            access(&resolved, Access::WRITE_OK | Access::EXEC_OK)
+                .map_err(|e| fail(target, "cannot write results")(e.into()))?;
+        }
         let lock = File::open(staging.path()).ok();
         if let Some(f) = &lock {
             mark_in_use(f);

@@ -279,3 +279,94 @@ fn an_output_onto_a_mount_point_is_written_on_its_file_system() {
         );
     }
 }
+
+/// Runs the binary with `args` as an unprivileged user (`setpriv` to `nobody` when the tests
+/// run as root, for whom permissions do not hold).
+fn unprivileged(args: &[&str]) -> Run {
+    let root = std::fs::metadata("/proc/self").is_ok_and(|m| {
+        use std::os::unix::fs::MetadataExt;
+        m.uid() == 0
+    });
+    let mut cmd = if root {
+        let mut c = Command::new("setpriv");
+        c.args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+            .arg(env!("CARGO_BIN_EXE_modaltol"));
+        c
+    } else {
+        Command::new(env!("CARGO_BIN_EXE_modaltol"))
+    };
+    cmd.args(args);
+    common::command_with_deadline(cmd, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_target_that_cannot_take_the_results_is_refused_before_anything_is_computed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mode = |p: &Path, m: u32| std::fs::set_permissions(p, std::fs::Permissions::from_mode(m));
+    mode(d, 0o777).unwrap();
+    let m = pendulum();
+    // A directory of the user's that they may not write: refused at once, untouched.
+    let locked = d.join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::write(locked.join("notes.txt"), b"mine").unwrap();
+    mode(&locked, 0o555).unwrap();
+    let t = std::time::Instant::now();
+    let long = ["--speed", "0:6:0.01", "--samples", "100000"];
+    let mut args = vec!["analyze", &m, "-o", locked.to_str().unwrap()];
+    args.extend(long);
+    let o = unprivileged(&args);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(
+        o.stderr.contains("locked") && o.stderr.contains("ermission"),
+        "{}",
+        o.stderr
+    );
+    assert!(
+        t.elapsed() < Duration::from_secs(5),
+        "refused only after computing"
+    );
+    let o = unprivileged(&[
+        "sweep",
+        &m,
+        "--speed",
+        "0:6000:0.01",
+        "-o",
+        locked.join("s.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(
+        t.elapsed() < Duration::from_secs(5),
+        "refused only after computing"
+    );
+    // A writable target in a parent that is not: staged inside, written.
+    let parent = d.join("parent");
+    let target = parent.join("results");
+    std::fs::create_dir_all(&target).unwrap();
+    mode(&target, 0o777).unwrap();
+    mode(&parent, 0o555).unwrap();
+    let o = unprivileged(&[
+        "analyze",
+        &m,
+        "-o",
+        target.to_str().unwrap(),
+        "--speed",
+        "0:1:1",
+        "--samples",
+        "10",
+    ]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    modaltol::files::Manifest::read(&target)
+        .unwrap()
+        .verify(&target)
+        .unwrap();
+    assert!(
+        !std::fs::read_dir(&target).unwrap().any(|e| e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .starts_with('.'))
+    );
+    mode(&parent, 0o755).unwrap();
+    mode(&locked, 0o755).unwrap();
+}
