@@ -58,7 +58,7 @@ macro_rules! note_inline {
         computation failed, or an I/O error (a closed stdout, a full disk); 2 bad input (model \
         or arguments); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM: the command stops \
         at its next check, an analysis writes its partial result (flagged), a file is never \
-        written cut; the same signal again stops it at once."
+        written cut; a second signal stops it at once."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -526,7 +526,7 @@ static SIGNAL: AtomicI32 = AtomicI32::new(0);
 /// `cancel`, in every command alike: the run stops at its next check (a sweep before its next
 /// speed, the Monte Carlo after its current chunk), writes what may be written (an analysis's
 /// partial result, flagged; never a cut file) and exits with 128 + the signal's number (130,
-/// 143). The same signal again ends the process at once (the next run into the same place
+/// 143). A second signal ends the process at once (the next run into the same place
 /// removes what it left).
 fn handle_interrupts(cancel: &Cancel) {
     let Ok(mut signals) = Signals::new([SIGINT, SIGTERM]) else {
