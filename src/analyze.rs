@@ -201,10 +201,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     let slots: Vec<Mutex<Option<Result<LocalModel, String>>>> =
         (0..n).map(|_| Mutex::new(None)).collect();
     let done = AtomicUsize::new(0);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opt.threads.unwrap_or(0))
-        .build()
-        .expect("thread pool");
+    let pool = crate::threads::pool(opt.threads);
     let mut failures = Vec::new();
     let mut nominal = Vec::with_capacity(n);
     pool.install(|| {

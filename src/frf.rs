@@ -81,3 +81,54 @@ pub fn transfer<T: Real>(
     }
     Some(Complex { re, im })
 }
+
+/// Why `H(jω)` has no finite value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoTransfer {
+    /// The dynamic stiffness `K̂ − ω²M̂ + jωĈ` is singular (or so near it that the solve gives
+    /// no finite number): an undamped mode at the excitation frequency; |H| is infinite.
+    Resonance,
+    /// A number on the way (`ω²M̂`, `ωĈ`, or |H| itself) is beyond floating point.
+    Overflow,
+}
+
+impl NoTransfer {
+    /// What an output's message says.
+    pub fn message(self) -> &'static str {
+        match self {
+            NoTransfer::Resonance => {
+                "resonance: |H| is infinite (an undamped mode at the excitation frequency)"
+            }
+            NoTransfer::Overflow => {
+                "overflow: |H| or the dynamic stiffness at this frequency is beyond floating point"
+            }
+        }
+    }
+}
+
+/// Why the transfer value `h` computed at `omega` from `lin` ([`transfer`]) is not a finite
+/// number; `None` where it is one (|H|, arg H and both parts finite).
+pub fn transfer_defect(
+    lin: &Linearization<f64>,
+    omega: f64,
+    h: Option<&Complex<f64>>,
+) -> Option<NoTransfer> {
+    if let Some(h) = h
+        && [h.re, h.im, h.magnitude(), h.phase()]
+            .iter()
+            .all(|v| v.is_finite())
+    {
+        return None;
+    }
+    let stiffness_finite = (0..lin.m.nrows()).all(|r| {
+        (0..lin.m.ncols()).all(|c| {
+            (lin.k[(r, c)] - omega * omega * lin.m[(r, c)]).is_finite()
+                && (omega * lin.c[(r, c)]).is_finite()
+        })
+    });
+    match h {
+        _ if !stiffness_finite => Some(NoTransfer::Overflow),
+        Some(h) if h.re.is_finite() && h.im.is_finite() => Some(NoTransfer::Overflow),
+        _ => Some(NoTransfer::Resonance),
+    }
+}

@@ -1,23 +1,43 @@
 //! The `modaltol` command line: a thin layer over the library that parses arguments, reads the
-//! model, writes results and maps errors to exit codes (2: bad input, 1: other failures).
+//! model, writes results and maps errors to exit codes (2: bad input, 1: other failures, 130
+//! and 143: interrupted by SIGINT or SIGTERM).
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
-use modaltol::files::{AtomicFile, ResultDir, write_atomically};
+use modaltol::files::{AtomicFile, Inputs, ResultDir};
 use modaltol::model::Sampling;
 use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, TransferAt};
-use modaltol::shard::ShardFile;
+use modaltol::settings::{self, ThreadsError};
+use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point_at};
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::iterator::Signals;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+
+/// Writes a line to stderr, best effort: progress and notes must not stop a run whose stderr
+/// cannot be written (closed, a full disk), as `eprintln!` would by panicking.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
+/// [`note!`] without the newline (a progress line rewritten in place).
+macro_rules! note_inline {
+    ($($arg:tt)*) => {{
+        let _ = write!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 /// Analytical tolerance analysis of the modal characteristics of multibody systems in dynamic
 /// equilibrium.
@@ -29,7 +49,17 @@ use std::path::PathBuf;
 /// Units: SI throughout. Speeds and frequencies in rad/s, angles in rad, translations in m,
 /// drive forces in N·m (revolute) or N (prismatic).
 #[derive(Parser)]
-#[command(name = "modaltol", version, about, long_about)]
+#[command(
+    name = "modaltol",
+    version,
+    about,
+    long_about,
+    after_long_help = "Exit codes: 0 success (also when a reader closes the pipe); 1 the \
+        computation failed, or an I/O error (a closed stdout, a full disk); 2 bad input (model \
+        or arguments); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM: the command stops \
+        at its next check, an analysis writes its partial result (flagged), a file is never \
+        written cut; a second signal stops it at once."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -69,8 +99,10 @@ enum Format {
     Table,
     /// Everything, for scripts.
     Json,
-    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate)
-    /// or of derivatives (`sensitivity`: one row per mode and design variable).
+    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate;
+    /// at a speed that fails, one row per degree of freedom with status `failed`) or of
+    /// derivatives (`sensitivity`: one row per mode and design variable); the last column,
+    /// `message`, says why a speed failed or |H| has no value (a resonance, an overflow).
     Csv,
 }
 
@@ -174,7 +206,9 @@ enum Command {
     /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
     /// iterations (Newton), branch (stable|switched|unstable: whether the equilibrium continued
     /// from the previous speed was kept, or a stable one found instead), message (why a speed
-    /// failed, why the branch was switched or left unstable, a change of stability).
+    /// failed, why the branch was switched or left unstable, a change of stability, or why |H|
+    /// has no value: "resonance" where an undamped mode sits at the excitation frequency,
+    /// "overflow" where a number is beyond floating point).
     Sweep(SweepArgs),
     /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
     /// the design variables at one speed, through the move of the equilibrium.
@@ -205,6 +239,11 @@ enum Command {
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`.
+    ///
+    /// Every shard must come from the same model (with the same --set), tolerance cases,
+    /// speeds, samples, seed, sampling and quadrature options: a shard computed from anything
+    /// else is refused, naming the file and what differs. The quadrature runs with the
+    /// options the shards' run was given.
     Merge(MergeArgs),
     /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
     /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
@@ -212,7 +251,7 @@ enum Command {
     ///
     /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
     /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
-    /// derivative).
+    /// derivative), message (why H has no value where it has none: "resonance", "overflow").
     Frf(FrfArgs),
 }
 
@@ -323,7 +362,7 @@ struct AnalyzeArgs {
     #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<u64>)]
     seed: Option<u64>,
     /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
-    /// not depend on it); default: all cores.
+    /// not depend on it): 1 to 1024; default: all cores.
     #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     threads: Option<usize>,
     /// Skip the Monte Carlo.
@@ -402,10 +441,11 @@ struct FrfArgs {
 /// The governor example, built into the binary so `analyze` runs with no model file.
 const EMBEDDED_GOVERNOR: &str = include_str!("../examples/governor.toml");
 
-/// The run was interrupted after writing a partial result: exit code 130.
+/// The run was interrupted (SIGINT, SIGTERM); the message says what was written: exit code
+/// 128 + the signal's number.
 #[derive(Debug, thiserror::Error)]
-#[error("interrupted; the outputs hold a partial result")]
-struct Interrupted;
+#[error("interrupted; {0}")]
+struct Interrupted(String);
 
 /// The computation asked for failed (its reason is the message): exit code 1.
 #[derive(Debug, thiserror::Error)]
@@ -465,6 +505,15 @@ fn model_or_governor(model: &Option<PathBuf>, set: &[(String, f64)]) -> Result<C
     }
 }
 
+/// `--threads`, checked ([`settings::threads`]): a count out of bounds is bad input, one the
+/// operating system refuses a failure.
+fn checked_threads(threads: Option<usize>) -> Result<Option<usize>> {
+    settings::threads(threads).map_err(|e| match e {
+        ThreadsError::Refused { .. } => Failed(format!("--threads: {e}")).into(),
+        _ => InputError(format!("--threads {e}")).into(),
+    })
+}
+
 /// The model's tolerance cases, or one made of the parameters' own tolerances.
 fn tolerance_cases(m: &Model, only: &[String]) -> Result<Vec<modaltol::model::Case>> {
     m.tolerance_cases(only).map_err(|e| {
@@ -481,9 +530,9 @@ fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
     move |stage: &str, done: usize, total: usize| {
         if terminal {
             if done == total || done.is_multiple_of(16) {
-                eprint!("\r{stage}: {done}/{total}          ");
+                note_inline!("\r{stage}: {done}/{total}          ");
                 if done == total {
-                    eprintln!();
+                    note!();
                 }
             }
             return;
@@ -492,21 +541,63 @@ fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
         let mut last = last.lock().unwrap_or_else(|e| e.into_inner());
         if last.0 != stage || last.1 != tenth {
             *last = (stage.to_string(), tenth);
-            eprintln!("{stage}: {done}/{total}");
+            note!("{stage}: {done}/{total}");
         }
     }
 }
 
-/// Ctrl-C cancels `cancel`: the Monte Carlo stops after its current chunk; what was done is
-/// written, flagged as partial, and the exit code is 130.
-fn install_interrupt_handler(cancel: &Cancel) {
+/// The signal that interrupted the run (0: none).
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// SIGINT (Ctrl-C) and SIGTERM (what Slurm and Kubernetes send at a time limit) cancel
+/// `cancel`, in every command alike: the run stops at its next check (a sweep before its next
+/// speed, the Monte Carlo after its current chunk), writes what may be written (an analysis's
+/// partial result, flagged; never a cut file) and exits with 128 + the signal's number (130,
+/// 143). A second signal ends the process at once (the next run into the same place
+/// removes what it left).
+fn handle_interrupts(cancel: &Cancel) {
+    let Ok(mut signals) = Signals::new([SIGINT, SIGTERM]) else {
+        return; // the default actions then stay: the process ends at the signal
+    };
     let cancel = cancel.clone();
-    let _ = ctrlc::set_handler(move || {
-        eprintln!(
-            "\nmodaltol: interrupted; finishing the current chunk and writing a partial result"
-        );
-        cancel.cancel();
+    std::thread::spawn(move || {
+        for signal in signals.forever() {
+            if SIGNAL.swap(signal, Ordering::SeqCst) != 0 {
+                std::process::exit(128 + signal);
+            }
+            let name = if signal == SIGTERM {
+                "SIGTERM"
+            } else {
+                "SIGINT"
+            };
+            note!(
+                "\nmodaltol: {name}: stopping at the next check and writing what is complete \
+                 (again to stop at once)"
+            );
+            cancel.cancel();
+        }
     });
+}
+
+/// Stops a command that a signal cancelled before it writes its output `output` (stdout
+/// where `None`), which is then not written.
+fn stop_if_cancelled(cancel: &Cancel, output: &Option<PathBuf>) -> Result<()> {
+    if !cancel.is_cancelled() {
+        return Ok(());
+    }
+    Err(Interrupted(match output {
+        Some(f) => format!("{} not written", f.display()),
+        None => "nothing written".into(),
+    })
+    .into())
+}
+
+/// The exit code of a run that a signal interrupted: 128 + its number.
+fn interrupted_code() -> Option<i32> {
+    match SIGNAL.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(128 + s),
+    }
 }
 
 /// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
@@ -522,10 +613,10 @@ fn write_outputs(
     let used = threads.unwrap_or_else(rayon::current_num_threads);
     let written = modaltol::results::write(m, a, mc, used, display, dir)?;
     for (stem, e) in &written.missing_png {
-        eprintln!("modaltol: no PNG for {stem}: {e}");
+        note!("modaltol: no PNG for {stem}: {e}");
     }
     let partial = written.partial;
-    eprintln!(
+    note!(
         "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
         a.analytic_seconds,
         a.quadrature_seconds
@@ -537,25 +628,39 @@ fn write_outputs(
         output.display()
     );
     for w in report::inadmissible_warnings(a) {
-        eprintln!("modaltol: warning: {w}");
+        note!("modaltol: warning: {w}");
     }
     if !a.failures.is_empty() {
-        eprintln!(
+        note!(
             "modaltol: {} speed(s) failed; see summary.json",
             a.failures.len()
         );
     }
     for line in report::unfilled_lines(a) {
-        eprintln!("modaltol: note: {line}");
+        note!("modaltol: note: {line}");
     }
     if partial {
-        eprintln!(
+        note!(
             "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
             a.samples_done
         );
-        return Err(Interrupted.into());
+        return Err(Interrupted("the outputs hold a partial result".into()).into());
     }
     Ok(())
+}
+
+/// An output named that is one of the run's inputs: bad arguments, refused before anything
+/// is computed or written.
+fn refuse_input(inputs: &Inputs, output: &std::path::Path) -> Result<()> {
+    inputs
+        .refuse_output(output)
+        .map_err(|e| InputError(format!("{e}: {}", e.source)).into())
+}
+
+/// Where `analyze` writes: a shard's file, or the whole run's directory.
+enum Destination {
+    Shard(AtomicFile, PathBuf),
+    Directory(ResultDir),
 }
 
 /// Where a command's table goes: a file written beside its target and renamed into place by
@@ -581,9 +686,19 @@ impl Write for Sink {
 }
 
 impl Sink {
-    fn to(output: &Option<PathBuf>) -> Result<Sink> {
+    /// The file `output` (refused where it is one of `inputs`), or stdout.
+    fn to(output: &Option<PathBuf>, inputs: &Inputs) -> Result<Sink> {
         Ok(match output {
-            Some(p) => Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?)),
+            Some(p) => {
+                refuse_input(inputs, p)?;
+                Sink::File(std::io::BufWriter::new(AtomicFile::create(p)?))
+            }
+            None if STDOUT_CLOSED.load(Ordering::SeqCst) => {
+                return Err(Failed(
+                    "stdout is closed: nothing could be written (give -o FILE)".into(),
+                )
+                .into());
+            }
             None => Sink::Stdout(std::io::BufWriter::new(std::io::stdout().lock())),
         })
     }
@@ -598,15 +713,16 @@ impl Sink {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli, cancel: &Cancel) -> Result<()> {
+    let set = &cli.set;
     match cli.command {
-        Command::Check(args) => check_command(args, &cli.set),
-        Command::Modal(args) => modal_command(args, &cli.set),
-        Command::Sweep(args) => sweep_command(args, &cli.set),
-        Command::Sensitivity(args) => sensitivity_command(args, &cli.set),
-        Command::Analyze(args) => analyze_command(args, &cli.set),
-        Command::Merge(args) => merge_command(args, &cli.set),
-        Command::Frf(args) => frf_command(args, &cli.set),
+        Command::Check(args) => check_command(args, set),
+        Command::Modal(args) => modal_command(args, set, cancel),
+        Command::Sweep(args) => sweep_command(args, set, cancel),
+        Command::Sensitivity(args) => sensitivity_command(args, set, cancel),
+        Command::Analyze(args) => analyze_command(args, set, cancel),
+        Command::Merge(args) => merge_command(args, set, cancel),
+        Command::Frf(args) => frf_command(args, set, cancel),
     }
 }
 
@@ -614,7 +730,7 @@ fn run(cli: Cli) -> Result<()> {
 fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
     let CheckArgs { model } = args;
     let m = load(&model, set)?;
-    let mut w = Sink::to(&None)?;
+    let mut w = Sink::to(&None, &Inputs::default())?;
     write!(w, "{}", report::check_summary(&m))?;
     w.finish()?;
 
@@ -622,7 +738,7 @@ fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol modal` (see its `--help`).
-fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
+fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let ModalArgs {
         model,
         speed,
@@ -632,18 +748,17 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
         output,
     } = args;
     let m = load(&model, set)?;
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let opt = Options {
         independent: independent(&m, &ind)?,
         no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = m.nominal();
     initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let result = point_at(&m, &p, speed, &opt);
-    let mut w = Sink::to(&output)?;
+    stop_if_cancelled(cancel, &output)?;
     match format {
         Format::Json => writeln!(
             w,
@@ -652,7 +767,10 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
         )?,
         Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
         Format::Csv => {
-            let rows = result.as_ref().map(report::modes_rows).unwrap_or_default();
+            let rows = match &result {
+                Ok(pt) => report::modes_rows(pt),
+                Err(e) => report::modes_failed_rows(&m, speed, e),
+            };
             write_csv(&mut w, &report::modes_header(&m), &rows)?
         }
     }
@@ -665,7 +783,7 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol sweep` (see its `--help`).
-fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
+fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let SweepArgs {
         model,
         speed,
@@ -702,13 +820,21 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
         ..Default::default()
     };
     let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
-    let mut csv = csv::Writer::from_writer(Sink::to(&output)?);
+    let mut csv = csv::Writer::from_writer(Sink::to(&output, &Inputs::new(&[&model]))?);
     csv.write_record(report::sweep_header(&m, &cols))?;
     let n = range.len();
     // Long sweeps (sensitivities at each speed, or many speeds) report their progress.
     let progress = (sens || n >= 2000).then(progress_printer);
     let mut failed = 0usize;
     for (i, w) in range.speeds().enumerate() {
+        if cancel.is_cancelled() {
+            // Streamed rows stay on stdout; a file is complete or absent.
+            return Err(Interrupted(match &output {
+                Some(f) => format!("{} not written ({i} of {n} speeds done)", f.display()),
+                None => format!("after {i} of {n} speeds"),
+            })
+            .into());
+        }
         let (r, extras) = study.step(w);
         if r.is_err() {
             failed += 1;
@@ -728,7 +854,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
         .into());
     }
     if failed > 0 {
-        eprintln!(
+        note!(
             "modaltol: {failed} of {n} speeds failed (status 'failed', reason in the message column)"
         );
     }
@@ -737,7 +863,11 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol sensitivity` (see its `--help`).
-fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<()> {
+fn sensitivity_command(
+    args: SensitivityArgs,
+    set: &[(String, f64)],
+    cancel: &Cancel,
+) -> Result<()> {
     let SensitivityArgs {
         model,
         speed,
@@ -748,48 +878,44 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
         output,
     } = args;
     let m = load(&model, set)?;
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
     let tf = match tspec.as_deref() {
         Some(s) => Some(parse_transfer(&m, s)?),
         None => m.analysis.transfer,
     };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = m.nominal();
     initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
-    let s = sensitivity::sensitivities(
-        &m,
-        &p,
-        &pt,
-        &wrt,
-        tf.map(|t| TransferAt::at_speed(&t, speed)),
-        how(derivatives),
-    )
-    .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let at = tf.map(|t| TransferAt::at_speed(&t, speed));
+    let s = sensitivity::sensitivities(&m, &p, &pt, &wrt, at, how(derivatives))
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let why = report::transfer_defect_at(&pt, at.as_ref());
+    stop_if_cancelled(cancel, &output)?;
     let method = if derivatives == Derivatives::Ad {
         "ad"
     } else {
         "fd"
     };
-    let mut w = Sink::to(&output)?;
     match format {
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::sensitivity_json(&m, speed, method, &pt, &s))?
+            serde_json::to_string_pretty(&report::sensitivity_json(
+                &m, speed, method, &pt, &s, why
+            ))?
         )?,
         Format::Table => write!(
             w,
             "{}",
-            report::sensitivity_table(&m, speed, method, &pt, &s)
+            report::sensitivity_table(&m, speed, method, &pt, &s, why)
         )?,
         Format::Csv => write_csv(
             &mut w,
             &report::SENSITIVITY_HEADER,
-            &report::sensitivity_rows(&m, &pt, &s),
+            &report::sensitivity_rows(&m, &pt, &s, why),
         )?,
     }
     w.finish()?;
@@ -798,7 +924,7 @@ fn sensitivity_command(args: SensitivityArgs, set: &[(String, f64)]) -> Result<(
 }
 
 /// `modaltol analyze` (see its `--help`).
-fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
+fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let AnalyzeArgs {
         model,
         output,
@@ -814,12 +940,9 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         cases: only,
         display,
     } = args;
-    if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
-        return Err(InputError(
-            "--quadrature-tolerance must be a relative error in (0, 1), e.g. 1e-3".into(),
-        )
-        .into());
-    }
+    settings::quadrature_tolerance(quadrature_tolerance)
+        .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
+    let threads = checked_threads(threads)?;
     let m = model_or_governor(&model, set)?;
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
@@ -827,15 +950,10 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
             InputError("no --speed given and the model has no [analysis] speed".into())
         })?,
     };
+    settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
     let cases = tolerance_cases(&m, &only)?;
-    if let Some(n) = samples
-        && !(2..=modaltol::montecarlo::MAX_SAMPLES).contains(&n)
-    {
-        return Err(InputError(format!(
-            "--samples must lie in 2..={} (got {n})",
-            modaltol::montecarlo::MAX_SAMPLES
-        ))
-        .into());
+    if let Some(n) = samples {
+        settings::samples(n).map_err(|e| InputError(format!("--samples {e}")))?;
     }
     let mc = (!no_monte_carlo).then(|| McOptions {
         samples: samples.unwrap_or(m.analysis.samples),
@@ -851,32 +969,30 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
     let split = match &shard {
         None => Split::Whole,
         Some(spec) => {
-            let bad = || InputError(format!("--shard '{spec}': expected K/N with 1 ≤ K ≤ N"));
-            let (k, n) = spec.split_once('/').ok_or_else(bad)?;
-            let (k, n): (usize, usize) = (
-                k.trim().parse().map_err(|_| bad())?,
-                n.trim().parse().map_err(|_| bad())?,
-            );
-            if k == 0 || k > n {
-                return Err(bad().into());
-            }
+            let (k, n) = settings::shard(spec).map_err(|e| InputError(format!("--shard {e}")))?;
             if mc.is_none() {
                 return Err(InputError(
                     "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo".into(),
                 )
                 .into());
             }
-            Split::Shard(k - 1, n)
+            Split::Shard(k, n)
         }
     };
     // Fail early where the results cannot be written.
-    let dir = match split {
-        Split::Shard(..) => {
+    let inputs = Inputs::new(&model.iter().collect::<Vec<_>>());
+    let destination = match split {
+        Split::Shard(k, n) => {
             std::fs::create_dir_all(&output)
                 .with_context(|| format!("{}: cannot create the directory", output.display()))?;
-            None
+            let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+            refuse_input(&inputs, &path)?;
+            Destination::Shard(AtomicFile::create(&path)?, path)
         }
-        _ => Some(ResultDir::create(&output)?),
+        _ => {
+            refuse_input(&inputs, &output)?;
+            Destination::Directory(ResultDir::create(&output)?.protect(inputs)?)
+        }
     };
     // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
     let quadrature =
@@ -891,34 +1007,41 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)]) -> Result<()> {
         monte_carlo: mc,
         split,
         threads,
-        cancel: Cancel::new(),
+        cancel: cancel.clone(),
     };
-    install_interrupt_handler(&opt.cancel);
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
-        let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
-        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, mc, &range, (*k, *n)) else {
-            eprintln!(
-                "modaltol: interrupted; {} not written (a shard is complete or absent)",
-                path.display()
-            );
-            return Err(Interrupted.into());
+        let Destination::Shard(mut f, path) = destination else {
+            unreachable!("a shard's destination is its file")
         };
-        write_atomically(&path, file.to_json().as_bytes())?;
-        eprintln!(
+        let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
+        let run = RunSettings::new(&range, &mc, tolerance, *n);
+        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
+            return Err(Interrupted(format!(
+                "{} not written (a shard is complete or absent)",
+                path.display()
+            ))
+            .into());
+        };
+        f.write_all(file.to_json().as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        f.commit()?;
+        note!(
             "modaltol: wrote {}; combine the shards with `modaltol merge`",
             path.display()
         );
         return Ok(());
     }
-    let dir = dir.expect("a result directory");
+    let Destination::Directory(dir) = destination else {
+        unreachable!("a whole run's destination is a directory")
+    };
     write_outputs(&m, &a, mc.as_ref(), threads, display.into(), dir, &output)?;
 
     Ok(())
 }
 
 /// `modaltol merge` (see its `--help`).
-fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
+fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let MergeArgs {
         model,
         output,
@@ -931,6 +1054,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     let (first, states) =
         modaltol::shard::read_all(&m, &cases, &shards).map_err(|e| InputError(e.to_string()))?;
     let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
+    settings::analysis_speeds(range.len()).map_err(InputError)?;
     let mc = McOptions {
         samples: first.samples,
         seed: first.seed,
@@ -940,13 +1064,21 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
         cases,
-        quadrature: Some(QuadOptions::default()),
+        // The quadrature of the run the shards belong to.
+        quadrature: first.quadrature.map(|tolerance| QuadOptions {
+            tolerance,
+            threads: None,
+        }),
         monte_carlo: Some(mc),
         split: Split::Merged(states),
         threads: None,
-        cancel: Cancel::new(),
+        cancel: cancel.clone(),
     };
-    let dir = ResultDir::create(&output)?;
+    let mut inputs: Vec<&PathBuf> = model.iter().collect();
+    inputs.extend(&shards);
+    let inputs = Inputs::new(&inputs);
+    refuse_input(&inputs, &output)?;
+    let dir = ResultDir::create(&output)?.protect(inputs)?;
     let a = analyze(&m, &opt, &progress_printer());
     write_outputs(&m, &a, Some(&mc), None, display.into(), dir, &output)?;
 
@@ -954,7 +1086,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)]) -> Result<()> {
 }
 
 /// `modaltol frf` (see its `--help`).
-fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
+fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
     let FrfArgs {
         model,
         speed,
@@ -987,7 +1119,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
             let outp = output.ok_or_else(|| {
                 InputError("--input needs --output (the response); or use --transfer".into())
             })?;
-            eprintln!(
+            note!(
                 "modaltol: note: `--input {inp} --output {outp}` is the older spelling of \
                  `--transfer input={inp},output={outp}`; -o/--output now names the CSV file"
             );
@@ -1007,21 +1139,21 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
             (tf, output.map(PathBuf::from).or(out))
         }
     };
-    if !speed.is_finite() {
-        return Err(InputError("--speed must be finite".into()).into());
-    }
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(&m, &wrt)?;
+    let mut csv = csv::Writer::from_writer(Sink::to(&file, &Inputs::new(&[&model]))?);
     let p = m.nominal();
     initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
-    let rows =
-        sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, range.speeds())
-            .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
-    let mut csv = csv::Writer::from_writer(Sink::to(&file)?);
+    // Stops at the frequency after a signal.
+    let frequencies = range.speeds().take_while(|_| !cancel.is_cancelled());
+    let rows = sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, frequencies)
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    stop_if_cancelled(cancel, &file)?;
     csv.write_record(report::frf_header(&m, &wrt))?;
-    for row in report::frf_rows(&rows) {
+    for row in report::frf_rows(&pt.linear, &rows) {
         csv.write_record(&row)?;
     }
     csv.into_inner().map_err(|e| e.into_error())?.finish()?;
@@ -1029,9 +1161,30 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)]) -> Result<()> {
     Ok(())
 }
 
+/// Was stdout closed when the process started (`modaltol … >&-`)? Rust's runtime opens
+/// `/dev/null` in its place before `main`, and whatever is written there vanishes without a
+/// word; so this is looked at before the runtime starts (an ELF initialiser), and a command
+/// that would write to stdout refuses to run instead.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+#[cfg(target_os = "linux")]
+#[used]
+#[unsafe(link_section = ".init_array")]
+static NOTE_A_CLOSED_STDOUT: extern "C" fn() = {
+    extern "C" fn note() {
+        // SAFETY: F_GETFD reads a descriptor's flags and nothing else; a closed one is EBADF.
+        let closed = unsafe { libc::fcntl(1, libc::F_GETFD) } == -1;
+        STDOUT_CLOSED.store(closed, Ordering::SeqCst);
+    }
+    note
+};
+
 fn main() {
     let cli = Cli::parse();
-    if let Err(e) = run(cli) {
+    let cancel = Cancel::new();
+    handle_interrupts(&cancel);
+    let result = run(cli, &cancel);
+    if let Err(e) = result {
         // A reader that stopped reading (`… | head`) is not an error of ours.
         let pipe = |io: &std::io::Error| io.kind() == std::io::ErrorKind::BrokenPipe;
         let broken_pipe = e.chain().any(|c| {
@@ -1045,14 +1198,18 @@ fn main() {
         if broken_pipe {
             std::process::exit(0);
         }
-        eprintln!("modaltol: error: {e:#}");
+        note!("modaltol: error: {e:#}");
         let code = if e.downcast_ref::<InputError>().is_some() {
             2
         } else if e.downcast_ref::<Interrupted>().is_some() {
-            130
+            interrupted_code().unwrap_or(130)
         } else {
             1
         };
+        std::process::exit(code);
+    }
+    // A signal that came when nothing was left to stop still ends the run as interrupted.
+    if let Some(code) = interrupted_code() {
         std::process::exit(code);
     }
 }

@@ -537,10 +537,7 @@ pub fn inadmissible(
     opt: McOptions,
 ) -> Vec<(String, usize, f64)> {
     let sampler = Sampler::new(model, vars, spread, opt);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opt.threads.unwrap_or(0))
-        .build()
-        .expect("thread pool");
+    let pool = crate::threads::pool(opt.threads);
     let mut tally: Vec<(String, usize, f64)> = pool.install(|| {
         (0..opt.samples)
             .into_par_iter()
@@ -653,10 +650,7 @@ pub fn run_chunks(
     mut values: Option<&mut Vec<Vec<f32>>>,
 ) -> TreeFold {
     let sampler = Sampler::new(model, vars, spread, opt);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opt.threads.unwrap_or(0))
-        .build()
-        .expect("thread pool");
+    let pool = crate::threads::pool(opt.threads);
     let mut out = TreeFold::default();
     let mut done = 0;
     if let Some(v) = values.as_deref_mut() {

@@ -261,10 +261,7 @@ pub fn integrate(
             .map(|_| (0..finest).map(|_| None).collect())
             .collect(),
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opt.threads.unwrap_or(0))
-        .build()
-        .expect("thread pool");
+    let pool = crate::threads::pool(opt.threads);
     let normal = Normal::standard();
     let node_params = |line: &Line, t: f64| {
         let mut z = DVector::<f64>::zeros(d);

@@ -5,11 +5,15 @@
 //! N·m (revolute) or N (prismatic), damping ratios dimensionless.
 
 use crate::analyze::{Analysis, Method, Row};
+use crate::frf::{NoTransfer, transfer_defect};
+use crate::linearize::Linearization;
 use crate::modal::{C64, Mode};
 use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::plots::{CriticalSpeed, Display, Plot};
-use crate::sensitivity::{ResponseRow, Sensitivity, Status as SensStatus};
+use crate::sensitivity::{
+    ResponseRow, Sensitivity, Status as SensStatus, TransferAt, nominal_transfer,
+};
 use crate::study::SweepExtras;
 use crate::sweep::{Point, PointError};
 use crate::tolerance::Quantity;
@@ -39,6 +43,11 @@ fn fixed(x: f64, decimals: usize) -> String {
 fn opt(v: Option<f64>) -> String {
     v.filter(|x| x.is_finite())
         .map_or(String::new(), |x| x.to_string())
+}
+
+/// A row's message: its parts that are there, joined.
+fn message<'a>(parts: impl IntoIterator<Item = Option<&'a str>>) -> String {
+    parts.into_iter().flatten().collect::<Vec<_>>().join("; ")
 }
 
 /// The columns every per-mode table starts with: where, which mode, its character and roots.
@@ -158,7 +167,8 @@ pub fn sweep_rows(
                 );
                 r.push(p.equilibrium.iterations.to_string());
                 r.push(p.branch.as_str().into());
-                r.push(point_message(p));
+                let why = extras.transfer_defect.map(NoTransfer::message);
+                r.push(point_message(p, why));
                 r
             })
             .collect(),
@@ -188,7 +198,8 @@ pub fn display_shape(shape: &[C64]) -> Vec<C64> {
 
 /// Header of the modes table (`modal --format csv`): the mode's frequencies, damping ratio,
 /// its two roots, then its shape in the free coordinates, scaled by [`display_shape`]
-/// (`shape_re:<joint>`, `shape_im:<joint>`).
+/// (`shape_re:<joint>`, `shape_im:<joint>`), then `message` (the point's note, or why it
+/// failed).
 pub fn modes_header(model: &Model) -> Vec<String> {
     let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
     for &i in &model.free() {
@@ -203,13 +214,9 @@ pub fn modes_header(model: &Model) -> Vec<String> {
 
 /// What a point's rows say beside their numbers: which branch and why where it is not simply
 /// the stable equilibrium reached, then any note (a change of stability).
-fn point_message(p: &Point) -> String {
+fn point_message(p: &Point, transfer: Option<&str>) -> String {
     let branch = (p.branch.as_str() != "stable").then(|| p.branch.to_string());
-    branch
-        .into_iter()
-        .chain(p.note.clone())
-        .collect::<Vec<_>>()
-        .join("; ")
+    message([branch.as_deref(), p.note.as_deref(), transfer])
 }
 
 /// Rows of the modes table at the point `p` (see [`modes_header`]).
@@ -226,7 +233,23 @@ pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
                 r.push(z.im.to_string());
             }
             r.push(p.branch.as_str().into());
-            r.push(point_message(p));
+            r.push(point_message(p, None));
+            r
+        })
+        .collect()
+}
+
+/// Rows of the modes table of a point at `speed` that failed: one per degree of freedom,
+/// status `failed`, the reason in `message` (as in a sweep).
+pub fn modes_failed_rows(model: &Model, speed: f64, e: &PointError) -> Vec<Vec<String>> {
+    let ncols = modes_header(model).len();
+    (0..model.dof().max(1))
+        .map(|i| {
+            let mut r = vec![String::new(); ncols];
+            r[0] = speed.to_string();
+            r[1] = (i + 1).to_string();
+            r[2] = "failed".into();
+            r[ncols - 1] = e.to_string();
             r
         })
         .collect()
@@ -241,8 +264,8 @@ pub fn elasticity(b: f64, f: f64, df_db: f64) -> Option<f64> {
 
 /// Header of the sensitivity table (`sensitivity --format csv`): one row per mode and design
 /// variable, the derivatives per unit of the variable (`d_…`) and normalised (`elasticity_…`,
-/// [`elasticity`]).
-pub const SENSITIVITY_HEADER: [&str; 18] = [
+/// [`elasticity`]), then `message` (why |H| has no value, where it has none).
+pub const SENSITIVITY_HEADER: [&str; 19] = [
     "speed",
     "mode",
     "status",
@@ -261,11 +284,23 @@ pub const SENSITIVITY_HEADER: [&str; 18] = [
     "elasticity_natural_frequency",
     "elasticity_damping_ratio",
     "elasticity_transfer_magnitude",
+    "message",
 ];
 
+/// Why the transfer function `t` has no finite value at the point `pt`, where it has none.
+pub fn transfer_defect_at(pt: &Point, t: Option<&TransferAt>) -> Option<NoTransfer> {
+    t.and_then(|t| transfer_defect(&pt.linear, t.omega, nominal_transfer(pt, t).as_ref()))
+}
+
 /// Rows of the sensitivity table (see [`SENSITIVITY_HEADER`]); derivatives that do not exist
-/// are empty and `sensitivity_status` says `not_differentiable`.
-pub fn sensitivity_rows(model: &Model, pt: &Point, s: &Sensitivity) -> Vec<Vec<String>> {
+/// are empty and `sensitivity_status` says `not_differentiable`; `transfer` says why |H| has
+/// no value, where it has none ([`transfer_defect`]).
+pub fn sensitivity_rows(
+    model: &Model,
+    pt: &Point,
+    s: &Sensitivity,
+    transfer: Option<NoTransfer>,
+) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     for (i, m) in pt.modes.iter().enumerate() {
         for v in &s.variables {
@@ -294,6 +329,7 @@ pub fn sensitivity_rows(model: &Model, pt: &Point, s: &Sensitivity) -> Vec<Vec<S
                 opt(el(m.natural_frequency, d(ms.d_natural_frequency))),
                 opt(el(m.damping_ratio, d(ms.d_damping_ratio))),
                 opt(s.transfer_magnitude.and_then(|h| el(h, dh))),
+                message([transfer.map(NoTransfer::message)]),
             ]);
         }
     }
@@ -301,7 +337,8 @@ pub fn sensitivity_rows(model: &Model, pt: &Point, s: &Sensitivity) -> Vec<Vec<S
 }
 
 /// Header of the frequency-response table (`frf`): excitation frequency, |H|, arg H, its real
-/// and imaginary parts, then `d(magnitude)/d(P)` per design variable.
+/// and imaginary parts, then `d(magnitude)/d(P)` per design variable, then `message` (why `H`
+/// has no value, where it has none).
 pub fn frf_header(model: &Model, wrt: &[usize]) -> Vec<String> {
     let mut header: Vec<String> = ["frequency", "magnitude", "phase", "real", "imag"]
         .iter()
@@ -311,22 +348,27 @@ pub fn frf_header(model: &Model, wrt: &[usize]) -> Vec<String> {
         wrt.iter()
             .map(|&b| format!("d(magnitude)/d({})", model.parameters[b].name)),
     );
+    header.push("message".into());
     header
 }
 
-/// Rows of the frequency-response table (see [`frf_header`]); empty cells where `H` or a
-/// derivative does not exist.
-pub fn frf_rows(rows: &[ResponseRow]) -> Vec<Vec<String>> {
+/// Rows of the frequency-response table (see [`frf_header`]) of the linearisation `lin`:
+/// empty cells where `H` or a derivative does not exist, and where `H` has no finite value,
+/// the reason ([`transfer_defect`]: a resonance, an overflow).
+pub fn frf_rows(lin: &Linearization<f64>, rows: &[ResponseRow]) -> Vec<Vec<String>> {
     rows.iter()
         .map(|r| {
             let mut row = vec![r.frequency.to_string()];
-            match r.h {
-                Some(h) => {
-                    row.extend([h.magnitude(), h.phase(), h.re, h.im].map(|v| v.to_string()))
-                }
-                None => row.extend(std::iter::repeat_n(String::new(), 4)),
-            }
+            let why = transfer_defect(lin, r.frequency, r.h.as_ref());
+            let h = r.h.filter(|_| why.is_none());
+            row.extend([
+                opt(h.map(|h| h.magnitude())),
+                opt(h.map(|h| h.phase())),
+                opt(h.map(|h| h.re)),
+                opt(h.map(|h| h.im)),
+            ]);
             row.extend(r.d_magnitude.iter().map(|&v| opt(v)));
+            row.push(message([why.map(NoTransfer::message)]));
             row
         })
         .collect()
@@ -339,6 +381,7 @@ pub fn sensitivity_json(
     method: &str,
     pt: &Point,
     s: &Sensitivity,
+    transfer: Option<NoTransfer>,
 ) -> Value {
     let vars: Vec<Value> = s
         .variables
@@ -365,7 +408,9 @@ pub fn sensitivity_json(
         "units": {"frequency": "rad/s", "derivative": "quantity unit per parameter unit"},
         "modes": pt.modes.iter().enumerate().map(|(i, m)| json!({"mode": i + 1, "status": m.class.as_str(),
             "damped_frequency": m.damped_frequency, "natural_frequency": m.natural_frequency, "damping_ratio": m.damping_ratio})).collect::<Vec<_>>(),
-        "transfer_magnitude": s.transfer_magnitude, "transfer_phase": s.transfer_phase,
+        "transfer_magnitude": s.transfer_magnitude.filter(|_| transfer.is_none()),
+        "transfer_phase": s.transfer_phase.filter(|_| transfer.is_none()),
+        "transfer_message": transfer.map(NoTransfer::message),
         "variables": vars,
     })
 }
@@ -377,6 +422,7 @@ pub fn sensitivity_table(
     method: &str,
     pt: &Point,
     s: &Sensitivity,
+    transfer: Option<NoTransfer>,
 ) -> String {
     let mut out = String::new();
     let _ = writeln!(
@@ -384,7 +430,9 @@ pub fn sensitivity_table(
         "model: {}    speed: {speed:?} rad/s    derivatives: {method}",
         model.name
     );
-    if let (Some(h), Some(ph)) = (s.transfer_magnitude, s.transfer_phase) {
+    if let Some(why) = transfer {
+        let _ = writeln!(out, "transfer: {}", why.message());
+    } else if let (Some(h), Some(ph)) = (s.transfer_magnitude, s.transfer_phase) {
         let _ = writeln!(out, "transfer |H| = {h:.8e}, arg H = {ph:.6} rad");
     }
     for (i, m) in pt.modes.iter().enumerate() {

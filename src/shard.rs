@@ -7,8 +7,11 @@
 //! `merge` trusts nothing in them:
 //!
 //! * a SHA-256 digest of the whole content (with the digest field empty) catches any edit or
-//!   truncation; the model fingerprint is a SHA-256 too (a stable hash: std's `DefaultHasher`
-//!   may change between Rust releases);
+//!   truncation;
+//! * a [`Fingerprint`] of everything the numbers depend on (the whole validated model, the
+//!   tolerance cases, the speeds, samples, seed, sampling and the quadrature's options), one
+//!   SHA-256 per section, so a shard of another model or run is refused naming what differs
+//!   (SHA-256 is stable; std's `DefaultHasher` may change between Rust releases);
 //! * the blocks of shard `K` must be exactly the layout of shard `K`'s chunks, so a shard
 //!   relabelled as another (even with a recomputed digest) is refused;
 //! * every count and moment must be possible: `n + failed` equals the block's samples, every
@@ -19,6 +22,7 @@ use crate::analyze::Analysis;
 use crate::model::{Case, Model, Sampling, SpeedRange};
 use crate::montecarlo::{self, Block, McOptions, Moments};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// Largest shard file read (a shard holds a few blocks of moments per case).
@@ -29,20 +33,24 @@ pub fn output_count(m: &Model) -> usize {
     crate::output::outputs(m.dof(), m.analysis.transfer.is_some()).len()
 }
 
-/// Format tag of shard files (2: aligned blocks, digest).
-pub const FORMAT: &str = "modaltol-shard-2";
+/// Format tag of shard files (2: aligned blocks, digest; 3: the fingerprint by section, the
+/// quadrature's options).
+pub const FORMAT: &str = "modaltol-shard-3";
 
 /// What `analyze --shard K/N` writes.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ShardFile {
     pub format: String,
-    /// Identifies the model and its tolerance cases ([`fingerprint`]).
-    pub fingerprint: String,
+    /// What the shard was computed from ([`Fingerprint`]).
+    pub fingerprint: Fingerprint,
     /// The speed range, as `from:to:step` (rad/s).
     pub speed: String,
     pub samples: usize,
     pub seed: u64,
     pub sampling: Sampling,
+    /// The quadrature's requested relative error of the run the shard belongs to (`merge`
+    /// runs the quadrature with it); `None`: the run has no quadrature (`--no-quadrature`).
+    pub quadrature: Option<f64>,
     /// 1-based shard number `K` of `of`.
     pub shard: usize,
     pub of: usize,
@@ -63,47 +71,114 @@ pub struct ShardError {
     pub message: String,
 }
 
-/// A SHA-256 fingerprint of the model's parameters and the tolerance cases: shards made from
-/// another model or other cases are refused by `merge`.
-pub fn fingerprint(model: &Model, cases: &[crate::model::Case]) -> String {
-    let mut bytes = Vec::new();
-    bytes.extend(model.name.as_bytes());
-    bytes.push(0);
-    for p in &model.parameters {
-        bytes.extend(p.name.as_bytes());
-        bytes.push(0);
-        bytes.extend(p.value.to_bits().to_le_bytes());
+/// What a shard was computed from, section by section: for each top-level part of the
+/// validated model (its serialisation, see [`Model`]: `name`, `parameters`, `gravity`,
+/// `bodies`, `joints`, `forces`, `constraints`, `ports`, `independent`, `analysis`, …), the
+/// tolerance cases run (`cases`) and each run setting (`speed`, `samples`, `seed`,
+/// `sampling`, `quadrature`), the first 32 hex digits of the SHA-256 of its canonical JSON.
+/// Where the model was written (file, lines, columns, comments) is no part of it; every
+/// number the model holds is, bit for bit. Two shards with equal fingerprints computed the
+/// same numbers; where they differ, [`Fingerprint::differences`] names what.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Fingerprint(pub BTreeMap<String, String>);
+
+impl Fingerprint {
+    /// The fingerprint of a run of `model` with `cases` and the settings `run` (its shard
+    /// count left out: [`gather`] checks that).
+    pub fn of(model: &Model, cases: &[Case], run: &RunSettings) -> Fingerprint {
+        let mut sections = BTreeMap::new();
+        let mut add = |name: &str, value: serde_json::Value| {
+            let text = serde_json::to_string(&value).expect("a JSON value serialises");
+            sections.insert(
+                name.to_string(),
+                crate::files::sha256_hex(text.as_bytes())[..32].to_string(),
+            );
+        };
+        let model = serde_json::to_value(model).expect("a model serialises");
+        let serde_json::Value::Object(parts) = model else {
+            unreachable!("a model serialises to an object")
+        };
+        for (name, value) in parts {
+            add(&name, value);
+        }
+        add("cases", json(&cases));
+        add("speed", json(&run.speed));
+        add("samples", json(&run.samples));
+        add("seed", json(&run.seed));
+        add("sampling", json(&run.sampling));
+        add("quadrature", json(&run.quadrature));
+        Fingerprint(sections)
     }
-    bytes.extend(format!("{cases:?}").as_bytes());
-    crate::files::sha256_hex(&bytes)[..32].to_string()
+
+    /// The sections in which `other` differs from `self` (present in one only, or with
+    /// another digest), as readers know them.
+    pub fn differences(&self, other: &Fingerprint) -> Vec<&'static str> {
+        let names: std::collections::BTreeSet<&String> =
+            self.0.keys().chain(other.0.keys()).collect();
+        let mut out: Vec<&'static str> = Vec::new();
+        for k in names {
+            let title = section_title(k);
+            if self.0.get(k) != other.0.get(k) && !out.contains(&title) {
+                out.push(title);
+            }
+        }
+        out
+    }
+}
+
+fn json(v: &impl Serialize) -> serde_json::Value {
+    serde_json::to_value(v).expect("a plain value serialises")
+}
+
+/// What a fingerprint's section is called in messages.
+fn section_title(section: &str) -> &'static str {
+    match section {
+        "name" => "model name",
+        "parameters" => "parameters (values, tolerances, distributions; --set)",
+        "gravity" => "gravity",
+        "bodies" => "bodies",
+        "joints" | "order" | "coordinates" => "joints",
+        "forces" => "force elements",
+        "constraints" => "constraints (cut joints)",
+        "ports" => "ports",
+        "independent" => "independent coordinates",
+        "analysis" => "[analysis] table",
+        "cases" => "tolerance cases (--case)",
+        "speed" => "speeds (--speed)",
+        "samples" => "samples (--samples)",
+        "seed" => "seed (--seed)",
+        "sampling" => "sampling (--sampling)",
+        "quadrature" => "quadrature options (--quadrature-tolerance, --no-quadrature)",
+        _ => "a part this version of modaltol does not know",
+    }
 }
 
 impl ShardFile {
-    /// Shard `k` (0-based) of `n` of the analysis `a` of `model` with `cases` over `speed`, run
-    /// with `mc`; `None` when the run was interrupted before all of the shard's chunks were
-    /// done (a shard is complete or absent).
+    /// Shard `k` (0-based) of `run.of` of the analysis `a` of `model` with `cases`, run with
+    /// the settings `run`; `None` when the run was interrupted before all of the shard's
+    /// chunks were done (a shard is complete or absent).
     pub fn of_analysis(
         model: &Model,
         cases: &[Case],
         a: &Analysis,
-        mc: McOptions,
-        speed: &SpeedRange,
-        (k, n): (usize, usize),
+        run: &RunSettings,
+        k: usize,
     ) -> Option<ShardFile> {
-        let expect = montecarlo::shard_chunks(mc.samples, k, n);
+        let expect = montecarlo::shard_chunks(run.samples, k, run.of);
         let complete = a
             .shard_states
             .iter()
             .all(|c| c.last().map_or(expect.start, |b| b.chunks().end) == expect.end);
         complete.then(|| ShardFile {
             format: FORMAT.into(),
-            fingerprint: fingerprint(model, cases),
-            speed: format!("{}:{}:{}", speed.from, speed.to, speed.step),
-            samples: mc.samples,
-            seed: mc.seed,
-            sampling: mc.sampling,
+            fingerprint: Fingerprint::of(model, cases, run),
+            speed: run.speed.clone(),
+            samples: run.samples,
+            seed: run.seed,
+            sampling: run.sampling,
+            quadrature: run.quadrature,
             shard: k + 1,
-            of: n,
+            of: run.of,
             outputs: output_count(model),
             cases: a.shard_states.clone(),
             digest: String::new(),
@@ -146,13 +221,25 @@ impl ShardFile {
         Ok(f)
     }
 
-    /// Checks that the shard was made from the model and cases of `fingerprint`, and that every
-    /// block and count is what shard `shard` of `of` must hold: `speeds` speeds, `outputs`
-    /// outputs per speed, `cases` tolerance cases.
+    /// The settings of the run this shard belongs to.
+    pub fn run(&self) -> RunSettings {
+        RunSettings {
+            speed: self.speed.clone(),
+            samples: self.samples,
+            seed: self.seed,
+            sampling: self.sampling,
+            quadrature: self.quadrature,
+            of: self.of,
+        }
+    }
+
+    /// Checks that the shard was computed from what `fingerprint` describes (naming what
+    /// differs otherwise), and that every block and count is what shard `shard` of `of` must
+    /// hold: `speeds` speeds, `outputs` outputs per speed, `cases` tolerance cases.
     pub fn check(
         &self,
         file: &str,
-        fingerprint: &str,
+        fingerprint: &Fingerprint,
         speeds: usize,
         outputs: usize,
         cases: usize,
@@ -161,10 +248,20 @@ impl ShardFile {
             file: file.to_string(),
             message,
         };
-        if self.fingerprint != fingerprint {
-            return Err(err(
-                "made from another model or other tolerance cases".into()
-            ));
+        let differ = fingerprint.differences(&self.fingerprint);
+        if !differ.is_empty() {
+            return Err(err(format!(
+                "made from another model, other tolerance cases or other settings than the \
+                 merge's: its {} {} (merge reads the model of --model with --set and --case, \
+                 and the settings of the first shard; re-run the shard, or merge only shards \
+                 of one run)",
+                differ.join(", "),
+                if differ.len() == 1 {
+                    "differs"
+                } else {
+                    "differ"
+                }
+            )));
         }
         if self.of == 0 || self.shard == 0 || self.shard > self.of {
             return Err(err(format!(
@@ -252,18 +349,37 @@ fn plausible(m: &Moments, samples: usize) -> Result<(), String> {
 /// The settings every shard of one run shares.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSettings {
+    /// The speed range, as `from:to:step` (rad/s).
     pub speed: String,
     pub samples: usize,
     pub seed: u64,
     pub sampling: Sampling,
+    /// The quadrature's requested relative error; `None`: no quadrature.
+    pub quadrature: Option<f64>,
+    /// The number of shards.
     pub of: usize,
+}
+
+impl RunSettings {
+    /// The settings of a sharded run over `speed` with the Monte Carlo options `mc`, the
+    /// quadrature's tolerance `quadrature` (`None`: none) split into `of` shards.
+    pub fn new(speed: &SpeedRange, mc: &McOptions, quadrature: Option<f64>, of: usize) -> Self {
+        RunSettings {
+            speed: format!("{}:{}:{}", speed.from, speed.to, speed.step),
+            samples: mc.samples,
+            seed: mc.seed,
+            sampling: mc.sampling,
+            quadrature,
+            of,
+        }
+    }
 }
 
 /// Checks that `files` (path, parsed shard) are shards `1..=N` of one run, each once, made from
 /// `fingerprint`, and returns the run's settings and, per case, all blocks in chunk order.
 pub fn gather(
     files: Vec<(String, ShardFile)>,
-    fingerprint: &str,
+    fingerprint: &Fingerprint,
 ) -> Result<(RunSettings, Vec<Vec<Block>>), ShardError> {
     let mut files = files;
     files.sort_by_key(|(_, f)| f.shard);
@@ -273,22 +389,19 @@ pub fn gather(
             message: "needs at least one shard file".into(),
         });
     };
-    let settings = |f: &ShardFile| RunSettings {
-        speed: f.speed.clone(),
-        samples: f.samples,
-        seed: f.seed,
-        sampling: f.sampling,
-        of: f.of,
-    };
-    let run = settings(first);
+    let run = first.run();
     for (path, f) in &files {
-        if f.fingerprint != fingerprint {
+        if &f.fingerprint != fingerprint {
             return Err(ShardError {
                 file: path.clone(),
-                message: "made from another model or other tolerance cases".into(),
+                message: format!(
+                    "made from another model, other tolerance cases or other settings: its {} \
+                     differ from the merge's",
+                    fingerprint.differences(&f.fingerprint).join(", ")
+                ),
             });
         }
-        if settings(f) != run {
+        if f.run() != run {
             return Err(ShardError {
                 file: path.clone(),
                 message: format!(
@@ -316,13 +429,13 @@ pub fn gather(
 }
 
 /// Reads and verifies the shard files `paths` of one run of `model` with `cases` and gathers
-/// them ([`gather`]).
+/// them ([`gather`]). The run's settings are those of the lowest-numbered shard; every shard
+/// must have been computed from `model`, `cases` and those settings ([`Fingerprint`]).
 pub fn read_all(
     model: &Model,
     cases: &[Case],
     paths: &[PathBuf],
 ) -> Result<(RunSettings, Vec<Vec<Block>>), ShardError> {
-    let fingerprint = fingerprint(model, cases);
     let mut files = Vec::with_capacity(paths.len());
     for path in paths {
         let name = path.display().to_string();
@@ -334,18 +447,23 @@ pub fn read_all(
             .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
         let text = String::from_utf8(bytes)
             .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
-        let f = ShardFile::parse(&text, &name)?;
+        files.push((name.clone(), ShardFile::parse(&text, &name)?));
+    }
+    let Some((_, first)) = files.iter().min_by_key(|(_, f)| f.shard) else {
+        return Err(ShardError {
+            file: "merge".into(),
+            message: "needs at least one shard file".into(),
+        });
+    };
+    let fingerprint = Fingerprint::of(model, cases, &first.run());
+    for (name, f) in &files {
         let speeds = SpeedRange::parse(&f.speed)
-            .map_err(|e| refuse(format!("speed '{}': {e}", f.speed)))?
+            .map_err(|e| ShardError {
+                file: name.clone(),
+                message: format!("speed '{}': {e}", f.speed),
+            })?
             .len();
-        f.check(
-            &name,
-            &fingerprint,
-            speeds,
-            output_count(model),
-            cases.len(),
-        )?;
-        files.push((name, f));
+        f.check(name, &fingerprint, speeds, output_count(model), cases.len())?;
     }
     gather(files, &fingerprint)
 }

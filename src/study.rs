@@ -2,7 +2,7 @@
 //! what the `sweep` command writes, one speed at a time, for any front end.
 
 use crate::compiled::Compiled;
-use crate::frf::Complex;
+use crate::frf::{Complex, NoTransfer, transfer_defect};
 use crate::model::Transfer;
 use crate::sensitivity::{Derivatives, Sensitivity, TransferAt, nominal_transfer, sensitivities};
 use crate::sweep::{Options, Point, PointError, Sweep};
@@ -11,6 +11,8 @@ use crate::sweep::{Options, Point, PointError, Sweep};
 #[derive(Debug, Clone, Default)]
 pub struct SweepExtras {
     pub transfer: Option<Complex<f64>>,
+    /// Why the transfer function asked for has no finite value, where it has none.
+    pub transfer_defect: Option<NoTransfer>,
     pub sensitivity: Option<Sensitivity>,
 }
 
@@ -52,6 +54,8 @@ impl<'a> SweepStudy<'a> {
         if let Ok(pt) = &result {
             let t = self.transfer.map(|t| TransferAt::at_speed(&t, speed));
             extras.transfer = t.and_then(|t| nominal_transfer(pt, &t));
+            extras.transfer_defect =
+                t.and_then(|t| transfer_defect(&pt.linear, t.omega, extras.transfer.as_ref()));
             if !self.wrt.is_empty() {
                 let p = self.model.nominal();
                 match sensitivities(self.model, &p, pt, &self.wrt, t, self.derivatives) {

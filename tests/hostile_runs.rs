@@ -244,30 +244,119 @@ fn impossible_monte_carlo_samples_count_as_failed_with_their_reason() {
     assert!(rows > 0);
 }
 
+/// The settings of the shard runs below.
+const SHARD_RUN: [&str; 6] = ["--speed", "0:3:1", "--samples", "300", "--case", "L3"];
+
+/// Runs `analyze --shard K/3` of `model` with `extra` options into `dir`, returns its path.
+fn shard(dir: &Path, model: &str, k: usize, extra: &[&str]) -> String {
+    let out = dir.to_str().unwrap();
+    let spec = format!("{k}/3");
+    let mut args = vec!["analyze", model, "-o", out, "--shard", &spec];
+    args.extend(SHARD_RUN);
+    args.extend(extra);
+    let o = run(&args);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    dir.join(format!("shard-{k}-of-3.json"))
+        .display()
+        .to_string()
+}
+
 /// Runs `analyze --shard K/3` for K = 1..3 into `dir` and returns the shard paths.
 fn shards(dir: &Path, model: &str) -> Vec<String> {
-    (1..=3)
-        .map(|k| {
-            let o = run(&[
-                "analyze",
-                model,
-                "-o",
-                dir.to_str().unwrap(),
-                "--speed",
-                "0:3:1",
-                "--samples",
-                "300",
-                "--case",
-                "L3",
-                "--shard",
-                &format!("{k}/3"),
-            ]);
-            assert_eq!(o.code, Some(0), "{}", o.stderr);
-            dir.join(format!("shard-{k}-of-3.json"))
-                .display()
-                .to_string()
-        })
-        .collect()
+    (1..=3).map(|k| shard(dir, model, k, &[])).collect()
+}
+
+/// `merge --model MODEL -o DIR/merged --case L3 SHARDS…`.
+fn merge(dir: &Path, model: &str, shards: &[String]) -> Run {
+    let out = dir.join("merged");
+    let mut args = vec!["merge", "--model", model, "-o", out.to_str().unwrap()];
+    args.extend(["--case", "L3"]);
+    args.extend(shards.iter().map(String::as_str));
+    run(&args)
+}
+
+#[test]
+fn a_shard_of_another_model_or_run_is_refused_naming_what_differs() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let good = shards(dir.path(), m);
+    // One shard each from a model whose gravity, geometry, an expression or a parameter
+    // differs, or from a run with other options: refused, naming the file and what differs.
+    let elsewhere = dir.path().join("other");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let gravity = variant(
+        &elsewhere,
+        "rotating_pendulum.toml",
+        "g.toml",
+        &[("-9.80665", "-7")],
+    );
+    let damping = variant(
+        &elsewhere,
+        "rotating_pendulum.toml",
+        "c.toml",
+        &[("damping = \"c\"", "damping = \"c*1.1\"")],
+    );
+    for (k, model, extra, what) in [
+        (2, gravity.as_str(), &[][..], "gravity"),
+        (3, damping.as_str(), &[][..], "joints"),
+        (1, m, &["--set", "L=1.1"][..], "parameters"),
+        (2, m, &["--no-quadrature"][..], "quadrature"),
+        (3, m, &["--sampling", "sobol"][..], "sampling"),
+    ] {
+        let odd = shard(&elsewhere, model, k, extra);
+        let mut set = good.clone();
+        set[k - 1] = odd;
+        let o = merge(dir.path(), m, &set);
+        assert_eq!(o.code, Some(2), "{what}: merged; {}", o.stderr);
+        assert!(
+            o.stderr.contains(&format!("other/shard-{k}-of-3.json")) && o.stderr.contains(what),
+            "{what}: {}",
+            o.stderr
+        );
+    }
+    assert_eq!(merge(dir.path(), m, &good).code, Some(0));
+}
+
+#[test]
+fn merged_shards_run_the_quadrature_their_run_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let whole = dir.path().join("whole");
+    let mut args = vec![
+        "analyze",
+        m,
+        "-o",
+        whole.to_str().unwrap(),
+        "--no-quadrature",
+    ];
+    args.extend(SHARD_RUN);
+    assert_eq!(run(&args).code, Some(0));
+    let set: Vec<String> = (1..=3)
+        .map(|k| shard(dir.path(), m, k, &["--no-quadrature"]))
+        .collect();
+    let o = merge(dir.path(), m, &set);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    // The same rows and numbers, but the Monte Carlo quantiles (which need every sample's
+    // value, and which a merge leaves empty); and no quadrature rows.
+    let rows = |d: &Path| -> Vec<Vec<String>> {
+        let mut r = csv::Reader::from_path(d.join("tolerance.csv")).unwrap();
+        let h = r.headers().unwrap().clone();
+        let method = h.iter().position(|c| c == "method").unwrap();
+        let q = h.iter().position(|c| c == "q05").unwrap();
+        r.records()
+            .map(|x| {
+                let mut v: Vec<String> = x.unwrap().iter().map(String::from).collect();
+                assert_ne!(v[method], "quadrature");
+                if v[method] == "monte_carlo" {
+                    v[q..q + 3].iter_mut().for_each(String::clear);
+                }
+                v
+            })
+            .collect()
+    };
+    assert!(rows(&whole) == rows(&dir.path().join("merged")));
 }
 
 #[test]
@@ -365,6 +454,20 @@ fn bounded_inputs_are_refused_quickly() {
         t,
     );
     assert_eq!(o.code, Some(2), "{}", o.stderr);
+    // 10⁹ speeds of an analysis (all held in memory): refused before they are made.
+    let o = run_limited(
+        &[
+            "analyze",
+            m,
+            "-o",
+            out.to_str().unwrap(),
+            "--speed",
+            "0:999999999:1",
+        ],
+        t,
+    );
+    assert_eq!(o.code, Some(2), "{}", o.stderr);
+    assert!(o.stderr.contains("1000000000 speeds"), "{}", o.stderr);
     let big = variant(
         dir.path(),
         "rotating_pendulum.toml",
@@ -408,6 +511,97 @@ fn bounded_inputs_are_refused_quickly() {
     let o = run_limited(&["check", dotted.to_str().unwrap()], t);
     assert_eq!(o.code, Some(2));
     assert!(o.stderr.contains("dotted.toml:1:"), "{}", o.stderr);
+}
+
+/// Runs the binary with `args` under `ulimit -v KB` (the address space a container or a batch
+/// job may grant).
+fn run_with_address_space(kb: usize, args: &[&str]) -> Run {
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c")
+        .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_modaltol"))
+        .args(args);
+    common::command_with_deadline(cmd, Duration::from_secs(60)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn thread_counts_are_bounded_and_a_refusal_of_the_system_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    let analyze = |threads: &'static str| {
+        vec![
+            "analyze",
+            m,
+            "-o",
+            o,
+            "--speed",
+            "0:1:1",
+            "--samples",
+            "20",
+            "--threads",
+            threads,
+        ]
+    };
+    for (threads, why) in [("0", "at least 1"), ("3000", "more than the 1024")] {
+        let o = run_limited(&analyze(threads), Duration::from_secs(10));
+        assert_eq!(o.code, Some(2), "--threads {threads}: {}", o.stderr);
+        assert!(o.stderr.contains(why), "--threads {threads}: {}", o.stderr);
+    }
+    // Within the bound but more than 1.5 GB of address space holds (their stacks): the
+    // system's refusal, reported before anything is computed; never a panic.
+    let o = run_with_address_space(1_500_000, &analyze("1000"));
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(
+        o.stderr.contains("cannot start 1000 worker threads") && !o.stderr.contains("panicked"),
+        "{}",
+        o.stderr
+    );
+    assert!(!out.exists(), "a result was written");
+}
+
+#[test]
+fn a_failed_modal_point_gives_its_reason_in_every_format() {
+    for name in common::EXAMPLES {
+        let m = common::example_path(name);
+        let m = m.to_str().unwrap();
+        let model = common::example(name);
+        let mut reasons = Vec::new();
+        for format in ["table", "json", "csv"] {
+            let o = run(&["modal", m, "--speed", "1e308", "--format", format]);
+            assert_eq!(o.code, Some(1), "{name} {format}: {}", o.stderr);
+            let reason = o
+                .stderr
+                .split("failed: ")
+                .nth(1)
+                .unwrap()
+                .trim()
+                .to_string();
+            assert!(
+                o.stdout.to_lowercase().contains("failed") && o.stdout.contains(&reason),
+                "{name} {format}: {}",
+                o.stdout
+            );
+            reasons.push(reason);
+            if format == "csv" {
+                let mut r = csv::Reader::from_reader(o.stdout.as_bytes());
+                let header = r.headers().unwrap().clone();
+                let message = header.iter().position(|h| h == "message").unwrap();
+                let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+                assert_eq!(rows.len(), model.dof().max(1), "{name}");
+                for row in rows {
+                    assert_eq!(&row[2], "failed");
+                    assert_eq!(row[message], reasons[0], "{name}");
+                }
+            }
+        }
+        assert!(
+            reasons.iter().all(|r| r == &reasons[0] && !r.is_empty()),
+            "{reasons:?}"
+        );
+    }
 }
 
 #[test]

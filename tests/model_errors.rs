@@ -321,3 +321,39 @@ fn force_elements_take_the_fields_their_type_declares() {
         "its two points coincide in the reference configuration",
     );
 }
+
+#[test]
+fn a_coordinate_named_twice_as_independent_is_refused_for_every_example() {
+    for name in [
+        "rotating_pendulum.toml",
+        "governor.toml",
+        "spinning_universal_pendulum.toml",
+        "spinning_spatial_fourbar.toml",
+        "rotor_on_rubber_mounts.toml",
+    ] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples")
+            .join(name);
+        let m = Model::from_file(&path).unwrap();
+        let free: Vec<String> = m
+            .free()
+            .iter()
+            .map(|&i| m.coordinates[i].name.clone())
+            .collect();
+        // Every free coordinate repeated in place of the next one (or beside itself where
+        // there is only one degree of freedom): as many names as degrees of freedom, or one
+        // more, and never accepted.
+        for (k, c) in free.iter().enumerate() {
+            let mut names: Vec<String> = free.iter().take(m.dof().max(2)).cloned().collect();
+            names.retain(|n| n != c);
+            names.insert(0, c.clone());
+            names.insert(1, c.clone());
+            names.truncate(m.dof().max(2));
+            let e = m.independent_coordinates(&names).unwrap_err();
+            assert!(
+                e.contains(&format!("'{c}' is named twice")),
+                "{name}, coordinate {k} ({names:?}): {e}"
+            );
+        }
+    }
+}

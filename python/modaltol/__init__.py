@@ -164,7 +164,9 @@ class Model:
         tolerance), computed ``"ad"`` (exact) or ``"fd"``. A failed speed has status
         ``failed`` and its reason in ``message``. ``branch``: ``"stable"`` switches to a stable
         equilibrium where the one followed loses its stability, ``"as-given"`` follows it
-        (the ``branch`` column says which, ``message`` why).
+        (the ``branch`` column says which, ``message`` why). The table is held in memory: one
+        of more than 2·10⁷ cells (rows × columns) raises ``ValueError`` before anything is
+        computed (the command line's ``sweep -o FILE`` streams any length). Ctrl-C stops it.
         """
         return _frame(
             self._native.sweep(
@@ -234,7 +236,8 @@ class Model:
     ) -> pd.DataFrame:
         """Frequency response H(jω) at ``speed`` over the excitation frequencies ``freq``
         (rad/s), from ``transfer = "input=NAME,output=NAME"`` (default the model's), with
-        d|H|/dP. The CLI's ``frf`` columns."""
+        d|H|/dP. The CLI's ``frf`` columns; at most 2·10⁷ cells, as :meth:`sweep`. Ctrl-C
+        stops it."""
         return _frame(
             self._native.frf(float(speed), _speeds(freq), transfer, _names(wrt))
         )
@@ -261,7 +264,8 @@ class Model:
         ``"lhs"`` or ``"sobol"``; default the model's). With ``output``, also writes the CLI's
         result directory (CSV, plots, report.html, summary.json), its plots and report with
         speeds in ``speed_unit`` and frequencies in ``frequency_unit`` (``"rad/s"``, ``"hz"``,
-        ``"rpm"``; the tables stay in rad/s). Ctrl-C stops it."""
+        ``"rpm"``; the tables stay in rad/s). At most 10⁵ speeds; ``threads`` from 1 to 1024
+        (``None``: one per core), the command line's rules. Ctrl-C stops it."""
         d = self._native.analyze(
             _speeds(speeds),
             _names(cases),

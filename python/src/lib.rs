@@ -15,11 +15,12 @@ use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
 use modaltol::files::ResultDir;
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
-use modaltol::montecarlo::{MAX_SAMPLES, McOptions};
+use modaltol::montecarlo::McOptions;
 use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
+use modaltol::settings::{self, ThreadsError};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point_at};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -143,22 +144,28 @@ fn table<'py>(
     Ok(out)
 }
 
-/// Speeds from `"FROM:TO:STEP"` or a sequence of numbers.
-fn speeds(spec: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+/// How many speeds (or frequencies) a call may take: a check of their number
+/// ([`settings::table`], [`settings::analysis_speeds`]), made before they are.
+type Fits<'a> = &'a dyn Fn(usize) -> Result<(), String>;
+
+/// Speeds from `"FROM:TO:STEP"` or a sequence of numbers, as many as `fits` allows.
+fn speeds(spec: &Bound<'_, PyAny>, what: &str, fits: Fits<'_>) -> PyResult<Vec<f64>> {
     let v: Vec<f64> = if let Ok(s) = spec.extract::<String>() {
         let r = SpeedRange::parse(&s).map_err(|e| bad(format!("{what}: {e}")))?;
-        r.speeds().collect()
+        range(&r, what, fits)?
     } else {
         spec.extract()
             .map_err(|_| bad(format!("{what}: expected \"FROM:TO:STEP\" or numbers")))?
     };
-    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
-        return Err(bad(format!("{what}: {x} is not finite")));
-    }
-    if v.is_empty() {
-        return Err(bad(format!("{what}: no values")));
-    }
+    let v = settings::values(v).map_err(|e| bad(format!("{what}: {e}")))?;
+    fits(v.len()).map_err(|e| bad(format!("{what}: {e}")))?;
     Ok(v)
+}
+
+/// The points of a range, as many as `fits` allows.
+fn range(r: &SpeedRange, what: &str, fits: Fits<'_>) -> PyResult<Vec<f64>> {
+    fits(r.len()).map_err(|e| bad(format!("{what}: {e}")))?;
+    Ok(r.speeds().collect())
 }
 
 /// A display unit for the plots and report.
@@ -234,25 +241,27 @@ impl NativeModel {
         })
     }
 
-    /// The speeds asked for, or the model's `[analysis] speed`.
-    fn speeds_or_model(&self, speeds: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+    /// The speeds asked for, or the model's `[analysis] speed`, as many as `fits` allows.
+    fn speeds_or_model(
+        &self,
+        speeds: Option<&Bound<'_, PyAny>>,
+        fits: Fits<'_>,
+    ) -> PyResult<Vec<f64>> {
         match speeds {
-            Some(s) => self::speeds(s, "speeds"),
-            None => Ok(self
-                .m()
-                .analysis
-                .speed
-                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?
-                .speeds()
-                .collect()),
+            Some(s) => self::speeds(s, "speeds", fits),
+            None => {
+                let r =
+                    self.m().analysis.speed.ok_or_else(|| {
+                        bad("no speeds given and the model has no [analysis] speed")
+                    })?;
+                range(&r, "the model's [analysis] speed", fits)
+            }
         }
     }
 
     /// The nominal point at `speed`.
     fn point(&self, speed: f64, opt: &Options) -> PyResult<modaltol::sweep::Point> {
-        if !speed.is_finite() {
-            return Err(bad(format!("speed must be finite, got {speed}")));
-        }
+        settings::speed(speed).map_err(|e| bad(format!("speed {e}")))?;
         let p = self.model.nominal();
         initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
         point_at(&self.model, &p, speed, opt)
@@ -363,7 +372,6 @@ impl NativeModel {
         branch: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let m = self.m();
-        let w = self.speeds_or_model(speeds)?;
         let tf = self.transfer(transfer)?;
         let cols = SweepColumns {
             transfer: tf.is_some(),
@@ -373,6 +381,10 @@ impl NativeModel {
                 Vec::new()
             },
         };
+        let columns = report::sweep_header(m, &cols).len();
+        let w = self.speeds_or_model(speeds, &|n| {
+            settings::table(n.saturating_mul(m.dof().max(1)), columns)
+        })?;
         let opt = self.options_on(independent, branch)?;
         let how = self::derivatives(derivatives)?;
         let cancel = Cancel::new();
@@ -460,16 +472,13 @@ impl NativeModel {
         let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
             let pt = self.point(speed, &Options::default())?;
             let p = self.model.nominal();
-            let s = sensitivity::sensitivities(
-                &self.model,
-                &p,
-                &pt,
-                &wrt,
-                tf.map(|t| TransferAt::at_speed(&t, speed)),
-                how,
-            )
-            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
-            Ok(report::sensitivity_rows(self.m(), &pt, &s))
+            let at = tf.map(|t| TransferAt::at_speed(&t, speed));
+            let s =
+                sensitivity::sensitivities(&self.model, &p, &pt, &wrt, at, how).map_err(|e| {
+                    SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}"))
+                })?;
+            let why = report::transfer_defect_at(&pt, at.as_ref());
+            Ok(report::sensitivity_rows(self.m(), &pt, &s, why))
         })?;
         table(py, &report::SENSITIVITY_HEADER, &rows)
     }
@@ -495,11 +504,15 @@ impl NativeModel {
         .ok_or_else(|| {
             bad("frf needs transfer=\"input=NAME,output=NAME\" (the model has no [analysis] transfer)")
         })?;
-        let freqs = self::speeds(freq, "freq")?;
         let wrt = self.wrt(wrt)?;
-        let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
+        let header = report::frf_header(self.m(), &wrt);
+        let freqs = self::speeds(freq, "freq", &|n| settings::table(n, header.len()))?;
+        let cancel = Cancel::new();
+        let rows = interruptible(py, &cancel, || -> PyResult<Vec<Vec<String>>> {
             let pt = self.point(speed, &Options::default())?;
             let p = self.model.nominal();
+            // Stops at the frequency after a Ctrl-C (`interruptible` then raises).
+            let freqs = freqs.into_iter().take_while(|_| !cancel.is_cancelled());
             let r = sensitivity::frequency_response(
                 &self.model,
                 &p,
@@ -507,12 +520,12 @@ impl NativeModel {
                 tf.input,
                 tf.output,
                 &wrt,
-                freqs.into_iter(),
+                freqs,
             )
             .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
-            Ok(report::frf_rows(&r))
-        })?;
-        table(py, &report::frf_header(self.m(), &wrt), &rows)
+            Ok(report::frf_rows(&pt.linear, &r))
+        })??;
+        table(py, &header, &rows)
     }
 
     /// The tolerance analysis (the CLI's `analyze`): tolerance and probability tables and the
@@ -540,25 +553,19 @@ impl NativeModel {
             speed: unit(speed_unit, "speed_unit")?,
             frequency: unit(frequency_unit, "frequency_unit")?,
         };
-        let w = self.speeds_or_model(speeds)?;
+        let w = self.speeds_or_model(speeds, &settings::analysis_speeds)?;
         let cases = m
             .tolerance_cases(&cases.unwrap_or_default())
             .map_err(|e| bad(format!("cases: {e}")))?;
-        if !(quadrature_tolerance > 0.0 && quadrature_tolerance < 1.0) {
-            return Err(bad(
-                "quadrature_tolerance must be a relative error in (0, 1), e.g. 1e-3",
-            ));
-        }
-        if let Some(n) = samples
-            && !(2..=MAX_SAMPLES as i64).contains(&n)
-        {
-            return Err(bad(format!(
-                "samples must lie in 2..={MAX_SAMPLES} (got {n})"
-            )));
-        }
-        if threads == Some(0) {
-            return Err(bad("threads must be at least 1 (None: all cores)"));
-        }
+        settings::quadrature_tolerance(quadrature_tolerance)
+            .map_err(|e| bad(format!("quadrature_tolerance {e}")))?;
+        let samples = samples
+            .map(|n| settings::samples(n).map_err(|e| bad(format!("samples {e}"))))
+            .transpose()?;
+        let threads = settings::threads(threads).map_err(|e| match e {
+            ThreadsError::Refused { .. } => PyRuntimeError::new_err(format!("threads: {e}")),
+            _ => bad(format!("threads {e}")),
+        })?;
         let sampling = match sampling {
             None => m.analysis.sampling,
             Some("random") => Sampling::Random,
@@ -571,7 +578,7 @@ impl NativeModel {
             }
         };
         let mc = monte_carlo.then(|| McOptions {
-            samples: samples.map_or(m.analysis.samples, |n| n as usize),
+            samples: samples.unwrap_or(m.analysis.samples),
             seed: seed.unwrap_or(m.analysis.seed),
             sampling,
             threads,
@@ -579,7 +586,7 @@ impl NativeModel {
         // Fail early where the results cannot be written.
         let dir = output
             .as_ref()
-            .map(|o| ResultDir::create(o).map_err(|e| bad(e.to_string())))
+            .map(|o| ResultDir::create(o).map_err(|e| bad(format!("{e}: {}", e.source))))
             .transpose()?;
         let opt = AnalyzeOptions {
             speeds: w,
@@ -605,7 +612,7 @@ impl NativeModel {
             threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         if let Some(dir) = dir {
             py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, display, dir))
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+                .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
         }
         let d = PyDict::new(py);
         d.set_item(

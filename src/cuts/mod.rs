@@ -18,7 +18,7 @@ use crate::rigid::Pose;
 /// Geometry of a cut joint in the reference configuration; `V` is a vector and `X` a number
 /// (expressions in the model, values in the mechanics, where `axis` and `axis2` are unit
 /// vectors when used).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Geometry<V, X> {
     pub body1: Option<usize>,
     pub point1: V,
@@ -54,7 +54,7 @@ pub trait CutType {
 macro_rules! cut_types {
     ($($variant:ident => $ty:path),* $(,)?) => {
         /// The cut-joint types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
         pub enum Kind {
             $($variant),*
         }

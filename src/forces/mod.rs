@@ -28,7 +28,7 @@ use crate::rigid::Pose;
 
 /// Geometry of a force element in the reference configuration; `V` is a vector (expressions
 /// in the model, values in the mechanics, where `axis` is a unit vector when used).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Geometry<V> {
     pub body1: Option<usize>,
     pub point1: V,
@@ -72,7 +72,7 @@ pub trait ForceType {
 macro_rules! force_types {
     ($($variant:ident => $ty:path),* $(,)?) => {
         /// The force-element types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
         pub enum Kind {
             $($variant),*
         }

@@ -26,7 +26,7 @@ use crate::real::{Real, V3};
 use crate::rigid::Pose;
 
 /// Physical unit of a coordinate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Unit {
     /// An angle or a rotation parameter, rad; its generalised force is a torque, N·m.
     Angle,
@@ -76,7 +76,7 @@ pub enum Use {
 
 /// Geometry of a joint in the reference configuration; `V` is a vector of expressions in the
 /// model and a [`V3`] in the mechanics, where `axis` and `axis2` are unit vectors when used.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Geometry<V> {
     pub at: V,
     pub axis: V,
@@ -102,7 +102,7 @@ pub trait JointType {
 macro_rules! joint_types {
     ($($variant:ident => $ty:path),* $(,)?) => {
         /// The joint types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
         pub enum Kind {
             $($variant),*
         }

@@ -30,7 +30,7 @@ pub struct ParseError {
 }
 
 /// Built-in functions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Func {
     Sqrt,
     Sin,
@@ -83,7 +83,7 @@ impl Func {
 }
 
 /// Binary operators.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum BinOp {
     Add,
     Sub,
@@ -93,7 +93,7 @@ pub enum BinOp {
 }
 
 /// A parsed expression. Names are resolved to parameter indices while parsing ([`Expr::parse`]).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub enum Expr {
     Num(f64),
     /// Parameter by index into the model's parameter list.

@@ -70,10 +70,12 @@ impl fmt::Display for ModelError {
     }
 }
 
-/// A field of the model: an expression and where it was written.
-#[derive(Debug, Clone)]
+/// A field of the model: an expression and where it was written (which is no part of what it
+/// means: left out of its serialisation).
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Field {
     pub expr: Expr,
+    #[serde(skip)]
     pub site: Site,
 }
 
@@ -97,7 +99,7 @@ impl Field {
 
 /// A tolerance on a design variable, as written (`"3%"` or an absolute value in the
 /// parameter's unit). By default it is read as ±3σ of a normal distribution.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub enum Tolerance {
     /// Fraction of the nominal value (0.03 for "3%").
     Relative(f64),
@@ -126,18 +128,19 @@ pub enum Distribution {
 }
 
 /// A named model parameter (a candidate design variable).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Parameter {
     pub name: String,
     pub value: f64,
     pub tolerance: Option<Tolerance>,
     pub distribution: Distribution,
+    #[serde(skip)]
     pub site: Site,
 }
 
 /// A rigid body. Inertia is about the centre of mass, in global axes of the reference
 /// configuration; `cm` is the centre of mass there.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Body {
     pub name: String,
     pub mass: Field,
@@ -151,7 +154,7 @@ pub struct Body {
 
 /// A tree joint: `child` moves relative to `parent` (`None` = ground) with the joint's
 /// coordinates; its type ([`crate::joints`]) says how.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Joint {
     pub name: String,
     pub kind: crate::joints::Kind,
@@ -172,7 +175,7 @@ pub struct Joint {
 }
 
 /// A generalised coordinate: one relative coordinate of one joint.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Coordinate {
     pub joint: usize,
     /// The joint's name, or `joint.suffix` for joints with several coordinates.
@@ -183,7 +186,7 @@ pub struct Coordinate {
 
 /// A force element between two bodies; its type ([`crate::forces`]) gives its deformation's
 /// components, and each component its own spring, damper, free value and preload.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct ForceElement {
     pub name: String,
     pub kind: crate::forces::Kind,
@@ -197,7 +200,7 @@ pub struct ForceElement {
 }
 
 /// A cut joint closing a kinematic loop; its type ([`crate::cuts`]) gives its equations.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Constraint {
     pub name: String,
     pub kind: crate::cuts::Kind,
@@ -205,7 +208,7 @@ pub struct Constraint {
 }
 
 /// Inclusive range of speeds `from:to:step` (rad/s).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SpeedRange {
     pub from: f64,
     pub to: f64,
@@ -278,7 +281,7 @@ pub enum Sampling {
 }
 
 /// One end of a transfer function: where the excitation enters or the response is read.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Channel {
     /// A free joint coordinate: a generalised force on it in, its value out.
     Coordinate(usize),
@@ -289,7 +292,7 @@ pub enum Channel {
 
 /// A transfer function `H(jω)` from `input` to `output` at the excitation frequency
 /// `order × speed`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct Transfer {
     pub input: Channel,
     pub output: Channel,
@@ -300,7 +303,7 @@ pub struct Transfer {
 /// point along a direction (a force in, the point's displacement along it out) or a direction
 /// alone (a torque about it in, the body's rotation about it out). The direction is carried
 /// by the body, as drawn.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Port {
     pub name: String,
     pub body: usize,
@@ -310,14 +313,14 @@ pub struct Port {
 }
 
 /// A correlation matrix between parameters (rows and columns in the order of `params`).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Correlation {
     pub params: Vec<usize>,
     pub matrix: Vec<Vec<f64>>,
 }
 
 /// A named tolerance case: per-parameter tolerances and optional correlations.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Case {
     pub name: String,
     pub tolerances: Vec<(usize, Tolerance)>,
@@ -341,7 +344,7 @@ impl Case {
 }
 
 /// The `[analysis]` table: what the model's author wants analysed by default.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Analysis {
     pub speed: Option<SpeedRange>,
     pub transfer: Option<Transfer>,
@@ -352,9 +355,15 @@ pub struct Analysis {
 }
 
 /// A validated mechanism. Immutable; numbers are expressions of the parameters and speed.
-#[derive(Debug, Clone)]
+///
+/// Its serialisation is everything that can change a number computed from it (every body,
+/// joint, force, constraint, port, expression, the gravity, the independent coordinates and
+/// the `[analysis]` table) and nothing of where it was written (file, lines, columns): what
+/// the fingerprint of a shard ([`crate::shard::Fingerprint`]) hashes.
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Model {
     pub name: String,
+    #[serde(skip)]
     pub file: String,
     pub parameters: Vec<Parameter>,
     pub gravity: [Field; 3],
@@ -603,16 +612,20 @@ impl Model {
     }
 
     /// Free coordinates named as the independent ones (coordinate indices): as many as the
-    /// degrees of freedom, each a free joint coordinate.
+    /// degrees of freedom, each a free joint coordinate, each once (the rule the model file's
+    /// `independent` follows; a repeated name would leave a degree of freedom without one).
     pub fn independent_coordinates(&self, names: &[String]) -> Result<Vec<usize>, String> {
-        let out = names
-            .iter()
-            .map(|n| {
-                self.coordinate(n)
-                    .filter(|&i| !self.coordinates[i].driven)
-                    .ok_or_else(|| format!("'{n}' is not a free joint coordinate of the model"))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut out: Vec<usize> = Vec::with_capacity(names.len());
+        for n in names {
+            let i = self
+                .coordinate(n)
+                .filter(|&i| !self.coordinates[i].driven)
+                .ok_or_else(|| format!("'{n}' is not a free joint coordinate of the model"))?;
+            if out.contains(&i) {
+                return Err(format!("'{n}' is named twice"));
+            }
+            out.push(i);
+        }
         if out.len() != self.dof() {
             return Err(format!(
                 "{} coordinate(s) named but the model has {} degree(s) of freedom",

@@ -52,10 +52,21 @@ pub struct Run {
 /// Runs the `modaltol` binary with `args`; kills it and returns `Err` if it is still running
 /// after `limit` (a hang).
 pub fn run_with_deadline(args: &[&str], limit: std::time::Duration) -> Result<Run, String> {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_modaltol"));
+    cmd.args(args);
+    command_with_deadline(cmd, limit)
+}
+
+/// Runs `cmd` (the binary, or a shell that sets limits and runs it); kills it and returns
+/// `Err` if it is still running after `limit` (a hang).
+pub fn command_with_deadline(
+    mut cmd: std::process::Command,
+    limit: std::time::Duration,
+) -> Result<Run, String> {
     use std::io::Read;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_modaltol"))
-        .args(args)
+    use std::process::Stdio;
+    let args = format!("{cmd:?}");
+    let mut child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -83,7 +94,7 @@ pub fn run_with_deadline(args: &[&str], limit: std::time::Duration) -> Result<Ru
         if t.elapsed() > limit {
             let _ = child.kill();
             let _ = child.wait();
-            return Err(format!("modaltol {args:?} hung (killed after {limit:?})"));
+            return Err(format!("{args} hung (killed after {limit:?})"));
         }
         std::thread::sleep(std::time::Duration::from_millis(2));
     }

@@ -1,0 +1,133 @@
+//! A transfer function without a finite value is never a silent blank: in every example, at
+//! excitation frequencies from ordinary to beyond floating point and at an undamped mode's
+//! own frequency, every sweep, frequency-response and sensitivity row whose |H| is empty says
+//! why (a resonance, an overflow), and no row holds an infinity or a NaN.
+
+mod common;
+
+use modaltol::compiled::Compiled;
+use modaltol::model::Transfer;
+use modaltol::report::{self, SweepColumns};
+use modaltol::sensitivity::{self, Derivatives, TransferAt};
+use modaltol::study::SweepStudy;
+use modaltol::sweep::Options;
+
+/// Excitation frequencies (rad/s), or orders of the speed: ordinary, near the square root of
+/// the largest float, and beyond it.
+const EXCITATIONS: [f64; 7] = [1e-300, 0.5, 7.0, 1e150, 1e155, 1e200, 1e308];
+
+/// Every cell of a row is a finite number or text; a row with an empty `value` cell says why
+/// in its `message` cell, and a row without says nothing of a resonance or an overflow.
+fn check_row(header: &[String], row: &[String], value: &str, what: &str) -> bool {
+    let at = |c: &str| header.iter().position(|h| h == c).unwrap();
+    for cell in row {
+        assert!(
+            !cell.parse::<f64>().is_ok_and(|v| !v.is_finite()),
+            "{what}: a non-finite cell in {row:?}"
+        );
+    }
+    let message = &row[at("message")];
+    let said = message.contains("resonance") || message.contains("overflow");
+    assert_eq!(
+        row[at(value)].is_empty(),
+        said,
+        "{what}: |H| '{}' with message '{message}'",
+        row[at(value)]
+    );
+    message.contains("resonance")
+}
+
+/// The examples, and the pendulum without damping (a true undamped resonance).
+fn models() -> Vec<(String, Compiled)> {
+    let mut out: Vec<(String, Compiled)> = common::EXAMPLES
+        .iter()
+        .map(|n| (n.to_string(), common::example(n)))
+        .collect();
+    let undamped = Compiled::from_file_with(
+        &common::example_path("rotating_pendulum.toml"),
+        &[("c".into(), 0.0)],
+    )
+    .unwrap();
+    out.push(("undamped pendulum".into(), undamped));
+    out
+}
+
+#[test]
+fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
+    let mut resonances = 0;
+    for (name, m) in models() {
+        let t = m.analysis.transfer.unwrap();
+        let speed = 1.0;
+        let pt = common::at(&m, speed, &Options::default());
+        // The modes' own frequencies: a resonance where a mode has no damping.
+        let mut excitations = EXCITATIONS.to_vec();
+        excitations.extend(pt.modes.iter().map(|md| md.natural_frequency));
+        let wrt = m.toleranced();
+        // Sweep rows, with the excitation at `order × speed`.
+        for &order in &excitations {
+            let cols = SweepColumns {
+                transfer: true,
+                wrt: wrt.clone(),
+            };
+            let tf = Transfer { order, ..t };
+            let mut study = SweepStudy::new(
+                &m,
+                Options::default(),
+                Some(tf),
+                wrt.clone(),
+                Derivatives::Exact,
+            );
+            let (r, extras) = study.step(speed);
+            let header = report::sweep_header(&m, &cols);
+            for row in report::sweep_rows(&m, &cols, speed, &r, &extras) {
+                let what = format!("{name}: sweep, order {order:e}");
+                resonances += check_row(&header, &row, "transfer_magnitude", &what) as usize;
+            }
+            // The sensitivity table at the same excitation.
+            let at = TransferAt::at_speed(&tf, speed);
+            if let Ok(s) = sensitivity::sensitivities(
+                &m,
+                &m.nominal(),
+                &pt,
+                &wrt,
+                Some(at),
+                Derivatives::Exact,
+            ) {
+                let why = report::transfer_defect_at(&pt, Some(&at));
+                let header: Vec<String> = report::SENSITIVITY_HEADER
+                    .iter()
+                    .map(|h| h.to_string())
+                    .collect();
+                for row in report::sensitivity_rows(&m, &pt, &s, why) {
+                    let what = format!("{name}: sensitivity, order {order:e}");
+                    check_row(&header, &row, "transfer_magnitude", &what);
+                }
+                let json = report::sensitivity_json(&m, speed, "ad", &pt, &s, why);
+                assert_eq!(
+                    json["transfer_magnitude"].is_null(),
+                    json["transfer_message"].is_string(),
+                    "{name}: sensitivity JSON, order {order:e}: {json}"
+                );
+            }
+        }
+        // Frequency-response rows over the same frequencies.
+        let rows = sensitivity::frequency_response(
+            &m,
+            &m.nominal(),
+            &pt,
+            t.input,
+            t.output,
+            &wrt,
+            excitations.iter().copied(),
+        )
+        .unwrap();
+        let header = report::frf_header(&m, &wrt);
+        for row in report::frf_rows(&pt.linear, &rows) {
+            resonances += check_row(&header, &row, "magnitude", &format!("{name}: frf")) as usize;
+        }
+    }
+    assert!(
+        resonances > 0,
+        "no resonance was met: the test tests less than it says"
+    );
+}
