@@ -9,19 +9,23 @@
 //!   old one in one atomic `renameat2(RENAME_EXCHANGE)` (Linux) and removes the old one: killed
 //!   at any moment, the target holds either the earlier complete run or the new one, and no file
 //!   of an earlier run lingers beside a new one. When the target holds files that no earlier
-//!   manifest lists (the user's own, or shard files), or the platform or file system cannot
+//!   manifest lists (the user's own, or shard files), they are hard-linked into the staged
+//!   directory before the exchange (the same files). Where that cannot be done (a special
+//!   file, another file system inside the target) or the platform or file system cannot
 //!   exchange, the files are renamed in one by one instead (each atomic), as one transaction:
 //!   conflicts (a directory where a file goes, an input of the run) are looked for before
-//!   anything moves, the earlier manifest goes first and the new one comes last, and a rename
-//!   that fails puts back everything moved before it. Where the target is a mount point (a
-//!   container's volume) or its parent is not writable, the run is staged inside the target,
-//!   so that every rename stays on one file system.
+//!   anything moves, the earlier manifest goes first and the new one comes last, a rename
+//!   that fails puts back everything moved before it, and a run killed midway is rolled back
+//!   by the next one into the same place. Where the target is a mount point (a container's
+//!   volume) or its parent is not writable, the run is staged inside the target, so that
+//!   every rename stays on one file system.
 //!
 //! Common to both: a target that is a symbolic link is written through (the link stays, its
-//! target gets the result, as a shell's `>` does); files are created with the permissions the
-//! umask allows, as any other program's; an output that is one of the run's inputs (the same
-//! file, by device and inode, whatever links lead to it) is refused ([`Inputs`]); and what a
-//! killed run left (its staging file or directory, `.NAME.XXXXXX.partial`, which a live run
+//! target gets the result, as a shell's `>` does); a single file onto a device or a pipe is
+//! written to directly; files are created with the permissions the umask allows, as any other
+//! program's; an output that is one of the run's inputs (the same file, by device and inode,
+//! whatever links lead to it) is refused ([`Inputs`]); and what a killed run left (its staging
+//! file or directory, `.NAME.XXXXXX.partial`, which a live run
 //! holds locked) is removed by the next run writing to the same place.
 
 use sha2::{Digest, Sha256};
@@ -187,8 +191,10 @@ fn mark_in_use(f: &File) {
 
 /// Removes what killed runs left in `dir` for the target named `name`: staging files and
 /// directories `.NAME.XXXXXX.partial` (`tempfile`'s six random characters) that no live run
-/// holds locked.
-fn remove_leftovers(dir: &Path, name: &str) {
+/// holds locked. A staging directory of a result directory `target` killed while its files
+/// were renamed in one by one is first rolled back ([`roll_back`]), so that the target holds
+/// the earlier run again.
+fn remove_leftovers(dir: &Path, name: &str, target: Option<&Path>) {
     let prefix = format!(".{}.", truncate(name, 60));
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -222,6 +228,9 @@ fn remove_leftovers(dir: &Path, name: &str) {
         if f.try_lock().is_err() {
             continue;
         }
+        if let (true, Some(target)) = (kind.is_dir(), target) {
+            roll_back(&path, target);
+        }
         let _ = if kind.is_dir() {
             std::fs::remove_dir_all(&path)
         } else {
@@ -230,11 +239,61 @@ fn remove_leftovers(dir: &Path, name: &str) {
     }
 }
 
+/// Undoes the one-by-one install ([`ResultDir::install_one_by_one`]) of a killed run staged at
+/// `staging` into `target`, where it was cut before its manifest went in: the run's files
+/// that reached the target are removed and the earlier ones (kept in `staging/.previous`) put
+/// back. A staging directory without that backup never started an install, and one without
+/// its manifest finished it: nothing to undo.
+fn roll_back(staging: &Path, target: &Path) {
+    let backup = staging.join(".previous");
+    let Some(new) = Manifest::read(staging) else {
+        return;
+    };
+    if !backup.is_dir() {
+        return;
+    }
+    for e in &new.files {
+        // Gone from the staging directory: it was renamed into the target.
+        if is_plain_name(&e.file) && std::fs::symlink_metadata(staging.join(&e.file)).is_err() {
+            let _ = std::fs::remove_file(target.join(&e.file));
+        }
+    }
+    if let Ok(entries) = std::fs::read_dir(&backup) {
+        for e in entries.flatten() {
+            let _ = std::fs::rename(e.path(), target.join(e.file_name()));
+        }
+    }
+    sync(target);
+}
+
 /// A file written beside its target and renamed into place by [`AtomicFile::commit`]; dropped
-/// without a commit, it is removed and the target is untouched.
+/// without a commit, it is removed and the target is untouched. A target that is no regular
+/// file (a device such as `/dev/null`, a named pipe, `/dev/stdout`) is written directly
+/// instead, as a shell's `>` does: it cannot be replaced, and replacing it would destroy it.
 pub struct AtomicFile {
     target: PathBuf,
-    temp: tempfile::NamedTempFile,
+    file: Staged,
+}
+
+/// Where an [`AtomicFile`]'s bytes go.
+enum Staged {
+    /// A temporary file beside the target, renamed into place.
+    Beside(tempfile::NamedTempFile),
+    /// The target itself (a device or a pipe).
+    Direct(File),
+}
+
+/// Is `path` something other than a regular file or a directory, through its links (a
+/// device, a named pipe, a socket), or one of the process's open descriptors (`/dev/stdout`,
+/// `/dev/fd/N`, `/proc/…`, whose links lead to a descriptor rather than a name)?
+fn is_special(path: &Path) -> bool {
+    let Ok(meta) = std::fs::metadata(path) else {
+        return false;
+    };
+    let descriptor = ["/dev/stdout", "/dev/stderr", "/dev/fd", "/proc"]
+        .iter()
+        .any(|d| path.starts_with(d));
+    descriptor || (!meta.is_file() && !meta.is_dir())
 }
 
 impl AtomicFile {
@@ -242,6 +301,16 @@ impl AtomicFile {
     /// anything is computed, where the file cannot be written there: its directory is missing
     /// or not writable, or a directory stands at its name.
     pub fn create(target: &Path) -> Result<AtomicFile, FileError> {
+        if is_special(target) {
+            let f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(target)
+                .map_err(fail(target, "cannot open for writing"))?;
+            return Ok(AtomicFile {
+                target: target.to_path_buf(),
+                file: Staged::Direct(f),
+            });
+        }
         let resolved = write_target(target);
         if resolved.is_dir() {
             return Err(invalid(target, "cannot write", "it is a directory".into()));
@@ -251,7 +320,7 @@ impl AtomicFile {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        remove_leftovers(dir, &name);
+        remove_leftovers(dir, &name, None);
         let temp = tempfile::Builder::new()
             .prefix(&format!(".{}.", truncate(&name, 60)))
             .suffix(".partial")
@@ -261,31 +330,40 @@ impl AtomicFile {
         mark_in_use(temp.as_file());
         Ok(AtomicFile {
             target: resolved,
-            temp,
+            file: Staged::Beside(temp),
         })
     }
 
     /// Syncs and renames the file into place.
     pub fn commit(self) -> Result<(), FileError> {
         let target = self.target;
-        self.temp
-            .as_file()
-            .sync_all()
-            .map_err(fail(&target, "cannot write"))?;
-        self.temp
-            .persist(&target)
-            .map_err(|e| fail(&target, "cannot rename into place")(e.error))?;
-        sync_parent(&target);
-        Ok(())
+        match self.file {
+            Staged::Direct(mut f) => f.flush().map_err(fail(&target, "cannot write")),
+            Staged::Beside(temp) => {
+                temp.as_file()
+                    .sync_all()
+                    .map_err(fail(&target, "cannot write"))?;
+                temp.persist(&target)
+                    .map_err(|e| fail(&target, "cannot rename into place")(e.error))?;
+                sync_parent(&target);
+                Ok(())
+            }
+        }
     }
 }
 
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.temp.write(buf)
+        match &mut self.file {
+            Staged::Beside(t) => t.write(buf),
+            Staged::Direct(f) => f.write(buf),
+        }
     }
     fn flush(&mut self) -> std::io::Result<()> {
-        self.temp.flush()
+        match &mut self.file {
+            Staged::Beside(t) => t.flush(),
+            Staged::Direct(f) => f.flush(),
+        }
     }
 }
 
@@ -391,10 +469,10 @@ impl ResultDir {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "results".into());
-        remove_leftovers(&parent, &name);
+        remove_leftovers(&parent, &name, Some(&resolved));
         let exists = resolved.is_dir();
         if exists {
-            remove_leftovers(&resolved, INSIDE);
+            remove_leftovers(&resolved, INSIDE, Some(&resolved));
         }
         let stage = |dir: &Path, name: &str| {
             tempfile::Builder::new()
@@ -436,9 +514,24 @@ impl ResultDir {
     }
 
     /// The run's inputs, which the commit must not replace or remove ([`Inputs`]); the
-    /// target itself must not be one.
-    pub fn protect(mut self, inputs: Inputs) -> Result<ResultDir, FileError> {
+    /// target itself must not be one. Refused now, before anything is computed: an input in
+    /// the target that the run would replace (a name for which `writes` is true) or remove (a
+    /// file of the earlier run). The commit checks again against the names actually written.
+    pub fn protect(
+        mut self,
+        inputs: Inputs,
+        writes: impl Fn(&str) -> bool,
+    ) -> Result<ResultDir, FileError> {
         inputs.refuse_output(&self.target)?;
+        let earlier = listed(Manifest::read(&self.target).as_ref());
+        if let Ok(entries) = std::fs::read_dir(&self.target) {
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                if writes(&name) || earlier.contains(&name) {
+                    inputs.refuse_output(&e.path())?;
+                }
+            }
+        }
         self.inputs = inputs;
         Ok(self)
     }
@@ -509,7 +602,91 @@ impl ResultDir {
                 return Ok(());
             }
         }
-        self.install_one_by_one(staging, manifest, previous.as_ref(), rename)
+        let plan = self.plan(manifest, previous.as_ref())?;
+        if self.place == Staging::Beside && self.exchange_keeping(staging, &plan) {
+            return Ok(());
+        }
+        self.install_one_by_one(staging, manifest, &plan, rename)
+    }
+
+    /// What replacing the target's content means: the run's files, the earlier run's files it
+    /// does not write (removed), and the entries that stay (the user's own). Refuses, before
+    /// anything moves, a directory where a result file goes and an input among the files
+    /// replaced or removed.
+    fn plan(&self, manifest: &Manifest, previous: Option<&Manifest>) -> Result<Plan, FileError> {
+        let target = &self.target;
+        let mut new: Vec<String> = manifest.files.iter().map(|e| e.file.clone()).collect();
+        new.push("manifest.json".into());
+        let is_file = |f: &String| {
+            std::fs::symlink_metadata(target.join(f)).is_ok_and(|m| m.file_type().is_file())
+        };
+        // The earlier run's files this run does not write, removed (regular files only).
+        let stale: Vec<String> = listed(previous)
+            .into_iter()
+            .filter(|f| !new.contains(f) && is_plain_name(f))
+            .filter(is_file)
+            .collect();
+        for name in &new {
+            if let Ok(m) = std::fs::symlink_metadata(target.join(name))
+                && m.is_dir()
+            {
+                return Err(invalid(
+                    &target.join(name),
+                    "cannot write results",
+                    "a directory stands where a result file goes; nothing was changed".into(),
+                ));
+            }
+        }
+        self.refuse_inputs_among(target, &new)?;
+        self.refuse_inputs_among(target, &stale)?;
+        let kept = std::fs::read_dir(target)
+            .map(|entries| {
+                entries
+                    .flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| !new.contains(n) && !stale.contains(n))
+                    .collect()
+            })
+            .unwrap_or_default();
+        Ok(Plan { new, stale, kept })
+    }
+
+    /// Puts the run in place in one atomic exchange while keeping the user's entries of the
+    /// target: they are hard-linked into the staged directory first (the same files, not
+    /// copies; directories made anew with their permissions), and whatever appeared in the
+    /// target meanwhile is moved over after. False, with the staged directory as it was, where
+    /// that cannot be done (another file system inside the target, a special file, a link the
+    /// system refuses, no exchange).
+    fn exchange_keeping(&self, staging: &Path, plan: &Plan) -> bool {
+        let target = &self.target;
+        let mut linked = Vec::new();
+        let all = plan.kept.iter().all(|name| {
+            let ok = link_tree(&target.join(name), &staging.join(name), 0).is_ok();
+            linked.push(name);
+            ok
+        });
+        if !all || exchange(staging, target).is_err() {
+            for name in linked {
+                let at = staging.join(name);
+                let _ = std::fs::remove_dir_all(&at).or_else(|_| std::fs::remove_file(&at));
+            }
+            return false;
+        }
+        sync_parent(target);
+        // The earlier content is now at `staging` (removed by the caller): entries created
+        // there after the listing above are moved over, best effort.
+        if let Ok(entries) = std::fs::read_dir(staging) {
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                let known = plan.kept.contains(&name)
+                    || plan.new.contains(&name)
+                    || plan.stale.contains(&name);
+                if !known && std::fs::symlink_metadata(target.join(&name)).is_err() {
+                    let _ = std::fs::rename(e.path(), target.join(&name));
+                }
+            }
+        }
+        true
     }
 
     /// Refuses to replace or remove `names` in `dir` where one of them is an input.
@@ -526,33 +703,11 @@ impl ResultDir {
         &self,
         staging: &Path,
         manifest: &Manifest,
-        previous: Option<&Manifest>,
+        plan: &Plan,
         rename: &mut Rename<'_>,
     ) -> Result<(), FileError> {
         let target = &self.target;
-        let mut new: Vec<String> = manifest.files.iter().map(|e| e.file.clone()).collect();
-        new.push("manifest.json".into());
-        // The earlier run's files this run does not write, removed (regular files only).
-        let stale: Vec<String> = listed(previous)
-            .into_iter()
-            .filter(|f| !new.contains(f) && is_plain_name(f))
-            .filter(|f| {
-                std::fs::symlink_metadata(target.join(f)).is_ok_and(|m| m.file_type().is_file())
-            })
-            .collect();
-        for name in &new {
-            if let Ok(m) = std::fs::symlink_metadata(target.join(name))
-                && m.is_dir()
-            {
-                return Err(invalid(
-                    &target.join(name),
-                    "cannot write results",
-                    "a directory stands where a result file goes; nothing was changed".into(),
-                ));
-            }
-        }
-        self.refuse_inputs_among(target, &new)?;
-        self.refuse_inputs_among(target, &stale)?;
+        let stale = &plan.stale;
         let backup = staging.join(".previous");
         std::fs::create_dir(&backup).map_err(fail(target, "cannot write results"))?;
         let mut moves = Moves::default();
@@ -569,7 +724,7 @@ impl ResultDir {
                 }
                 moves.mv(rename, &from, &to)?;
             }
-            for f in &stale {
+            for f in stale {
                 moves.mv(rename, &target.join(f), &backup.join(f))?;
             }
             moves.mv(rename, &staging.join("manifest.json"), &old_manifest)
@@ -584,6 +739,39 @@ impl ResultDir {
         }
         sync(target);
         Ok(())
+    }
+}
+
+/// The entries of a target that a run replaces, removes and keeps ([`ResultDir::plan`]).
+struct Plan {
+    /// The run's files and its manifest.
+    new: Vec<String>,
+    /// The earlier run's files this run does not write.
+    stale: Vec<String>,
+    /// Everything else in the target: the user's own entries.
+    kept: Vec<String>,
+}
+
+/// Makes `to` the same tree as `from` without copying a byte: regular files hard-linked,
+/// symbolic links made anew, directories made with their permissions and filled alike. An
+/// error for anything else (a device, a socket, a pipe), across file systems, or deeper than
+/// 256 levels.
+fn link_tree(from: &Path, to: &Path, depth: usize) -> std::io::Result<()> {
+    let meta = std::fs::symlink_metadata(from)?;
+    let kind = meta.file_type();
+    if kind.is_symlink() {
+        std::os::unix::fs::symlink(std::fs::read_link(from)?, to)
+    } else if kind.is_file() {
+        std::fs::hard_link(from, to)
+    } else if kind.is_dir() && depth < 256 {
+        std::fs::create_dir(to)?;
+        for e in std::fs::read_dir(from)? {
+            let e = e?;
+            link_tree(&e.path(), &to.join(e.file_name()), depth + 1)?;
+        }
+        std::fs::set_permissions(to, meta.permissions())
+    } else {
+        Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
     }
 }
 
@@ -695,6 +883,7 @@ fn sync_parent(path: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::Permissions;
 
     #[test]
     fn a_result_directory_replaces_the_earlier_run_whole() {
@@ -755,10 +944,13 @@ mod tests {
             .map(|e| {
                 let e = e.unwrap();
                 let name = e.file_name().to_string_lossy().into_owned();
-                let bytes = if e.file_type().unwrap().is_dir() {
+                let kind = e.file_type().unwrap();
+                let bytes = if kind.is_dir() {
                     b"/".to_vec()
-                } else {
+                } else if kind.is_file() {
                     std::fs::read(e.path()).unwrap()
+                } else {
+                    b"?".to_vec()
                 };
                 (name, bytes)
             })
@@ -772,8 +964,9 @@ mod tests {
         (inside, beside)
     }
 
-    /// An earlier run in `target` with a file of the user's beside it (so that the next run is
-    /// renamed in one by one), and the files of the next run.
+    /// An earlier run in `target` with a file of the user's beside it and a socket (which
+    /// cannot be linked, so that the next run is renamed in one by one), and the files of the
+    /// next run.
     fn earlier_run_and_the_next(target: &Path) -> Vec<(&'static str, &'static [u8])> {
         let mut r = ResultDir::create(target).unwrap();
         for (name, bytes) in [
@@ -785,6 +978,7 @@ mod tests {
         }
         r.commit(false).unwrap();
         std::fs::write(target.join("notes.txt"), b"mine").unwrap();
+        std::os::unix::net::UnixListener::bind(target.join("socket")).unwrap();
         vec![
             ("a.csv", b"new a"),
             ("b.csv", b"new b"),
@@ -948,14 +1142,113 @@ mod tests {
         let mut r = ResultDir::create(&target).unwrap();
         r.write("a.csv", b"1").unwrap();
         r.commit(false).unwrap();
+        // Refused before the run: a file of the earlier run (removed as stale), a name the
+        // run writes.
         let input = target.join("a.csv");
+        let e = ResultDir::create(&target)
+            .unwrap()
+            .protect(Inputs::new(&[&input]), |_| false)
+            .err()
+            .unwrap();
+        assert!(e.source.to_string().contains("is the input"), "{e}");
+        std::fs::write(target.join("c.csv"), b"mine").unwrap();
+        let mine = Inputs::new(&[target.join("c.csv")]);
+        let e = ResultDir::create(&target)
+            .unwrap()
+            .protect(mine.clone(), |n| n == "c.csv")
+            .err()
+            .unwrap();
+        assert!(e.source.to_string().contains("is the input"), "{e}");
+        // Where the run's names were not foreseen, the commit refuses them still.
         let mut r = ResultDir::create(&target)
             .unwrap()
-            .protect(Inputs::new(&[&input]))
+            .protect(mine, |_| false)
             .unwrap();
-        r.write("b.csv", b"2").unwrap();
+        r.write("c.csv", b"2").unwrap();
         let e = r.commit(false).unwrap_err();
         assert!(e.source.to_string().contains("is the input"), "{e}");
         assert_eq!(std::fs::read(&input).unwrap(), b"1");
+        assert_eq!(std::fs::read(target.join("c.csv")).unwrap(), b"mine");
+    }
+
+    #[test]
+    fn the_users_files_are_kept_through_one_atomic_exchange() {
+        use std::os::unix::fs::MetadataExt;
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("results");
+        let mut r = ResultDir::create(&target).unwrap();
+        r.write("a.csv", b"old a").unwrap();
+        r.write("gone.svg", b"old").unwrap();
+        r.commit(false).unwrap();
+        std::fs::write(target.join("notes.txt"), b"mine").unwrap();
+        std::fs::create_dir_all(target.join("sub/deeper")).unwrap();
+        std::fs::write(target.join("sub/deeper/data.bin"), b"deep").unwrap();
+        std::fs::set_permissions(target.join("sub"), Permissions::from_mode(0o750)).unwrap();
+        std::os::unix::fs::symlink("notes.txt", target.join("link")).unwrap();
+        // A user's file under a result's name, not listed by the earlier run: replaced.
+        std::fs::write(target.join("b.csv"), b"user's b").unwrap();
+        let inode = |p: &str| std::fs::metadata(target.join(p)).unwrap().ino();
+        let (notes, deep) = (inode("notes.txt"), inode("sub/deeper/data.bin"));
+        let mut r = ResultDir::create(&target).unwrap();
+        r.write("a.csv", b"new a").unwrap();
+        r.write("b.csv", b"new b").unwrap();
+        r.commit_with(false, &mut |_: &Path, _: &Path| {
+            panic!("renamed one by one instead of exchanged")
+        })
+        .unwrap();
+        Manifest::read(&target).unwrap().verify(&target).unwrap();
+        assert_eq!(std::fs::read(target.join("a.csv")).unwrap(), b"new a");
+        assert_eq!(std::fs::read(target.join("b.csv")).unwrap(), b"new b");
+        assert!(!target.join("gone.svg").exists());
+        // The same files, not copies; the directory's permissions and the link kept.
+        assert_eq!(inode("notes.txt"), notes);
+        assert_eq!(inode("sub/deeper/data.bin"), deep);
+        let mode = std::fs::metadata(target.join("sub")).unwrap().mode() & 0o777;
+        assert_eq!(mode, 0o750);
+        assert_eq!(
+            std::fs::read_link(target.join("link")).unwrap(),
+            Path::new("notes.txt")
+        );
+        let beside: Vec<_> = std::fs::read_dir(root.path()).unwrap().collect();
+        assert_eq!(beside.len(), 1, "something was left beside the target");
+    }
+
+    #[test]
+    fn a_run_killed_at_any_rename_is_rolled_back_by_the_next() {
+        // A panic in the rename stands for a kill: nothing after it runs, nothing is undone,
+        // the staging directory stays, its lock is released.
+        let kill_at = |k: Option<usize>| {
+            let root = tempfile::tempdir().unwrap();
+            let target = root.path().join("results");
+            let next = earlier_run_and_the_next(&target);
+            let before = snapshot(&target);
+            let mut r = ResultDir::create(&target).unwrap();
+            for (name, bytes) in &next {
+                r.write(name, bytes).unwrap();
+            }
+            let mut calls = 0;
+            let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                r.commit_with(false, &mut |a: &Path, b: &Path| {
+                    calls += 1;
+                    if Some(calls - 1) == k {
+                        panic!("killed");
+                    }
+                    std::fs::rename(a, b)
+                })
+            }))
+            .is_err();
+            // The next run into the same place, before it writes anything.
+            drop(ResultDir::create(&target).unwrap());
+            (killed, calls, before, snapshot(&target), target, root)
+        };
+        let (killed, renames, ..) = kill_at(None);
+        assert!(!killed);
+        for k in 0..renames {
+            let (killed, _, before, after, target, _root) = kill_at(Some(k));
+            assert!(killed, "step {k}");
+            assert_eq!(after.0, before.0, "killed at rename {k}: not rolled back");
+            assert_eq!(after.1, before.1, "killed at rename {k}: leftovers beside");
+            Manifest::read(&target).unwrap().verify(&target).unwrap();
+        }
     }
 }

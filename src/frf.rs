@@ -14,7 +14,7 @@
 use crate::linalg::solve;
 use crate::linearize::Linearization;
 use crate::model::Channel;
-use crate::real::{Real, cst};
+use crate::real::{Real, cst, re};
 use nalgebra::DMatrix;
 
 /// A complex value over `T`.
@@ -74,6 +74,9 @@ pub fn transfer<T: Real>(
         rhs[(k, 0)] = bi[k];
     }
     let x = solve(&z, &rhs)?;
+    if !resolved(lin, omega, &bi, &x) {
+        return None;
+    }
     let (mut re, mut im) = (cst::<T>(0.0), cst::<T>(0.0));
     for k in 0..n {
         re += bo[k] * x[(k, 0)];
@@ -82,11 +85,42 @@ pub fn transfer<T: Real>(
     Some(Complex { re, im })
 }
 
+/// The relative accuracy below which `H` is not given: a response `x = Z⁻¹b` that large is
+/// decided by the rounding of the dynamic stiffness `Z`, not by the mechanism.
+pub const RESOLUTION: f64 = 1e-6;
+
+/// Is the response `x` to the load `b` resolved by the dynamic stiffness at `omega`, or is `Z`
+/// singular to working precision (an undamped mode at the excitation frequency, up to the
+/// rounding of its frequency)? `Z`'s entries carry rounding errors of about `ε·S`, with `S`
+/// the largest row sum of `|K̂| + ω²|M̂| + ω|Ĉ|` taken before the cancellation that makes a
+/// resonance; they move `x` relatively by about `‖Z⁻¹‖·ε·S ≥ ‖x‖/‖b‖·ε·S` (Higham, *Accuracy
+/// and Stability of Numerical Algorithms*, 2nd ed., §7.2). Where that exceeds [`RESOLUTION`],
+/// |H| has no reliable digits: a resonance is exact (infinite) or beyond the precision of the
+/// model's numbers, so a step of one ulp in the speed cannot turn it into a finite 10¹⁴.
+fn resolved<T: Real>(lin: &Linearization<T>, omega: f64, b: &[T], x: &DMatrix<T>) -> bool {
+    let n = lin.m.nrows();
+    let scale = (0..n)
+        .map(|r| {
+            (0..n)
+                .map(|c| {
+                    re(lin.k[(r, c)]).abs()
+                        + omega * omega * re(lin.m[(r, c)]).abs()
+                        + omega.abs() * re(lin.c[(r, c)]).abs()
+                })
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let load = b.iter().fold(0.0f64, |s, v| s.max(re(*v).abs()));
+    let response = x.iter().fold(0.0f64, |s, v| s.max(re(*v).abs()));
+    response * f64::EPSILON * scale <= RESOLUTION * load
+}
+
 /// Why `H(jω)` has no finite value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NoTransfer {
-    /// The dynamic stiffness `K̂ − ω²M̂ + jωĈ` is singular (or so near it that the solve gives
-    /// no finite number): an undamped mode at the excitation frequency; |H| is infinite.
+    /// The dynamic stiffness `K̂ − ω²M̂ + jωĈ` is singular, or singular to working precision
+    /// ([`RESOLUTION`]): an undamped mode at the excitation frequency; |H| is infinite or
+    /// beyond what the model's numbers resolve.
     Resonance,
     /// A number on the way (`ω²M̂`, `ωĈ`, or |H| itself) is beyond floating point.
     Overflow,
@@ -97,7 +131,8 @@ impl NoTransfer {
     pub fn message(self) -> &'static str {
         match self {
             NoTransfer::Resonance => {
-                "resonance: |H| is infinite (an undamped mode at the excitation frequency)"
+                "resonance: |H| is infinite or unresolved (an undamped mode at the excitation \
+                 frequency, to working precision)"
             }
             NoTransfer::Overflow => {
                 "overflow: |H| or the dynamic stiffness at this frequency is beyond floating point"

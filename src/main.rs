@@ -238,7 +238,8 @@ enum Command {
     /// governor example built into the binary.
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
-    /// (same seed, same numbers): writes the same files as `analyze`.
+    /// (same seed, same numbers): writes the same files as `analyze`, except the Monte Carlo
+    /// quantiles q05, q50, q95 (they need every sample at once; a merge leaves them empty).
     ///
     /// Every shard must come from the same model (with the same --set), tolerance cases,
     /// speeds, samples, seed, sampling and quadrature options: a shard computed from anything
@@ -640,10 +641,14 @@ fn write_outputs(
         note!("modaltol: note: {line}");
     }
     if partial {
-        note!(
-            "modaltol: partial result (Monte Carlo interrupted): samples done per case {:?}",
-            a.samples_done
-        );
+        if a.samples_done.is_empty() {
+            note!("modaltol: partial result (interrupted): not every speed was analysed");
+        } else {
+            note!(
+                "modaltol: partial result (interrupted): Monte Carlo samples done per case {:?}",
+                a.samples_done
+            );
+        }
         return Err(Interrupted("the outputs hold a partial result".into()).into());
     }
     Ok(())
@@ -654,6 +659,12 @@ fn write_outputs(
 fn refuse_input(inputs: &Inputs, output: &std::path::Path) -> Result<()> {
     inputs
         .refuse_output(output)
+        .map_err(|e| InputError(format!("{e}: {}", e.source)).into())
+}
+
+/// `dir`, refusing (as an input error, before the run) an input it would replace or remove.
+fn protect(dir: ResultDir, inputs: Inputs) -> Result<ResultDir> {
+    dir.protect(inputs, modaltol::results::is_result_file)
         .map_err(|e| InputError(format!("{e}: {}", e.source)).into())
 }
 
@@ -976,6 +987,16 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
                 )
                 .into());
             }
+            if let Some(mc) = &mc
+                && n > mc.samples
+            {
+                return Err(InputError(format!(
+                    "--shard {spec}: {n} shards of {} samples would leave shards without a \
+                     sample; use at most {} shards",
+                    mc.samples, mc.samples
+                ))
+                .into());
+            }
             Split::Shard(k, n)
         }
     };
@@ -991,7 +1012,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
         }
         _ => {
             refuse_input(&inputs, &output)?;
-            Destination::Directory(ResultDir::create(&output)?.protect(inputs)?)
+            Destination::Directory(protect(ResultDir::create(&output)?, inputs)?)
         }
     };
     // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
@@ -1078,7 +1099,7 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
     inputs.extend(&shards);
     let inputs = Inputs::new(&inputs);
     refuse_input(&inputs, &output)?;
-    let dir = ResultDir::create(&output)?.protect(inputs)?;
+    let dir = protect(ResultDir::create(&output)?, inputs)?;
     let a = analyze(&m, &opt, &progress_printer());
     write_outputs(&m, &a, Some(&mc), None, display.into(), dir, &output)?;
 

@@ -732,7 +732,8 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
     let s = (l1 + l2).re;
     let wn = p.abs().sqrt();
     let zeta = if wn > 0.0 {
-        -s / (2.0 * wn)
+        // `+ 0.0`: an undamped mode's ζ is 0, not −0.
+        -s / (2.0 * wn) + 0.0
     } else {
         f64::INFINITY.copysign(-s)
     };

@@ -11,6 +11,16 @@ use crate::plots::{self, Display};
 use crate::report;
 use rayon::prelude::*;
 
+/// Is `name` one that [`write()`] may put in a result directory (its tables, report, summary,
+/// plots and manifest)? An input of that name there would be replaced.
+pub fn is_result_file(name: &str) -> bool {
+    matches!(
+        name,
+        "tolerance.csv" | "probabilities.csv" | "report.html" | "summary.json" | "manifest.json"
+    ) || name.ends_with(".svg")
+        || name.ends_with(".png")
+}
+
 /// What [`write()`] leaves for its caller to tell the user.
 #[derive(Debug, Default)]
 pub struct Written {

@@ -252,15 +252,10 @@ impl ShardFile {
         if !differ.is_empty() {
             return Err(err(format!(
                 "made from another model, other tolerance cases or other settings than the \
-                 merge's: its {} {} (merge reads the model of --model with --set and --case, \
-                 and the settings of the first shard; re-run the shard, or merge only shards \
-                 of one run)",
-                differ.join(", "),
-                if differ.len() == 1 {
-                    "differs"
-                } else {
-                    "differ"
-                }
+                 merge's: it differs in its {} (merge reads the model of --model with --set \
+                 and --case, and the settings of the first shard; re-run the shard, or merge \
+                 only shards of one run)",
+                differ.join(", ")
             )));
         }
         if self.of == 0 || self.shard == 0 || self.shard > self.of {

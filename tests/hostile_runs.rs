@@ -525,6 +525,38 @@ fn run_with_address_space(kb: usize, args: &[&str]) -> Run {
 }
 
 #[test]
+fn more_shards_than_samples_are_refused_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("rotating_pendulum.toml");
+    let out = dir.path().join("o");
+    for (spec, ok) in [("1/20", true), ("1/21", false), ("21/99999999999", false)] {
+        let args = [
+            "analyze",
+            m.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--speed",
+            "0:1:1",
+            "--samples",
+            "20",
+            "--shard",
+            spec,
+        ];
+        let o = run_limited(&args, Duration::from_secs(30));
+        if ok {
+            assert_eq!(o.code, Some(0), "--shard {spec}: {}", o.stderr);
+        } else {
+            assert_eq!(o.code, Some(2), "--shard {spec}: {}", o.stderr);
+            assert!(
+                o.stderr.contains("without a"),
+                "--shard {spec}: {}",
+                o.stderr
+            );
+        }
+    }
+}
+
+#[test]
 fn thread_counts_are_bounded_and_a_refusal_of_the_system_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let m = common::example_path("rotating_pendulum.toml");

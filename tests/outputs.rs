@@ -105,29 +105,62 @@ fn an_output_that_is_an_input_is_refused_by_every_command() {
     ]);
     assert_eq!(o.code, Some(2), "{}", o.stderr);
     assert_eq!(std::fs::read(&as_shard).unwrap(), original);
-    // A model lying in the result directory under a result's name is never replaced.
+    // A model lying in the result directory under a result's name is never replaced, and is
+    // refused as bad arguments before anything is computed (5·10⁴ speeds × 10⁵ samples would
+    // not finish within the test's time).
     let results = d.join("results");
     std::fs::create_dir(&results).unwrap();
-    let inside = results.join("report.html");
-    std::fs::copy(&model, &inside).unwrap();
+    for name in ["report.html", "tolerance.csv", "summary.json", "x.svg"] {
+        let inside = results.join(name);
+        std::fs::copy(&model, &inside).unwrap();
+        let o = run(&[
+            "analyze",
+            inside.to_str().unwrap(),
+            "-o",
+            results.to_str().unwrap(),
+            "--speed",
+            "0:5:0.0001",
+            "--samples",
+            "100000",
+        ]);
+        assert_eq!(o.code, Some(2), "{name}: {}", o.stderr);
+        assert!(o.stderr.contains("is the input"), "{name}: {}", o.stderr);
+        assert_eq!(std::fs::read(&inside).unwrap(), original);
+        assert_eq!(
+            std::fs::read_dir(&results).unwrap().count(),
+            1,
+            "{name}: a result was written"
+        );
+        std::fs::remove_file(&inside).unwrap();
+    }
+    // A shard lying in the merge's result directory under a result's name, likewise.
     let o = run(&[
         "analyze",
-        inside.to_str().unwrap(),
+        m,
         "-o",
-        results.to_str().unwrap(),
+        shard_dir.to_str().unwrap(),
+        "--shard",
+        "1/1",
         "--speed",
         "0:1:1",
         "--samples",
         "10",
     ]);
-    assert_ne!(o.code, Some(0), "{}", o.stderr);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let shard = results.join("summary.json");
+    std::fs::rename(shard_dir.join("shard-1-of-1.json"), &shard).unwrap();
+    let shard_bytes = std::fs::read(&shard).unwrap();
+    let o = run(&[
+        "merge",
+        "--model",
+        m,
+        "-o",
+        results.to_str().unwrap(),
+        shard.to_str().unwrap(),
+    ]);
+    assert_eq!(o.code, Some(2), "{}", o.stderr);
     assert!(o.stderr.contains("is the input"), "{}", o.stderr);
-    assert_eq!(std::fs::read(&inside).unwrap(), original);
-    assert_eq!(
-        std::fs::read_dir(&results).unwrap().count(),
-        1,
-        "a result was written"
-    );
+    assert_eq!(std::fs::read(&shard).unwrap(), shard_bytes);
 }
 
 #[test]
@@ -369,4 +402,45 @@ fn a_target_that_cannot_take_the_results_is_refused_before_anything_is_computed(
     );
     mode(&parent, 0o755).unwrap();
     mode(&locked, 0o755).unwrap();
+}
+
+/// A device or a named pipe given to `-o` is written to, as a shell's `>` writes, never
+/// replaced by a file (which, run as root on `/dev/null`, would destroy the device).
+#[test]
+fn an_output_onto_a_device_or_a_pipe_is_written_to_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let m = common::example_path("rotating_pendulum.toml");
+    let m = m.to_str().unwrap();
+    for args in [
+        vec!["sweep", m, "--speed", "0:2:1", "-o", "/dev/null"],
+        vec!["modal", m, "--speed", "1", "-o", "/dev/null"],
+        vec!["sensitivity", m, "--speed", "1", "-o", "/dev/null"],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.code, Some(0), "{args:?}: {}", o.stderr);
+        let kind = std::fs::metadata("/dev/null").unwrap().file_type();
+        assert!(kind.is_char_device(), "{args:?}: /dev/null was replaced");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+    };
+    let o = run(&["sweep", m, "--speed", "0:2:1", "-o", fifo.to_str().unwrap()]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    let text = reader.join().unwrap();
+    assert!(text.starts_with("speed,mode,"), "{text}");
+    assert_eq!(text.lines().count(), 4, "{text}");
+    let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(kind.is_fifo(), "the pipe was replaced");
+    // `/dev/stdout` is the process's standard output, whatever it is (here a pipe).
+    let o = run(&["sweep", m, "--speed", "0:2:1", "-o", "/dev/stdout"]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(o.stdout.starts_with("speed,mode,"), "{}", o.stdout);
 }

@@ -131,3 +131,88 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
         "no resonance was met: the test tests less than it says"
     );
 }
+
+/// An undamped resonance is a resonance whatever the rounding of its frequency: within a
+/// hundred ulps of an undamped mode's natural frequency (where the dynamic stiffness is
+/// singular to working precision) every route says "resonance" and gives no |H|, never a
+/// finite 10¹⁴; a mode with realistic light damping (ζ from 10⁻⁶) keeps its finite peak,
+/// equal to the closed form |H| = 1/(2ζk) of one degree of freedom to 10⁻⁹.
+#[test]
+fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
+    let undamped = Compiled::from_file_with(
+        &common::example_path("rotating_pendulum.toml"),
+        &[("c".into(), 0.0)],
+    )
+    .unwrap();
+    let t = undamped.analysis.transfer.unwrap();
+    let speed = 1.0;
+    let pt = common::at(&undamped, speed, &Options::default());
+    let wn = pt.modes[0].natural_frequency;
+    let wrt = undamped.toleranced();
+    let mut near = vec![wn];
+    let (mut up, mut down) = (wn, wn);
+    for _ in 0..100 {
+        up = up.next_up();
+        down = down.next_down();
+        near.extend([up, down]);
+    }
+    let rows = sensitivity::frequency_response(
+        &undamped,
+        &undamped.nominal(),
+        &pt,
+        t.input,
+        t.output,
+        &wrt,
+        near.iter().copied(),
+    )
+    .unwrap();
+    let header = report::frf_header(&undamped, &wrt);
+    for row in report::frf_rows(&pt.linear, &rows) {
+        assert!(
+            check_row(&header, &row, "magnitude", "undamped pendulum near ω_n"),
+            "{row:?}"
+        );
+    }
+    // The sweep's row at an order that puts the excitation within ulps of ω_n.
+    for &w in &near[..21] {
+        let tf = Transfer {
+            order: w / speed,
+            ..t
+        };
+        let mut study = SweepStudy::new(
+            &undamped,
+            Options::default(),
+            Some(tf),
+            wrt.clone(),
+            Derivatives::Exact,
+        );
+        let (r, extras) = study.step(speed);
+        let cols = SweepColumns {
+            transfer: true,
+            wrt: wrt.clone(),
+        };
+        let header = report::sweep_header(&undamped, &cols);
+        for row in report::sweep_rows(&undamped, &cols, speed, &r, &extras) {
+            assert!(
+                check_row(&header, &row, "transfer_magnitude", "sweep near ω_n"),
+                "{row:?}"
+            );
+        }
+    }
+    // Light damping: a finite peak, 1/(2ζ k) at ω = ω_n with k = ω_n² m̂ (one coordinate).
+    for zeta in [1e-6, 1e-4, 1e-2] {
+        let lin = &pt.linear;
+        let (k, m) = (lin.k[(0, 0)], lin.m[(0, 0)]);
+        let c = 2.0 * zeta * (k * m).sqrt();
+        let mut damped = lin.clone();
+        damped.c[(0, 0)] = c;
+        let w = (k / m).sqrt();
+        let h = modaltol::frf::transfer(&damped, t.input, t.output, w).expect("a finite peak");
+        let exact = 1.0 / (c * w);
+        assert!(
+            (h.magnitude() - exact).abs() <= 1e-9 * exact,
+            "ζ = {zeta}: |H| {} against {exact}",
+            h.magnitude()
+        );
+    }
+}

@@ -13,7 +13,7 @@
 use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
-use modaltol::files::ResultDir;
+use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::plots::{Display, FrequencyUnit};
@@ -194,6 +194,8 @@ fn derivatives(how: &str) -> PyResult<Derivatives> {
 #[pyclass(frozen, module = "modaltol._modaltol")]
 struct NativeModel {
     model: Arc<Compiled>,
+    /// The file the model was read from, which no output may replace.
+    source: Option<PathBuf>,
 }
 
 impl NativeModel {
@@ -586,7 +588,12 @@ impl NativeModel {
         // Fail early where the results cannot be written.
         let dir = output
             .as_ref()
-            .map(|o| ResultDir::create(o).map_err(|e| bad(format!("{e}: {}", e.source))))
+            .map(|o| {
+                let inputs = Inputs::new(&self.source.iter().collect::<Vec<_>>());
+                ResultDir::create(o)
+                    .and_then(|d| d.protect(inputs, modaltol::results::is_result_file))
+                    .map_err(|e| bad(format!("{e}: {}", e.source)))
+            })
             .transpose()?;
         let opt = AnalyzeOptions {
             speeds: w,
@@ -668,7 +675,10 @@ fn load(
 ) -> PyResult<NativeModel> {
     let set = overrides(parameters)?;
     Compiled::from_file_with(&path, &set)
-        .map(|m| NativeModel { model: Arc::new(m) })
+        .map(|m| NativeModel {
+            model: Arc::new(m),
+            source: Some(path),
+        })
         .map_err(|e| model_error(py, e))
 }
 
@@ -683,7 +693,10 @@ fn loads(
 ) -> PyResult<NativeModel> {
     let set = overrides(parameters)?;
     Compiled::from_bytes_with(text.as_bytes(), name, &set)
-        .map(|m| NativeModel { model: Arc::new(m) })
+        .map(|m| NativeModel {
+            model: Arc::new(m),
+            source: None,
+        })
         .map_err(|e| model_error(py, e))
 }
 
