@@ -7,7 +7,7 @@
 //! in parallel (rayon) in chunks, and the chunks' moments are combined along one fixed binary
 //! tree over the chunk indices ([`TreeFold`]), so the output is bit-identical for any number of
 //! threads or shards, and memory does not grow with the number of samples (at most
-//! [`MAX_SAMPLES`]; the values kept for quantiles are capped by [`MAX_KEPT_VALUES`]).
+//! [`MAX_SAMPLES`](crate::settings::MAX_SAMPLES); the values kept for quantiles are capped by [`MAX_KEPT_VALUES`]).
 //!
 //! Per speed and output: mean and σ (one-pass central moments up to the fourth), their 95 %
 //! confidence intervals, the samples that failed (no equilibrium or no modes) and those whose
@@ -610,10 +610,6 @@ fn run_sample(
     });
     out
 }
-
-/// Largest number of Monte Carlo samples a run may ask for (beyond that the standard error
-/// is far below any tolerance's meaning, and the sample index must fit the samplers' 32 bits).
-pub const MAX_SAMPLES: usize = 1_000_000_000;
 
 /// Samples per chunk: the unit of parallel work, of interruption and of sharding.
 pub const CHUNK: usize = 64;

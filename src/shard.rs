@@ -264,7 +264,7 @@ impl ShardFile {
                 self.shard, self.of
             )));
         }
-        if self.samples < 2 || self.samples > montecarlo::MAX_SAMPLES {
+        if self.samples < 2 || self.samples > crate::settings::MAX_SAMPLES {
             return Err(err(format!("{} samples is out of range", self.samples)));
         }
         if self.outputs != outputs {

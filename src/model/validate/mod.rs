@@ -988,15 +988,8 @@ fn analysis(
         });
     }
     if let Some(n) = &s.samples {
-        if *n.get_ref() < 2 || *n.get_ref() as u128 > crate::montecarlo::MAX_SAMPLES as u128 {
-            return Err(ctx.err(
-                n.span(),
-                format!(
-                    "analysis samples must lie in 2..={} (got {})",
-                    crate::montecarlo::MAX_SAMPLES,
-                    n.get_ref()
-                ),
-            ));
+        if let Err(e) = crate::settings::samples(*n.get_ref()) {
+            return Err(ctx.err(n.span(), format!("analysis samples {e}")));
         }
         a.samples = *n.get_ref() as usize;
     }
