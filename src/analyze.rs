@@ -407,11 +407,15 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                         basis: None,
                         quantiles: st.quantiles,
                         errors: None,
-                        missing: (!st.mean.is_finite()).then(|| {
-                            nominal[si]
-                                .as_ref()
-                                .map_or(Missing::NoValue, |pt| no_value(pt, o))
-                        }),
+                        missing: if !st.mean.is_finite() {
+                            Some(
+                                nominal[si]
+                                    .as_ref()
+                                    .map_or(Missing::NoValue, |pt| no_value(pt, o)),
+                            )
+                        } else {
+                            (!st.std.is_finite()).then_some(Missing::OneSample)
+                        },
                     });
                 }
             }

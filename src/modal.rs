@@ -119,6 +119,10 @@ pub enum ModalError {
     #[error("non-finite entries in M̂, Ĉ or K̂ (an input value overflows)")]
     NotFinite,
     #[error(
+        "M̂, Ĉ and K̂ span more than double precision (the scale of their terms, max(‖K̂‖, ‖M̂‖Ω², ‖Ĉ‖²/‖M̂‖), overflows): an input value is out of scale"
+    )]
+    ScaleOverflow,
+    #[error(
         "the eigenvalue solver did not converge ({what}; M̂, Ĉ, K̂ span more than double precision can resolve)"
     )]
     NoConvergence { what: &'static str },
@@ -160,6 +164,9 @@ pub fn modes(
         .then(|| undamped_modes(m, k))
         .flatten();
     let test = RigidTest::new(m, c, k, speed);
+    if !(test.stiffness.is_finite() && test.candidate.is_finite()) {
+        return Err(ModalError::ScaleOverflow);
+    }
     let mut out = match undamped {
         Some(out) => out,
         None if m.nrows() == 1 => scalar_modes(m[(0, 0)], c[(0, 0)], k[(0, 0)])?,

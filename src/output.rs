@@ -73,6 +73,8 @@ pub enum Missing {
     Failed(String),
     /// No node or sample of a sampling method gave a value.
     NoValue,
+    /// One sample alone gave a value: a mean without a σ.
+    OneSample,
     /// Not asked for (a first-order local model has no Hessians).
     NotComputed,
 }
@@ -101,6 +103,7 @@ impl std::fmt::Display for Missing {
             ),
             Missing::Failed(e) => write!(f, "derivatives failed: {e}"),
             Missing::NoValue => write!(f, "no node or sample gave a value"),
+            Missing::OneSample => write!(f, "no σ: one sample alone gave a value"),
             Missing::NotComputed => write!(f, "not computed"),
         }
     }

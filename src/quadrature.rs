@@ -293,7 +293,9 @@ pub fn integrate(
             } else {
                 c[2 * modes] = 0.0;
             }
-            if c.iter().all(|v| v.is_finite()) {
+            // The node holds where its modes do: an |H| without a value (a resonance at this
+            // node) leaves |H| alone without one, not the modes' outputs.
+            if c[..2 * modes].iter().all(|v| v.is_finite()) {
                 branch[i] = Some(switches as u32);
             }
         });
@@ -1108,6 +1110,8 @@ fn carrier_value(o: &Output, c: &[f64], modes: usize) -> f64 {
             (p - 0.25 * s * s).max(0.0).sqrt()
         }
         (Quantity::DampingRatio, Some(m)) => -c[2 * m] / (2.0 * c[2 * m + 1].abs().sqrt()),
+        // `f64::max` would turn a node's missing |H| (NaN: a resonance there) into 0.
+        (Quantity::TransferMagnitude, _) if c[2 * modes].is_nan() => f64::NAN,
         (Quantity::TransferMagnitude, _) => c[2 * modes].max(0.0),
         _ => f64::NAN,
     }

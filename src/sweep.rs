@@ -87,11 +87,12 @@ pub struct Branch {
 pub enum BranchKind {
     /// The equilibrium Newton reached is stable.
     Stable,
-    /// The equilibrium Newton reached is unstable through its mode `mode` (0-based, among that
-    /// equilibrium's modes, which are not reported) with the root `re + i·im`; the stable one
-    /// found by stepping `amplitude` (rad or m at the largest coordinate) along that mode's
+    /// The equilibrium Newton reached is unstable through its mode `mode` (0-based here,
+    /// 1-based in JSON; among that equilibrium's modes, which are not reported) with the root
+    /// `re + i·im`; the stable one found by stepping `amplitude` (rad or m at the largest coordinate) along that mode's
     /// shape (its real or imaginary part, `sign`) is reported instead.
     Switched {
+        #[serde(serialize_with = "one_based")]
         mode: usize,
         re: f64,
         im: f64,
@@ -99,16 +100,22 @@ pub enum BranchKind {
         sign: f64,
         amplitude: f64,
     },
-    /// The equilibrium Newton reached is unstable through `mode` (0-based, among the point's
-    /// modes) and reported as it is:
+    /// The equilibrium Newton reached is unstable through `mode` (0-based here, 1-based in
+    /// JSON; among the point's modes) and reported as it is:
     /// `searched` says whether a stable one was looked for along the unstable modes (and none
     /// found) or not (switching off, [`Options::no_branch_switch`]).
     Unstable {
+        #[serde(serialize_with = "one_based")]
         mode: usize,
         re: f64,
         im: f64,
         searched: bool,
     },
+}
+
+/// Writes a 0-based mode index as the 1-based number every output shows.
+fn one_based<S: serde::Serializer>(mode: &usize, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_u64(*mode as u64 + 1)
 }
 
 impl Branch {

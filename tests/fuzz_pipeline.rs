@@ -142,7 +142,8 @@ fn check_csv(text: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// Checks `tolerance.csv`: a row without a mean says why (its `reason`), and only such a row.
+/// Checks `tolerance.csv`: a row without a mean or a σ says why (its `reason`), and only such
+/// a row.
 fn check_reasons(text: &str) -> Result<(), String> {
     let mut rows = csv::Reader::from_reader(text.as_bytes());
     let header = rows.headers().map_err(|e| e.to_string())?.clone();
@@ -152,10 +153,11 @@ fn check_reasons(text: &str) -> Result<(), String> {
             .position(|h| h == n)
             .ok_or(format!("no column {n}"))
     };
-    let (mean, reason) = (col("mean")?, col("reason")?);
+    let (mean, std, reason) = (col("mean")?, col("std")?, col("reason")?);
     for row in rows.records() {
         let row = row.map_err(|e| e.to_string())?;
-        if row[mean].is_empty() == row[reason].is_empty() {
+        let incomplete = row[mean].is_empty() || row[std].is_empty();
+        if incomplete == row[reason].is_empty() {
             return Err(format!("a row's mean and reason: {row:?}"));
         }
     }

@@ -10,6 +10,7 @@ use modaltol::compiled::Compiled;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
+use modaltol::output::Quantity;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
 
@@ -169,6 +170,64 @@ fn the_quadrature_and_the_monte_carlo_see_no_instability_in_a_rigid_body_mode() 
                 assert!(r.mean.is_nan() && r.missing.is_some(), "{r:?}");
             } else {
                 assert_eq!((r.mean, r.std), (0.0, 0.0), "{r:?}");
+            }
+        }
+    }
+}
+
+/// A node of the quadrature whose |H| has no value (a rigid-body mode is a resonance at zero
+/// excitation frequency, so at rest |H| is unbounded at every node) keeps its modes: their ω_d
+/// and ζ rows are filled (at rest the two tilt modes are a double pair, which the Taylor
+/// methods cannot expand), within the order of σ² of the nominal values, and |H| alone is
+/// left empty with the resonance as its reason, never read as 0.
+#[test]
+fn a_node_without_a_transfer_value_keeps_its_modes() {
+    let text = format!(
+        "{}[analysis]\ntransfer = {{ input = \"ball.rx\", output = \"ball.rx\", order = 1 }}\n",
+        ball_rod(1.0, 0.5, 0.01)
+    );
+    let model = Compiled::from_str(&text, "ball_rod_transfer.toml").unwrap();
+    let opt = AnalyzeOptions {
+        speeds: vec![0.0, 1.0],
+        cases: model.analysis.cases.clone(),
+        quadrature: Some(QuadOptions::default()),
+        monte_carlo: None,
+        ..Default::default()
+    };
+    let a = analyze(&model, &opt, &|_, _, _| {});
+    let row = |speed: f64, q: Quantity, mode: Option<usize>, method: Method| {
+        a.rows
+            .iter()
+            .find(|r| r.speed == speed && r.quantity == q && r.mode == mode && r.method == method)
+            .unwrap_or_else(|| panic!("no row {speed} {q:?} {mode:?} {method:?}"))
+    };
+    for method in [Method::Quadrature, Method::Analytic, Method::FirstOrder] {
+        let h = row(0.0, Quantity::TransferMagnitude, None, method);
+        assert!(h.mean.is_nan() && h.missing.is_some(), "{h:?}");
+        let h = row(1.0, Quantity::TransferMagnitude, None, method);
+        assert!(h.mean > 0.0 && h.missing.is_none(), "{h:?}");
+    }
+    let p = model.nominal();
+    for speed in [0.0, 1.0] {
+        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let nominal = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+        // The analysis numbers modes as its sweep tracks them: compared with the nearest.
+        for mode in [1, 2] {
+            for q in [Quantity::DampedFrequency, Quantity::DampingRatio] {
+                let quad = row(speed, q, Some(mode), Method::Quadrature);
+                assert!(quad.missing.is_none(), "{quad:?}");
+                let near = nominal.modes[1..].iter().any(|m| {
+                    let value = match q {
+                        Quantity::DampedFrequency => m.damped_frequency,
+                        _ => m.damping_ratio,
+                    };
+                    (quad.mean - value).abs() <= 1e-3 * value.abs()
+                });
+                assert!(
+                    near && quad.std > 0.0,
+                    "{quad:?} against {:?}",
+                    nominal.modes
+                );
             }
         }
     }

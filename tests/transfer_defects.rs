@@ -56,7 +56,9 @@ fn models() -> Vec<(String, Compiled)> {
 fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
     let mut resonances = 0;
     for (name, m) in models() {
-        let t = m.analysis.transfer.unwrap();
+        let Some(t) = m.analysis.transfer else {
+            continue;
+        };
         let speed = 1.0;
         let pt = common::at(&m, speed, &Options::default());
         // The modes' own frequencies: a resonance where a mode has no damping.
