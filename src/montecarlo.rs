@@ -563,12 +563,19 @@ pub fn inadmissible(
     tally
 }
 
-/// Number of branch switches of the nominal sweep up to each speed.
+/// Number of branch switches of the nominal sweep up to each speed, counted as a sample's are
+/// ([`sample_sweep`]): from its first point on. Samples start from that point, so a switch
+/// made there (from the model's initial guess onto a stable equilibrium, where a sweep starts
+/// past a loss of stability) is none of theirs.
 pub fn branch_counts(nominal: &[Option<Point>]) -> Vec<usize> {
+    let mut started = false;
     nominal
         .iter()
         .scan(0, |n, p| {
-            *n += usize::from(p.as_ref().is_some_and(|p| p.new_branch));
+            if let Some(p) = p {
+                *n += usize::from(started && p.new_branch);
+                started = true;
+            }
             Some(*n)
         })
         .collect()

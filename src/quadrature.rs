@@ -1026,6 +1026,17 @@ impl Context<'_> {
         cuts.sort_by(|x, y| x.0.total_cmp(&y.0));
         let other = st.branch != self.branch;
         let modes = self.modes;
+        // A mode can be unstable between nodes only where one of the stencil's nodes says so:
+        // otherwise an excursion of the interpolant is the interpolation's, not the mode's
+        // (the sum `s` of a rigid-body mode's roots, its partner alone, jumps between nodes
+        // where two such modes trade places, and the interpolant overshoots above 0).
+        let may_be_unstable: Vec<bool> = (0..modes)
+            .map(|m| {
+                st.rows
+                    .iter()
+                    .any(|r| growth(r[2 * m], r[2 * m + 1]) > 0.0 || r[2 * m + 1] < 0.0)
+            })
+            .collect();
         for seg in cuts.windows(2) {
             let ((x0, e0), (x1, e1)) = (seg[0], seg[1]);
             if x1 <= x0 {
@@ -1034,8 +1045,9 @@ impl Context<'_> {
             let len = x1 - x0;
             // Character on the sub-piece (constant there): from its midpoint.
             st.eval(0.5 * (x0 + x1), &mut c);
-            let unstable =
-                (0..modes).any(|m| growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0);
+            let unstable = (0..modes).any(|m| {
+                may_be_unstable[m] && (growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0)
+            });
             // Overdamped: two real roots of one sign, both negative (`p > 0`); a rigid-body
             // mode (a zero root, `p = 0` exactly) is neither overdamped nor unstable.
             let overdamped: Vec<bool> = (0..modes)
