@@ -452,7 +452,9 @@ fn analytic_rows(
     let mut rows = Vec::new();
     let row = |o: &Output, method, stat: Result<Stat, Missing>, shares, basis| {
         let (mean, std, missing) = match stat {
-            Ok(st) => (st.mean, st.std, None),
+            Ok(st) if st.mean.is_finite() && st.std.is_finite() => (st.mean, st.std, None),
+            // An overflow on the way (a Hessian of 10³⁰⁰'s): no value, and why.
+            Ok(_) => (f64::NAN, f64::NAN, Some(Missing::NotFinite)),
             Err(e) => (f64::NAN, f64::NAN, Some(e)),
         };
         Row {

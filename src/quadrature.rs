@@ -56,7 +56,7 @@ use crate::model::Distribution;
 use crate::montecarlo::{correlation_factor, parameters_at, sample_sweep};
 use crate::sensitivity::TransferAt;
 use crate::sweep::Point;
-use crate::tolerance::{LocalModel, Output, Quantity, Spread, value};
+use crate::tolerance::{LocalModel, Output, Quantity, Spread, sigma_of, value};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
@@ -628,8 +628,7 @@ impl Sums {
         let w = self.defined[o];
         (w > 0.0).then(|| {
             let m1 = self.s1[o] / w;
-            let var = (self.s2[o] / w - m1 * m1).max(0.0);
-            (m1 + shift, var.sqrt())
+            (m1 + shift, sigma_of(self.s2[o] / w - m1 * m1))
         })
     }
 

@@ -319,10 +319,16 @@ pub fn first_order(value: f64, grad: &[f64], s: &Spread) -> (Stat, Vec<f64>) {
     (
         Stat {
             mean: value,
-            std: var.max(0.0).sqrt(),
+            std: sigma_of(var),
         },
         shares,
     )
+}
+
+/// √v of a variance `v` that rounding may leave a little below 0; NaN stays NaN (`f64::max`
+/// would turn it into a σ of 0, hiding an overflow).
+pub fn sigma_of(v: f64) -> f64 {
+    if v.is_nan() { v } else { v.max(0.0).sqrt() }
 }
 
 /// Second order: mean + ½ tr(HΣ), σ² = gᵀΣg + ½ tr(HΣHΣ) (normal variables); for independent
@@ -362,7 +368,7 @@ pub fn second_order(value: f64, grad: &[f64], hess: &DMatrix<f64>, s: &Spread) -
     };
     Stat {
         mean,
-        std: (first + second).max(0.0).sqrt(),
+        std: sigma_of(first + second),
     }
 }
 
@@ -410,7 +416,7 @@ pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
         let mean = mu.sqrt() * series;
         return Stat {
             mean,
-            std: (second - mean * mean).max(0.0).sqrt(),
+            std: sigma_of(second - mean * mean),
         };
     }
     let upper = (mu + 10.0 * sigma).max(0.0).sqrt();
@@ -438,7 +444,7 @@ pub fn sqrt_positive_part(mu: f64, sigma: f64) -> Stat {
     let mean = 0.5 * h * sum;
     Stat {
         mean,
-        std: (second - mean * mean).max(0.0).sqrt(),
+        std: sigma_of(second - mean * mean),
     }
 }
 

@@ -545,7 +545,7 @@ impl NativeModel {
         monte_carlo: bool,
         quadrature: bool,
         quadrature_tolerance: f64,
-        threads: Option<usize>,
+        threads: Option<i64>,
         output: Option<PathBuf>,
         speed_unit: &str,
         frequency_unit: &str,
@@ -564,6 +564,8 @@ impl NativeModel {
         let samples = samples
             .map(|n| settings::samples(n).map_err(|e| bad(format!("samples {e}"))))
             .transpose()?;
+        // A negative count is refused as zero is (the command line's parser refuses it too).
+        let threads = threads.map(|n| usize::try_from(n).unwrap_or(0));
         let threads = settings::threads(threads).map_err(|e| match e {
             ThreadsError::Refused { .. } => PyRuntimeError::new_err(format!("threads: {e}")),
             _ => bad(format!("threads {e}")),

@@ -333,6 +333,9 @@ def test_settings_follow_the_command_line_rules(pendulum: modaltol.Model, cli: P
         assert r.returncode == 2
         reason = str(e.value).removeprefix("threads ")
         assert reason in r.stderr, (reason, r.stderr)
+    # A negative count is a value refused, not an overflow of the binding.
+    with pytest.raises(ValueError, match="at least 1"):
+        pendulum.analyze("0:1:1", threads=-1, samples=10)
     for samples in [1, 10**10]:
         with pytest.raises(ValueError, match="samples must lie in"):
             pendulum.analyze("0:1:1", samples=samples)
