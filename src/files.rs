@@ -937,8 +937,11 @@ mod tests {
         assert!(read_bounded(&f, 4).is_err());
     }
 
+    /// A directory's entries with their bytes, and the names beside it ([`snapshot`]).
+    type Snapshot = (Vec<(String, Vec<u8>)>, Vec<String>);
+
     /// Every entry of `dir` with its bytes (directories as `/`), and what lies beside it.
-    fn snapshot(dir: &Path) -> (Vec<(String, Vec<u8>)>, Vec<String>) {
+    fn snapshot(dir: &Path) -> Snapshot {
         let mut inside: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| {
@@ -986,6 +989,18 @@ mod tests {
         ]
     }
 
+    /// An earlier run in `target` ([`earlier_run_and_the_next`]), and the next run staged,
+    /// ready to commit, with the target's entries before it.
+    fn next_run_staged(target: &Path) -> (ResultDir, Snapshot) {
+        let next = earlier_run_and_the_next(target);
+        let before = snapshot(target);
+        let mut r = ResultDir::create(target).unwrap();
+        for (name, bytes) in &next {
+            r.write(name, bytes).unwrap();
+        }
+        (r, before)
+    }
+
     #[test]
     fn a_directory_where_any_result_file_goes_is_refused_before_anything_moves() {
         let names = ["a.csv", "b.csv", "c.csv", "manifest.json"];
@@ -1011,12 +1026,7 @@ mod tests {
         let run = |fail_at: Option<usize>| {
             let root = tempfile::tempdir().unwrap();
             let target = root.path().join("results");
-            let next = earlier_run_and_the_next(&target);
-            let before = snapshot(&target);
-            let mut r = ResultDir::create(&target).unwrap();
-            for (name, bytes) in &next {
-                r.write(name, bytes).unwrap();
-            }
+            let (r, before) = next_run_staged(&target);
             let mut calls = 0;
             let result = r.commit_with(false, &mut |a: &Path, b: &Path| {
                 calls += 1;
@@ -1220,12 +1230,7 @@ mod tests {
         let kill_at = |k: Option<usize>| {
             let root = tempfile::tempdir().unwrap();
             let target = root.path().join("results");
-            let next = earlier_run_and_the_next(&target);
-            let before = snapshot(&target);
-            let mut r = ResultDir::create(&target).unwrap();
-            for (name, bytes) in &next {
-                r.write(name, bytes).unwrap();
-            }
+            let (r, before) = next_run_staged(&target);
             let mut calls = 0;
             let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 r.commit_with(false, &mut |a: &Path, b: &Path| {

@@ -172,17 +172,23 @@ pub fn sweep_rows(
                 r
             })
             .collect(),
-        Err(e) => (0..model.dof().max(1))
-            .map(|i| {
-                let mut r = vec![String::new(); ncols];
-                r[0] = speed.to_string();
-                r[1] = (i + 1).to_string();
-                r[2] = "failed".into();
-                r[ncols - 1] = e.to_string();
-                r
-            })
-            .collect(),
+        Err(e) => failed_rows(model, ncols, speed, e),
     }
+}
+
+/// A failed point's rows, `ncols` wide: one per degree of freedom, status `failed`, the
+/// reason in the last column (`message`).
+fn failed_rows(model: &Model, ncols: usize, speed: f64, e: &PointError) -> Vec<Vec<String>> {
+    (0..model.dof().max(1))
+        .map(|i| {
+            let mut r = vec![String::new(); ncols];
+            r[0] = speed.to_string();
+            r[1] = (i + 1).to_string();
+            r[2] = "failed".into();
+            r[ncols - 1] = e.to_string();
+            r
+        })
+        .collect()
 }
 
 /// A mode shape for display: scaled so that its largest component is 1 (real), the
@@ -242,17 +248,7 @@ pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
 /// Rows of the modes table of a point at `speed` that failed: one per degree of freedom,
 /// status `failed`, the reason in `message` (as in a sweep).
 pub fn modes_failed_rows(model: &Model, speed: f64, e: &PointError) -> Vec<Vec<String>> {
-    let ncols = modes_header(model).len();
-    (0..model.dof().max(1))
-        .map(|i| {
-            let mut r = vec![String::new(); ncols];
-            r[0] = speed.to_string();
-            r[1] = (i + 1).to_string();
-            r[2] = "failed".into();
-            r[ncols - 1] = e.to_string();
-            r
-        })
-        .collect()
+    failed_rows(model, modes_header(model).len(), speed, e)
 }
 
 /// The elasticity `(b/f)·df/db`: the relative change of `f` per relative change of `b`; none
