@@ -21,7 +21,8 @@
 //!
 //! Cranelift: <https://cranelift.dev>, the code generator of Wasmtime.
 
-use super::{CHUNK, Op, Seeding, Tape, Term};
+use super::forward::CHUNK;
+use super::{Op, Seeding, Tape, Term};
 use cranelift_codegen::ir::{
     AbiParam, InstBuilder, MemFlagsData, StackSlotData, StackSlotKind, UserFuncName, Value, types,
 };
