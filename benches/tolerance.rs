@@ -65,7 +65,6 @@ fn bench(c: &mut Criterion) {
             samples: 100,
             seed: 1,
             sampling: Sampling::Random,
-            threads: None,
         }),
         ..Default::default()
     };

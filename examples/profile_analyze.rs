@@ -24,7 +24,6 @@ fn main() {
             samples: 100,
             seed: 1,
             sampling: Sampling::Random,
-            threads: Some(1),
         }),
         threads: Some(1),
         ..Default::default()

@@ -12,7 +12,7 @@
 //! split into recording the program and the point after it (from the initial guess), and the
 //! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process;
 //! `… -- hessians n`: the gradients and Hessians along the chain's parameters at one point.
-use modaltol::compiled::Compiled;
+use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
 use modaltol::output::outputs;
@@ -91,15 +91,18 @@ fn main() {
         // `direct` without the recorded program).
         let n = args[1].parse().unwrap();
         let text = chain(n);
-        let opt = Options {
-            direct: args.get(3).is_some_and(|a| a == "direct"),
-            ..Options::default()
+        let route = if args.get(3).is_some_and(|a| a == "direct") {
+            Route::Direct
+        } else {
+            Route::Recorded
         };
         for _ in 0..args[2].parse().unwrap() {
-            let model = Compiled::from_str(&text, "chain.toml").unwrap();
+            let model = Compiled::from_str(&text, "chain.toml")
+                .unwrap()
+                .with_route(route);
             let p = model.nominal();
             let q0 = initial_guess(&model, &p, 5.0).unwrap();
-            point(&model, &p, 5.0, &q0, &opt).unwrap();
+            point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
         }
         return;
     }
@@ -145,17 +148,14 @@ fn main() {
             let p = model.nominal();
             let q0 = initial_guess(&model, &p, 5.0).unwrap();
             record = record.min(time(&mut || {
-                model.problem(&p, 5.0, &q0, false).unwrap();
+                model.problem(&p, 5.0, &q0).unwrap();
             }));
             after = after.min(time(&mut || {
                 point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
             }));
-            let opt = Options {
-                direct: true,
-                ..Options::default()
-            };
+            let reference = model.clone().with_route(Route::Direct);
             direct = direct.min(time(&mut || {
-                point(&model, &p, 5.0, &q0, &opt).unwrap();
+                point(&reference, &p, 5.0, &q0, &Options::default()).unwrap();
             }));
         }
         println!(

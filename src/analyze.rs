@@ -12,16 +12,13 @@ use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::modal::ModeClass;
 use crate::model::Case;
-use crate::montecarlo::{self, Block, McOptions, McStat, TreeFold};
+use crate::montecarlo::{self, Block, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
-use crate::quadrature::{self, Event, QuadOptions, QuadStat};
-use crate::sweep::{Options, Point, Sweep};
-use crate::tolerance::{
-    KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat, discriminant, first_order, invariant,
-    local_model, outputs, second_order,
-};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use crate::propagate::{Propagation, Run, Study};
+use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
+use crate::sweep::Point;
+use crate::taylor::{Taylor, TaylorStats};
+use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
 use std::time::Instant;
 
 /// Propagation methods, as named in the outputs.
@@ -117,8 +114,8 @@ pub struct AnalyzeOptions {
     pub quadrature: Option<QuadOptions>,
     pub monte_carlo: Option<McOptions>,
     pub split: Split,
-    /// Worker threads for the derivatives (`None`: rayon's default); the Monte Carlo uses its
-    /// own setting.
+    /// Worker threads of every stage (`None`: rayon's default); results do not depend on
+    /// their number.
     pub threads: Option<usize>,
     /// Cancelling it stops the run at its next check: the sweep before its next speed (the
     /// speeds left are failures, "interrupted"), the quadrature before its next case, the Monte
@@ -184,6 +181,10 @@ impl Analysis {
 pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 
 /// Runs the analysis. Failed speeds are reported in `failures` and skipped; the run goes on.
+///
+/// The stages, in order: the [`Study`] (nominal sweep and local models, shared by the cases);
+/// per case the [`Quadrature`]; per case the [`Taylor`] methods and the `analytic` rows; per
+/// case the [`MonteCarlo`] (whole, one shard, or the shards' blocks merged).
 pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> Analysis {
     let mut vars: Vec<usize> = opt
         .cases
@@ -192,236 +193,76 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .collect();
     vars.sort_unstable();
     vars.dedup();
-    let transfer = model.analysis.transfer;
-    let p = model.nominal();
-    let t0 = Instant::now();
-    // The sweep is sequential (continuation); each point's local model is independent, so it is
-    // handed to the other worker threads as soon as the point is solved.
-    let n = opt.speeds.len();
-    let slots: Vec<Mutex<Option<Result<LocalModel, String>>>> =
-        (0..n).map(|_| Mutex::new(None)).collect();
-    let done = AtomicUsize::new(0);
     let pool = crate::threads::pool(opt.threads);
-    let mut failures = Vec::new();
-    let mut nominal = Vec::with_capacity(n);
-    pool.install(|| {
-        rayon::scope(|scope| {
-            let mut sweep = Sweep::new(model, p.clone(), Options::default());
-            for (i, &w) in opt.speeds.iter().enumerate() {
-                if opt.cancel.is_cancelled() {
-                    failures.push((w, "interrupted".to_string()));
-                    nominal.push(None);
-                    continue;
-                }
-                match sweep.step(w) {
-                    Ok(pt) => {
-                        let (slot, done, pt_local, p, vars) =
-                            (&slots[i], &done, pt.clone(), &p, &vars);
-                        scope.spawn(move |_| {
-                            let lm =
-                                local_model(model, p, &pt_local, vars, transfer.as_ref(), true)
-                                    .map_err(|e| format!("derivatives: {e}"));
-                            *slot.lock().expect("unpoisoned") = Some(lm);
-                            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                            progress("derivatives", d, n);
-                        });
-                        nominal.push(Some(pt));
-                    }
-                    Err(e) => {
-                        failures.push((w, e.to_string()));
-                        nominal.push(None);
-                    }
-                }
-            }
-        })
-    });
-    let locals = slots
-        .into_iter()
-        .map(|m| m.into_inner().expect("unpoisoned"));
-    let locals: Vec<Option<LocalModel>> = locals
-        .into_iter()
-        .zip(&opt.speeds)
-        .map(|(lm, &w)| match lm? {
-            Ok(lm) => Some(lm),
-            Err(e) => {
-                failures.push((w, e));
-                None
-            }
-        })
-        .collect();
-    failures.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let stage = |name: &str| {
+        let name = name.to_string();
+        move |d: usize, n: usize| progress(&name, d, n)
+    };
+    let derivatives = stage("derivatives");
+    let run = Run {
+        cancel: &opt.cancel,
+        pool: &pool,
+        progress: &derivatives,
+    };
+    let t0 = Instant::now();
+    let study = Study::build(model, vars, opt.speeds.clone(), &run);
     let spreads: Vec<Spread> = opt
         .cases
         .iter()
-        .map(|c| Spread::new(model, c, &vars))
+        .map(|c| Spread::new(model, c, &study.vars))
         .collect();
     let taylor_seconds = t0.elapsed().as_secs_f64();
-    let modes = nominal
+    let tq = Instant::now();
+    let quad: Vec<Option<QuadResult>> = match opt.quadrature {
+        Some(options) => spreads
+            .iter()
+            .zip(&opt.cases)
+            .map(|(s, case)| {
+                let progress = stage(&format!("quadrature {}", case.name));
+                Quadrature { options }
+                    .propagate(&study, s, &run.with_progress(&progress))
+                    .value
+            })
+            .collect(),
+        None => vec![None; spreads.len()],
+    };
+    let quadrature_seconds = opt.quadrature.map(|_| tq.elapsed().as_secs_f64());
+    let quadrature_rules = quad
         .iter()
         .flatten()
-        .map(|p| p.modes.len())
-        .next()
-        .unwrap_or(0);
-    let outs = outputs(modes, transfer.is_some());
-    let mut probabilities = Vec::new();
-    let mut quadrature_rules = Vec::new();
-    let tq = Instant::now();
-    let quad: Vec<Option<quadrature::QuadResult>> = spreads
-        .iter()
-        .enumerate()
-        .map(|(ci, s)| {
-            let q = opt.quadrature?;
-            if opt.cancel.is_cancelled() {
-                return None;
-            }
-            let name = format!("quadrature {}", opt.cases[ci].name);
-            let r = quadrature::integrate(
-                model,
-                &vars,
-                s,
-                &opt.speeds,
-                &nominal,
-                &locals,
-                &outs,
-                transfer.as_ref(),
-                QuadOptions {
-                    threads: q.threads.or(opt.threads),
-                    ..q
-                },
-                &|d, n| progress(&name, d, n),
-            );
-            quadrature_rules.push((r.rule.clone(), r.nodes));
-            Some(r)
-        })
+        .map(|r| (r.rule.clone(), r.nodes))
         .collect();
-    let quadrature_seconds = opt.quadrature.map(|_| tq.elapsed().as_secs_f64());
     let t2 = Instant::now();
     let mut rows = Vec::new();
+    let mut probabilities = Vec::new();
     for (ci, s) in spreads.iter().enumerate() {
-        for (si, lm) in locals.iter().enumerate() {
-            let Some(lm) = lm else { continue };
+        let taylor = Taylor.propagate(&study, s, &run).value;
+        for (si, (lm, stats)) in study.locals.iter().zip(taylor).enumerate() {
+            let (Some(lm), Some(stats)) = (lm, stats) else {
+                continue;
+            };
             let q = quad[ci].as_ref().map(|q| q.stats[si].as_slice());
-            rows.extend(analytic_rows(opt.speeds[si], ci, lm, s, q));
+            rows.extend(analytic_rows(opt.speeds[si], ci, lm, &stats, q));
         }
         if let Some(q) = &quad[ci] {
-            for (si, ps) in q.probabilities.iter().enumerate() {
-                if nominal[si].is_none() {
-                    continue;
-                }
-                probabilities.extend(ps.iter().map(|p| ProbabilityRow {
-                    speed: opt.speeds[si],
-                    case: ci,
-                    method: Method::Quadrature,
-                    event: p.event,
-                    mode: p.mode,
-                    probability: p.probability,
-                    ci: (
-                        (p.probability - p.error).max(0.0),
-                        (p.probability + p.error).min(1.0),
-                    ),
-                }));
-            }
+            probabilities.extend(quadrature_probabilities(&study, ci, q));
         }
     }
     let analytic_seconds = taylor_seconds + t2.elapsed().as_secs_f64();
-
-    let mut samples_done = Vec::new();
-    let mut inadmissible = Vec::new();
-    let mut shard_states = Vec::new();
-    let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
-        let t1 = Instant::now();
-        for (ci, s) in spreads.iter().enumerate() {
-            let name = format!("monte carlo {}", opt.cases[ci].name);
-            let (stats, done) = match &opt.split {
-                Split::Merged(blocks) => {
-                    let mut fold = TreeFold::default();
-                    for b in &blocks[ci] {
-                        fold.push(b.clone());
-                    }
-                    montecarlo::statistics(&fold, opt.speeds.len(), outs.len(), mc.samples)
-                }
-                Split::Shard(k, n) => {
-                    let range = montecarlo::shard_chunks(mc.samples, *k, *n);
-                    let states = montecarlo::run_chunks(
-                        model,
-                        &vars,
-                        s,
-                        &opt.speeds,
-                        &nominal,
-                        &outs,
-                        transfer.as_ref(),
-                        mc,
-                        range,
-                        &opt.cancel,
-                        &|d| progress(&name, d, mc.samples),
-                        None,
-                    );
-                    shard_states.push(states.into_blocks());
-                    continue;
-                }
-                Split::Whole => {
-                    if opt.cancel.is_cancelled() {
-                        samples_done.push(0);
-                        continue;
-                    }
-                    montecarlo::run(
-                        model,
-                        &vars,
-                        s,
-                        &opt.speeds,
-                        &nominal,
-                        &outs,
-                        transfer.as_ref(),
-                        mc,
-                        &opt.cancel,
-                        &|d| progress(&name, d, mc.samples),
-                    )
-                }
-            };
-            samples_done.push(done);
-            inadmissible.push(montecarlo::inadmissible(
-                model,
-                &vars,
-                s,
-                McOptions {
-                    samples: done,
-                    ..mc
-                },
-            ));
-            for (si, row) in stats.iter().enumerate() {
-                if nominal[si].is_none() || done < 2 {
-                    continue;
-                }
-                probabilities.extend(monte_carlo_probabilities(opt.speeds[si], ci, &outs, row));
-                for (o, st) in outs.iter().zip(row) {
-                    rows.push(Row {
-                        speed: opt.speeds[si],
-                        quantity: o.quantity,
-                        mode: o.mode,
-                        case: ci,
-                        method: Method::MonteCarlo,
-                        mean: st.mean,
-                        std: st.std,
-                        mc: Some(*st),
-                        shares: None,
-                        basis: None,
-                        quantiles: st.quantiles,
-                        errors: None,
-                        missing: if !st.mean.is_finite() {
-                            Some(
-                                nominal[si]
-                                    .as_ref()
-                                    .map_or(Missing::NoValue, |pt| no_value(pt, o)),
-                            )
-                        } else {
-                            (!st.std.is_finite()).then_some(Missing::OneSample)
-                        },
-                    });
-                }
-            }
-        }
-        t1.elapsed().as_secs_f64()
-    });
+    let t1 = Instant::now();
+    let mc = opt
+        .monte_carlo
+        .map(|mc| monte_carlo(&study, &spreads, opt, mc, &run, &stage));
+    let monte_carlo_seconds = mc.as_ref().map(|_| t1.elapsed().as_secs_f64());
+    let mc = mc.unwrap_or_default();
+    rows.extend(mc.rows);
+    probabilities.extend(mc.probabilities);
+    let Study {
+        vars,
+        failures,
+        nominal,
+        ..
+    } = study;
     Analysis {
         vars,
         cases: opt.cases.clone(),
@@ -433,20 +274,145 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         monte_carlo_seconds,
         failures,
         nominal,
-        samples_done,
-        inadmissible,
-        shard_states,
+        samples_done: mc.samples_done,
+        inadmissible: mc.inadmissible,
+        shard_states: mc.shard_states,
         cancelled: opt.cancel.is_cancelled(),
     }
 }
 
+/// The quadrature's probabilities of character of case `case`, at the speeds whose nominal
+/// point exists.
+fn quadrature_probabilities(study: &Study, case: usize, q: &QuadResult) -> Vec<ProbabilityRow> {
+    let mut out = Vec::new();
+    for (si, ps) in q.probabilities.iter().enumerate() {
+        if study.nominal[si].is_none() {
+            continue;
+        }
+        out.extend(ps.iter().map(|p| ProbabilityRow {
+            speed: study.speeds[si],
+            case,
+            method: Method::Quadrature,
+            event: p.event,
+            mode: p.mode,
+            probability: p.probability,
+            ci: (
+                (p.probability - p.error).max(0.0),
+                (p.probability + p.error).min(1.0),
+            ),
+        }));
+    }
+    out
+}
+
+/// What the Monte Carlo stage adds to an [`Analysis`].
+#[derive(Debug, Default)]
+struct MonteCarloPart {
+    rows: Vec<Row>,
+    probabilities: Vec<ProbabilityRow>,
+    samples_done: Vec<usize>,
+    inadmissible: Vec<Vec<(String, usize, f64)>>,
+    shard_states: Vec<Vec<Block>>,
+}
+
+/// The Monte Carlo of every case as `opt.split` asks: all samples here, one shard's chunks
+/// (their blocks kept for the merge), or the shards' blocks folded as a whole run would.
+fn monte_carlo<S, F>(
+    study: &Study,
+    spreads: &[Spread],
+    opt: &AnalyzeOptions,
+    mc: McOptions,
+    run: &Run,
+    stage: &S,
+) -> MonteCarloPart
+where
+    S: Fn(&str) -> F,
+    F: Fn(usize, usize) + Sync,
+{
+    let mut part = MonteCarloPart::default();
+    let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+    for (ci, s) in spreads.iter().enumerate() {
+        let progress = stage(&format!("monte carlo {}", opt.cases[ci].name));
+        let run = run.with_progress(&progress);
+        let (stats, done) = match &opt.split {
+            Split::Merged(blocks) => {
+                let mut fold = TreeFold::default();
+                for b in &blocks[ci] {
+                    fold.push(b.clone());
+                }
+                montecarlo::statistics(&fold, speeds, outs, mc.samples)
+            }
+            Split::Shard(k, n) => {
+                let method = MonteCarlo::shard(mc, *k, *n);
+                let states = method.propagate(study, s, &run).value;
+                part.shard_states.push(states.fold.into_blocks());
+                continue;
+            }
+            Split::Whole => {
+                if opt.cancel.is_cancelled() {
+                    part.samples_done.push(0);
+                    continue;
+                }
+                let r = MonteCarlo::whole(mc).propagate(study, s, &run).value;
+                (r.stats, r.samples)
+            }
+        };
+        part.samples_done.push(done);
+        part.inadmissible
+            .push(MonteCarlo::whole(mc).inadmissible(study, s, done, &run));
+        for (si, row) in stats.iter().enumerate() {
+            if study.nominal[si].is_none() || done < 2 {
+                continue;
+            }
+            part.probabilities.extend(monte_carlo_probabilities(
+                study.speeds[si],
+                ci,
+                &study.outputs,
+                row,
+            ));
+            part.rows.extend(monte_carlo_rows(study, si, ci, row));
+        }
+    }
+    part
+}
+
+/// The Monte Carlo rows of case `case` at speed `si`; a row without a value says why.
+fn monte_carlo_rows(study: &Study, si: usize, case: usize, stats: &[McStat]) -> Vec<Row> {
+    let nominal = study.nominal[si].as_ref();
+    study
+        .outputs
+        .iter()
+        .zip(stats)
+        .map(|(o, st)| Row {
+            speed: study.speeds[si],
+            quantity: o.quantity,
+            mode: o.mode,
+            case,
+            method: Method::MonteCarlo,
+            mean: st.mean,
+            std: st.std,
+            mc: Some(*st),
+            shares: None,
+            basis: None,
+            quantiles: st.quantiles,
+            errors: None,
+            missing: if !st.mean.is_finite() {
+                Some(nominal.map_or(Missing::NoValue, |pt| no_value(pt, o)))
+            } else {
+                (!st.std.is_finite()).then_some(Missing::OneSample)
+            },
+        })
+        .collect()
+}
+
 /// First-order, second-order, (for ω_d) invariant, quadrature and the `analytic` rows of one
-/// speed and case; a method that gives no value says why in its row.
+/// speed and case from the [`Taylor`] statistics `taylor` of the local model `lm`; a method
+/// that gives no value says why in its row.
 fn analytic_rows(
     speed: f64,
     case: usize,
     lm: &LocalModel,
-    s: &Spread,
+    taylor: &[TaylorStats],
     quad: Option<&[Option<QuadStat>]>,
 ) -> Vec<Row> {
     let mut rows = Vec::new();
@@ -473,26 +439,20 @@ fn analytic_rows(
             missing,
         }
     };
-    for (k, o) in lm.outputs.iter().enumerate() {
-        let v = lm.value[k];
-        let fo = lm.grad[k].clone().map(|g| first_order(v, &g, s));
-        let shares = fo.as_ref().ok().map(|(_, shares)| shares.clone());
-        let fo = fo.map(|(st, _)| st);
+    for (k, (o, t)) in lm.outputs.iter().zip(taylor).enumerate() {
+        let shares = t
+            .first_order
+            .as_ref()
+            .ok()
+            .map(|(_, shares)| shares.clone());
+        let fo = t.first_order.clone().map(|(st, _)| st);
         rows.push(row(o, Method::FirstOrder, fo.clone(), shares, None));
-        let so = lm.grad[k]
-            .clone()
-            .and_then(|g| lm.hess[k].clone().map(|h| second_order(v, &g, &h, s)));
+        let so = t.second_order.clone();
         rows.push(row(o, Method::SecondOrder, so.clone(), None, None));
         let mut choice = so
-            .clone()
             .map(|st| (Method::SecondOrder, st))
             .or(fo.map(|st| (Method::FirstOrder, st)));
-        if let (Quantity::DampedFrequency, Some(m)) = (o.quantity, o.mode) {
-            let (d, g, h) = &lm.disc[m];
-            let inv = g.clone().map(|g| {
-                let h = h.as_ref().ok();
-                (invariant(*d, &g, h, s), discriminant(*d, &g, h, s))
-            });
+        if let Some(inv) = &t.invariant {
             rows.push(row(
                 o,
                 Method::Invariant,
@@ -503,7 +463,7 @@ fn analytic_rows(
             if let Ok((st, dst)) = inv
                 && (choice.is_err() || dst.mean.abs() < KINK_SIGMAS * dst.std)
             {
-                choice = Ok((Method::Invariant, st));
+                choice = Ok((Method::Invariant, *st));
             }
         }
         let q = quad.map(|q| {

@@ -3,9 +3,10 @@
 //! A [`Model`] is the validated description of a mechanism. Solving thousands of operating
 //! points of it (a sweep, a Monte Carlo run, the quadrature nodes) is faster through its
 //! equations recorded once as a [`Program`]; [`Compiled`] holds the model and that recording,
-//! made on first use, and hands out each point's equations on the route that serves
-//! ([`Compiled::equations`], [`Compiled::problem`]). It dereferences to the model, so
-//! everything that only describes the mechanism reads it as before.
+//! made on first use, and hands out each point's equations
+//! ([`Compiled::equations`], [`Compiled::problem`]) on the [`Route`] chosen when it is made.
+//! It dereferences to the model, so everything that only describes the mechanism reads it as
+//! before.
 
 use crate::equilibrium::Problem;
 use crate::mechanics::{System, steady_speeds};
@@ -17,10 +18,25 @@ use std::ops::Deref;
 use std::path::Path;
 use std::sync::OnceLock;
 
+/// How a model's equations are evaluated: chosen once, when the [`Compiled`] is made, and
+/// used by every computation on it (the equilibrium solve, the linearisation, the
+/// sensitivities and the Hessians). The two routes give the same numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Route {
+    /// Through the program recorded on first use, where the recording is valid (else
+    /// directly): the fast route, and the default.
+    #[default]
+    Recorded,
+    /// Always through the generic mechanics: the reference the recorded route is checked
+    /// against, in tests and timings.
+    Direct,
+}
+
 /// A model and its recorded equations (see the module documentation).
 #[derive(Debug, Clone)]
 pub struct Compiled {
     model: Model,
+    route: Route,
     program: OnceLock<Option<Program>>,
 }
 
@@ -43,8 +59,23 @@ impl Compiled {
     pub fn new(model: Model) -> Self {
         Compiled {
             model,
+            route: Route::default(),
             program: OnceLock::new(),
         }
+    }
+
+    /// The same model evaluated on `route` (nothing recorded yet).
+    pub fn with_route(self, route: Route) -> Self {
+        Compiled {
+            model: self.model,
+            route,
+            program: OnceLock::new(),
+        }
+    }
+
+    /// The route the model's equations are evaluated on.
+    pub fn route(&self) -> Route {
+        self.route
     }
 
     /// Reads and validates a model file ([`Model::from_file`]).
@@ -84,9 +115,13 @@ impl Compiled {
     }
 
     /// The model's equations recorded as a program for fast operating-point solves, recorded
-    /// on the first call (at these parameters, speed and coordinates); `None` where the
-    /// recording is not valid, and then the direct route serves.
+    /// on the first call (at these parameters, speed and coordinates); `None` on the
+    /// [`Route::Direct`] and where the recording is not valid, and then the direct route
+    /// serves.
     pub fn program(&self, p: &[f64], speed: f64, q: &[f64]) -> Option<&Program> {
+        if self.route == Route::Direct {
+            return None;
+        }
         if let Some(recorded) = self.program.get() {
             return recorded.as_ref();
         }
@@ -122,20 +157,11 @@ impl Compiled {
         })
     }
 
-    /// The equilibrium solve at parameters `p` and `speed` from near `q0`: through the
-    /// recorded program when the model has one and `direct` is off, else directly (the two
-    /// give the same numbers; `direct` is for cross-checks and timing).
-    pub fn problem(
-        &self,
-        p: &[f64],
-        speed: f64,
-        q0: &[f64],
-        direct: bool,
-    ) -> Result<Problem<'_>, FieldError> {
+    /// The equilibrium solve at parameters `p` and `speed` from near `q0`, on the model's
+    /// [`Route`].
+    pub fn problem(&self, p: &[f64], speed: f64, q0: &[f64]) -> Result<Problem<'_>, FieldError> {
         let names = self.coordinates.iter().map(|c| c.name.as_str()).collect();
-        let recorded = (!direct)
-            .then(|| self.program(p, speed, q0).and_then(|pr| pr.at(p, speed)))
-            .flatten();
+        let recorded = self.program(p, speed, q0).and_then(|pr| pr.at(p, speed));
         let mut problem = match recorded {
             Some(instance) => Problem::new(
                 Box::new(instance),

@@ -37,6 +37,7 @@ use crate::frf::transfer;
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
+use crate::pair;
 use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
@@ -232,11 +233,8 @@ fn expand<J: Jet>(
                     J::from(0.0)
                 }
             });
-            let zeta = invariants.clone().map(|(s, pr)| {
-                let pr = if pr.re() < 0.0 { -pr } else { pr };
-                -s / (pr.sqrt() * 2.0)
-            });
-            let d = invariants.map(|(s, pr)| pr - s * s * 0.25);
+            let zeta = invariants.clone().map(|(s, pr)| pair::damping_ratio(s, pr));
+            let d = invariants.map(|(s, pr)| pair::discriminant(s, pr));
             [wd, zeta, d]
         })
         .collect();

@@ -975,7 +975,6 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
             Some(SamplingArg::Sobol) => Sampling::Sobol,
             None => m.analysis.sampling,
         },
-        threads,
     });
     let split = match &shard {
         None => Split::Whole,
@@ -1019,7 +1018,6 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
     let quadrature =
         (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
             tolerance: quadrature_tolerance,
-            threads,
         });
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
@@ -1080,16 +1078,12 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
         samples: first.samples,
         seed: first.seed,
         sampling: first.sampling,
-        threads: None,
     };
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
         cases,
         // The quadrature of the run the shards belong to.
-        quadrature: first.quadrature.map(|tolerance| QuadOptions {
-            tolerance,
-            threads: None,
-        }),
+        quadrature: first.quadrature.map(|tolerance| QuadOptions { tolerance }),
         monte_carlo: Some(mc),
         split: Split::Merged(states),
         threads: None,

@@ -55,6 +55,7 @@
 //! [`linalg::symmetric_definite`] and `first_order_modes`).
 
 use crate::linalg;
+use crate::pair;
 use crate::schur::Eigen;
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -737,10 +738,10 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
     let (l1, l2) = (root.lambda, partner.lambda);
     let p = (l1 * l2).re;
     let s = (l1 + l2).re;
-    let wn = p.abs().sqrt();
+    let wn = pair::natural_frequency(p);
     let zeta = if wn > 0.0 {
         // `+ 0.0`: an undamped mode's ζ is 0, not −0.
-        -s / (2.0 * wn) + 0.0
+        pair::damping_ratio(s, p) + 0.0
     } else {
         f64::INFINITY.copysign(-s)
     };

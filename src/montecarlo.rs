@@ -18,14 +18,11 @@
 //! heavy-tailed outputs (|H| at a stationary point is χ²-like, κ ≈ 15), where the χ² interval,
 //! valid for normal outputs only, would be several times too narrow.
 
-use crate::cancel::Cancel;
-use crate::compiled::Compiled;
-use crate::equilibrium::Settings;
 use crate::modal::ModeClass;
-use crate::model::{Distribution, Sampling, Transfer};
-use crate::sensitivity::TransferAt;
-use crate::sweep::{Options, Point, Sweep};
-use crate::tolerance::{Output, Spread, match_modes, value};
+use crate::model::Sampling;
+use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
+use crate::sampling::{DesignMap, sample_sweep};
+use crate::tolerance::{Spread, value};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -37,8 +34,6 @@ pub struct McOptions {
     pub samples: usize,
     pub seed: u64,
     pub sampling: Sampling,
-    /// Worker threads (`None`: rayon's default).
-    pub threads: Option<usize>,
 }
 
 /// Statistics of one output at one speed.
@@ -62,7 +57,7 @@ pub struct McStat {
     /// branch switches since the lowest speed).
     pub other_branch: usize,
     /// The 5, 50 and 95 % sample quantiles (linear interpolation between order statistics),
-    /// where the run kept the values (see [`run`]).
+    /// where the run kept the values (see [`MonteCarlo::quantiles`]).
     pub quantiles: Option<[f64; 3]>,
 }
 
@@ -372,20 +367,18 @@ pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
 
 /// Design-variable values of sample `index` (`vars` in the order of `spread`).
 pub struct Sampler {
-    vars: Vec<usize>,
-    nominal: Vec<f64>,
-    spread: Spread,
-    /// Cholesky factor of the correlation of the normal variables.
-    chol: nalgebra::DMatrix<f64>,
+    map: DesignMap,
+    /// Number of design variables.
+    dims: usize,
     opt: McOptions,
     /// Latin hypercube: the key of variable v's permutation of the strata ([`permute`]).
     strata: Vec<u32>,
 }
 
 impl Sampler {
-    pub fn new(model: &Compiled, vars: &[usize], spread: &Spread, opt: McOptions) -> Sampler {
-        let n = vars.len();
-        let chol = correlation_factor(&spread.correlation);
+    /// The samples of the study's variables under `spread`.
+    pub fn new(study: &Study, spread: &Spread, opt: McOptions) -> Sampler {
+        let n = study.vars.len();
         // One permutation key per variable, drawn from a stream reserved for it.
         let strata = (0..n)
             .map(|v| {
@@ -395,10 +388,8 @@ impl Sampler {
             })
             .collect();
         Sampler {
-            vars: vars.to_vec(),
-            nominal: model.nominal(),
-            spread: spread.clone(),
-            chol,
+            map: DesignMap::new(study.model.nominal(), study.vars.clone(), spread.clone()),
+            dims: n,
             opt,
             strata,
         }
@@ -406,7 +397,7 @@ impl Sampler {
 
     /// Uniform numbers in (0, 1), one per variable, for sample `index`.
     fn uniforms(&self, index: usize) -> Vec<f64> {
-        let n = self.vars.len();
+        let n = self.dims;
         let clamp = |u: f64| u.clamp(1e-12, 1.0 - 1e-12);
         match self.opt.sampling {
             Sampling::Sobol => (0..n)
@@ -441,40 +432,8 @@ impl Sampler {
         let u = self.uniforms(index);
         let normal = Normal::standard();
         let z: Vec<f64> = u.iter().map(|&x| normal.inverse_cdf(x)).collect();
-        parameters_at(&self.nominal, &self.vars, &self.spread, &self.chol, &z, &u)
+        self.map.parameters(&z, &u)
     }
-}
-
-/// Parameter values at independent standard normals `z` (and their uniforms `u = Φ(z)`), one
-/// per design variable: a normal variable is `b₀ + σ (L z)ₖ` with `L` the Cholesky factor of
-/// the correlation, a uniform one `b₀ + √3 σ (2uₖ − 1)` (uniform on ±T; correlations are not
-/// applied to uniform variables). Monte Carlo samples and quadrature nodes both come from here.
-pub fn parameters_at(
-    nominal: &[f64],
-    vars: &[usize],
-    spread: &Spread,
-    chol: &nalgebra::DMatrix<f64>,
-    z: &[f64],
-    u: &[f64],
-) -> Vec<f64> {
-    let zc = chol * nalgebra::DVector::from_column_slice(z);
-    let mut p = nominal.to_vec();
-    for (k, &b) in vars.iter().enumerate() {
-        p[b] += match spread.distribution[k] {
-            Distribution::Normal => spread.sigma[k] * zc[k],
-            Distribution::Uniform => spread.sigma[k] * 3f64.sqrt() * (2.0 * u[k] - 1.0),
-        };
-    }
-    p
-}
-
-/// Cholesky factor of a correlation matrix (the identity where it is not positive definite;
-/// the model's validation rejects such matrices).
-pub fn correlation_factor(c: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
-    let n = c.nrows();
-    c.clone()
-        .cholesky()
-        .map_or_else(|| nalgebra::DMatrix::identity(n, n), |c| c.l())
 }
 
 /// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
@@ -482,116 +441,12 @@ pub fn correlation_factor(c: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> 
 /// what happened to the sample there.
 type SampleResult = Vec<(f64, Events)>;
 
-/// Sweeps the design `p` across `speeds` as a Monte Carlo sample or a quadrature node does:
-/// warm-started from the nominal point at the first speed, continued from speed to speed (so
-/// that it follows the branch a sweep from the lowest speed follows), its modes matched to the
-/// nominal ones by shape. `visit(i, point)` gets, per speed, the nominal point and the sample's
-/// with the number of branch switches the sample's sweep made up to there, or `None` where
-/// either failed or the sample has another number of modes.
-pub fn sample_sweep(
-    model: &Compiled,
-    p: Vec<f64>,
-    speeds: &[f64],
-    nominal: &[Option<Point>],
-    mut visit: impl FnMut(usize, Option<(&Point, &Point, usize)>),
-) {
-    // Samples do not report drive forces.
-    let options = Options {
-        newton: Settings {
-            drive_force: false,
-            ..Settings::default()
-        },
-        ..Options::default()
-    };
-    // A design that cannot exist (a negative mass, an indefinite inertia) fails at every speed.
-    if model.admissible(&p).is_err() {
-        for i in 0..speeds.len() {
-            visit(i, None);
-        }
-        return;
-    }
-    let mut sweep = Sweep::new(model, p, options);
-    let mut started = false;
-    let mut switches = 0;
-    for (i, (&w, nom)) in speeds.iter().zip(nominal).enumerate() {
-        let pt = nom.as_ref().and_then(|nom| {
-            if !started {
-                sweep.warm_start(nom);
-            }
-            let pt = sweep.step(w).ok()?;
-            started = true;
-            switches += usize::from(pt.new_branch);
-            (pt.modes.len() == nom.modes.len()).then(|| (nom, match_modes(nom, pt)))
-        });
-        visit(i, pt.as_ref().map(|(nom, pt)| (*nom, pt, switches)));
-    }
-}
-
-/// The samples `0..samples` whose design is not physically admissible
-/// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
-/// frequent first. They fail at every speed; this says why.
-pub fn inadmissible(
-    model: &Compiled,
-    vars: &[usize],
-    spread: &Spread,
-    opt: McOptions,
-) -> Vec<(String, usize, f64)> {
-    let sampler = Sampler::new(model, vars, spread, opt);
-    let pool = crate::threads::pool(opt.threads);
-    let mut tally: Vec<(String, usize, f64)> = pool.install(|| {
-        (0..opt.samples)
-            .into_par_iter()
-            .filter_map(|i| model.admissible(&sampler.parameters(i)).err())
-            .fold(Vec::new, |mut t: Vec<(String, usize, f64)>, d| {
-                match t.iter_mut().find(|x| x.0 == d.reason) {
-                    Some(x) => x.1 += 1,
-                    None => t.push((d.reason, 1, d.value)),
-                }
-                t
-            })
-            .reduce(Vec::new, |mut a, b| {
-                for (r, n, v) in b {
-                    match a.iter_mut().find(|x| x.0 == r) {
-                        Some(x) => x.1 += n,
-                        None => a.push((r, n, v)),
-                    }
-                }
-                a
-            })
-    });
-    tally.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
-    tally
-}
-
-/// Number of branch switches of the nominal sweep up to each speed, counted as a sample's are
-/// ([`sample_sweep`]): from its first point on. Samples start from that point, so a switch
-/// made there (from the model's initial guess onto a stable equilibrium, where a sweep starts
-/// past a loss of stability) is none of theirs.
-pub fn branch_counts(nominal: &[Option<Point>]) -> Vec<usize> {
-    let mut started = false;
-    nominal
-        .iter()
-        .scan(0, |n, p| {
-            if let Some(p) = p {
-                *n += usize::from(started && p.new_branch);
-                started = true;
-            }
-            Some(*n)
-        })
-        .collect()
-}
-
-fn run_sample(
-    model: &Compiled,
-    p: Vec<f64>,
-    speeds: &[f64],
-    nominal: &[Option<Point>],
-    outs: &[Output],
-    transfer: Option<&Transfer>,
-) -> SampleResult {
-    let branches = branch_counts(nominal);
-    let mut out = Vec::with_capacity(speeds.len() * outs.len());
-    sample_sweep(model, p, speeds, nominal, |i, pts| {
+/// Sweeps the design `p` across the study's speeds and reads every output there, with what
+/// happened to the sample.
+fn run_sample(study: &Study, p: Vec<f64>) -> SampleResult {
+    let outs = &study.outputs;
+    let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
+    sample_sweep(study.model, p, &study.speeds, &study.nominal, |i, pts| {
         let Some((nom, pt, switches)) = pts else {
             out.extend(std::iter::repeat_n(
                 (f64::NAN, Events::default()),
@@ -599,9 +454,9 @@ fn run_sample(
             ));
             return;
         };
-        let tf = transfer.map(|t| TransferAt::at_speed(t, speeds[i]));
+        let tf = study.transfer_at(i);
         let unstable = !pt.stable();
-        let other_branch = switches != branches[i];
+        let other_branch = switches != study.branches[i];
         out.extend(outs.iter().map(|o| {
             let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
             let events = Events {
@@ -632,77 +487,184 @@ pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize
     (c * k / n)..(c * (k + 1) / n)
 }
 
-/// Evaluates the chunks `range` (samples `CHUNK·i .. CHUNK·(i+1)` of chunk `i`) and returns each
-/// chunk's moments `[chunk][speed][output]`, in chunk order. Stops early (fewer chunks) when
-/// `cancel` is cancelled. `progress` gets the number of samples done in this call. With
-/// `values`, also keeps every finite value per `[speed · outputs + output]`, in sample order
-/// (for quantiles).
-#[allow(clippy::too_many_arguments)]
-pub fn run_chunks(
-    model: &Compiled,
-    vars: &[usize],
-    spread: &Spread,
-    speeds: &[f64],
-    nominal: &[Option<Point>],
-    outs: &[Output],
-    transfer: Option<&Transfer>,
-    opt: McOptions,
-    range: std::ops::Range<usize>,
-    cancel: &Cancel,
-    progress: &(dyn Fn(usize) + Sync),
-    mut values: Option<&mut Vec<Vec<f32>>>,
-) -> TreeFold {
-    let sampler = Sampler::new(model, vars, spread, opt);
-    let pool = crate::threads::pool(opt.threads);
-    let mut out = TreeFold::default();
-    let mut done = 0;
-    if let Some(v) = values.as_deref_mut() {
-        v.resize(speeds.len() * outs.len(), Vec::new());
-    }
-    for chunk in range {
-        if cancel.is_cancelled() {
-            break;
+/// The Monte Carlo as a propagation method: the samples of `chunks` (samples
+/// `CHUNK·i .. CHUNK·(i+1)` of chunk `i`), each a whole sweep, their moments folded along the
+/// fixed tree (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct MonteCarlo {
+    pub options: McOptions,
+    /// The chunks evaluated here: all of them, or one shard's.
+    pub chunks: std::ops::Range<usize>,
+    /// Keep every value for the 5/50/95 % quantiles (a whole run, unless more than
+    /// [`MAX_KEPT_VALUES`] values would be kept).
+    pub quantiles: bool,
+}
+
+/// What a [`MonteCarlo`] run gives.
+#[derive(Debug, Clone)]
+pub struct McResult {
+    /// Each chunk's moments, in chunk order (folded).
+    pub fold: TreeFold,
+    /// Statistics `[speed][output]` of the chunks done, with the quantiles where they were
+    /// kept.
+    pub stats: Vec<Vec<McStat>>,
+    /// Samples evaluated (fewer than asked where the run was cancelled).
+    pub samples: usize,
+}
+
+impl MonteCarlo {
+    /// All samples of `options`.
+    pub fn whole(options: McOptions) -> MonteCarlo {
+        MonteCarlo {
+            options,
+            chunks: 0..chunks(options.samples),
+            quantiles: true,
         }
-        let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(opt.samples));
-        let results: Vec<SampleResult> = pool.install(|| {
-            (start..end)
-                .into_par_iter()
-                .map(|i| {
-                    run_sample(
-                        model,
-                        sampler.parameters(i),
-                        speeds,
-                        nominal,
-                        outs,
-                        transfer,
-                    )
-                })
-                .collect()
-        });
-        let mut acc = vec![vec![Moments::default(); outs.len()]; speeds.len()];
-        for r in results {
-            for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
-                if v.is_finite() {
-                    m.add(v);
-                    if let Some(vals) = values.as_deref_mut() {
-                        vals[k].push(v as f32);
+    }
+
+    /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), no quantiles.
+    pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo {
+        MonteCarlo {
+            options,
+            chunks: shard_chunks(options.samples, k, n),
+            quantiles: false,
+        }
+    }
+
+    /// Evaluates the chunks and returns each chunk's moments `[chunk][speed][output]`, in
+    /// chunk order; stops early (fewer chunks, [`Termination::Cancelled`]) when the run is
+    /// cancelled. Progress counts the
+    /// samples done in this call. With `values`, also keeps every finite value per
+    /// `[speed · outputs + output]`, in sample order (for quantiles).
+    fn run_chunks(
+        &self,
+        study: &Study,
+        spread: &Spread,
+        run: &Run,
+        mut values: Option<&mut Vec<Vec<f32>>>,
+    ) -> (TreeFold, Termination) {
+        let opt = self.options;
+        let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+        let sampler = Sampler::new(study, spread, opt);
+        let mut out = TreeFold::default();
+        let mut done = 0;
+        if let Some(v) = values.as_deref_mut() {
+            v.resize(speeds * outs, Vec::new());
+        }
+        for chunk in self.chunks.clone() {
+            if run.cancel.is_cancelled() {
+                return (out, Termination::Cancelled);
+            }
+            let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(opt.samples));
+            let results: Vec<SampleResult> = run.pool.install(|| {
+                (start..end)
+                    .into_par_iter()
+                    .map(|i| run_sample(study, sampler.parameters(i)))
+                    .collect()
+            });
+            let mut acc = vec![vec![Moments::default(); outs]; speeds];
+            for r in results {
+                for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
+                    if v.is_finite() {
+                        m.add(v);
+                        if let Some(vals) = values.as_deref_mut() {
+                            vals[k].push(v as f32);
+                        }
+                    } else {
+                        m.failed += 1;
                     }
-                } else {
-                    m.failed += 1;
+                    m.count(events);
                 }
-                m.count(events);
+            }
+            out.push(Block {
+                level: 0,
+                index: chunk,
+                moments: acc,
+            });
+            done += end - start;
+            (run.progress)(done, opt.samples);
+        }
+        (out, Termination::Completed)
+    }
+
+    /// The samples `0..samples` of `spread` whose design is not physically admissible
+    /// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
+    /// frequent first. They fail at every speed; this says why.
+    pub fn inadmissible(
+        &self,
+        study: &Study,
+        spread: &Spread,
+        samples: usize,
+        run: &Run,
+    ) -> Vec<(String, usize, f64)> {
+        let model = study.model;
+        let sampler = Sampler::new(
+            study,
+            spread,
+            McOptions {
+                samples,
+                ..self.options
+            },
+        );
+        let mut tally: Vec<(String, usize, f64)> = run.pool.install(|| {
+            (0..samples)
+                .into_par_iter()
+                .filter_map(|i| model.admissible(&sampler.parameters(i)).err())
+                .fold(Vec::new, |mut t: Vec<(String, usize, f64)>, d| {
+                    match t.iter_mut().find(|x| x.0 == d.reason) {
+                        Some(x) => x.1 += 1,
+                        None => t.push((d.reason, 1, d.value)),
+                    }
+                    t
+                })
+                .reduce(Vec::new, |mut a, b| {
+                    for (r, n, v) in b {
+                        match a.iter_mut().find(|x| x.0 == r) {
+                            Some(x) => x.1 += n,
+                            None => a.push((r, n, v)),
+                        }
+                    }
+                    a
+                })
+        });
+        tally.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+        tally
+    }
+}
+
+impl Propagation for MonteCarlo {
+    type Value = McResult;
+
+    fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McResult> {
+        let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+        let samples = self.options.samples;
+        let keep = self.quantiles && samples.saturating_mul(speeds * outs) <= MAX_KEPT_VALUES;
+        let mut values = Vec::new();
+        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut values));
+        let (mut stats, done) = statistics(&fold, speeds, outs, samples);
+        if keep {
+            for (st, vals) in stats.iter_mut().flatten().zip(values) {
+                let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
+                v.sort_by(f64::total_cmp);
+                if !v.is_empty() {
+                    st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
+                }
             }
         }
-        out.push(Block {
-            level: 0,
-            index: chunk,
-            moments: acc,
-        });
-        done += end - start;
-        progress(done);
+        Estimate {
+            value: McResult {
+                fold,
+                stats,
+                samples: done,
+            },
+            termination,
+        }
     }
-    out
 }
+
+/// At most this many values (`samples × speeds × outputs`) are kept for the quantiles of a
+/// whole run (4 bytes each); a larger run reports no quantiles.
+pub const MAX_KEPT_VALUES: usize = 100_000_000;
 
 /// Statistics `[speed][output]` of the chunks folded, and the number of samples (of `asked`)
 /// they cover.
@@ -731,55 +693,6 @@ pub fn statistics(
             .collect(),
         samples,
     )
-}
-
-/// At most this many values (`samples × speeds × outputs`) are kept for the quantiles of a
-/// whole run (4 bytes each); a larger run reports no quantiles.
-pub const MAX_KEPT_VALUES: usize = 100_000_000;
-
-/// Runs the whole Monte Carlo: all chunks, folded. Returns `stats[speed][output]` (with the
-/// 5/50/95 % quantiles unless more than [`MAX_KEPT_VALUES`] values would be kept) and the
-/// number of samples evaluated (fewer than asked when `cancel` interrupted the run).
-#[allow(clippy::too_many_arguments)]
-pub fn run(
-    model: &Compiled,
-    vars: &[usize],
-    spread: &Spread,
-    speeds: &[f64],
-    nominal: &[Option<Point>],
-    outs: &[Output],
-    transfer: Option<&Transfer>,
-    opt: McOptions,
-    cancel: &Cancel,
-    progress: &(dyn Fn(usize) + Sync),
-) -> (Vec<Vec<McStat>>, usize) {
-    let keep = opt.samples.saturating_mul(speeds.len() * outs.len()) <= MAX_KEPT_VALUES;
-    let mut values = Vec::new();
-    let states = run_chunks(
-        model,
-        vars,
-        spread,
-        speeds,
-        nominal,
-        outs,
-        transfer,
-        opt,
-        0..chunks(opt.samples),
-        cancel,
-        progress,
-        keep.then_some(&mut values),
-    );
-    let (mut stats, done) = statistics(&states, speeds.len(), outs.len(), opt.samples);
-    if keep {
-        for (st, vals) in stats.iter_mut().flatten().zip(values) {
-            let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
-            v.sort_by(f64::total_cmp);
-            if !v.is_empty() {
-                st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
-            }
-        }
-    }
-    (stats, done)
 }
 
 #[cfg(test)]

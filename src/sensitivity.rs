@@ -35,6 +35,7 @@ use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Mode, Root, Smoothness, similarities, smoothness};
 use crate::model::{Channel, Transfer};
+use crate::pair;
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -130,12 +131,8 @@ fn mode_derivative(
     let s = (l1 + l2).re;
     let (ds, dp) = invariants.unwrap_or(((d1 + d2).re, (d1 * l2 + l1 * d2).re));
     let wn = m.natural_frequency;
-    let dwn = if wn > 0.0 {
-        p.signum() * dp / (2.0 * wn)
-    } else {
-        f64::NAN
-    };
-    let dzeta = -ds / (2.0 * wn) + s * dwn / (2.0 * wn * wn);
+    let dwn = pair::d_natural_frequency(p, wn, dp);
+    let dzeta = pair::d_damping_ratio(s, wn, ds, dwn);
     ModeSensitivity {
         status,
         d_eigen_re: d1.re,

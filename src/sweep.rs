@@ -200,9 +200,6 @@ pub struct Options {
     pub newton: Settings,
     /// Do not look for a stable branch when the equilibrium found is unstable.
     pub no_branch_switch: bool,
-    /// Evaluate the mechanics directly, not through the model's recorded program (the two
-    /// give the same numbers; this is for cross-checks and timing).
-    pub direct: bool,
 }
 
 /// The model's initial guesses at parameters `p` and `speed`.
@@ -291,9 +288,8 @@ pub fn point_from(
     start: Start,
     opt: &Options,
 ) -> Result<Point, PointError> {
-    // Through the recorded program when there is one (the system's numbers are part of it),
-    // else directly.
-    let problem = model.problem(p, speed, q0, opt.direct)?;
+    // On the model's route (the recorded program when there is one).
+    let problem = model.problem(p, speed, q0)?;
     let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);

@@ -30,6 +30,7 @@ use crate::hessian::hessians;
 use crate::modal::{Smoothness, smoothness};
 use crate::model::{Case, Distribution, Transfer};
 use crate::output::Missing;
+use crate::pair;
 use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
@@ -231,8 +232,7 @@ fn discriminants(pt: &Point) -> Vec<f64> {
         .iter()
         .map(|m| {
             let (l1, l2) = (m.root.lambda, m.partner.lambda);
-            let (sum, prod) = ((l1 + l2).re, (l1 * l2).re);
-            prod - 0.25 * sum * sum
+            pair::discriminant((l1 + l2).re, (l1 * l2).re)
         })
         .collect()
 }

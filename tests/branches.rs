@@ -206,8 +206,8 @@ fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
                 samples: 200,
                 seed: 5,
                 sampling: Sampling::Lhs,
-                threads: Some(1),
             }),
+            threads: Some(1),
             ..Default::default()
         };
         let a = analyze(&model, &opt, &|_, _, _| {});

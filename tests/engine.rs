@@ -6,7 +6,7 @@ mod common;
 
 use approx::assert_relative_eq;
 use common::{at, example, example_text};
-use modaltol::compiled::Compiled;
+use modaltol::compiled::{Compiled, Route};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, constraints_at, evaluate};
 use modaltol::modal::ModeClass;
@@ -445,13 +445,11 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
     // Wherever the spin angle starts, including where the residual is stationary in it
     // (cos q_D at 0 and π) and where the tilt lies across the swing plane (π/2).
     // Both routes (recorded program, direct evaluation).
-    let direct = Options {
-        direct: true,
-        ..Options::default()
-    };
-    for opt in [Options::default(), direct] {
+    for route in [Route::Recorded, Route::Direct] {
+        let model = model.clone().with_route(route);
         for spin in [0.0, FRAC_PI_2, 1.0, PI, -2.2] {
-            let err = point(&model, &p, 2.0, &[spin, 0.5], &opt).expect_err("no steady state");
+            let err = point(&model, &p, 2.0, &[spin, 0.5], &Options::default())
+                .expect_err("no steady state");
             assert!(err.to_string().contains("no steady state"), "{spin}: {err}");
         }
     }
@@ -525,12 +523,10 @@ fn a_spring_to_the_ground_is_checked_by_evaluation() {
     let tied = Compiled::from_str(&spring("ground"), "tied.toml").unwrap();
     let p = tied.nominal();
     assert!(tied.steady_by_symmetry(&p, 2.0).is_empty());
-    let direct = Options {
-        direct: true,
-        ..Options::default()
-    };
-    for opt in [Options::default(), direct] {
-        let err = point(&tied, &p, 2.0, &[0.3, 0.5], &opt).expect_err("no steady state");
+    for route in [Route::Recorded, Route::Direct] {
+        let tied = tied.clone().with_route(route);
+        let err =
+            point(&tied, &p, 2.0, &[0.3, 0.5], &Options::default()).expect_err("no steady state");
         assert!(err.to_string().contains("no steady state"), "{err}");
     }
     let braced = Compiled::from_str(&spring("shaft"), "braced.toml").unwrap();

@@ -4,7 +4,7 @@
 mod common;
 
 use common::example;
-use modaltol::compiled::Compiled;
+use modaltol::compiled::{Compiled, Route};
 use modaltol::equilibrium::Solvable;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
@@ -459,14 +459,13 @@ fn sweeps_agree_with_and_without_the_program() {
         let model = example(name);
         let p = model.nominal();
         let run = |direct: bool| {
-            let mut s = Sweep::new(
-                &model,
-                p.clone(),
-                Options {
-                    direct,
-                    ..Default::default()
-                },
-            );
+            let route = if direct {
+                Route::Direct
+            } else {
+                Route::Recorded
+            };
+            let model = model.clone().with_route(route);
+            let mut s = Sweep::new(&model, p.clone(), Options::default());
             (0..=40)
                 .map(|i| s.step(0.125 * i as f64))
                 .collect::<Vec<_>>()
@@ -597,14 +596,13 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
     );
     let model = Compiled::from_str(&text, "sqrt_speed.toml").unwrap();
     let run = |direct: bool| {
-        let mut s = Sweep::new(
-            &model,
-            model.nominal(),
-            Options {
-                direct,
-                ..Default::default()
-            },
-        );
+        let route = if direct {
+            Route::Direct
+        } else {
+            Route::Recorded
+        };
+        let model = model.clone().with_route(route);
+        let mut s = Sweep::new(&model, model.nominal(), Options::default());
         [2.0, 1.5, 1.0, 0.4, 0.3, 0.75, 1.25]
             .into_iter()
             .map(|w| s.step(w).map_err(|e| e.to_string()))

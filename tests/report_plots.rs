@@ -23,7 +23,6 @@ fn run(model: &Compiled, speeds: &[f64]) -> modaltol::analyze::Analysis {
             samples: 200,
             seed: 3,
             sampling: Sampling::Random,
-            threads: None,
         }),
         ..Default::default()
     };

@@ -137,8 +137,8 @@ fn the_quadrature_and_the_monte_carlo_see_no_instability_in_a_rigid_body_mode() 
                 samples: 64,
                 seed: 3,
                 sampling: Sampling::Lhs,
-                threads: Some(1),
             }),
+            threads: Some(1),
             ..Default::default()
         };
         let a = analyze(&model, &opt, &|_, _, _| {});

@@ -33,7 +33,6 @@ fn shard_of(model: &Compiled, dir: &Path) -> PathBuf {
         samples: 2,
         seed: 5,
         sampling: model.analysis.sampling,
-        threads: Some(1),
     };
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),

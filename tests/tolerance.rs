@@ -44,8 +44,8 @@ fn run(
             samples,
             seed: 1,
             sampling,
-            threads,
         }),
+        threads,
         ..Default::default()
     };
     analyze(model, &opt, &|_, _, _| {})
@@ -640,8 +640,8 @@ fn a_cancelled_token_stops_its_own_monte_carlo_and_no_other() {
             samples: 4096,
             seed: 1,
             sampling: Sampling::Random,
-            threads: Some(1),
         }),
+        threads: Some(1),
         cancel,
         ..Default::default()
     };

@@ -585,7 +585,6 @@ impl NativeModel {
             samples: samples.unwrap_or(m.analysis.samples),
             seed: seed.unwrap_or(m.analysis.seed),
             sampling,
-            threads,
         });
         // Fail early where the results cannot be written.
         let dir = output
@@ -602,7 +601,6 @@ impl NativeModel {
             cases,
             quadrature: quadrature.then_some(QuadOptions {
                 tolerance: quadrature_tolerance,
-                threads,
             }),
             monte_carlo: mc,
             split: Split::Whole,

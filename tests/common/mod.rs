@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests: the shipped examples and one solved point.
 #![allow(dead_code)] // each test target uses its own subset
 
-use modaltol::compiled::Compiled;
+use modaltol::compiled::{Compiled, Route};
 use modaltol::modal::C64;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
@@ -103,6 +103,12 @@ pub fn command_with_deadline(
 /// The point at `speed` with nominal parameters from the model's initial guess, on the recorded
 /// route (which must record) or the direct one.
 pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
+    let route = if direct {
+        Route::Direct
+    } else {
+        Route::Recorded
+    };
+    let model = &model.clone().with_route(route);
     let p = model.nominal();
     let q0 = initial_guess(model, &p, speed).unwrap();
     if !direct {
@@ -112,11 +118,8 @@ pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
             model.name
         );
     }
-    let opt = Options {
-        direct,
-        ..Options::default()
-    };
-    point(model, &p, speed, &q0, &opt).unwrap_or_else(|e| panic!("{}: {e}", model.name))
+    point(model, &p, speed, &q0, &Options::default())
+        .unwrap_or_else(|e| panic!("{}: {e}", model.name))
 }
 
 /// Every root of every mode.

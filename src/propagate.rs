@@ -1,0 +1,185 @@
+//! The propagation layer: what every method that spreads the tolerances through the pipeline
+//! takes and gives.
+//!
+//! A [`Study`] is the deterministic part of an analysis, shared by every method and every
+//! tolerance case: the model, the design variables (the union over the cases), the speeds, the
+//! nominal sweep and, at each of its points, the [`LocalModel`] (values, exact gradients and
+//! Hessians of every output). A method is an object implementing [`Propagation`]: given the
+//! study, one case's [`Spread`] and the [`Run`] control (cancellation, the worker threads,
+//! progress), it returns an [`Estimate`]: its statistics with the reason it stopped. The
+//! methods are [`crate::taylor::Taylor`] (first order, second order and the invariant method
+//! from the local models), [`crate::quadrature::Quadrature`] and
+//! [`crate::montecarlo::MonteCarlo`]; the last two place their points through
+//! [`crate::sampling`]. [`crate::analyze`] runs them per case and assembles the rows.
+//!
+//! This is the seam a new method plugs into: one type, one `impl Propagation`, and its rows in
+//! `analyze`. (In the manner of OpenTURNS' and chaospy's algorithm objects: inputs in, a
+//! result with its own error estimate and termination out.)
+
+use crate::cancel::Cancel;
+use crate::compiled::Compiled;
+use crate::model::Transfer;
+use crate::sampling::branch_counts;
+use crate::sensitivity::TransferAt;
+use crate::sweep::{Options, Point, Sweep};
+use crate::tolerance::{LocalModel, Output, Spread, local_model, outputs};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The deterministic part of an analysis, shared by every method and case (see the module
+/// documentation).
+#[derive(Debug)]
+pub struct Study<'a> {
+    pub model: &'a Compiled,
+    /// Design variables (parameter indices, the union over the cases), the order of every
+    /// gradient and spread.
+    pub vars: Vec<usize>,
+    /// Operating speeds (rad/s).
+    pub speeds: Vec<f64>,
+    /// The nominal point at each speed, `None` where it failed.
+    pub nominal: Vec<Option<Point>>,
+    /// The local model at each speed, `None` where the point or its derivatives failed.
+    pub locals: Vec<Option<LocalModel>>,
+    /// The outputs (every mode's ω_d and ζ, then |H|), the same at every speed.
+    pub outputs: Vec<Output>,
+    /// The model's transfer function, if it has one.
+    pub transfer: Option<Transfer>,
+    /// Branch switches of the nominal sweep up to each speed, counted as a sample's are
+    /// ([`branch_counts`]).
+    pub branches: Vec<usize>,
+    /// Speeds whose nominal point or local model failed, with the reason, by speed.
+    pub failures: Vec<(f64, String)>,
+}
+
+/// How a run is controlled from outside: cancellation, the worker threads, progress.
+pub struct Run<'a> {
+    /// Cancelling it stops the run at its next check (see [`Termination::Cancelled`]).
+    pub cancel: &'a Cancel,
+    /// The worker threads every parallel stage runs on (results do not depend on their
+    /// number).
+    pub pool: &'a rayon::ThreadPool,
+    /// `(done, total)` of the current stage, called from any worker.
+    pub progress: &'a (dyn Fn(usize, usize) + Sync),
+}
+
+impl Run<'_> {
+    /// The same control reporting progress to `progress` instead.
+    pub fn with_progress<'b>(&'b self, progress: &'b (dyn Fn(usize, usize) + Sync)) -> Run<'b> {
+        Run {
+            cancel: self.cancel,
+            pool: self.pool,
+            progress,
+        }
+    }
+}
+
+/// Why a method stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Termination {
+    /// Everything asked was computed.
+    Completed,
+    /// The run was cancelled: the value covers what was done before (possibly nothing).
+    Cancelled,
+}
+
+/// What a method gives: its value and why it stopped.
+#[derive(Debug, Clone)]
+pub struct Estimate<T> {
+    pub value: T,
+    pub termination: Termination,
+}
+
+/// A propagation method: the statistics of a study's outputs under one case's spread.
+pub trait Propagation {
+    /// The method's statistics.
+    type Value;
+
+    /// Propagates `spread` (over [`Study::vars`]) through the study.
+    fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<Self::Value>;
+}
+
+impl<'a> Study<'a> {
+    /// The nominal sweep of `model` over `speeds` and, at each point, the local model for
+    /// `vars` (with Hessians). The sweep is sequential (continuation); each point's local model
+    /// is independent, so it is handed to the other workers as soon as the point is solved.
+    /// Failed speeds are recorded in [`Study::failures`] and the run goes on; a cancelled run
+    /// leaves the speeds after it as failures ("interrupted").
+    pub fn build(model: &'a Compiled, vars: Vec<usize>, speeds: Vec<f64>, run: &Run) -> Self {
+        let transfer = model.analysis.transfer;
+        let p = model.nominal();
+        let n = speeds.len();
+        let slots: Vec<Mutex<Option<Result<LocalModel, String>>>> =
+            (0..n).map(|_| Mutex::new(None)).collect();
+        let done = AtomicUsize::new(0);
+        let mut failures = Vec::new();
+        let mut nominal = Vec::with_capacity(n);
+        run.pool.install(|| {
+            rayon::scope(|scope| {
+                let mut sweep = Sweep::new(model, p.clone(), Options::default());
+                for (i, &w) in speeds.iter().enumerate() {
+                    if run.cancel.is_cancelled() {
+                        failures.push((w, "interrupted".to_string()));
+                        nominal.push(None);
+                        continue;
+                    }
+                    match sweep.step(w) {
+                        Ok(pt) => {
+                            let (slot, done, pt_local, p, vars) =
+                                (&slots[i], &done, pt.clone(), &p, &vars);
+                            scope.spawn(move |_| {
+                                let lm =
+                                    local_model(model, p, &pt_local, vars, transfer.as_ref(), true)
+                                        .map_err(|e| format!("derivatives: {e}"));
+                                *slot.lock().expect("unpoisoned") = Some(lm);
+                                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                                (run.progress)(d, n);
+                            });
+                            nominal.push(Some(pt));
+                        }
+                        Err(e) => {
+                            failures.push((w, e.to_string()));
+                            nominal.push(None);
+                        }
+                    }
+                }
+            })
+        });
+        let locals: Vec<Option<LocalModel>> = slots
+            .into_iter()
+            .map(|m| m.into_inner().expect("unpoisoned"))
+            .zip(&speeds)
+            .map(|(lm, &w)| match lm? {
+                Ok(lm) => Some(lm),
+                Err(e) => {
+                    failures.push((w, e));
+                    None
+                }
+            })
+            .collect();
+        failures.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let modes = nominal
+            .iter()
+            .flatten()
+            .map(|p| p.modes.len())
+            .next()
+            .unwrap_or(0);
+        Study {
+            model,
+            outputs: outputs(modes, transfer.is_some()),
+            branches: branch_counts(&nominal),
+            vars,
+            speeds,
+            nominal,
+            locals,
+            transfer,
+            failures,
+        }
+    }
+
+    /// The transfer function at speed `i` (excited at its order times the speed).
+    pub fn transfer_at(&self, i: usize) -> Option<TransferAt> {
+        self.transfer
+            .as_ref()
+            .map(|t| TransferAt::at_speed(t, self.speeds[i]))
+    }
+}

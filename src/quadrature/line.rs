@@ -1,0 +1,326 @@
+//! One line integral at one speed: the nodes grouped into runs on one branch, interpolated
+//! within a run, split where the branch or a mode's character changes, and integrated by
+//! Gauss–Legendre against the normal density.
+
+use super::NodeData;
+use super::roots::{root_in, roots_in};
+use super::rules::grid;
+use super::sums::Sums;
+use crate::pair;
+use crate::tolerance::{Output, Quantity};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// Where the extrapolated tails end (normal mass outside: 2·10⁻¹⁹).
+const TAIL_END: f64 = 9.0;
+
+/// Gauss–Legendre, 5 points on [−1, 1].
+const GL_X: [f64; 5] = [
+    -0.906_179_845_938_664,
+    -0.538_469_310_105_683_1,
+    0.0,
+    0.538_469_310_105_683_1,
+    0.906_179_845_938_664,
+];
+const GL_W: [f64; 5] = [
+    0.236_926_885_056_189_1,
+    0.478_628_670_499_366_5,
+    0.568_888_888_888_888_9,
+    0.478_628_670_499_366_5,
+    0.236_926_885_056_189_1,
+];
+
+/// Where a line integral collects its weighted output values for the quantiles (per output),
+/// and the line's weight.
+pub(super) type Atoms<'a> = (&'a mut Vec<Vec<(f64, f64)>>, f64);
+
+/// What a line integral needs at one speed.
+pub(super) struct Context<'a> {
+    pub store: &'a NodeData,
+    pub speed: usize,
+    pub outs: &'a [Output],
+    pub modes: usize,
+    pub shift: &'a [f64],
+    /// The nominal branch count here.
+    pub branch: u32,
+}
+
+/// An interpolant: Lagrange through nodes (positions and carrier rows).
+struct Stencil<'a> {
+    t: Vec<f64>,
+    rows: Vec<&'a [f64]>,
+    branch: u32,
+}
+
+impl Stencil<'_> {
+    fn eval(&self, t: f64, out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for (i, (&ti, row)) in self.t.iter().zip(&self.rows).enumerate() {
+            let l: f64 = self
+                .t
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &tj)| (t - tj) / (ti - tj))
+                .product();
+            for (o, &c) in out.iter_mut().zip(row.iter()) {
+                *o += l * c;
+            }
+        }
+    }
+}
+
+impl Context<'_> {
+    /// Integrates one line with the nodes at `stride`; with `atoms`, also collects the
+    /// weighted output values for the quantiles.
+    pub fn line(&self, li: usize, stride: usize, mut atoms: Option<Atoms>) -> Sums {
+        let data = &self.store.data[li];
+        let finest = data.len();
+        let w = self.store.width;
+        let idx: Vec<usize> = (0..finest).step_by(stride).collect();
+        let t: Vec<f64> = idx.iter().map(|&j| grid(finest, j)).collect();
+        let node = |k: usize| data[idx[k]].as_ref().expect("swept");
+        let sig: Vec<Option<u32>> = (0..idx.len()).map(|k| node(k).branch[self.speed]).collect();
+        let row = |k: usize| &node(k).carriers[self.speed * w..(self.speed + 1) * w];
+        // Runs of equal signature.
+        let mut run_of = vec![(0usize, 0usize); idx.len()];
+        let mut start = 0;
+        for k in 1..=idx.len() {
+            if k == idx.len() || sig[k] != sig[start] {
+                for r in run_of.iter_mut().take(k).skip(start) {
+                    *r = (start, k - 1);
+                }
+                start = k;
+            }
+        }
+        let stencil = |from: usize, to: usize| Stencil {
+            t: t[from..=to].to_vec(),
+            rows: (from..=to).map(row).collect(),
+            branch: sig[from].unwrap_or(0),
+        };
+        // Up to 4 nodes of the run `(r0, r1)` around the interval starting at `k`.
+        let around = |k: usize, (r0, r1): (usize, usize)| {
+            let len = (r1 - r0 + 1).min(4);
+            let from = k.saturating_sub(1).clamp(r0, r1 + 1 - len);
+            stencil(from, from + len - 1)
+        };
+        let mut sums = Sums::new(self.outs.len(), self.modes);
+        for k in 0..idx.len() - 1 {
+            let (a, b) = (t[k], t[k + 1]);
+            match (sig[k], sig[k + 1]) {
+                (None, None) => sums.mass += normal_mass(a, b),
+                (x, y) if x == y => {
+                    let st = around(k, run_of[k]);
+                    self.piece(&st, a, b, &mut sums, &mut atoms);
+                }
+                (Some(_), None) => {
+                    let m = 0.5 * (a + b);
+                    let (r0, _) = run_of[k];
+                    let st = stencil(k.saturating_sub(3).max(r0), k);
+                    self.piece(&st, a, m, &mut sums, &mut atoms);
+                    sums.mass += normal_mass(m, b);
+                }
+                (None, Some(_)) => {
+                    let m = 0.5 * (a + b);
+                    let (_, r1) = run_of[k + 1];
+                    let st = stencil(k + 1, (k + 4).min(r1));
+                    sums.mass += normal_mass(a, m);
+                    self.piece(&st, m, b, &mut sums, &mut atoms);
+                }
+                (Some(_), Some(_)) => {
+                    let (r0, _) = run_of[k];
+                    let (_, r1) = run_of[k + 1];
+                    let left = stencil(k.saturating_sub(3).max(r0), k);
+                    let right = stencil(k + 1, (k + 4).min(r1));
+                    let m = self.switch_point(&left, &right, a, b);
+                    self.piece(&left, a, m, &mut sums, &mut atoms);
+                    self.piece(&right, m, b, &mut sums, &mut atoms);
+                }
+            }
+        }
+        // The tails beyond ±6 (normal mass 2·10⁻⁹, but 4·10⁻⁸ of a variance): the end runs'
+        // interpolants extrapolated to ±9 (mass beyond: 2·10⁻¹⁹).
+        let last = idx.len() - 1;
+        match sig[0] {
+            Some(_) => {
+                let st = stencil(0, run_of[0].1.min(3));
+                self.piece(&st, -TAIL_END, t[0], &mut sums, &mut atoms);
+            }
+            None => sums.mass += normal_mass(-TAIL_END, t[0]),
+        }
+        match sig[last] {
+            Some(_) => {
+                let st = stencil(run_of[last].0.max(last.saturating_sub(3)), last);
+                self.piece(&st, t[last], TAIL_END, &mut sums, &mut atoms);
+            }
+            None => sums.mass += normal_mass(t[last], TAIL_END),
+        }
+        sums
+    }
+
+    /// Where the branch changes in `[a, b]`: the zero of the extrapolated `Π p` (det K̂/det M̂,
+    /// zero at a static bifurcation) from each side, averaged; the middle if neither has one.
+    fn switch_point(&self, left: &Stencil, right: &Stencil, a: f64, b: f64) -> f64 {
+        let mut c = vec![0.0; self.store.width];
+        // Rigid-body modes (`p` exactly zero on both sides, [`crate::modal::ModeClass::Rigid`])
+        // would make the product zero everywhere: they are left out.
+        let rigid: Vec<bool> = (0..self.modes)
+            .map(|m| {
+                [left, right]
+                    .iter()
+                    .all(|st| st.rows.iter().all(|r| r[2 * m + 1] == 0.0))
+            })
+            .collect();
+        let mut g = |st: &Stencil, t: f64| {
+            st.eval(t, &mut c);
+            (0..self.modes)
+                .filter(|&m| !rigid[m])
+                .map(|m| c[2 * m + 1])
+                .product::<f64>()
+        };
+        let roots: Vec<f64> = [left, right]
+            .into_iter()
+            .filter_map(|st| root_in(&mut |t| g(st, t), a, b))
+            .collect();
+        if roots.is_empty() {
+            0.5 * (a + b)
+        } else {
+            roots.iter().sum::<f64>() / roots.len() as f64
+        }
+    }
+
+    /// Integrates the interpolant `st` over `[a, b]`, split where a mode changes character.
+    fn piece(&self, st: &Stencil, a: f64, b: f64, sums: &mut Sums, atoms: &mut Option<Atoms>) {
+        if b <= a {
+            return;
+        }
+        let mut c = vec![0.0; self.store.width];
+        // Breakpoints: sign changes of D, p and s of every mode.
+        // Breakpoints (and whether ω_d has a square-root edge there): sign changes of D, p
+        // and s of every mode.
+        let mut cuts = vec![(a, false), (b, false)];
+        for m in 0..self.modes {
+            for f in 0..3 {
+                let mut h = |t: f64| {
+                    st.eval(t, &mut c);
+                    let (s, p) = (c[2 * m], c[2 * m + 1]);
+                    match f {
+                        0 => pair::discriminant(s, p),
+                        1 => p,
+                        _ => growth(s, p),
+                    }
+                };
+                cuts.extend(roots_in(&mut h, a, b).into_iter().map(|r| (r, f == 0)));
+            }
+        }
+        cuts.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let other = st.branch != self.branch;
+        let modes = self.modes;
+        // A mode can be unstable between nodes only where one of the stencil's nodes says so:
+        // otherwise an excursion of the interpolant is the interpolation's, not the mode's
+        // (the sum `s` of a rigid-body mode's roots, its partner alone, jumps between nodes
+        // where two such modes trade places, and the interpolant overshoots above 0).
+        let may_be_unstable: Vec<bool> = (0..modes)
+            .map(|m| {
+                st.rows
+                    .iter()
+                    .any(|r| growth(r[2 * m], r[2 * m + 1]) > 0.0 || r[2 * m + 1] < 0.0)
+            })
+            .collect();
+        for seg in cuts.windows(2) {
+            let ((x0, e0), (x1, e1)) = (seg[0], seg[1]);
+            if x1 <= x0 {
+                continue;
+            }
+            let len = x1 - x0;
+            // Character on the sub-piece (constant there): from its midpoint.
+            st.eval(0.5 * (x0 + x1), &mut c);
+            let unstable = (0..modes).any(|m| {
+                may_be_unstable[m] && (growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0)
+            });
+            // Overdamped: two real roots of one sign, both negative (`p > 0`); a rigid-body
+            // mode (a zero root, `p = 0` exactly) is neither overdamped nor unstable.
+            let overdamped: Vec<bool> = (0..modes)
+                .map(|m| {
+                    let (s, p) = (c[2 * m], c[2 * m + 1]);
+                    pair::discriminant(s, p) <= 0.0 && p > 0.0 && growth(s, p) <= 0.0
+                })
+                .collect();
+            for (&x, &wx) in GL_X.iter().zip(&GL_W) {
+                // Gauss–Legendre in u ∈ [0, 1]; towards a square-root edge t − edge ∝ u² (both
+                // edges: 1 − cos πu), which makes √(t − edge) smooth in u.
+                let u = 0.5 + 0.5 * x;
+                let (t, dt) = match (e0, e1) {
+                    (false, false) => (x0 + len * u, len),
+                    (true, false) => (x0 + len * u * u, 2.0 * len * u),
+                    (false, true) => (x1 - len * (1.0 - u) * (1.0 - u), 2.0 * len * (1.0 - u)),
+                    (true, true) => {
+                        let pi = std::f64::consts::PI;
+                        (
+                            x0 + len * 0.5 * (1.0 - (pi * u).cos()),
+                            len * 0.5 * pi * (pi * u).sin(),
+                        )
+                    }
+                };
+                let wt = 0.5 * wx * dt * density(t);
+                sums.mass += wt;
+                for (m, &o) in overdamped.iter().enumerate() {
+                    if o {
+                        sums.events[m] += wt;
+                    }
+                }
+                if unstable {
+                    sums.events[modes] += wt;
+                }
+                if other {
+                    sums.events[modes + 1] += wt;
+                }
+                st.eval(t, &mut c);
+                for (o, out) in self.outs.iter().enumerate() {
+                    let v = carrier_value(out, &c, modes);
+                    if !v.is_finite() {
+                        continue;
+                    }
+                    let dv = v - self.shift[o];
+                    sums.defined[o] += wt;
+                    sums.s1[o] += wt * dv;
+                    sums.s2[o] += wt * dv * dv;
+                    if let Some((atoms, lw)) = atoms.as_mut() {
+                        atoms[o].push((v, wt * *lw));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Relative growth rate below which a pair counts as stable (as in [`crate::modal`]: an
+/// undamped pair has `s` at rounding level around zero).
+const GROWTH_TOL: f64 = 1e-9;
+
+/// The pair's growth rate `Re λ = s/2` less [`GROWTH_TOL`] of its size `√|p|`: positive when
+/// the pair is unstable through a complex pair (flutter) or a positive real root.
+fn growth(s: f64, p: f64) -> f64 {
+    0.5 * s - GROWTH_TOL * p.abs().sqrt()
+}
+
+/// An output from the carriers: ω_d = √max(0, p − s²/4), ζ = −s/(2√|p|), |H| (not below 0).
+fn carrier_value(o: &Output, c: &[f64], modes: usize) -> f64 {
+    match (o.quantity, o.mode) {
+        (Quantity::DampedFrequency, Some(m)) => pair::damped_frequency(c[2 * m], c[2 * m + 1]),
+        (Quantity::DampingRatio, Some(m)) => pair::damping_ratio(c[2 * m], c[2 * m + 1]),
+        // `f64::max` would turn a node's missing |H| (NaN: a resonance there) into 0.
+        (Quantity::TransferMagnitude, _) if c[2 * modes].is_nan() => f64::NAN,
+        (Quantity::TransferMagnitude, _) => c[2 * modes].max(0.0),
+        _ => f64::NAN,
+    }
+}
+
+pub(super) fn density(t: f64) -> f64 {
+    (-0.5 * t * t).exp() / (2.0 * std::f64::consts::PI).sqrt()
+}
+
+/// Normal mass of `[a, b]`.
+fn normal_mass(a: f64, b: f64) -> f64 {
+    let n = Normal::standard();
+    n.cdf(b) - n.cdf(a)
+}

@@ -1,0 +1,279 @@
+//! Moments, event masses and quantiles from the line integrals, with the along-line and
+//! transverse error estimates: the statistics of one refinement level.
+
+use super::line::Context;
+use super::rules::{Rule, Transverse};
+use super::{Event, NodeData, Probability, QuadStat, Reference};
+use crate::tolerance::sigma_of;
+use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Relative precision of one node's outputs (Newton's certified step and the eigensolver are
+/// near 10⁻¹², a little amplified near a bifurcation): a floor of the error estimates, times
+/// the size of the output.
+const EVAL_PRECISION: f64 = 1e-9;
+
+/// Sums of one line (or of a rule) at one speed: per output the mass where it is defined and
+/// the first two moments about the nominal value; the event masses; the total mass.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Sums {
+    pub mass: f64,
+    pub defined: Vec<f64>,
+    pub s1: Vec<f64>,
+    pub s2: Vec<f64>,
+    /// Overdamped per mode, then unstable, then other branch.
+    pub events: Vec<f64>,
+}
+
+impl Sums {
+    pub fn new(outs: usize, modes: usize) -> Sums {
+        Sums {
+            mass: 0.0,
+            defined: vec![0.0; outs],
+            s1: vec![0.0; outs],
+            s2: vec![0.0; outs],
+            events: vec![0.0; modes + 2],
+        }
+    }
+
+    fn add_scaled(&mut self, b: &Sums, w: f64) {
+        self.mass += w * b.mass;
+        for (x, y) in self
+            .defined
+            .iter_mut()
+            .chain(&mut self.s1)
+            .chain(&mut self.s2)
+            .chain(&mut self.events)
+            .zip(b.defined.iter().chain(&b.s1).chain(&b.s2).chain(&b.events))
+        {
+            *x += w * y;
+        }
+    }
+
+    /// Mean and σ of output `o` (shifted back by `shift`).
+    fn moments(&self, o: usize, shift: f64) -> Option<(f64, f64)> {
+        let w = self.defined[o];
+        (w > 0.0).then(|| {
+            let m1 = self.s1[o] / w;
+            (m1 + shift, sigma_of(self.s2[o] / w - m1 * m1))
+        })
+    }
+
+    fn probability(&self, e: usize) -> f64 {
+        if self.mass > 0.0 {
+            self.events[e] / self.mass
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// Statistics at every speed from the nodes of refinement `level` (the answer) and of the
+/// level below (its along-line error estimate), against the `nominal` reference.
+pub(super) fn evaluate(
+    store: &NodeData,
+    rule: &Rule,
+    level: usize,
+    nominal: &Reference,
+) -> (Vec<Vec<Option<QuadStat>>>, Vec<Vec<Probability>>) {
+    let (lines, transverse) = (&rule.lines, rule.transverse);
+    let (first_level, last_level) = (rule.levels.first, rule.levels.last);
+    let stride = 1 << (last_level - level);
+    let coarse = stride << 1;
+    let (nominal_values, branches, outs, modes) = (
+        nominal.values,
+        nominal.branches,
+        nominal.outs,
+        nominal.modes,
+    );
+    let check_stride = 1 << (last_level - first_level);
+    let per_speed: Vec<(Vec<Option<QuadStat>>, Vec<Probability>)> = (0..store.speeds)
+        .into_par_iter()
+        .map(|i| {
+            let shift: Vec<f64> = nominal_values[i]
+                .iter()
+                .map(|v| if v.is_finite() { *v } else { 0.0 })
+                .collect();
+            let ctx = Context {
+                store,
+                speed: i,
+                outs,
+                modes,
+                shift: &shift,
+                branch: branches[i] as u32,
+            };
+            let mut fine = Sums::new(outs.len(), modes);
+            let mut rough = Sums::new(outs.len(), modes);
+            let mut check = Sums::new(outs.len(), modes);
+            let mut main_at_check = Sums::new(outs.len(), modes);
+            let replicates = match transverse {
+                Transverse::Scrambled { replicates } => replicates,
+                _ => 1,
+            };
+            let mut reps = vec![Sums::new(outs.len(), modes); replicates];
+            let mut atoms: Vec<Vec<(f64, f64)>> = vec![Vec::new(); outs.len()];
+            for (li, line) in lines.iter().enumerate() {
+                if line.check {
+                    let s = ctx.line(li, check_stride, None);
+                    check.add_scaled(&s, line.weight);
+                    continue;
+                }
+                let s = ctx.line(li, stride, Some((&mut atoms, line.weight)));
+                fine.add_scaled(&s, line.weight);
+                reps[line.replicate].add_scaled(&s, line.weight * replicates as f64);
+                rough.add_scaled(&ctx.line(li, coarse, None), line.weight);
+                if transverse == Transverse::Tensor {
+                    main_at_check.add_scaled(&ctx.line(li, check_stride, None), line.weight);
+                }
+            }
+            // Transverse error of a statistic computed from sums.
+            let t975 = if replicates > 1 {
+                StudentsT::new(0.0, 1.0, (replicates - 1) as f64)
+                    .map_or(2.0, |t| t.inverse_cdf(0.975))
+            } else {
+                0.0
+            };
+            let transverse_error = |f: &dyn Fn(&Sums) -> Option<f64>| -> f64 {
+                match transverse {
+                    Transverse::Single => 0.0,
+                    Transverse::Tensor => match (f(&main_at_check), f(&check)) {
+                        (Some(a), Some(b)) => (a - b).abs(),
+                        _ => f64::NAN,
+                    },
+                    Transverse::Scrambled { .. } => {
+                        let v: Option<Vec<f64>> = reps.iter().map(f).collect();
+                        v.map_or(f64::NAN, |v| {
+                            let r = v.len() as f64;
+                            let m = v.iter().sum::<f64>() / r;
+                            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
+                            t975 * (var / r).sqrt()
+                        })
+                    }
+                }
+            };
+            let stats = (0..outs.len())
+                .map(|o| {
+                    let (mean, std) = fine.moments(o, shift[o])?;
+                    let (rm, rs) = rough.moments(o, shift[o]).unwrap_or((f64::NAN, f64::NAN));
+                    let floor = EVAL_PRECISION * (mean.abs() + std);
+                    let mean_error = 2.0 * (mean - rm).abs()
+                        + floor
+                        + transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.0));
+                    let std_error = 2.0 * (std - rs).abs()
+                        + floor
+                        + transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.1));
+                    Some(QuadStat {
+                        mean,
+                        std,
+                        quantiles: quantiles(&mut atoms[o]),
+                        mean_error: if mean_error.is_finite() {
+                            mean_error
+                        } else {
+                            f64::INFINITY
+                        },
+                        std_error: if std_error.is_finite() {
+                            std_error
+                        } else {
+                            f64::INFINITY
+                        },
+                    })
+                })
+                .collect();
+            let probabilities = if fine.mass > 0.0 {
+                (0..modes + 2)
+                    .map(|e| {
+                        let p = fine.probability(e);
+                        let err = 2.0 * (p - rough.probability(e)).abs()
+                            + transverse_error(&|s: &Sums| Some(s.probability(e)));
+                        Probability {
+                            event: match e {
+                                e if e < modes => Event::Overdamped,
+                                e if e == modes => Event::Unstable,
+                                _ => Event::OtherBranch,
+                            },
+                            mode: (e < modes).then_some(e),
+                            probability: p,
+                            error: if err.is_finite() { err } else { 1.0 },
+                        }
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            (stats, probabilities)
+        })
+        .collect();
+    per_speed.into_iter().unzip()
+}
+
+/// The 5, 50 and 95 % quantiles of weighted atoms (value, weight).
+pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
+    atoms.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = atoms.iter().map(|a| a.1).sum();
+    [0.05, 0.5, 0.95].map(|q| {
+        let target = q * total;
+        let mut acc = 0.0;
+        for (k, &(v, w)) in atoms.iter().enumerate() {
+            // Each atom's weight centred on it: interpolate between neighbours' centres.
+            let centre = acc + 0.5 * w;
+            if centre >= target {
+                if k == 0 {
+                    return v;
+                }
+                let (pv, pw) = atoms[k - 1];
+                let pc = acc - 0.5 * pw;
+                let f = ((target - pc) / (centre - pc)).clamp(0.0, 1.0);
+                return pv + f * (v - pv);
+            }
+            acc += w;
+        }
+        atoms.last().map_or(f64::NAN, |a| a.0)
+    })
+}
+
+/// Was the along-line error met everywhere?
+pub(super) fn converged(
+    result: &(Vec<Vec<Option<QuadStat>>>, Vec<Vec<Probability>>),
+    tol: f64,
+) -> bool {
+    let outs = result.0.first().map_or(0, |r| r.len());
+    for o in 0..outs {
+        let largest = result
+            .0
+            .iter()
+            .filter_map(|r| r[o].map(|s| s.std))
+            .fold(0.0f64, f64::max);
+        for row in &result.0 {
+            if let Some(s) = row[o] {
+                let target = tol * s.std.max(0.02 * largest);
+                if !(s.mean_error <= target && s.std_error <= target) {
+                    return false;
+                }
+            }
+        }
+    }
+    result.1.iter().flatten().all(|p| p.error <= 5.0 * tol)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadrature::line::density;
+
+    #[test]
+    fn weighted_quantiles_of_a_fine_normal_grid() {
+        // Atoms of N(0,1) on a fine grid: the quantiles are ±1.6449 and 0.
+        let mut atoms: Vec<(f64, f64)> = (0..=20000)
+            .map(|k| {
+                let t = -8.0 + 16.0 * k as f64 / 20000.0;
+                (t, density(t) * 16.0 / 20000.0)
+            })
+            .collect();
+        let q = quantiles(&mut atoms);
+        assert!((q[0] + 1.644_853_6).abs() < 1e-3, "{q:?}");
+        assert!(
+            q[1].abs() < 1e-3 && (q[2] - 1.644_853_6).abs() < 1e-3,
+            "{q:?}"
+        );
+    }
+}
