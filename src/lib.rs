@@ -1,12 +1,40 @@
 //! modaltol: analytical tolerance analysis of the modal characteristics of multibody systems in
 //! dynamic equilibrium.
 //!
-//! Data flows one way: [`model`] (file format, validation) → [`mechanics`] (kinematics,
-//! equations of motion, constraints) → [`equilibrium`] → [`linearize`] → [`modal`] → [`sweep`]
-//! → [`report`]. The mechanics is generic over the scalar type ([`real::Real`]) so automatic
-//! differentiation gives exact derivatives everywhere; [`program`] traces that generic code once
-//! per model ([`tape`]) so that the thousands of operating points of a sweep or a Monte Carlo run
-//! evaluate a flat recorded program instead of nested dual numbers.
+//! # Data flow
+//!
+//! Data flows one way; a module imports only modules of the layers before its own (a folder
+//! module with its submodules counts as one; `tests/architecture.rs` enforces the order):
+//!
+//! 1. Foundations: [`real`] (the scalar trait the mechanics is generic over), [`linalg`],
+//!    [`schur`], [`rigid`], [`dual4`], [`settings`], [`threads`], [`cancel`], [`files`].
+//! 2. Element types: [`joints`], [`cuts`], [`forces`] (each kind one file plus one list).
+//! 3. [`model`]: the file format, validated once into a [`model::Model`].
+//! 4. [`mechanics`]: kinematics, equations of motion and constraints over any [`real::Real`].
+//! 5. [`linearize`]: M̂, Ĉ, K̂ in minimal coordinates (constraint stiffness included).
+//! 6. [`route`]: the equations of one operating point over any scalar, directly.
+//! 7. [`equilibrium`]: the dynamic equilibrium (Newton, balanced, certified).
+//! 8. [`tape`], [`program`]: the same equations recorded once per model and replayed.
+//! 9. [`compiled`]: a model with its [`compiled::Route`] (recorded or direct) chosen once.
+//! 10. [`pair`], [`modal`], [`output`], [`frf`]: damped modes, the pair maps, the outputs, |H|.
+//! 11. [`sweep`]: a point (equilibrium, linearisation, modes) and the continuation over speeds;
+//!     a point is the unit everything above consumes.
+//! 12. [`sensitivity`], [`hessian`], [`study`]: exact first and second derivatives through the
+//!     move of the equilibrium.
+//! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case.
+//! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
+//! 15. [`propagate`]: the propagation layer: [`propagate::Study`], [`propagate::Run`] and the
+//!     [`propagate::Propagation`] trait.
+//! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
+//!     [`montecarlo`].
+//! 17. [`analyze`], [`shard`]: the main job, its rows, and its split across runs.
+//! 18. [`plots`], [`report`], [`results`]: what is written; `main.rs` parses the command line
+//!     and writes files, the Python package binds the same library.
+//!
+//! The mechanics is generic over the scalar type so automatic differentiation gives exact
+//! derivatives everywhere; [`program`] traces that generic code once per model ([`tape`]) so
+//! that the thousands of operating points of a sweep or a Monte Carlo run evaluate a flat
+//! recorded program instead of nested dual numbers.
 #![deny(clippy::float_cmp)]
 
 pub mod analyze;
