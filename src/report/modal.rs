@@ -157,36 +157,7 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
         }
         Ok(p) => p,
     };
-    let eq = &p.equilibrium;
-    let _ = writeln!(
-        s,
-        "\nequilibrium ({} Newton iterations, residual {:.2e}, |Φ| {:.2e}):",
-        eq.iterations, eq.residual, eq.constraint_violation
-    );
-    for (i, c) in model.coordinates.iter().enumerate() {
-        let tag = if c.driven {
-            format!("  driven at {} {}/s", eq.qd[i], c.unit.symbol())
-        } else {
-            String::new()
-        };
-        let _ = writeln!(
-            s,
-            "  {:<16} {:>16.10} {}{tag}",
-            c.name,
-            eq.q[i],
-            c.unit.symbol()
-        );
-    }
-    for &i in &model.driven() {
-        let c = &model.coordinates[i];
-        let _ = writeln!(
-            s,
-            "  drive force on {:<8} {:>14.8e} {}",
-            c.name,
-            eq.drive_force[i],
-            c.unit.force_symbol()
-        );
-    }
+    write_equilibrium(&mut s, model, p);
     let ind: Vec<&str> = p
         .linear
         .independent
@@ -220,6 +191,52 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
             m.root.lambda.im
         );
     }
+    write_shapes(&mut s, model, p);
+    let _ = writeln!(s, "\nbranch: {}: {}", p.branch.as_str(), p.branch);
+    if let Some(n) = &p.note {
+        let _ = writeln!(s, "note: {n}");
+    }
+    s
+}
+
+/// The equilibrium of the `modal` text table: each coordinate's value (and speed, where it is
+/// driven), then the drive forces.
+fn write_equilibrium(s: &mut String, model: &Model, p: &Point) {
+    let eq = &p.equilibrium;
+    let _ = writeln!(
+        s,
+        "\nequilibrium ({} Newton iterations, residual {:.2e}, |Φ| {:.2e}):",
+        eq.iterations, eq.residual, eq.constraint_violation
+    );
+    for (i, c) in model.coordinates.iter().enumerate() {
+        let tag = if c.driven {
+            format!("  driven at {} {}/s", eq.qd[i], c.unit.symbol())
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "  {:<16} {:>16.10} {}{tag}",
+            c.name,
+            eq.q[i],
+            c.unit.symbol()
+        );
+    }
+    for &i in &model.driven() {
+        let c = &model.coordinates[i];
+        let _ = writeln!(
+            s,
+            "  drive force on {:<8} {:>14.8e} {}",
+            c.name,
+            eq.drive_force[i],
+            c.unit.force_symbol()
+        );
+    }
+}
+
+/// The mode shapes of the `modal` text table: one column per mode, one row per free
+/// coordinate, scaled by [`display_shape`], as magnitude ∠ phase.
+fn write_shapes(s: &mut String, model: &Model, p: &Point) {
     let free = model.free();
     let width = free
         .iter()
@@ -253,9 +270,4 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
         }
         let _ = writeln!(s);
     }
-    let _ = writeln!(s, "\nbranch: {}: {}", p.branch.as_str(), p.branch);
-    if let Some(n) = &p.note {
-        let _ = writeln!(s, "note: {n}");
-    }
-    s
 }

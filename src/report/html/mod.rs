@@ -10,7 +10,7 @@ use super::{inadmissible_warnings, paper_timings, unfilled};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
-use crate::plots::{Display, Plot};
+use crate::plots::{CriticalSpeed, Display, Plot};
 use first_order::first_order_table;
 use sigma::summary_table;
 use std::fmt::Write;
@@ -22,17 +22,47 @@ pub fn report_html(
     model: &Model,
     a: &Analysis,
     plots: &[&Plot],
-    critical: &[crate::plots::CriticalSpeed],
+    critical: &[CriticalSpeed],
     mc: Option<&McOptions>,
     d: Display,
 ) -> String {
     let mut h = String::new();
+    page_head(&mut h, model);
+    notices(&mut h, a, mc);
+    let _ = writeln!(
+        h,
+        "<p>Model file <code>{}</code>. Speeds {} points. Speeds in {}, frequencies in {} here; the CSV and JSON files are in SI units (rad/s).</p>",
+        esc(&model.file),
+        a.nominal.len(),
+        d.speed.symbol(),
+        d.frequency.symbol()
+    );
+    let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
+    cases_table(&mut h, model, a);
+    timing_table(&mut h, model, a, mc);
+    let _ = writeln!(h, "{}", first_order_table(a));
+    critical_table(&mut h, a, critical, d);
+    failures(&mut h, a);
+    h.push_str(&unfilled_table(a));
+    reading_guide(&mut h);
+    figures(&mut h, plots);
+    let _ = writeln!(h, "</body></html>");
+    h
+}
+
+/// The page up to its heading: the document head with its style sheet, and the title.
+fn page_head(h: &mut String, model: &Model) {
     let _ = write!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>modaltol: {}</title>\n<style>body{{font-family:sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222}}table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:4px 10px;text-align:right}}th{{background:#eee}}img{{max-width:100%;border:1px solid #ddd;margin:0.5em 0}}code{{background:#f4f4f4}}</style></head><body>\n",
         esc(&model.name)
     );
     let _ = writeln!(h, "<h1>Tolerance analysis: {}</h1>", esc(&model.name));
+}
+
+/// What the reader must know before the numbers: a Monte Carlo cut short, samples that were
+/// not physically admissible.
+fn notices(h: &mut String, a: &Analysis, mc: Option<&McOptions>) {
     if let Some(m) = mc.filter(|m| a.interrupted(m.samples)) {
         let _ = writeln!(
             h,
@@ -43,15 +73,10 @@ pub fn report_html(
     for w in inadmissible_warnings(a) {
         let _ = writeln!(h, "<p><b>Warning:</b> {}</p>", esc(&w));
     }
-    let _ = writeln!(
-        h,
-        "<p>Model file <code>{}</code>. Speeds {} points. Speeds in {}, frequencies in {} here; the CSV and JSON files are in SI units (rad/s).</p>",
-        esc(&model.file),
-        a.nominal.len(),
-        d.speed.symbol(),
-        d.frequency.symbol()
-    );
-    let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
+}
+
+/// The tolerance cases: per case, each variable's nominal value and tolerance.
+fn cases_table(h: &mut String, model: &Model, a: &Analysis) {
     let _ = writeln!(
         h,
         "<h2>Tolerance cases</h2><table><tr><th>case</th><th>variable</th><th>nominal</th><th>tolerance (±, = 3σ for normal)</th></tr>"
@@ -70,6 +95,11 @@ pub fn report_html(
         }
     }
     let _ = writeln!(h, "</table>");
+}
+
+/// The timing table: the paper's timings for its two examples beside this run's (analytic,
+/// quadrature, Monte Carlo and their ratios), and the quadrature's rules per case.
+fn timing_table(h: &mut String, model: &Model, a: &Analysis, mc: Option<&McOptions>) {
     let _ = writeln!(
         h,
         "<h2>Timing</h2><table><tr><th></th><th>analytic, Taylor methods (s)</th><th>quadrature (s)</th><th>Monte Carlo (s)</th><th>ratio Monte Carlo / analytic</th><th>ratio Monte Carlo / quadrature</th></tr>"
@@ -113,7 +143,10 @@ pub fn report_html(
             .collect::<Vec<_>>()
             .join("; ")
     );
-    let _ = writeln!(h, "{}", first_order_table(a));
+}
+
+/// The critical speeds of the Campbell diagram with their σ (none: no section).
+fn critical_table(h: &mut String, a: &Analysis, critical: &[CriticalSpeed], d: Display) {
     if !critical.is_empty() {
         let u = d.speed.symbol();
         let _ = writeln!(
@@ -134,6 +167,10 @@ pub fn report_html(
         }
         let _ = writeln!(h, "</table>");
     }
+}
+
+/// The speeds where the nominal analysis failed, with why (none: no section).
+fn failures(h: &mut String, a: &Analysis) {
     if !a.failures.is_empty() {
         let _ = writeln!(h, "<h2>Failed speeds</h2><ul>");
         for (w, m) in &a.failures {
@@ -141,7 +178,10 @@ pub fn report_html(
         }
         let _ = writeln!(h, "</ul>");
     }
-    h.push_str(&unfilled_table(a));
+}
+
+/// The reading guide: what each method is, which to read, and what the plots show.
+fn reading_guide(h: &mut String) {
     let _ = writeln!(
         h,
         "<h2>Reading guide</h2><ul>\
@@ -154,6 +194,10 @@ pub fn report_html(
 <li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
 <li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case, the engine orders and the critical speeds where a mode crosses one.</li></ul>"
     );
+}
+
+/// The plots, each an `<stem>.svg` beside the page, with its caption.
+fn figures(h: &mut String, plots: &[&Plot]) {
     let _ = writeln!(h, "<h2>Plots</h2>");
     for p in plots {
         let _ = writeln!(
@@ -164,8 +208,6 @@ pub fn report_html(
             esc(&p.caption)
         );
     }
-    let _ = writeln!(h, "</body></html>");
-    h
 }
 
 /// The rows without a value, per case, method, output and reason, with their speeds.
