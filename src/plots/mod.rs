@@ -844,7 +844,7 @@ pub fn png(
 
 /// DejaVu Sans, shipped with the project (`assets/fonts`, Bitstream Vera licence), so PNG text
 /// looks the same on every machine, with or without system fonts.
-const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// The font database for [`png`]: the bundled DejaVu Sans as every generic family.
 pub fn fonts() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
