@@ -105,27 +105,7 @@ pub(super) fn campbell(
             color,
         ));
     }
-    let speeds: Vec<f64> = a.nominal.iter().flatten().map(|p| p.speed).collect();
-    if let (Some(&lo), Some(&hi)) = (speeds.first(), speeds.last()) {
-        for &o in &orders {
-            // Cut where the line leaves the modes' range, so that it does not squash them.
-            let end = if top > 0.0 { hi.min(top / o) } else { hi };
-            if end > lo {
-                lines.push(
-                    Line::new(
-                        format!("{o}×Ω"),
-                        vec![(lo * xs, o * lo * ys), (end * xs, o * end * ys)],
-                        BLACK,
-                    )
-                    .styled(if o.to_bits() == 1f64.to_bits() {
-                        Style::Solid
-                    } else {
-                        Style::Dashed
-                    }),
-                );
-            }
-        }
-    }
+    lines.extend(order_lines(a, &orders, top, d));
     if !critical.is_empty() {
         lines.push(
             Line::new(
@@ -162,4 +142,37 @@ pub(super) fn campbell(
             svg,
         });
     (plot, critical)
+}
+
+/// The engine-order lines `order × Ω` of the Campbell diagram across the speeds of the analysis
+/// (1× solid, the others dashed), each cut where it rises above the modes' range (`top`, rad/s;
+/// not cut where `top` is 0).
+fn order_lines(a: &Analysis, orders: &[f64], top: f64, d: Display) -> Vec<Line> {
+    let (xs, ys) = (
+        d.speed.per_rad_per_second(),
+        d.frequency.per_rad_per_second(),
+    );
+    let mut lines = Vec::new();
+    let speeds: Vec<f64> = a.nominal.iter().flatten().map(|p| p.speed).collect();
+    if let (Some(&lo), Some(&hi)) = (speeds.first(), speeds.last()) {
+        for &o in orders {
+            // Cut where the line leaves the modes' range, so that it does not squash them.
+            let end = if top > 0.0 { hi.min(top / o) } else { hi };
+            if end > lo {
+                lines.push(
+                    Line::new(
+                        format!("{o}×Ω"),
+                        vec![(lo * xs, o * lo * ys), (end * xs, o * end * ys)],
+                        BLACK,
+                    )
+                    .styled(if o.to_bits() == 1f64.to_bits() {
+                        Style::Solid
+                    } else {
+                        Style::Dashed
+                    }),
+                );
+            }
+        }
+    }
+    lines
 }

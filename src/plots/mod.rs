@@ -13,13 +13,17 @@
 //! frequencies are shown in the units asked for ([`Display`]).
 //!
 //! Submodules: `draw` (the axes, lines, bands and legend panel every plot is drawn with),
-//! `bands`, `probability` and `campbell` (one per kind of plot), and `png` (rasterising).
+//! `bands`, `sigma`, `shares`, `probability` and `campbell` (one per kind of plot), and `png`
+//! (rasterising). This module holds what the kinds share (the display units, an output's rows
+//! and points, the methods' colours) and [`plots`], which makes them all.
 
 mod bands;
 mod campbell;
 mod draw;
 mod png;
 mod probability;
+mod shares;
+mod sigma;
 
 pub use bands::first_order_off;
 pub use campbell::CriticalSpeed;
@@ -27,12 +31,15 @@ pub use draw::{AXES_WIDTH, LEGEND_WIDTH, tick_label};
 pub use png::{fonts, png};
 
 use crate::analyze::{Analysis, Method, Row};
-use crate::model::Model;
+use crate::model::{Case, Model};
 use crate::tolerance::Quantity;
+use bands::band;
 use campbell::campbell;
-use draw::{Band, COLORS, Line, Style, draw, palette};
-use plotters::prelude::*;
+use draw::COLORS;
+use plotters::prelude::RGBColor;
 use probability::probabilities;
+use shares::shares;
+use sigma::sigma;
 
 /// A finished plot: a file stem and its SVG text.
 pub struct Plot {
@@ -128,8 +135,37 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
         .map(|p| p.modes.len())
         .next()
         .unwrap_or(0);
-    let xs = d.speed.per_rad_per_second();
     let xlabel = format!("speed Ω ({})", d.speed.symbol());
+    let quantities = outputs(a, modes);
+    for (ci, case) in a.cases.iter().enumerate() {
+        for &(q, mode) in &quantities {
+            let o = Output {
+                model,
+                a,
+                ci,
+                q,
+                mode,
+                d,
+            };
+            out.extend(band(&o, &xlabel));
+            out.extend(sigma(&o, &xlabel));
+        }
+        if let Some(p) = probabilities(model, a, ci, modes, d) {
+            out.push(p);
+        }
+        // Shares of the first-order variance (cases with several variables).
+        if case.tolerances.len() > 1 && modes > 0 {
+            out.extend(shares(model, a, ci, d, &xlabel));
+        }
+    }
+    let (campbell, critical) = campbell(model, a, modes, d);
+    out.extend(campbell);
+    (out, critical)
+}
+
+/// The outputs plotted per case: every mode's ω_d, its ζ where the system is damped, and |H|
+/// where the analysis has it.
+fn outputs(a: &Analysis, modes: usize) -> Vec<(Quantity, Option<usize>)> {
     let mut quantities: Vec<(Quantity, Option<usize>)> = Vec::new();
     for m in 0..modes {
         quantities.push((Quantity::DampedFrequency, Some(m)));
@@ -149,190 +185,63 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
     {
         quantities.push((Quantity::TransferMagnitude, None));
     }
-    for (ci, case) in a.cases.iter().enumerate() {
-        for &(q, mode) in &quantities {
-            let tag = mode.map_or(String::new(), |m| format!("_mode{}", m + 1));
-            let label = mode.map_or(q.as_str().to_string(), |m| {
-                format!("{} of mode {}", q.as_str(), m + 1)
-            });
-            let ys = scale(q, d);
-            let pts = |rows: &[&Row], f: &dyn Fn(&Row) -> f64| -> Vec<(f64, f64)> {
-                rows.iter().map(|r| (r.speed * xs, f(r) * ys)).collect()
-            };
-            // The answer to read first, then the paper's method and the others.
-            let methods: Vec<Method> = [
-                Method::Analytic,
-                Method::FirstOrder,
-                Method::SecondOrder,
-                Method::Invariant,
-                Method::MonteCarlo,
-            ]
-            .into_iter()
-            .filter(|&m| !series(a, ci, q, mode, m).is_empty())
-            .collect();
-            // ω_d and |H| cannot be negative: bands stop at zero.
-            let floor = if q == Quantity::DampingRatio {
-                f64::NEG_INFINITY
-            } else {
-                0.0
-            };
-            // Mean ± σ: the answer as a band, every method's mean, first order's ± σ dashed.
-            let answer = series(a, ci, q, mode, Method::Analytic);
-            let bands = vec![Band {
-                name: "analytic mean ± σ (the answer)".into(),
-                lower: pts(&answer, &|r| (r.mean - r.std).max(floor)),
-                upper: pts(&answer, &|r| r.mean + r.std),
-                color: method_color(Method::Analytic),
-            }];
-            let mut lines = Vec::new();
-            for &m in &methods {
-                if m == Method::SecondOrder || m == Method::Invariant {
-                    continue;
-                }
-                let rows = series(a, ci, q, mode, m);
-                let style = if m == Method::MonteCarlo {
-                    Style::Dots
-                } else {
-                    Style::Solid
-                };
-                lines.push(
-                    Line::new(
-                        format!("{} mean", m.as_str()),
-                        pts(&rows, &|r| r.mean),
-                        method_color(m),
-                    )
-                    .styled(style),
-                );
-                if m == Method::FirstOrder {
-                    lines.push(
-                        Line::new(
-                            "first_order mean ± σ",
-                            pts(&rows, &|r| r.mean + r.std),
-                            method_color(m),
-                        )
-                        .styled(Style::Dashed),
-                    );
-                    lines.push(
-                        Line::new(
-                            "",
-                            pts(&rows, &|r| (r.mean - r.std).max(floor)),
-                            method_color(m),
-                        )
-                        .styled(Style::Dashed),
-                    );
-                }
-            }
-            // The speeds where first order's σ is more than 10 % off the quadrature's.
-            let off = first_order_off(a, ci, q, mode);
-            if off.iter().any(|p| p.1.is_finite()) {
-                lines.push(
-                    Line::new(
-                        "first order σ > 10 % off",
-                        off.iter().map(|&(x, y)| (x * xs, y * ys)).collect(),
-                        RED,
-                    )
-                    .styled(Style::Marks),
-                );
-            }
-            let title = format!("{}: {label}, case {}", model.name, case.name);
-            if let Ok(svg) = draw(&title, &xlabel, &unit(model, q, d), &lines, &bands) {
-                out.push(Plot {
-                    stem: format!("band_{}_{}{tag}", case.name, q.as_str()),
-                    caption: format!(
-                        "Mean ± σ of {label} against speed for case {}. The shaded band is the \
-                         answer to read (analytic); dashed lines are the paper's first-order \
-                         band; red dots mark the speeds where first order's σ is more than 10 % \
-                         off.",
-                        case.name
-                    ),
-                    title,
-                    svg,
-                });
-            }
-            // σ by method.
-            let lines: Vec<Line> = methods
-                .iter()
-                .map(|&m| {
-                    let style = match m {
-                        Method::MonteCarlo => Style::Dots,
-                        Method::SecondOrder | Method::Invariant => Style::Dashed,
-                        _ => Style::Solid,
-                    };
-                    Line::new(
-                        m.as_str(),
-                        pts(&series(a, ci, q, mode, m), &|r| r.std),
-                        method_color(m),
-                    )
-                    .styled(style)
-                })
-                .collect();
-            let title = format!("{}: σ of {label}, case {}", model.name, case.name);
-            let ylabel = format!("σ of {}", unit(model, q, d));
-            if let Ok(svg) = draw(&title, &xlabel, &ylabel, &lines, &[]) {
-                out.push(Plot {
-                    stem: format!("std_{}_{}{tag}", case.name, q.as_str()),
-                    caption: format!(
-                        "σ of {label} by each method, case {}. Where the methods part, read \
-                         analytic (the quadrature: its error estimate is in tolerance.csv); \
-                         Monte Carlo scatters by its own sampling error.",
-                        case.name
-                    ),
-                    title,
-                    svg,
-                });
-            }
-        }
-        if let Some(p) = probabilities(model, a, ci, modes, d) {
-            out.push(p);
-        }
-        // Shares of the first-order variance (cases with several variables).
-        if case.tolerances.len() > 1 && modes > 0 {
-            let rows = series(
-                a,
-                ci,
-                Quantity::DampedFrequency,
-                Some(0),
-                Method::FirstOrder,
-            );
-            let lines: Vec<Line> = a
-                .vars
-                .iter()
-                .enumerate()
-                .filter(|(_, b)| case.tolerances.iter().any(|t| t.0 == **b))
-                .map(|(k, &b)| {
-                    Line::new(
-                        model.parameters[b].name.clone(),
-                        rows.iter()
-                            .map(|r| {
-                                (
-                                    r.speed * xs,
-                                    r.shares.as_ref().map_or(f64::NAN, |s| 100.0 * s[k]),
-                                )
-                            })
-                            .collect(),
-                        palette(k),
-                    )
-                })
-                .collect();
-            let title = format!(
-                "{}: share of the variance of ω_d (mode 1), case {}",
-                model.name, case.name
-            );
-            if let Ok(svg) = draw(&title, &xlabel, "share of variance (%)", &lines, &[]) {
-                out.push(Plot {
-                    stem: format!("shares_{}", case.name),
-                    caption: format!(
-                        "Each design variable's share of the first-order variance of mode 1's \
-                         ω_d, case {}: which tolerance to tighten at each speed.",
-                        case.name
-                    ),
-                    title,
-                    svg,
-                });
-            }
-        }
+    quantities
+}
+
+/// One output of one case, as its band and σ plots show it.
+struct Output<'a> {
+    model: &'a Model,
+    a: &'a Analysis,
+    /// The case's index.
+    ci: usize,
+    q: Quantity,
+    mode: Option<usize>,
+    d: Display,
+}
+
+impl<'a> Output<'a> {
+    /// The case.
+    fn case(&self) -> &'a Case {
+        &self.a.cases[self.ci]
     }
-    let (campbell, critical) = campbell(model, a, modes, d);
-    out.extend(campbell);
-    (out, critical)
+
+    /// The end of the plots' stems: `_mode<k>` for a mode's output.
+    fn tag(&self) -> String {
+        self.mode
+            .map_or(String::new(), |m| format!("_mode{}", m + 1))
+    }
+
+    /// The output in words, for titles and captions.
+    fn label(&self) -> String {
+        let q = self.q;
+        self.mode.map_or(q.as_str().to_string(), |m| {
+            format!("{} of mode {}", q.as_str(), m + 1)
+        })
+    }
+
+    /// The output's rows of method `m`.
+    fn rows(&self, m: Method) -> Vec<&'a Row> {
+        series(self.a, self.ci, self.q, self.mode, m)
+    }
+
+    /// `f` of each of `rows` against its speed, in the display units.
+    fn pts(&self, rows: &[&Row], f: &dyn Fn(&Row) -> f64) -> Vec<(f64, f64)> {
+        let (xs, ys) = (self.d.speed.per_rad_per_second(), scale(self.q, self.d));
+        rows.iter().map(|r| (r.speed * xs, f(r) * ys)).collect()
+    }
+
+    /// The methods that have rows for the output: the answer to read first, then the paper's
+    /// method and the others.
+    fn methods(&self) -> Vec<Method> {
+        [
+            Method::Analytic,
+            Method::FirstOrder,
+            Method::SecondOrder,
+            Method::Invariant,
+            Method::MonteCarlo,
+        ]
+        .into_iter()
+        .filter(|&m| !self.rows(m).is_empty())
+        .collect()
+    }
 }
