@@ -1,0 +1,84 @@
+//! The summary `check` prints: what a model file holds (bodies, joints, coordinates,
+//! constraints, parameters, tolerance cases) and the physical limits its tolerances reach. A
+//! file of its own because it formats the model, not a result.
+
+use crate::model::Model;
+use std::fmt::Write;
+
+/// Summary printed by `check`.
+pub fn check_summary(model: &Model) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "model '{}' ({}) is valid", model.name, model.file);
+    let _ = writeln!(s, "  bodies ({}):", model.bodies.len());
+    for b in &model.bodies {
+        let _ = writeln!(s, "    {}", b.name);
+    }
+    let body = |b: Option<usize>| b.map_or("ground".to_string(), |i| model.bodies[i].name.clone());
+    let _ = writeln!(s, "  joints ({}):", model.joints.len());
+    // Columns as wide as the longest name, so that long names do not push them out of line.
+    let wide = |names: &mut dyn Iterator<Item = &str>, least: usize| {
+        names
+            .map(|n| n.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(least)
+    };
+    let jw = wide(&mut model.joints.iter().map(|j| j.name.as_str()), 12);
+    let kw = wide(&mut model.joints.iter().map(|j| j.kind.name()), 10);
+    let pw = wide(&mut model.parameters.iter().map(|p| p.name.as_str()), 14);
+    for j in &model.joints {
+        let kind = j.kind.name();
+        let drive = if j.drive.is_some() { ", driven" } else { "" };
+        let _ = writeln!(
+            s,
+            "    {:<jw$} {:<kw$} {} → {}{drive}",
+            j.name,
+            kind,
+            body(j.parent),
+            body(Some(j.child))
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  coordinates: {} ({} driven, {} free)",
+        model.coordinates.len(),
+        model.driven().len(),
+        model.free().len()
+    );
+    let _ = writeln!(s, "  force elements: {}", model.forces.len());
+    let _ = writeln!(
+        s,
+        "  constraints: {} ({} equations)",
+        model.constraints.len(),
+        model.n_constraints()
+    );
+    for c in &model.constraints {
+        let _ = writeln!(s, "    {}", c.name);
+    }
+    let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
+    let _ = writeln!(s, "  parameters ({}):", model.parameters.len());
+    for p in &model.parameters {
+        let tol = match p.tolerance {
+            Some(crate::model::Tolerance::Relative(f)) => format!("  ± {}%", f * 100.0),
+            Some(crate::model::Tolerance::Absolute(a)) => format!("  ± {a}"),
+            None => String::new(),
+        };
+        let _ = writeln!(s, "    {:<pw$} {}{tol}", p.name, p.value);
+    }
+    if !model.analysis.cases.is_empty() {
+        let names: Vec<&str> = model
+            .analysis
+            .cases
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
+        let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
+    }
+    for (case, at, defect) in model.tolerance_limits() {
+        let _ = writeln!(
+            s,
+            "  warning: case '{case}' reaches a physical limit within its tolerances: at {at}, {defect}; Monte Carlo samples beyond it count as failed"
+        );
+    }
+    s
+}

@@ -1,0 +1,267 @@
+//! `report.html`: one page per analysis, built from named sections (the numeric summary, the
+//! tolerance cases, the timings, where first order is off, the critical speeds, the failures,
+//! the rows without a value, a reading guide and the plots). Sections big enough to be read on
+//! their own are submodules.
+
+mod first_order;
+mod sigma;
+
+use super::{inadmissible_warnings, paper_timings, unfilled};
+use crate::analyze::Analysis;
+use crate::model::Model;
+use crate::montecarlo::McOptions;
+use crate::plots::{CriticalSpeed, Display, Plot};
+use first_order::first_order_table;
+use sigma::summary_table;
+use std::fmt::Write;
+
+/// `report.html`: the numeric summary per case, the timing table (beside the paper's Tables 1–2
+/// for its two examples), the critical speeds, a short reading guide and the plots (each an
+/// `<stem>.svg` in the same directory), in the display units `d`.
+pub fn report_html(
+    model: &Model,
+    a: &Analysis,
+    plots: &[&Plot],
+    critical: &[CriticalSpeed],
+    mc: Option<&McOptions>,
+    d: Display,
+) -> String {
+    let mut h = String::new();
+    page_head(&mut h, model);
+    notices(&mut h, a, mc);
+    let _ = writeln!(
+        h,
+        "<p>Model file <code>{}</code>. Speeds {} points. Speeds in {}, frequencies in {} here; the CSV and JSON files are in SI units (rad/s).</p>",
+        esc(&model.file),
+        a.nominal.len(),
+        d.speed.symbol(),
+        d.frequency.symbol()
+    );
+    let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
+    cases_table(&mut h, model, a);
+    timing_table(&mut h, model, a, mc);
+    let _ = writeln!(h, "{}", first_order_table(a));
+    critical_table(&mut h, a, critical, d);
+    failures(&mut h, a);
+    h.push_str(&unfilled_table(a));
+    reading_guide(&mut h);
+    figures(&mut h, plots);
+    let _ = writeln!(h, "</body></html>");
+    h
+}
+
+/// The page up to its heading: the document head with its style sheet, and the title.
+fn page_head(h: &mut String, model: &Model) {
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>modaltol: {}</title>\n<style>body{{font-family:sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;color:#222}}table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:4px 10px;text-align:right}}th{{background:#eee}}img{{max-width:100%;border:1px solid #ddd;margin:0.5em 0}}code{{background:#f4f4f4}}</style></head><body>\n",
+        esc(&model.name)
+    );
+    let _ = writeln!(h, "<h1>Tolerance analysis: {}</h1>", esc(&model.name));
+}
+
+/// What the reader must know before the numbers: a Monte Carlo cut short, samples that were
+/// not physically admissible.
+fn notices(h: &mut String, a: &Analysis, mc: Option<&McOptions>) {
+    if let Some(m) = mc.filter(|m| a.interrupted(m.samples)) {
+        let _ = writeln!(
+            h,
+            "<p><b>Partial result:</b> the Monte Carlo was interrupted; samples done per case {:?} of {} asked.</p>",
+            a.samples_done, m.samples
+        );
+    }
+    for w in inadmissible_warnings(a) {
+        let _ = writeln!(h, "<p><b>Warning:</b> {}</p>", esc(&w));
+    }
+}
+
+/// The tolerance cases: per case, each variable's nominal value and tolerance.
+fn cases_table(h: &mut String, model: &Model, a: &Analysis) {
+    let _ = writeln!(
+        h,
+        "<h2>Tolerance cases</h2><table><tr><th>case</th><th>variable</th><th>nominal</th><th>tolerance (±, = 3σ for normal)</th></tr>"
+    );
+    for c in &a.cases {
+        for (b, t) in &c.tolerances {
+            let p = &model.parameters[*b];
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.6}</td></tr>",
+                esc(&c.name),
+                esc(&p.name),
+                p.value,
+                t.absolute(p.value)
+            );
+        }
+    }
+    let _ = writeln!(h, "</table>");
+}
+
+/// The timing table: the paper's timings for its two examples beside this run's (analytic,
+/// quadrature, Monte Carlo and their ratios), and the quadrature's rules per case.
+fn timing_table(h: &mut String, model: &Model, a: &Analysis, mc: Option<&McOptions>) {
+    let _ = writeln!(
+        h,
+        "<h2>Timing</h2><table><tr><th></th><th>analytic, Taylor methods (s)</th><th>quadrature (s)</th><th>Monte Carlo (s)</th><th>ratio Monte Carlo / analytic</th><th>ratio Monte Carlo / quadrature</th></tr>"
+    );
+    if let Some((example, analytic, mc, ratio)) = paper_timings(model) {
+        let _ = writeln!(
+            h,
+            "<tr><td>paper, {example} (2007 hardware, 3000 samples)</td><td>{analytic}</td><td>–</td><td>{mc}</td><td>{ratio}</td><td>–</td></tr>"
+        );
+    }
+    let secs = |t: Option<f64>| t.map_or("not run".to_string(), |t| format!("{t:.3}"));
+    let ratio = |b: Option<f64>| {
+        a.monte_carlo_seconds
+            .zip(b)
+            .map_or("–".to_string(), |(m, b)| format!("{:.0}", m / b))
+    };
+    let samples = mc.map_or(String::new(), |m| {
+        format!(
+            ", {} samples, {:?} sampling, seed {}",
+            m.samples, m.sampling, m.seed
+        )
+    });
+    let _ = writeln!(
+        h,
+        "<tr><td>this run ({} case(s), {} speeds{samples})</td><td>{:.3}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+        a.cases.len(),
+        a.nominal.len(),
+        a.analytic_seconds,
+        secs(a.quadrature_seconds),
+        secs(a.monte_carlo_seconds),
+        ratio(Some(a.analytic_seconds)),
+        ratio(a.quadrature_seconds),
+    );
+    let _ = writeln!(
+        h,
+        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and the Taylor methods for all cases; the paper's covers first order only. The quadrature sweeps its nodes across all speeds like Monte Carlo samples ({}).</p>",
+        a.cases
+            .iter()
+            .zip(&a.quadrature_rules)
+            .map(|(c, (rule, _))| format!("{}: {}", esc(&c.name), esc(rule)))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+}
+
+/// The critical speeds of the Campbell diagram with their σ (none: no section).
+fn critical_table(h: &mut String, a: &Analysis, critical: &[CriticalSpeed], d: Display) {
+    if !critical.is_empty() {
+        let u = d.speed.symbol();
+        let _ = writeln!(
+            h,
+            "<h2>Critical speeds</h2><table><tr><th>mode</th><th>engine order</th><th>speed ({u})</th><th>σ ({u}), case {}</th></tr>",
+            esc(&a.cases[0].name)
+        );
+        let f = d.speed.per_rad_per_second();
+        for c in critical {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}×</td><td>{:.4}</td><td>{:.4}</td></tr>",
+                c.mode + 1,
+                c.order,
+                c.speed * f,
+                c.std * f
+            );
+        }
+        let _ = writeln!(h, "</table>");
+    }
+}
+
+/// The speeds where the nominal analysis failed, with why (none: no section).
+fn failures(h: &mut String, a: &Analysis) {
+    if !a.failures.is_empty() {
+        let _ = writeln!(h, "<h2>Failed speeds</h2><ul>");
+        for (w, m) in &a.failures {
+            let _ = writeln!(h, "<li>{w} rad/s: {}</li>", esc(m));
+        }
+        let _ = writeln!(h, "</ul>");
+    }
+}
+
+/// The reading guide: what each method is, which to read, and what the plots show.
+fn reading_guide(h: &mut String) {
+    let _ = writeln!(
+        h,
+        "<h2>Reading guide</h2><ul>\
+<li><b>first_order</b> is the paper's method: mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
+<li><b>second_order</b> adds the curvature (Hessians): a mean shift and variance terms. It repairs points where first order gives σ = 0 but the output does vary (|H| at the undamped resonance).</li>\
+<li><b>invariant</b> (ω_d only) propagates the pair discriminant D = λ₁λ₂ − (λ₁+λ₂)²/4, which stays smooth where a mode turns overdamped, and maps it through ω_d = √max(0, D). Use it near class changes, where first and second order fail.</li>\
+<li><b>quadrature</b> integrates the whole nonlinear analysis (equilibrium, modes, |H|) over the distribution of the design variables, deterministically: every node is swept from the lowest speed like a Monte Carlo sample, the integral is split where a mode turns overdamped or a design passes its own bifurcation, and every mean and σ comes with an error estimate (<code>mean_error</code>, <code>std_error</code>) and the 5/50/95 % quantiles. It is right at every speed, class changes and branch switches included.</li>\
+<li><b>analytic</b> is the answer to read: the quadrature where it ran (its <code>basis</code> says so), else the automatic Taylor choice (invariant near a change of class, else second order). Red marks in the band plots show the speeds where first order's σ is more than 10 % off.</li>\
+<li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample, with 95 % confidence intervals in <code>tolerance.csv</code> and counts of failed samples and of samples whose mode changed class. Where the distribution is a mixture (most samples overdamped, a few far out), a few thousand samples are far from converged; the quadrature is not.</li>\
+<li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
+<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case, the engine orders and the critical speeds where a mode crosses one.</li></ul>"
+    );
+}
+
+/// The plots, each an `<stem>.svg` beside the page, with its caption.
+fn figures(h: &mut String, plots: &[&Plot]) {
+    let _ = writeln!(h, "<h2>Plots</h2>");
+    for p in plots {
+        let _ = writeln!(
+            h,
+            "<figure><img src=\"{}.svg\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+            esc(&p.stem),
+            esc(&p.title),
+            esc(&p.caption)
+        );
+    }
+}
+
+/// The rows without a value, per case, method, output and reason, with their speeds.
+fn unfilled_table(a: &Analysis) -> String {
+    let groups = unfilled(a);
+    if groups.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from(
+        "<h2>Rows without a value</h2><p>Where a method gives no mean and σ, and why          (<code>tolerance.csv</code>'s <code>reason</code> column; speeds in rad/s).</p>         <table><tr><th>case</th><th>method</th><th>output</th><th>rows</th><th>speeds</th>         <th>reason</th></tr>",
+    );
+    for u in &groups {
+        let output = u.mode.map_or(u.quantity.as_str().to_string(), |m| {
+            format!("{} mode {}", u.quantity.as_str(), m + 1)
+        });
+        let lo = u.speeds.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = u.speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let speeds = if lo.to_bits() == hi.to_bits() {
+            format!("{lo}")
+        } else {
+            format!("{lo}–{hi}")
+        };
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>             <td style=\"text-align:left\">{}</td></tr>",
+            esc(&a.cases[u.case].name),
+            u.method.as_str(),
+            esc(&output),
+            u.speeds.len(),
+            speeds,
+            esc(&u.reason)
+        );
+    }
+    h.push_str("</table>");
+    h
+}
+
+/// A number to five significant digits, in fixed notation where that stays short.
+fn sig(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let exp = x.abs().log10().floor() as i32;
+    if (-3..5).contains(&exp) {
+        format!("{x:.*}", (4 - exp).max(0) as usize)
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
