@@ -481,25 +481,50 @@ fn node(v: Var) -> u32 {
     }
 }
 
+/// The thread's recording, active while this guard lives. Dropping it ends the recording,
+/// also when the traced code panics, so that no later computation on the thread records into
+/// a recorder left behind.
+struct Recording;
+
+impl Recording {
+    /// Starts recording on this thread, with hash-consing on or off.
+    fn start(cse: bool) -> Recording {
+        RECORDER.with(|r| {
+            *r.borrow_mut() = Some(Recorder {
+                cse,
+                ..Recorder::default()
+            });
+        });
+        Recording
+    }
+
+    /// Ends the recording and gives what it recorded.
+    fn finish(self) -> Option<Recorder> {
+        RECORDER.with(|r| r.borrow_mut().take())
+    }
+}
+
+impl Drop for Recording {
+    fn drop(&mut self) {
+        // `try_with`: the thread's storage may already be gone when a thread exits.
+        let _ = RECORDER.try_with(|r| r.borrow_mut().take());
+    }
+}
+
 /// [`record`](super::record), with hash-consing on or off.
 pub(super) fn record_with(
     x: &[f64],
     cse: bool,
     f: impl FnOnce(&[Var]) -> Option<Vec<Var>>,
 ) -> Option<Tape> {
-    RECORDER.with(|r| {
-        *r.borrow_mut() = Some(Recorder {
-            cse,
-            ..Recorder::default()
-        });
-    });
+    let recording = Recording::start(cse);
     let vars: Vec<Var> = x
         .iter()
         .enumerate()
         .map(|(k, &v)| push(Op::Input(k as u32), v))
         .collect();
     let outputs = f(&vars);
-    let rec = RECORDER.with(|r| r.borrow_mut().take())?;
+    let rec = recording.finish()?;
     let outputs = outputs?;
     if rec.tainted {
         return None;
@@ -509,4 +534,24 @@ pub(super) fn record_with(
         outputs,
         n_static: 0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_in_traced_code_ends_the_recording() {
+        let traced = std::panic::catch_unwind(|| {
+            record_with(&[1.0, 2.0], true, |x| {
+                let _ = x[0] * x[1];
+                panic!("the traced code fails")
+            })
+        });
+        assert!(traced.is_err());
+        assert!(RECORDER.with(|r| r.borrow().is_none()));
+        // The thread records afresh afterwards.
+        let tape = record_with(&[3.0], true, |x| Some(vec![x[0] * 2.0])).expect("records");
+        assert_eq!(tape.outputs.len(), 1);
+    }
 }
