@@ -1,13 +1,15 @@
 //! Force elements of a model file: type, bodies, points, axis and the per-component fields the
 //! type ([`crate::forces::ForceType`]) declares.
 
-use super::joints::{article, indexed, known, least_aligned, per_coordinate, vector};
-use super::{Ctx, R, body_ref, coincident, element_name, type_named};
+use super::geometry::{Item, coincident, known, least_aligned, vector};
+use super::names::{article, body_ref, element_name, type_named};
+use super::per_coordinate::{indexed, per_coordinate};
+use super::{Ctx, R};
 use crate::forces::{Geometry, Kind};
 use crate::joints::Use;
 use crate::model::ForceElement;
 use crate::model::schema::ForceSchema;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use toml::Spanned;
 
 /// Parses and checks the `[[forces]]` tables; `elements` collects their names (names are
@@ -17,8 +19,7 @@ pub(super) fn forces(
     raw: &[Spanned<ForceSchema>],
     body_names: &HashMap<String, usize>,
     joint_names: &HashMap<String, usize>,
-    elements: &mut HashMap<String, usize>,
-    nominal: &[f64],
+    elements: &mut HashSet<String>,
 ) -> R<Vec<ForceElement>> {
     let mut out = Vec::new();
     for f in raw {
@@ -36,30 +37,28 @@ pub(super) fn forces(
             ));
         }
         let [use_point1, use_point2, use_axis] = kind.uses();
-        let item = f.span();
-        let point1 = vector(
-            ctx, &s.point1, use_point1, "point1", &owner, &this, &item, nominal,
-        )?;
+        let item = Item {
+            owner: &owner,
+            kind: &this,
+            span: f.span(),
+        };
+        let point1 = vector(ctx, &item, &s.point1, use_point1, "point1")?;
         let point2 = match (&s.point2, use_point2) {
             (None, Use::Optional) => point1.clone(),
-            _ => vector(
-                ctx, &s.point2, use_point2, "point2", &owner, &this, &item, nominal,
-            )?,
+            _ => vector(ctx, &item, &s.point2, use_point2, "point2")?,
         };
-        let axis = vector(
-            ctx, &s.axis, use_axis, "axis", &owner, &this, &item, nominal,
-        )?;
+        let axis = vector(ctx, &item, &s.axis, use_axis, "axis")?;
         let reference = if use_axis == Use::Unused {
             axis.clone()
         } else {
-            if known(ctx, &axis, nominal)?.is_none() {
-                let span = s.axis.as_ref().map_or(item.clone(), |a| a.span());
+            if known(ctx, &axis)?.is_none() {
+                let span = s.axis.as_ref().map_or(item.span.clone(), |a| a.span());
                 return Err(ctx.err(
                     span,
                     format!("{owner}: its axis must not depend on the speed"),
                 ));
             }
-            least_aligned(ctx, &axis, &owner, &item, nominal)?
+            least_aligned(ctx, &item, &axis)?
         };
         let components = kind.components();
         let k = components.len();
@@ -76,14 +75,14 @@ pub(super) fn forces(
             .chain(&preload)
             .flatten()
         {
-            ctx.nominal(x, nominal)?;
+            ctx.nominal(x)?;
         }
         if kind.distinct_points()
             && free.iter().any(Option::is_none)
-            && coincident(ctx, &point1, &point2, nominal)?
+            && coincident(ctx, &point1, &point2)?
         {
             return Err(ctx.err(
-                item,
+                item.span,
                 format!(
                     "{owner}: its two points coincide in the reference configuration, so its free {} is zero and its line of action undefined there; give distinct points",
                     indexed(components[0].suffix, 0, 1)

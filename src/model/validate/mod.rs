@@ -9,36 +9,22 @@
 
 mod cuts;
 mod forces;
+mod geometry;
 mod joints;
+mod locate;
+mod names;
+mod per_coordinate;
+
+pub(super) use locate::error_at;
 
 use super::schema::{self, FileSchema, Num, SNum, SVec};
 use super::*;
-use std::collections::HashMap;
+use geometry::{Item, known, vector};
+use locate::{abbreviate, line_starts, locate_line};
+use names::{body_ref, check_name};
+use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use toml::Spanned;
-
-/// Builds a [`ModelError`] at byte `offset` of `text`.
-pub(super) fn error_at(file: &str, text: &str, offset: usize, msg: &str) -> ModelError {
-    let (line, column, snippet) = locate(text, offset);
-    ModelError {
-        file: file.to_string(),
-        line: Some(line),
-        column: Some(column),
-        message: msg.to_string(),
-        snippet: Some(snippet),
-    }
-}
-
-/// Do two points (known at nominal, not depending on the speed) coincide?
-fn coincident(ctx: &Ctx, a: &[Field; 3], b: &[Field; 3], nominal: &[f64]) -> R<bool> {
-    for (x, y) in a.iter().zip(b) {
-        match (ctx.nominal(x, nominal)?, ctx.nominal(y, nominal)?) {
-            (Some(u), Some(v)) if (u - v).abs() <= 0.0 => {}
-            _ => return Ok(false),
-        }
-    }
-    Ok(true)
-}
 
 /// Byte offset of the start of the line with the most dots and opening brackets (the deepest
 /// nesting of keys, tables and arrays), roughly: quotes are not tracked.
@@ -58,43 +44,44 @@ fn most_nested_line(text: &str) -> usize {
     best.1
 }
 
-/// 1-based line and column (in characters) of byte `offset`, and that line's text.
-fn locate(text: &str, offset: usize) -> (usize, usize, String) {
-    let mut off = offset.min(text.len());
-    while !text.is_char_boundary(off) {
-        off -= 1;
-    }
-    let before = &text[..off];
-    let line = before.matches('\n').count() + 1;
-    let start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = text[start..off].chars().count() + 1;
-    let end = text[off..].find('\n').map_or(text.len(), |i| off + i);
-    (
-        line,
-        column,
-        text[start..end].trim_end_matches('\r').to_string(),
-    )
-}
-
-/// Byte offset of the start of each line of `text`.
-fn line_starts(text: &str) -> Vec<usize> {
-    std::iter::once(0)
-        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-        .collect()
-}
-
 struct Ctx<'a> {
     text: &'a str,
     file: &'a str,
+    /// The parameters' names, which expressions refer to by position (none until the
+    /// parameters stage has run).
     params: Vec<String>,
+    /// Their nominal values, at which every field that does not use the speed is evaluated.
+    values: Vec<f64>,
     /// Byte offset of each line's start: every field's site is located by bisection (counting
     /// lines from the top for each of a large model's thousands of fields was quadratic).
     line_starts: Vec<usize>,
 }
 
+/// The result of a check: the first error found stops validation.
 type R<T> = Result<T, ModelError>;
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    fn new(text: &'a str, file: &'a str) -> Self {
+        Ctx {
+            text,
+            file,
+            params: Vec::new(),
+            values: Vec::new(),
+            line_starts: line_starts(text),
+        }
+    }
+
+    /// From now on, expressions may refer to `parameters` and are evaluated at their values.
+    fn declare(&mut self, parameters: &[Parameter]) {
+        self.params = parameters.iter().map(|p| p.name.clone()).collect();
+        self.values = parameters.iter().map(|p| p.value).collect();
+    }
+
+    /// Where errors about the file as a whole point: its first character.
+    fn whole(&self) -> Range<usize> {
+        0..self.text.len().min(1)
+    }
+
     fn err(&self, span: Range<usize>, msg: impl AsRef<str>) -> ModelError {
         error_at(self.file, self.text, span.start, msg.as_ref())
     }
@@ -179,37 +166,23 @@ impl Ctx<'_> {
     }
 
     /// Evaluates a field at the nominal parameters (if it does not use `speed`).
-    fn nominal(&self, f: &Field, p: &[f64]) -> R<Option<f64>> {
+    fn nominal(&self, f: &Field) -> R<Option<f64>> {
         if f.expr.uses_speed() {
             return Ok(None);
         }
-        f.expr.eval(p, 0.0).map(Some).map_err(|e| ModelError {
-            file: self.file.to_string(),
-            line: Some(f.site.line),
-            column: Some(f.site.column),
-            message: format!("{}: {e}", f.site.what),
-            snippet: Some(locate_line(self.text, f.site.line)),
-        })
+        f.expr
+            .eval(&self.values, 0.0)
+            .map(Some)
+            .map_err(|e| ModelError {
+                file: self.file.to_string(),
+                line: Some(f.site.line),
+                column: Some(f.site.column),
+                message: format!("{}: {e}", f.site.what),
+                snippet: Some(locate_line(self.text, f.site.line)),
+            })
     }
 }
 
-/// An expression shortened for messages (hostile input can be kilobytes long).
-fn abbreviate(s: &str) -> String {
-    const MAX: usize = 60;
-    if s.chars().count() <= MAX {
-        s.to_string()
-    } else {
-        format!("{}…", s.chars().take(MAX).collect::<String>())
-    }
-}
-
-fn locate_line(text: &str, line: usize) -> String {
-    text.lines().nth(line - 1).unwrap_or("").to_string()
-}
-
-/// Longest name of a parameter, body, joint, force, constraint or case (characters): names
-/// go into column headers, file names and plot titles.
-const MAX_NAME: usize = 64;
 /// Longest model name and description (characters).
 const MAX_TITLE: usize = 200;
 const MAX_DESCRIPTION: usize = 4000;
@@ -225,32 +198,6 @@ fn check_text(ctx: &Ctx, text: &Option<Spanned<String>>, what: &str, max: usize)
                 "the {what} has {} characters; at most {max} are allowed",
                 t.get_ref().chars().count()
             ),
-        ));
-    }
-    Ok(())
-}
-
-/// Names must be non-empty, short, and not clash with reserved words.
-fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()> {
-    let n = name.get_ref();
-    if n.chars().count() > MAX_NAME {
-        return Err(ctx.err(
-            name.span(),
-            format!(
-                "{kind} name '{}' has {} characters; at most {MAX_NAME} are allowed",
-                abbreviate(n),
-                n.chars().count()
-            ),
-        ));
-    }
-    if n.is_empty()
-        || !n
-            .chars()
-            .all(|c| c.is_alphanumeric() || c == '_' || c == '-')
-    {
-        return Err(ctx.err(
-            name.span(),
-            format!("{kind} name '{n}' must be non-empty and use letters, digits, '_' or '-'"),
         ));
     }
     Ok(())
@@ -392,60 +339,6 @@ fn override_values(ctx: &Ctx, parameters: &mut [Parameter], overrides: &[(String
     Ok(())
 }
 
-/// The name of a force element or cut joint (`what`): well formed and unique across joints,
-/// force elements and cut joints (`elements` collects the latter two).
-fn element_name(
-    ctx: &Ctx,
-    name: &Spanned<String>,
-    what: &str,
-    joint_names: &HashMap<String, usize>,
-    elements: &mut HashMap<String, usize>,
-) -> R<String> {
-    check_name(ctx, name, what)?;
-    let n = name.get_ref().clone();
-    if elements.insert(n.clone(), 0).is_some() || joint_names.contains_key(&n) {
-        return Err(ctx.err(name.span(), format!("duplicate name '{n}'")));
-    }
-    Ok(n)
-}
-
-/// The type named by `kind` among `all` (whose names `name` gives), or an error of `owner`
-/// listing them.
-fn type_named<K: Copy>(
-    ctx: &Ctx,
-    kind: &Spanned<String>,
-    owner: &str,
-    all: &[K],
-    name: impl Fn(K) -> &'static str,
-) -> R<K> {
-    all.iter()
-        .copied()
-        .find(|&k| name(k) == kind.get_ref())
-        .ok_or_else(|| {
-            ctx.err(
-                kind.span(),
-                format!(
-                    "{owner}: unknown type '{}' (expected {})",
-                    kind.get_ref(),
-                    joints::list(all.iter().map(|&k| name(k)))
-                ),
-            )
-        })
-}
-
-/// Resolves a body name (`ground` → `None`).
-fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R<Option<usize>> {
-    if s.get_ref() == "ground" {
-        return Ok(None);
-    }
-    names.get(s.get_ref()).map(|&i| Some(i)).ok_or_else(|| {
-        ctx.err(
-            s.span(),
-            format!("unknown body '{}' (bodies are declared in [[bodies]]; 'ground' is the fixed frame)", s.get_ref()),
-        )
-    })
-}
-
 pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
     let raw: FileSchema = toml::from_str(text).map_err(|e| {
         let off = e.span().map_or(0, |s| s.start);
@@ -457,17 +350,11 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
             None => error_at(file, text, most_nested_line(text), &msg),
         }
     })?;
-    let whole = 0..text.len().min(1);
 
     // Parameters, in file order.
     let mut praw: Vec<_> = raw.parameters.iter().collect();
     praw.sort_by_key(|(k, _)| k.span().start);
-    let mut ctx = Ctx {
-        text,
-        file,
-        params: Vec::new(),
-        line_starts: line_starts(text),
-    };
+    let mut ctx = Ctx::new(text, file);
     let mut parameters = Vec::new();
     for (k, v) in praw {
         check_name(&ctx, k, "parameter")?;
@@ -483,17 +370,16 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         parameters.push(parameter(&ctx, k, v)?);
     }
     override_values(&ctx, &mut parameters, overrides)?;
-    ctx.params = parameters.iter().map(|p| p.name.clone()).collect();
+    ctx.declare(&parameters);
     check_text(&ctx, &raw.name, "model name", MAX_TITLE)?;
     check_text(&ctx, &raw.description, "description", MAX_DESCRIPTION)?;
-    let nominal: Vec<f64> = parameters.iter().map(|p| p.value).collect();
 
     let gravity = match &raw.gravity {
         Some(g) => ctx.vec3(g, "gravity".into())?,
-        None => [0, 1, 2].map(|i| ctx.zero(&whole, format!("gravity[{i}]"))),
+        None => [0, 1, 2].map(|i| ctx.zero(&ctx.whole(), format!("gravity[{i}]"))),
     };
     for f in &gravity {
-        ctx.nominal(f, &nominal)?;
+        ctx.nominal(f)?;
     }
 
     // Bodies.
@@ -522,7 +408,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         };
         let cm = ctx.vec3(&s.cm, what("cm"))?;
         // Nominal checks: mass ≥ 0, inertia symmetric positive semi-definite.
-        if let Some(m) = ctx.nominal(&mass, &nominal)?
+        if let Some(m) = ctx.nominal(&mass)?
             && m < 0.0
         {
             return Err(ctx.err(
@@ -534,14 +420,14 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         let mut all_known = true;
         for i in 0..3 {
             for j in 0..3 {
-                match ctx.nominal(&inertia[i][j], &nominal)? {
+                match ctx.nominal(&inertia[i][j])? {
                     Some(v) => inom[i][j] = v,
                     None => all_known = false,
                 }
             }
         }
         for f in &cm {
-            ctx.nominal(f, &nominal)?;
+            ctx.nominal(f)?;
         }
         if all_known {
             let span = s.inertia.as_ref().map_or(b.span(), |x| x.span());
@@ -551,7 +437,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
             (None, None) => None,
             (Some(x), Some(y)) => {
                 let (x, y) = (ctx.vec3(x, what("x_axis"))?, ctx.vec3(y, what("y_axis"))?);
-                inertia_axes(&ctx, &x, &y, &nominal, b.span(), &name)?;
+                inertia_axes(&ctx, &x, &y, b.span(), &name)?;
                 Some([x, y])
             }
             (Some(a), None) | (None, Some(a)) => {
@@ -587,7 +473,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         coordinates,
         child_of,
         names: joint_names,
-    } = joints::joints(&ctx, &raw.joints, &body_names, &bodies, &nominal)?;
+    } = joints::joints(&ctx, &raw.joints, &body_names, &bodies)?;
 
     // Tree: every body is reached from ground; no cycles.
     for (b, c) in child_of.iter().enumerate() {
@@ -645,14 +531,13 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     }
 
     // Force elements.
-    let mut element_names: HashMap<String, usize> = HashMap::new();
+    let mut element_names: HashSet<String> = HashSet::new();
     let forces = forces::forces(
         &ctx,
         &raw.forces,
         &body_names,
         &joint_names,
         &mut element_names,
-        &nominal,
     )?;
 
     // Cut joints.
@@ -662,19 +547,18 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         &body_names,
         &joint_names,
         &mut element_names,
-        &nominal,
     )?;
     let n_free = coordinates.iter().filter(|c| !c.driven).count();
     let n_con: usize = constraints.iter().map(|c| c.kind.equations()).sum();
     if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {
-        let span = raw.constraints.last().map_or(whole.clone(), |c| c.span());
+        let span = raw.constraints.last().map_or(ctx.whole(), |c| c.span());
         return Err(ctx.err(
             span,
             format!("{n_con} constraint equation(s) for {n_free} free coordinate(s): the mechanism would have no degree of freedom"),
         ));
     }
     if n_free == 0 {
-        let span = raw.joints.first().map_or(whole.clone(), |c| c.span());
+        let span = raw.joints.first().map_or(ctx.whole(), |c| c.span());
         return Err(ctx.err(
             span,
             "the mechanism has no free coordinate (every joint is fixed or driven)",
@@ -720,7 +604,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         }
     };
 
-    let ports = ports(&ctx, &raw.ports, &body_names, &coordinates, &nominal)?;
+    let ports = ports(&ctx, &raw.ports, &body_names, &coordinates)?;
     let analysis = analysis(
         &ctx,
         raw.analysis.as_ref(),
@@ -760,7 +644,6 @@ fn ports(
     raw: &[Spanned<schema::PortSchema>],
     body_names: &HashMap<String, usize>,
     coordinates: &[Coordinate],
-    nominal: &[f64],
 ) -> R<Vec<Port>> {
     let mut out: Vec<Port> = Vec::new();
     for item in raw {
@@ -796,18 +679,14 @@ fn ports(
             crate::joints::Use::Required
         };
         let this = format!("a {} port", s.kind.get_ref());
-        let point = joints::vector(
-            ctx,
-            &s.point,
-            usage,
-            "point",
-            &owner,
-            &this,
-            &item.span(),
-            nominal,
-        )?;
+        let table = Item {
+            owner: &owner,
+            kind: &this,
+            span: item.span(),
+        };
+        let point = vector(ctx, &table, &s.point, usage, "point")?;
         let direction = ctx.vec3(&s.direction, format!("{owner} direction"))?;
-        if let Some(d) = joints::known(ctx, &direction, nominal)?
+        if let Some(d) = known(ctx, &direction)?
             && d.iter().all(|x| x.abs() <= 0.0)
         {
             return Err(ctx.err(s.direction.span(), format!("{owner}: direction is zero")));
@@ -889,14 +768,10 @@ fn inertia_axes(
     ctx: &Ctx,
     x: &[Field; 3],
     y: &[Field; 3],
-    nominal: &[f64],
     span: Range<usize>,
     name: &str,
 ) -> R<()> {
-    let (Some(a), Some(b)) = (
-        joints::known(ctx, x, nominal)?,
-        joints::known(ctx, y, nominal)?,
-    ) else {
+    let (Some(a), Some(b)) = (known(ctx, x)?, known(ctx, y)?) else {
         return Ok(());
     };
     let scale = |v: [f64; 3]| {
@@ -1089,6 +964,7 @@ fn analysis(
 
 #[cfg(test)]
 mod tests {
+    use super::locate::locate;
     use super::*;
 
     /// Sites located by bisection over the line starts agree with counting from the top, at
@@ -1096,12 +972,7 @@ mod tests {
     #[test]
     fn sites_by_bisection_agree_with_counting_lines() {
         let text = "a = 1\n\nλ = \"x·2\"\r\n  [[bodies]]\nω\n";
-        let ctx = Ctx {
-            text,
-            file: "f.toml",
-            params: Vec::new(),
-            line_starts: line_starts(text),
-        };
+        let ctx = Ctx::new(text, "f.toml");
         for off in 0..=text.len() + 2 {
             let site = ctx.site(&(off..off + 1), String::new());
             let (line, column, _) = locate(text, off);
