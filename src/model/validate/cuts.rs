@@ -1,13 +1,14 @@
 //! Cut joints of a model file: type, bodies, points and the fields the type
 //! ([`crate::cuts::CutType`]) declares.
 
-use super::joints::{article, least_aligned, not_parallel, vector};
-use super::{Ctx, R, body_ref, coincident, element_name, type_named};
+use super::geometry::{Item, coincident, least_aligned, not_parallel, vector};
+use super::names::{article, body_ref, element_name, type_named};
+use super::{Ctx, R};
 use crate::cuts::{Geometry, Kind};
 use crate::joints::Use;
 use crate::model::Constraint;
 use crate::model::schema::ConstraintSchema;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use toml::Spanned;
 
 /// Parses and checks the `[[constraints]]` tables; `elements` holds the force elements' names
@@ -17,8 +18,7 @@ pub(super) fn constraints(
     raw: &[Spanned<ConstraintSchema>],
     body_names: &HashMap<String, usize>,
     joint_names: &HashMap<String, usize>,
-    elements: &mut HashMap<String, usize>,
-    nominal: &[f64],
+    elements: &mut HashSet<String>,
 ) -> R<Vec<Constraint>> {
     let mut out = Vec::new();
     for c in raw {
@@ -36,40 +36,37 @@ pub(super) fn constraints(
             ));
         }
         let [use_point2, use_axis, use_axis2, use_length] = kind.uses();
-        let item = c.span();
+        let item = Item {
+            owner: &owner,
+            kind: &this,
+            span: c.span(),
+        };
         let point1 = ctx.vec3(&s.point1, format!("{owner} point1"))?;
         for f in &point1 {
-            ctx.nominal(f, nominal)?;
+            ctx.nominal(f)?;
         }
         let point2 = match (&s.point2, use_point2) {
             (None, Use::Optional) => point1.clone(),
-            _ => vector(
-                ctx, &s.point2, use_point2, "point2", &owner, &this, &item, nominal,
-            )?,
+            _ => vector(ctx, &item, &s.point2, use_point2, "point2")?,
         };
-        let axis = vector(
-            ctx, &s.axis, use_axis, "axis", &owner, &this, &item, nominal,
-        )?;
+        let axis = vector(ctx, &item, &s.axis, use_axis, "axis")?;
         let axis2 = match (&s.axis2, use_axis2) {
-            (None, Use::Optional) => least_aligned(ctx, &axis, &owner, &item, nominal)?,
-            _ => vector(
-                ctx, &s.axis2, use_axis2, "axis2", &owner, &this, &item, nominal,
-            )?,
+            (None, Use::Optional) => least_aligned(ctx, &item, &axis)?,
+            _ => vector(ctx, &item, &s.axis2, use_axis2, "axis2")?,
         };
         if use_axis2 != Use::Unused {
-            let span = s.axis2.as_ref().map_or(item.clone(), |a| a.span());
-            not_parallel(ctx, &axis, &axis2, &owner, span, nominal)?;
+            not_parallel(ctx, &item, &axis, &axis2, &s.axis2)?;
         }
         if let (Some(l), Use::Unused) = (&s.length, use_length) {
             return Err(ctx.err(l.span(), format!("{owner}: {this} has no 'length'")));
         }
         let length = ctx.opt_field(&s.length, format!("{owner} length"))?;
         for f in length.iter() {
-            ctx.nominal(f, nominal)?;
+            ctx.nominal(f)?;
         }
-        if kind.distinct_points() && coincident(ctx, &point1, &point2, nominal)? {
+        if kind.distinct_points() && coincident(ctx, &point1, &point2)? {
             return Err(ctx.err(
-                item,
+                item.span,
                 format!(
                     "{owner}: its two points coincide in the reference configuration, so the distance has no direction there; give distinct points"
                 ),

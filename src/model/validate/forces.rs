@@ -1,14 +1,24 @@
 //! Force elements of a model file: type, bodies, points, axis and the per-component fields the
 //! type ([`crate::forces::ForceType`]) declares.
 
-use super::joints::{article, indexed, known, least_aligned, per_coordinate, vector};
-use super::{Ctx, R, body_ref, coincident, element_name, type_named};
+use super::geometry::{Item, coincident, known, least_aligned, vector};
+use super::names::{article, body_ref, element_name, type_named};
+use super::per_coordinate::{indexed, per_coordinate};
+use super::{Ctx, R};
 use crate::forces::{Geometry, Kind};
 use crate::joints::Use;
-use crate::model::ForceElement;
 use crate::model::schema::ForceSchema;
-use std::collections::HashMap;
+use crate::model::{Field, ForceElement};
+use std::collections::{HashMap, HashSet};
 use toml::Spanned;
+
+/// The fields an element gives per component (`None`: not given).
+struct ComponentFields {
+    stiffness: Vec<Option<Field>>,
+    damping: Vec<Option<Field>>,
+    free: Vec<Option<Field>>,
+    preload: Vec<Option<Field>>,
+}
 
 /// Parses and checks the `[[forces]]` tables; `elements` collects their names (names are
 /// unique across joints, force elements and cut joints).
@@ -17,8 +27,7 @@ pub(super) fn forces(
     raw: &[Spanned<ForceSchema>],
     body_names: &HashMap<String, usize>,
     joint_names: &HashMap<String, usize>,
-    elements: &mut HashMap<String, usize>,
-    nominal: &[f64],
+    elements: &mut HashSet<String>,
 ) -> R<Vec<ForceElement>> {
     let mut out = Vec::new();
     for f in raw {
@@ -27,85 +36,106 @@ pub(super) fn forces(
         let owner = format!("force '{name}'");
         let kind = type_named(ctx, &s.kind, &owner, Kind::ALL, Kind::name)?;
         let this = format!("{} {}", article(kind.name()), kind.name());
-        let body1 = body_ref(ctx, body_names, &s.body1)?;
-        let body2 = body_ref(ctx, body_names, &s.body2)?;
-        if body1 == body2 {
-            return Err(ctx.err(
-                s.body2.span(),
-                format!("{owner}: both ends are on the same body"),
-            ));
-        }
-        let [use_point1, use_point2, use_axis] = kind.uses();
-        let item = f.span();
-        let point1 = vector(
-            ctx, &s.point1, use_point1, "point1", &owner, &this, &item, nominal,
-        )?;
-        let point2 = match (&s.point2, use_point2) {
-            (None, Use::Optional) => point1.clone(),
-            _ => vector(
-                ctx, &s.point2, use_point2, "point2", &owner, &this, &item, nominal,
-            )?,
+        let item = Item {
+            owner: &owner,
+            kind: &this,
+            span: f.span(),
         };
-        let axis = vector(
-            ctx, &s.axis, use_axis, "axis", &owner, &this, &item, nominal,
-        )?;
-        let reference = if use_axis == Use::Unused {
-            axis.clone()
-        } else {
-            if known(ctx, &axis, nominal)?.is_none() {
-                let span = s.axis.as_ref().map_or(item.clone(), |a| a.span());
-                return Err(ctx.err(
-                    span,
-                    format!("{owner}: its axis must not depend on the speed"),
-                ));
-            }
-            least_aligned(ctx, &axis, &owner, &item, nominal)?
-        };
-        let components = kind.components();
-        let k = components.len();
-        let what = |x: &str| format!("{owner} {x}");
-        let stiffness =
-            per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "component", &what)?;
-        let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "component", &what)?;
-        let free = per_coordinate(ctx, &s.free, k, "free", false, "component", &what)?;
-        let preload = per_coordinate(ctx, &s.preload, k, "preload", false, "component", &what)?;
-        for x in stiffness
-            .iter()
-            .chain(&damping)
-            .chain(&free)
-            .chain(&preload)
-            .flatten()
-        {
-            ctx.nominal(x, nominal)?;
-        }
+        let geometry = geometry(ctx, &item, s, kind, body_names)?;
+        let fields = component_fields(ctx, &item, s, kind)?;
         if kind.distinct_points()
-            && free.iter().any(Option::is_none)
-            && coincident(ctx, &point1, &point2, nominal)?
+            && fields.free.iter().any(Option::is_none)
+            && coincident(ctx, &geometry.point1, &geometry.point2)?
         {
             return Err(ctx.err(
-                item,
+                item.span,
                 format!(
                     "{owner}: its two points coincide in the reference configuration, so its free {} is zero and its line of action undefined there; give distinct points",
-                    indexed(components[0].suffix, 0, 1)
+                    indexed(kind.components()[0].suffix, 0, 1)
                 ),
             ));
         }
         out.push(ForceElement {
             name,
             kind,
-            geometry: Geometry {
-                body1,
-                point1,
-                body2,
-                point2,
-                axis,
-                reference,
-            },
-            stiffness,
-            damping,
-            free,
-            preload,
+            geometry,
+            stiffness: fields.stiffness,
+            damping: fields.damping,
+            free: fields.free,
+            preload: fields.preload,
         });
     }
     Ok(out)
+}
+
+/// The element's bodies (distinct) and its points and axis as its type uses them; the
+/// reference direction angles about the axis are measured from, which needs an axis that does
+/// not depend on the speed.
+fn geometry(
+    ctx: &Ctx,
+    item: &Item,
+    s: &ForceSchema,
+    kind: Kind,
+    body_names: &HashMap<String, usize>,
+) -> R<Geometry<[Field; 3]>> {
+    let body1 = body_ref(ctx, body_names, &s.body1)?;
+    let body2 = body_ref(ctx, body_names, &s.body2)?;
+    if body1 == body2 {
+        return Err(ctx.err(
+            s.body2.span(),
+            format!("{}: both ends are on the same body", item.owner),
+        ));
+    }
+    let [use_point1, use_point2, use_axis] = kind.uses();
+    let point1 = vector(ctx, item, &s.point1, use_point1, "point1")?;
+    let point2 = match (&s.point2, use_point2) {
+        (None, Use::Optional) => point1.clone(),
+        _ => vector(ctx, item, &s.point2, use_point2, "point2")?,
+    };
+    let axis = vector(ctx, item, &s.axis, use_axis, "axis")?;
+    let reference = if use_axis == Use::Unused {
+        axis.clone()
+    } else {
+        if known(ctx, &axis)?.is_none() {
+            let span = s.axis.as_ref().map_or(item.span.clone(), |a| a.span());
+            return Err(ctx.err(
+                span,
+                format!("{}: its axis must not depend on the speed", item.owner),
+            ));
+        }
+        least_aligned(ctx, item, &axis)?
+    };
+    Ok(Geometry {
+        body1,
+        point1,
+        body2,
+        point2,
+        axis,
+        reference,
+    })
+}
+
+/// Stiffness, damping, free value and preload per component, checked at the nominal values.
+fn component_fields(ctx: &Ctx, item: &Item, s: &ForceSchema, kind: Kind) -> R<ComponentFields> {
+    let k = kind.components().len();
+    let what = |x: &str| format!("{} {x}", item.owner);
+    let stiffness = per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "component", &what)?;
+    let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "component", &what)?;
+    let free = per_coordinate(ctx, &s.free, k, "free", false, "component", &what)?;
+    let preload = per_coordinate(ctx, &s.preload, k, "preload", false, "component", &what)?;
+    for x in stiffness
+        .iter()
+        .chain(&damping)
+        .chain(&free)
+        .chain(&preload)
+        .flatten()
+    {
+        ctx.nominal(x)?;
+    }
+    Ok(ComponentFields {
+        stiffness,
+        damping,
+        free,
+        preload,
+    })
 }

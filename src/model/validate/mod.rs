@@ -6,95 +6,127 @@
 //! values, negative mass and inertia that is not positive semi-definite. Expressions that do not
 //! mention `speed` are evaluated at the nominal parameters here, so such errors surface at load
 //! time; the rest are checked at each speed when the system is built.
+//!
+//! [`validate`] runs the stages in the order of the file's dependencies, each a submodule named
+//! for what it validates: [`syntax`], [`parameters`], [`header`], [`bodies`], [`joints`],
+//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`analysis`]. The first error
+//! stops validation, so this order is also the order in which errors are reported. Two stages
+//! keep a part with checks of its own apart: [`inertia`] (of [`bodies`]) and [`cases`] (of
+//! [`analysis`]). The checks several stages share are [`names`], [`geometry`],
+//! [`per_coordinate`] and [`locate`] (where a message points).
 
+mod analysis;
+mod bodies;
+mod cases;
 mod cuts;
 mod forces;
+mod geometry;
+mod header;
+mod inertia;
 mod joints;
+mod locate;
+mod mobility;
+mod names;
+mod parameters;
+mod per_coordinate;
+mod ports;
+mod syntax;
+mod tree;
 
-use super::schema::{self, FileSchema, Num, SNum, SVec};
-use super::*;
-use std::collections::HashMap;
+pub(super) use locate::error_at;
+
+use super::schema::{Num, SNum, SVec};
+use super::{Expr, Field, Model, ModelError, Parameter, Site};
+use locate::{abbreviate, line_starts, locate_line};
+use std::collections::HashSet;
 use std::ops::Range;
-use toml::Spanned;
 
-/// Builds a [`ModelError`] at byte `offset` of `text`.
-pub(super) fn error_at(file: &str, text: &str, offset: usize, msg: &str) -> ModelError {
-    let (line, column, snippet) = locate(text, offset);
-    ModelError {
+/// Validates the model `text` (named `file` in messages) with the nominal values of the
+/// parameters in `overrides` replaced.
+pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
+    let raw = syntax::parse(text, file)?;
+    let mut ctx = Ctx::new(text, file);
+    let parameters = parameters::parameters(&ctx, &raw.parameters, overrides)?;
+    ctx.declare(&parameters);
+    let header = header::header(&ctx, &raw)?;
+    let (body_names, bodies) = bodies::bodies(&ctx, &raw.bodies)?;
+    let tree = joints::joints(&ctx, &raw.joints, &body_names, &bodies)?;
+    let order = tree::order(&ctx, &raw, &bodies, &tree)?;
+    // Force elements and cut joints share one namespace (with the joints).
+    let mut elements = HashSet::new();
+    let forces = forces::forces(&ctx, &raw.forces, &body_names, &tree.names, &mut elements)?;
+    let constraints = cuts::constraints(
+        &ctx,
+        &raw.constraints,
+        &body_names,
+        &tree.names,
+        &mut elements,
+    )?;
+    let independent = mobility::mobility(&ctx, &raw, &tree.coordinates, &constraints)?;
+    let ports = ports::ports(&ctx, &raw.ports, &body_names, &tree.coordinates)?;
+    let analysis = analysis::analysis(
+        &ctx,
+        raw.analysis.as_ref(),
+        &tree.coordinates,
+        &ports,
+        &parameters,
+    )?;
+    Ok(Model {
+        name: header.name,
         file: file.to_string(),
-        line: Some(line),
-        column: Some(column),
-        message: msg.to_string(),
-        snippet: Some(snippet),
-    }
+        parameters,
+        gravity: header.gravity,
+        bodies,
+        joints: tree.joints,
+        order,
+        coordinates: tree.coordinates,
+        forces,
+        constraints,
+        ports,
+        independent,
+        analysis,
+    })
 }
 
-/// Do two points (known at nominal, not depending on the speed) coincide?
-fn coincident(ctx: &Ctx, a: &[Field; 3], b: &[Field; 3], nominal: &[f64]) -> R<bool> {
-    for (x, y) in a.iter().zip(b) {
-        match (ctx.nominal(x, nominal)?, ctx.nominal(y, nominal)?) {
-            (Some(u), Some(v)) if (u - v).abs() <= 0.0 => {}
-            _ => return Ok(false),
-        }
-    }
-    Ok(true)
-}
-
-/// Byte offset of the start of the line with the most dots and opening brackets (the deepest
-/// nesting of keys, tables and arrays), roughly: quotes are not tracked.
-fn most_nested_line(text: &str) -> usize {
-    let mut best = (0, 0);
-    let mut start = 0;
-    for line in text.split_inclusive('\n') {
-        let depth = line
-            .chars()
-            .filter(|c| matches!(c, '.' | '[' | '{'))
-            .count();
-        if depth > best.0 {
-            best = (depth, start);
-        }
-        start += line.len();
-    }
-    best.1
-}
-
-/// 1-based line and column (in characters) of byte `offset`, and that line's text.
-fn locate(text: &str, offset: usize) -> (usize, usize, String) {
-    let mut off = offset.min(text.len());
-    while !text.is_char_boundary(off) {
-        off -= 1;
-    }
-    let before = &text[..off];
-    let line = before.matches('\n').count() + 1;
-    let start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = text[start..off].chars().count() + 1;
-    let end = text[off..].find('\n').map_or(text.len(), |i| off + i);
-    (
-        line,
-        column,
-        text[start..end].trim_end_matches('\r').to_string(),
-    )
-}
-
-/// Byte offset of the start of each line of `text`.
-fn line_starts(text: &str) -> Vec<usize> {
-    std::iter::once(0)
-        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-        .collect()
-}
-
+/// What every stage needs: the file to point into, and the parameters its expressions refer to.
 struct Ctx<'a> {
     text: &'a str,
     file: &'a str,
+    /// The parameters' names, which expressions refer to by position (none until the
+    /// parameters stage has run).
     params: Vec<String>,
+    /// Their nominal values, at which every field that does not use the speed is evaluated.
+    values: Vec<f64>,
     /// Byte offset of each line's start: every field's site is located by bisection (counting
     /// lines from the top for each of a large model's thousands of fields was quadratic).
     line_starts: Vec<usize>,
 }
 
+/// The result of a check: the first error found stops validation.
 type R<T> = Result<T, ModelError>;
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    fn new(text: &'a str, file: &'a str) -> Self {
+        Ctx {
+            text,
+            file,
+            params: Vec::new(),
+            values: Vec::new(),
+            line_starts: line_starts(text),
+        }
+    }
+
+    /// From now on, expressions may refer to `parameters` and are evaluated at their values.
+    fn declare(&mut self, parameters: &[Parameter]) {
+        self.params = parameters.iter().map(|p| p.name.clone()).collect();
+        self.values = parameters.iter().map(|p| p.value).collect();
+    }
+
+    /// Where errors about the file as a whole point: its first character.
+    fn whole(&self) -> Range<usize> {
+        0..self.text.len().min(1)
+    }
+
     fn err(&self, span: Range<usize>, msg: impl AsRef<str>) -> ModelError {
         error_at(self.file, self.text, span.start, msg.as_ref())
     }
@@ -179,916 +211,26 @@ impl Ctx<'_> {
     }
 
     /// Evaluates a field at the nominal parameters (if it does not use `speed`).
-    fn nominal(&self, f: &Field, p: &[f64]) -> R<Option<f64>> {
+    fn nominal(&self, f: &Field) -> R<Option<f64>> {
         if f.expr.uses_speed() {
             return Ok(None);
         }
-        f.expr.eval(p, 0.0).map(Some).map_err(|e| ModelError {
-            file: self.file.to_string(),
-            line: Some(f.site.line),
-            column: Some(f.site.column),
-            message: format!("{}: {e}", f.site.what),
-            snippet: Some(locate_line(self.text, f.site.line)),
-        })
-    }
-}
-
-/// An expression shortened for messages (hostile input can be kilobytes long).
-fn abbreviate(s: &str) -> String {
-    const MAX: usize = 60;
-    if s.chars().count() <= MAX {
-        s.to_string()
-    } else {
-        format!("{}…", s.chars().take(MAX).collect::<String>())
-    }
-}
-
-fn locate_line(text: &str, line: usize) -> String {
-    text.lines().nth(line - 1).unwrap_or("").to_string()
-}
-
-/// Longest name of a parameter, body, joint, force, constraint or case (characters): names
-/// go into column headers, file names and plot titles.
-const MAX_NAME: usize = 64;
-/// Longest model name and description (characters).
-const MAX_TITLE: usize = 200;
-const MAX_DESCRIPTION: usize = 4000;
-
-/// A free text no longer than `max` characters.
-fn check_text(ctx: &Ctx, text: &Option<Spanned<String>>, what: &str, max: usize) -> R<()> {
-    if let Some(t) = text
-        && t.get_ref().chars().count() > max
-    {
-        return Err(ctx.err(
-            t.span(),
-            format!(
-                "the {what} has {} characters; at most {max} are allowed",
-                t.get_ref().chars().count()
-            ),
-        ));
-    }
-    Ok(())
-}
-
-/// Names must be non-empty, short, and not clash with reserved words.
-fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()> {
-    let n = name.get_ref();
-    if n.chars().count() > MAX_NAME {
-        return Err(ctx.err(
-            name.span(),
-            format!(
-                "{kind} name '{}' has {} characters; at most {MAX_NAME} are allowed",
-                abbreviate(n),
-                n.chars().count()
-            ),
-        ));
-    }
-    if n.is_empty()
-        || !n
-            .chars()
-            .all(|c| c.is_alphanumeric() || c == '_' || c == '-')
-    {
-        return Err(ctx.err(
-            name.span(),
-            format!("{kind} name '{n}' must be non-empty and use letters, digits, '_' or '-'"),
-        ));
-    }
-    Ok(())
-}
-
-fn tolerance(ctx: &Ctx, v: &toml::Value, span: Range<usize>, what: &str) -> R<Tolerance> {
-    let bad = |m: &str| ctx.err(span.clone(), format!("{what}: {m}"));
-    let t = match v {
-        toml::Value::String(s) => {
-            let s = s.trim();
-            if let Some(p) = s.strip_suffix('%') {
-                let f: f64 = p
-                    .trim()
-                    .parse()
-                    .map_err(|_| bad(&format!("'{s}' is not a percentage such as \"3%\"")))?;
-                Tolerance::Relative(f / 100.0)
-            } else {
-                let f: f64 = s.parse().map_err(|_| {
-                    bad(&format!(
-                        "'{s}' is neither a percentage (\"3%\") nor an absolute value"
-                    ))
-                })?;
-                Tolerance::Absolute(f)
-            }
-        }
-        toml::Value::Float(f) => Tolerance::Absolute(*f),
-        toml::Value::Integer(i) => Tolerance::Absolute(*i as f64),
-        _ => {
-            return Err(bad(
-                "a tolerance is \"3%\" (relative) or a number (absolute)",
-            ));
-        }
-    };
-    let x = match t {
-        Tolerance::Relative(x) | Tolerance::Absolute(x) => x,
-    };
-    if !x.is_finite() || x < 0.0 {
-        return Err(bad("a tolerance must be finite and not negative"));
-    }
-    Ok(t)
-}
-
-fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<Parameter> {
-    let n = name.get_ref().clone();
-    let what = format!("parameter '{n}'");
-    let span = v.span();
-    let num = |x: &toml::Value| -> Option<f64> {
-        match x {
-            toml::Value::Float(f) => Some(*f),
-            toml::Value::Integer(i) => Some(*i as f64),
-            _ => None,
-        }
-    };
-    let (value, tol, dist) = match v.get_ref() {
-        toml::Value::Table(t) => {
-            for k in t.keys() {
-                if !["value", "tolerance", "distribution"].contains(&k.as_str()) {
-                    return Err(ctx.err(
-                        span,
-                        format!(
-                            "{what}: unknown key '{k}' (expected value, tolerance, distribution)"
-                        ),
-                    ));
-                }
-            }
-            let value = t
-                .get("value")
-                .ok_or_else(|| ctx.err(span.clone(), format!("{what}: missing 'value'")))?;
-            let value = num(value).ok_or_else(|| {
-                ctx.err(span.clone(), format!("{what}: 'value' must be a number"))
-            })?;
-            let tol = t
-                .get("tolerance")
-                .map(|x| tolerance(ctx, x, span.clone(), &what))
-                .transpose()?;
-            let dist = match t.get("distribution") {
-                None => Distribution::Normal,
-                Some(toml::Value::String(s)) if s == "normal" => Distribution::Normal,
-                Some(toml::Value::String(s)) if s == "uniform" => Distribution::Uniform,
-                Some(_) => {
-                    return Err(ctx.err(
-                        span,
-                        format!("{what}: distribution must be \"normal\" or \"uniform\""),
-                    ));
-                }
-            };
-            (value, tol, dist)
-        }
-        other => {
-            let value = num(other).ok_or_else(|| {
-                ctx.err(
-                    span.clone(),
-                    format!("{what}: expected a number or {{ value = …, tolerance = \"3%\" }}"),
-                )
-            })?;
-            (value, None, Distribution::Normal)
-        }
-    };
-    if !value.is_finite() {
-        return Err(ctx.err(span, format!("{what}: value {value} is not finite")));
-    }
-    Ok(Parameter {
-        name: n,
-        value,
-        tolerance: tol,
-        distribution: dist,
-        site: ctx.site(&name.span(), what),
-    })
-}
-
-/// Replaces the nominal values of the named parameters, before anything reads them: the
-/// model is then validated exactly as if the file had said so. A name the model does not
-/// declare, or a value that is not finite, is an error naming the override.
-fn override_values(ctx: &Ctx, parameters: &mut [Parameter], overrides: &[(String, f64)]) -> R<()> {
-    for (name, value) in overrides {
-        let err = |message: String| ModelError {
-            file: ctx.file.to_string(),
-            line: None,
-            column: None,
-            message,
-            snippet: None,
-        };
-        let Some(p) = parameters.iter().position(|p| &p.name == name) else {
-            let names: Vec<&str> = parameters.iter().map(|p| p.name.as_str()).collect();
-            return Err(err(format!(
-                "override '{name}': the model has no such parameter (it has: {})",
-                if names.is_empty() {
-                    "none".to_string()
-                } else {
-                    names.join(", ")
-                }
-            )));
-        };
-        if !value.is_finite() {
-            return Err(err(format!("override '{name}' = {value}: not finite")));
-        }
-        parameters[p].value = *value;
-    }
-    Ok(())
-}
-
-/// The name of a force element or cut joint (`what`): well formed and unique across joints,
-/// force elements and cut joints (`elements` collects the latter two).
-fn element_name(
-    ctx: &Ctx,
-    name: &Spanned<String>,
-    what: &str,
-    joint_names: &HashMap<String, usize>,
-    elements: &mut HashMap<String, usize>,
-) -> R<String> {
-    check_name(ctx, name, what)?;
-    let n = name.get_ref().clone();
-    if elements.insert(n.clone(), 0).is_some() || joint_names.contains_key(&n) {
-        return Err(ctx.err(name.span(), format!("duplicate name '{n}'")));
-    }
-    Ok(n)
-}
-
-/// The type named by `kind` among `all` (whose names `name` gives), or an error of `owner`
-/// listing them.
-fn type_named<K: Copy>(
-    ctx: &Ctx,
-    kind: &Spanned<String>,
-    owner: &str,
-    all: &[K],
-    name: impl Fn(K) -> &'static str,
-) -> R<K> {
-    all.iter()
-        .copied()
-        .find(|&k| name(k) == kind.get_ref())
-        .ok_or_else(|| {
-            ctx.err(
-                kind.span(),
-                format!(
-                    "{owner}: unknown type '{}' (expected {})",
-                    kind.get_ref(),
-                    joints::list(all.iter().map(|&k| name(k)))
-                ),
-            )
-        })
-}
-
-/// Resolves a body name (`ground` → `None`).
-fn body_ref(ctx: &Ctx, names: &HashMap<String, usize>, s: &Spanned<String>) -> R<Option<usize>> {
-    if s.get_ref() == "ground" {
-        return Ok(None);
-    }
-    names.get(s.get_ref()).map(|&i| Some(i)).ok_or_else(|| {
-        ctx.err(
-            s.span(),
-            format!("unknown body '{}' (bodies are declared in [[bodies]]; 'ground' is the fixed frame)", s.get_ref()),
-        )
-    })
-}
-
-pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
-    let raw: FileSchema = toml::from_str(text).map_err(|e| {
-        let off = e.span().map_or(0, |s| s.start);
-        let msg = e.message().trim().to_string();
-        match e.span() {
-            Some(_) => error_at(file, text, off, &msg),
-            // The parser gives no place for some errors (its nesting limit): point at the
-            // most deeply nested line, the likely culprit.
-            None => error_at(file, text, most_nested_line(text), &msg),
-        }
-    })?;
-    let whole = 0..text.len().min(1);
-
-    // Parameters, in file order.
-    let mut praw: Vec<_> = raw.parameters.iter().collect();
-    praw.sort_by_key(|(k, _)| k.span().start);
-    let mut ctx = Ctx {
-        text,
-        file,
-        params: Vec::new(),
-        line_starts: line_starts(text),
-    };
-    let mut parameters = Vec::new();
-    for (k, v) in praw {
-        check_name(&ctx, k, "parameter")?;
-        if ["speed", "pi"].contains(&k.get_ref().as_str()) {
-            return Err(ctx.err(
-                k.span(),
-                format!(
-                    "'{}' is reserved and cannot be a parameter name",
-                    k.get_ref()
-                ),
-            ));
-        }
-        parameters.push(parameter(&ctx, k, v)?);
-    }
-    override_values(&ctx, &mut parameters, overrides)?;
-    ctx.params = parameters.iter().map(|p| p.name.clone()).collect();
-    check_text(&ctx, &raw.name, "model name", MAX_TITLE)?;
-    check_text(&ctx, &raw.description, "description", MAX_DESCRIPTION)?;
-    let nominal: Vec<f64> = parameters.iter().map(|p| p.value).collect();
-
-    let gravity = match &raw.gravity {
-        Some(g) => ctx.vec3(g, "gravity".into())?,
-        None => [0, 1, 2].map(|i| ctx.zero(&whole, format!("gravity[{i}]"))),
-    };
-    for f in &gravity {
-        ctx.nominal(f, &nominal)?;
-    }
-
-    // Bodies.
-    let mut body_names: HashMap<String, usize> = HashMap::new();
-    let mut bodies = Vec::new();
-    for b in &raw.bodies {
-        let s = b.get_ref();
-        check_name(&ctx, &s.name, "body")?;
-        let name = s.name.get_ref().clone();
-        if name == "ground" {
-            return Err(ctx.err(
-                s.name.span(),
-                "'ground' is the fixed frame and cannot be declared as a body",
-            ));
-        }
-        if body_names.insert(name.clone(), bodies.len()).is_some() {
-            return Err(ctx.err(s.name.span(), format!("duplicate body name '{name}'")));
-        }
-        let what = |f: &str| format!("body '{name}' {f}");
-        let mass = ctx.field(&s.mass, what("mass"))?;
-        let inertia = match &s.inertia {
-            None => std::array::from_fn(|i| {
-                std::array::from_fn(|j| ctx.zero(&b.span(), what(&format!("inertia[{i}][{j}]"))))
-            }),
-            Some(sp) => inertia(&ctx, sp, &what(""))?,
-        };
-        let cm = ctx.vec3(&s.cm, what("cm"))?;
-        // Nominal checks: mass ≥ 0, inertia symmetric positive semi-definite.
-        if let Some(m) = ctx.nominal(&mass, &nominal)?
-            && m < 0.0
-        {
-            return Err(ctx.err(
-                s.mass.span(),
-                format!("body '{name}': negative mass {m} kg"),
-            ));
-        }
-        let mut inom = [[0.0; 3]; 3];
-        let mut all_known = true;
-        for i in 0..3 {
-            for j in 0..3 {
-                match ctx.nominal(&inertia[i][j], &nominal)? {
-                    Some(v) => inom[i][j] = v,
-                    None => all_known = false,
-                }
-            }
-        }
-        for f in &cm {
-            ctx.nominal(f, &nominal)?;
-        }
-        if all_known {
-            let span = s.inertia.as_ref().map_or(b.span(), |x| x.span());
-            check_inertia(&ctx, &inom, span, &name)?;
-        }
-        let axes = match (&s.x_axis, &s.y_axis) {
-            (None, None) => None,
-            (Some(x), Some(y)) => {
-                let (x, y) = (ctx.vec3(x, what("x_axis"))?, ctx.vec3(y, what("y_axis"))?);
-                inertia_axes(&ctx, &x, &y, &nominal, b.span(), &name)?;
-                Some([x, y])
-            }
-            (Some(a), None) | (None, Some(a)) => {
-                return Err(ctx.err(
-                    a.span(),
-                    format!(
-                        "body '{name}': give both 'x_axis' and 'y_axis' (the axes its inertia is given in)"
-                    ),
-                ));
-            }
-        };
-        bodies.push(Body {
-            name,
-            mass,
-            inertia,
-            axes,
-            cm,
-        });
-    }
-    if bodies.is_empty() {
-        return Err(ModelError {
-            file: file.to_string(),
-            line: None,
-            column: None,
-            message: "the model declares no bodies ([[bodies]])".into(),
-            snippet: None,
-        });
-    }
-
-    // Joints.
-    let joints::Tree {
-        joints,
-        coordinates,
-        child_of,
-        names: joint_names,
-    } = joints::joints(&ctx, &raw.joints, &body_names, &bodies, &nominal)?;
-
-    // Tree: every body is reached from ground; no cycles.
-    for (b, c) in child_of.iter().enumerate() {
-        if c.is_none() {
-            let span = raw.bodies[b].get_ref().name.span();
-            return Err(ctx.err(
-                span,
-                format!(
-                    "body '{}' is not connected to ground: no joint has it as child",
-                    bodies[b].name
-                ),
-            ));
-        }
-    }
-    let mut order = Vec::new();
-    let mut placed = vec![false; joints.len()];
-    let mut frontier: Vec<Option<usize>> = vec![None];
-    while let Some(parent) = frontier.pop() {
-        for (ji, j) in joints.iter().enumerate() {
-            if j.parent == parent && !placed[ji] {
-                placed[ji] = true;
-                order.push(ji);
-                frontier.push(Some(j.child));
-            }
-        }
-    }
-    if let Some(ji) = placed.iter().position(|p| !p) {
-        // Walk up from this joint until a joint repeats: that is the cycle.
-        let mut path = vec![ji];
-        let mut cur = ji;
-        loop {
-            let parent_body = joints[cur]
-                .parent
-                .expect("unplaced joints have a body parent");
-            let up = child_of[parent_body].expect("every body has a parent joint");
-            if let Some(pos) = path.iter().position(|&x| x == up) {
-                let names: Vec<&str> = path[pos..]
-                    .iter()
-                    .rev()
-                    .map(|&k| joints[k].name.as_str())
-                    .collect();
-                let span = raw.joints[up].get_ref().name.span();
-                return Err(ctx.err(
-                    span,
-                    format!(
-                        "the joints form a cycle not connected to ground: {} → {}",
-                        names.join(" → "),
-                        names[0]
-                    ),
-                ));
-            }
-            path.push(up);
-            cur = up;
-        }
-    }
-
-    // Force elements.
-    let mut element_names: HashMap<String, usize> = HashMap::new();
-    let forces = forces::forces(
-        &ctx,
-        &raw.forces,
-        &body_names,
-        &joint_names,
-        &mut element_names,
-        &nominal,
-    )?;
-
-    // Cut joints.
-    let constraints = cuts::constraints(
-        &ctx,
-        &raw.constraints,
-        &body_names,
-        &joint_names,
-        &mut element_names,
-        &nominal,
-    )?;
-    let n_free = coordinates.iter().filter(|c| !c.driven).count();
-    let n_con: usize = constraints.iter().map(|c| c.kind.equations()).sum();
-    if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {
-        let span = raw.constraints.last().map_or(whole.clone(), |c| c.span());
-        return Err(ctx.err(
-            span,
-            format!("{n_con} constraint equation(s) for {n_free} free coordinate(s): the mechanism would have no degree of freedom"),
-        ));
-    }
-    if n_free == 0 {
-        let span = raw.joints.first().map_or(whole.clone(), |c| c.span());
-        return Err(ctx.err(
-            span,
-            "the mechanism has no free coordinate (every joint is fixed or driven)",
-        ));
-    }
-
-    // Independent coordinates.
-    let independent = match &raw.independent {
-        None => None,
-        Some(list) => {
-            let mut out = Vec::new();
-            for n in list.get_ref() {
-                let Some(ci) = coordinates.iter().position(|c| &c.name == n.get_ref()) else {
-                    return Err(ctx.err(
-                        n.span(),
-                        format!(
-                            "independent: '{}' is not a joint with a coordinate",
-                            n.get_ref()
-                        ),
-                    ));
-                };
-                if coordinates[ci].driven {
-                    return Err(ctx.err(
-                        n.span(),
-                        format!("independent: joint '{}' is driven", n.get_ref()),
-                    ));
-                }
-                if out.contains(&ci) {
-                    return Err(ctx.err(
-                        n.span(),
-                        format!("independent: '{}' is listed twice", n.get_ref()),
-                    ));
-                }
-                out.push(ci);
-            }
-            if out.len() != n_free - n_con {
-                return Err(ctx.err(
-                    list.span(),
-                    format!("independent lists {} coordinate(s) but the mechanism has {} degree(s) of freedom", out.len(), n_free - n_con),
-                ));
-            }
-            Some(out)
-        }
-    };
-
-    let ports = ports(&ctx, &raw.ports, &body_names, &coordinates, &nominal)?;
-    let analysis = analysis(
-        &ctx,
-        raw.analysis.as_ref(),
-        &coordinates,
-        &ports,
-        &parameters,
-    )?;
-
-    Ok(Model {
-        name: raw
-            .name
-            .as_ref()
-            .map(|n| n.get_ref().clone())
-            .unwrap_or_else(|| {
-                std::path::Path::new(file)
-                    .file_stem()
-                    .map_or("model".into(), |s| s.to_string_lossy().into_owned())
-            }),
-        file: file.to_string(),
-        parameters,
-        gravity,
-        bodies,
-        joints,
-        order,
-        coordinates,
-        forces,
-        constraints,
-        ports,
-        independent,
-        analysis,
-    })
-}
-
-/// Parses and checks the `[[ports]]` tables.
-fn ports(
-    ctx: &Ctx,
-    raw: &[Spanned<schema::PortSchema>],
-    body_names: &HashMap<String, usize>,
-    coordinates: &[Coordinate],
-    nominal: &[f64],
-) -> R<Vec<Port>> {
-    let mut out: Vec<Port> = Vec::new();
-    for item in raw {
-        let s = item.get_ref();
-        check_name(ctx, &s.name, "port")?;
-        let name = s.name.get_ref().clone();
-        if out.iter().any(|p| p.name == name) || coordinates.iter().any(|c| c.name == name) {
-            return Err(ctx.err(
-                s.name.span(),
-                format!("duplicate name '{name}' (ports and joint coordinates share the names a transfer function refers to)"),
-            ));
-        }
-        let owner = format!("port '{name}'");
-        let rotation = match s.kind.get_ref().as_str() {
-            "translation" => false,
-            "rotation" => true,
-            other => {
-                return Err(ctx.err(
-                    s.kind.span(),
-                    format!("{owner}: unknown type '{other}' (expected translation or rotation)"),
-                ));
-            }
-        };
-        let Some(body) = body_ref(ctx, body_names, &s.body)? else {
-            return Err(ctx.err(
-                s.body.span(),
-                format!("{owner}: ground does not move; give a body"),
-            ));
-        };
-        let usage = if rotation {
-            crate::joints::Use::Unused
-        } else {
-            crate::joints::Use::Required
-        };
-        let this = format!("a {} port", s.kind.get_ref());
-        let point = joints::vector(
-            ctx,
-            &s.point,
-            usage,
-            "point",
-            &owner,
-            &this,
-            &item.span(),
-            nominal,
-        )?;
-        let direction = ctx.vec3(&s.direction, format!("{owner} direction"))?;
-        if let Some(d) = joints::known(ctx, &direction, nominal)?
-            && d.iter().all(|x| x.abs() <= 0.0)
-        {
-            return Err(ctx.err(s.direction.span(), format!("{owner}: direction is zero")));
-        }
-        out.push(Port {
-            name,
-            body,
-            point,
-            direction,
-            rotation,
-        });
-    }
-    Ok(out)
-}
-
-/// Reads an inertia given as three principal values or a 3×3 matrix of numbers or expressions.
-fn inertia(ctx: &Ctx, v: &Spanned<toml::Value>, what: &str) -> R<[[Field; 3]; 3]> {
-    let span = v.span();
-    let bad = || {
-        ctx.err(span.clone(), format!("{what}inertia: expected 3 principal values [Ixx, Iyy, Izz] or a 3×3 matrix of numbers or expressions"))
-    };
-    let num = |x: &toml::Value, i: usize, j: usize| -> R<Field> {
-        let n = match x {
-            toml::Value::Float(f) => Num::Value(*f),
-            toml::Value::Integer(k) => Num::Value(*k as f64),
-            toml::Value::String(s) => Num::Expr(s.clone()),
-            _ => return Err(bad()),
-        };
-        // Entries carry the span of the whole array: errors point at its start.
-        ctx.field(
-            &Spanned::new(span.clone(), n),
-            format!("{what}inertia[{i}][{j}]"),
-        )
-    };
-    let toml::Value::Array(rows) = v.get_ref() else {
-        return Err(bad());
-    };
-    if rows.len() != 3 {
-        return Err(bad());
-    }
-    if rows.iter().all(|r| !r.is_array()) {
-        let d = [
-            num(&rows[0], 0, 0)?,
-            num(&rows[1], 1, 1)?,
-            num(&rows[2], 2, 2)?,
-        ];
-        return Ok(std::array::from_fn(|i| {
-            std::array::from_fn(|j| {
-                if i == j {
-                    d[i].clone()
-                } else {
-                    ctx.zero(&span, format!("{what}inertia[{i}][{j}]"))
-                }
+        f.expr
+            .eval(&self.values, 0.0)
+            .map(Some)
+            .map_err(|e| ModelError {
+                file: self.file.to_string(),
+                line: Some(f.site.line),
+                column: Some(f.site.column),
+                message: format!("{}: {e}", f.site.what),
+                snippet: Some(locate_line(self.text, f.site.line)),
             })
-        }));
     }
-    let mut out: Vec<Vec<Field>> = Vec::new();
-    for (i, r) in rows.iter().enumerate() {
-        let toml::Value::Array(r) = r else {
-            return Err(bad());
-        };
-        if r.len() != 3 {
-            return Err(bad());
-        }
-        out.push(
-            r.iter()
-                .enumerate()
-                .map(|(j, x)| num(x, i, j))
-                .collect::<R<Vec<_>>>()?,
-        );
-    }
-    Ok(std::array::from_fn(|i| {
-        std::array::from_fn(|j| out[i][j].clone())
-    }))
-}
-
-/// Inertia axes: neither zero nor parallel at the nominal values.
-fn inertia_axes(
-    ctx: &Ctx,
-    x: &[Field; 3],
-    y: &[Field; 3],
-    nominal: &[f64],
-    span: Range<usize>,
-    name: &str,
-) -> R<()> {
-    let (Some(a), Some(b)) = (
-        joints::known(ctx, x, nominal)?,
-        joints::known(ctx, y, nominal)?,
-    ) else {
-        return Ok(());
-    };
-    let scale = |v: [f64; 3]| {
-        let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        (m > 0.0).then(|| v.map(|x| x / m))
-    };
-    let (Some(a), Some(b)) = (scale(a), scale(b)) else {
-        return Err(ctx.err(span, format!("body '{name}': x_axis or y_axis is zero")));
-    };
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if norm(c) <= 1e-9 * norm(a) * norm(b) {
-        return Err(ctx.err(
-            span,
-            format!("body '{name}': x_axis and y_axis are parallel"),
-        ));
-    }
-    Ok(())
-}
-
-/// Symmetric and positive semi-definite (see [`super::admissible::inertia_defect`]).
-fn check_inertia(ctx: &Ctx, i: &[[f64; 3]; 3], span: Range<usize>, name: &str) -> R<()> {
-    match super::admissible::inertia_defect(i) {
-        Some((defect, value)) => {
-            Err(ctx.err(span, format!("body '{name}': {defect}: {value:.6e}")))
-        }
-        None => Ok(()),
-    }
-}
-
-fn analysis(
-    ctx: &Ctx,
-    raw: Option<&Spanned<schema::AnalysisSchema>>,
-    coords: &[Coordinate],
-    ports: &[Port],
-    params: &[Parameter],
-) -> R<Analysis> {
-    let mut a = Analysis {
-        speed: None,
-        transfer: None,
-        samples: 3000,
-        seed: 1,
-        sampling: Sampling::Random,
-        cases: Vec::new(),
-    };
-    let Some(raw) = raw else { return Ok(a) };
-    let s = raw.get_ref();
-    if let Some(sp) = &s.speed {
-        a.speed = Some(
-            SpeedRange::parse(sp.get_ref())
-                .map_err(|e| ctx.err(sp.span(), format!("analysis speed: {e}")))?,
-        );
-    }
-    if let Some(t) = &s.transfer {
-        let t = t.get_ref();
-        let coord = |n: &Spanned<String>| {
-            let name = n.get_ref();
-            match coords.iter().position(|c| &c.name == name) {
-                Some(c) if !coords[c].driven => Ok(Channel::Coordinate(c)),
-                _ => ports
-                    .iter()
-                    .position(|p| &p.name == name)
-                    .map(Channel::Port)
-                    .ok_or_else(|| {
-                        ctx.err(
-                            n.span(),
-                            format!(
-                                "analysis transfer: '{name}' is neither a free joint coordinate nor a port"
-                            ),
-                        )
-                    }),
-            }
-        };
-        let order = t.order.as_ref().map_or(1.0, |o| *o.get_ref());
-        if !order.is_finite() || order < 0.0 {
-            return Err(ctx.err(
-                t.order.as_ref().map_or(raw.span(), |o| o.span()),
-                "analysis transfer: order must be finite and ≥ 0",
-            ));
-        }
-        a.transfer = Some(Transfer {
-            input: coord(&t.input)?,
-            output: coord(&t.output)?,
-            order,
-        });
-    }
-    if let Some(n) = &s.samples {
-        if let Err(e) = crate::settings::samples(*n.get_ref()) {
-            return Err(ctx.err(n.span(), format!("analysis samples {e}")));
-        }
-        a.samples = *n.get_ref() as usize;
-    }
-    if let Some(seed) = s.seed {
-        a.seed = seed;
-    }
-    if let Some(m) = &s.sampling {
-        a.sampling = match m.get_ref().as_str() {
-            "random" => Sampling::Random,
-            "lhs" => Sampling::Lhs,
-            "sobol" => Sampling::Sobol,
-            x => {
-                return Err(ctx.err(
-                    m.span(),
-                    format!("analysis sampling '{x}': expected random, lhs or sobol"),
-                ));
-            }
-        };
-    }
-    for c in &s.cases {
-        let c = c.get_ref();
-        check_name(ctx, &c.name, "case")?;
-        if a.cases.iter().any(|x: &Case| &x.name == c.name.get_ref()) {
-            return Err(ctx.err(
-                c.name.span(),
-                format!("duplicate case name '{}'", c.name.get_ref()),
-            ));
-        }
-        let mut tl: Vec<_> = c.tolerances.iter().collect();
-        tl.sort_by_key(|(k, _)| k.span().start);
-        let mut tolerances = Vec::new();
-        for (k, v) in tl {
-            let Some(pi) = params.iter().position(|p| &p.name == k.get_ref()) else {
-                return Err(ctx.err(
-                    k.span(),
-                    format!(
-                        "case '{}': unknown parameter '{}'",
-                        c.name.get_ref(),
-                        k.get_ref()
-                    ),
-                ));
-            };
-            tolerances.push((
-                pi,
-                tolerance(
-                    ctx,
-                    v.get_ref(),
-                    v.span(),
-                    &format!("case '{}'", c.name.get_ref()),
-                )?,
-            ));
-        }
-        let correlation = match &c.correlation {
-            None => None,
-            Some(m) => {
-                let rows = m.get_ref();
-                let n = tolerances.len();
-                let bad = |msg: &str| {
-                    ctx.err(
-                        m.span(),
-                        format!("case '{}' correlation: {msg}", c.name.get_ref()),
-                    )
-                };
-                if rows.len() != n || rows.iter().any(|r| r.len() != n) {
-                    return Err(bad(&format!(
-                        "expected a {n}×{n} matrix (one row per tolerance, in the order written)"
-                    )));
-                }
-                let mat = nalgebra::DMatrix::from_fn(n, n, |i, j| rows[i][j]);
-                if mat.iter().any(|v| !v.is_finite() || v.abs() > 1.0)
-                    || (0..n).any(|i| (mat[(i, i)] - 1.0).abs() > 1e-12)
-                {
-                    return Err(bad("entries must lie in [−1, 1] with a unit diagonal"));
-                }
-                if (&mat - mat.transpose()).amax() > 1e-12 {
-                    return Err(bad("the matrix is not symmetric"));
-                }
-                if crate::linalg::symmetric_eigen(mat.clone())
-                    .is_none_or(|e| e.eigenvalues.min() < -1e-12)
-                {
-                    return Err(bad("the matrix is not positive semi-definite"));
-                }
-                Some(Correlation {
-                    params: tolerances.iter().map(|t| t.0).collect(),
-                    matrix: rows.clone(),
-                })
-            }
-        };
-        a.cases.push(Case {
-            name: c.name.get_ref().clone(),
-            tolerances,
-            correlation,
-        });
-    }
-    Ok(a)
 }
 
 #[cfg(test)]
 mod tests {
+    use super::locate::locate;
     use super::*;
 
     /// Sites located by bisection over the line starts agree with counting from the top, at
@@ -1096,12 +238,7 @@ mod tests {
     #[test]
     fn sites_by_bisection_agree_with_counting_lines() {
         let text = "a = 1\n\nλ = \"x·2\"\r\n  [[bodies]]\nω\n";
-        let ctx = Ctx {
-            text,
-            file: "f.toml",
-            params: Vec::new(),
-            line_starts: line_starts(text),
-        };
+        let ctx = Ctx::new(text, "f.toml");
         for off in 0..=text.len() + 2 {
             let site = ctx.site(&(off..off + 1), String::new());
             let (line, column, _) = locate(text, off);

@@ -1,0 +1,58 @@
+//! Fields given once per coordinate of a joint or per component of a force element: a list of
+//! one value each, or a single value where that is unambiguous. Joints and force elements both
+//! take them, so the rule lives in one place.
+
+use super::{Ctx, R};
+use crate::model::Field;
+use crate::model::schema::{Nums, SNums};
+use toml::Spanned;
+
+/// `field` or `field[i]` for coordinate `i` of `k`.
+pub(super) fn indexed(field: &str, i: usize, k: usize) -> String {
+    if k == 1 {
+        field.into()
+    } else {
+        format!("{field}[{i}]")
+    }
+}
+
+/// Values given per coordinate (or, for a force element, per component: `per` names which): a
+/// list of `k`, or one value where `k` is one (or, when `broadcast`, for every one).
+pub(super) fn per_coordinate(
+    ctx: &Ctx,
+    v: &Option<SNums>,
+    k: usize,
+    field: &str,
+    broadcast: bool,
+    per: &str,
+    what: &impl Fn(&str) -> String,
+) -> R<Vec<Option<Field>>> {
+    let Some(v) = v else {
+        return Ok(vec![None; k]);
+    };
+    match v.get_ref() {
+        Nums::One(n) if k == 1 || broadcast => {
+            let sn = Spanned::new(v.span(), n.clone());
+            (0..k)
+                .map(|i| ctx.field(&sn, what(&indexed(field, i, k))).map(Some))
+                .collect()
+        }
+        Nums::One(_) => Err(ctx.err(
+            v.span(),
+            format!("{}: give one value per {per}, a list of {k}", what(field)),
+        )),
+        Nums::Many(items) if items.len() == k => items
+            .iter()
+            .enumerate()
+            .map(|(i, n)| ctx.field(n, what(&indexed(field, i, k))).map(Some))
+            .collect(),
+        Nums::Many(items) => Err(ctx.err(
+            v.span(),
+            format!(
+                "{}: expected {k} value(s), one per {per}, got {}",
+                what(field),
+                items.len()
+            ),
+        )),
+    }
+}
