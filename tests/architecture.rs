@@ -10,7 +10,12 @@ use std::path::Path;
 /// The layers, lowest first (the order of `src/lib.rs`'s documentation). Modules in one layer
 /// may import each other only where the layer says so (`true`).
 const LAYERS: &[(&[&str], bool)] = &[
-    (&["real", "linalg", "schur", "threads", "cancel", "files", "dual4", "rigid", "settings"], true),
+    (
+        &[
+            "real", "linalg", "schur", "threads", "cancel", "files", "dual4", "rigid", "settings",
+        ],
+        true,
+    ),
     (&["joints", "cuts", "forces"], true),
     (&["model"], false),
     (&["mechanics"], false),
@@ -110,7 +115,9 @@ fn every_module_imports_only_modules_below_it_in_the_stated_order() {
                 continue;
             };
             if to > from || (to == from && !within) {
-                wrong.push(format!("{file}: {module} imports {target}, which sits above it"));
+                wrong.push(format!(
+                    "{file}: {module} imports {target}, which sits above it"
+                ));
             }
         }
     }
@@ -121,8 +128,8 @@ fn every_module_imports_only_modules_below_it_in_the_stated_order() {
 
 #[test]
 fn every_module_of_the_crate_is_in_the_stated_order() {
-    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"))
-        .unwrap();
+    let lib =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
     let declared: Vec<&str> = lib
         .lines()
         .filter_map(|l| l.strip_prefix("pub mod "))
