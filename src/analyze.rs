@@ -1,12 +1,13 @@
 //! The main job: how the tolerance cases spread every mode's ω_d and ζ and the transfer
 //! magnitude across the speed range, by every analytic method and by Monte Carlo.
 //!
-//! One nominal sweep; at each speed (in parallel) one [`LocalModel`] for the union of the cases' variables
-//! (derivatives do not depend on the tolerances, so cases share them); then per case the
-//! first-order, second-order and invariant statistics; then per case the `quadrature`
-//! ([`crate::quadrature`]: the whole pipeline integrated over the distribution, the answer the
-//! `analytic` row takes) and optionally the Monte Carlo. Wall times of the Taylor methods, the
-//! quadrature and the Monte Carlo are measured for the summary.
+//! The [`Study`]: one nominal sweep and, at each speed (in parallel), one [`LocalModel`] for
+//! the union of the cases' variables (derivatives do not depend on the tolerances, so cases
+//! share them). Then the propagation methods ([`crate::propagate`]) per case: the
+//! [`Quadrature`] (the whole pipeline integrated over the distribution, the answer the
+//! `analytic` row takes), the [`Taylor`] methods (first order, second order, invariant) and
+//! optionally the [`MonteCarlo`]. Wall times of the Taylor methods, the quadrature and the
+//! Monte Carlo are measured for the summary.
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;

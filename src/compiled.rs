@@ -64,18 +64,17 @@ impl Compiled {
         }
     }
 
-    /// The same model evaluated on `route` (nothing recorded yet).
+    /// The same model evaluated on `route` (its recording kept where the route is the same,
+    /// else nothing recorded yet).
     pub fn with_route(self, route: Route) -> Self {
+        if route == self.route {
+            return self;
+        }
         Compiled {
             model: self.model,
             route,
             program: OnceLock::new(),
         }
-    }
-
-    /// The route the model's equations are evaluated on.
-    pub fn route(&self) -> Route {
-        self.route
     }
 
     /// Reads and validates a model file ([`Model::from_file`]).
@@ -136,7 +135,7 @@ impl Compiled {
     }
 
     /// The equations at parameters `p` and `speed` over any [`Real`], near the coordinates
-    /// `q`: through the recorded program when the model has one, else directly.
+    /// `q`, on the model's [`Route`] (the recorded program when the model has one).
     pub fn equations<S: Real>(
         &self,
         p: &[S],

@@ -365,7 +365,8 @@ pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
     }
 }
 
-/// Design-variable values of sample `index` (`vars` in the order of `spread`).
+/// Design-variable values of sample `index` (the study's variables, in the order of the
+/// spread).
 pub struct Sampler {
     map: DesignMap,
     /// Number of design variables.
@@ -531,11 +532,10 @@ impl MonteCarlo {
         }
     }
 
-    /// Evaluates the chunks and returns each chunk's moments `[chunk][speed][output]`, in
-    /// chunk order; stops early (fewer chunks, [`Termination::Cancelled`]) when the run is
-    /// cancelled. Progress counts the
-    /// samples done in this call. With `values`, also keeps every finite value per
-    /// `[speed · outputs + output]`, in sample order (for quantiles).
+    /// Evaluates the chunks and folds each chunk's moments `[speed][output]` in chunk order
+    /// ([`TreeFold`]); stops early (fewer chunks, [`Termination::Cancelled`]) when the run is
+    /// cancelled. Progress counts the samples done in this call. With `values`, also keeps
+    /// every finite value per `[speed · outputs + output]`, in sample order (for quantiles).
     fn run_chunks(
         &self,
         study: &Study,
@@ -588,8 +588,10 @@ impl MonteCarlo {
     }
 
     /// The samples `0..samples` of `spread` whose design is not physically admissible
-    /// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first offending value)`, most
-    /// frequent first. They fail at every speed; this says why.
+    /// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first
+    /// offending value)`, most frequent first. They fail at every speed; this says why.
+    /// `samples` may be fewer than the run's (a cancelled run): they are still the run's
+    /// designs (the Latin hypercube's strata are those of every sample asked).
     pub fn inadmissible(
         &self,
         study: &Study,
@@ -598,14 +600,7 @@ impl MonteCarlo {
         run: &Run,
     ) -> Vec<(String, usize, f64)> {
         let model = study.model;
-        let sampler = Sampler::new(
-            study,
-            spread,
-            McOptions {
-                samples,
-                ..self.options
-            },
-        );
+        let sampler = Sampler::new(study, spread, self.options);
         let mut tally: Vec<(String, usize, f64)> = run.pool.install(|| {
             (0..samples)
                 .into_par_iter()

@@ -14,7 +14,8 @@
 //!
 //! This is the seam a new method plugs into: one type, one `impl Propagation`, and its rows in
 //! `analyze`. (In the manner of OpenTURNS' and chaospy's algorithm objects: inputs in, a
-//! result with its own error estimate and termination out.)
+//! result and its termination out; a method's error estimates are part of its value, as the
+//! quadrature's are.)
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;

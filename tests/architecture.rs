@@ -4,7 +4,6 @@
 //! sideways within a layer where the layer is not marked as one whose members may use each
 //! other.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The layers, lowest first (the order of `src/lib.rs`'s documentation). Modules in one layer
@@ -43,9 +42,135 @@ fn layer_of(module: &str) -> Option<(usize, bool)> {
         .map(|(i, (_, within))| (i, *within))
 }
 
-/// Every top-level module each source file of the crate imports through a `crate::` path.
-fn imports(src: &Path) -> BTreeMap<String, Vec<(String, String)>> {
-    let mut out: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
+/// The text of a source file without its comments (line and block) and with string and
+/// character literals emptied, so that only code is searched for paths.
+fn code_only(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '/' if chars.peek() == Some(&'/') => {
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        out.push('\n');
+                        break;
+                    }
+                }
+            }
+            '/' if chars.peek() == Some(&'*') => {
+                chars.next();
+                let mut prev = ' ';
+                for c in chars.by_ref() {
+                    if prev == '*' && c == '/' {
+                        break;
+                    }
+                    prev = c;
+                }
+                out.push(' ');
+            }
+            // A character literal (`'x'`, `'\''`), not a lifetime: emptied, so that `'"'`
+            // opens no string.
+            '\'' if chars.peek() == Some(&'\\') => {
+                chars.next();
+                chars.next();
+                for c in chars.by_ref() {
+                    if c == '\'' {
+                        break;
+                    }
+                }
+                out.push_str("' '");
+            }
+            '\'' if chars.clone().nth(1) == Some('\'') => {
+                chars.next();
+                chars.next();
+                out.push_str("' '");
+            }
+            '"' => {
+                let mut escaped = false;
+                for c in chars.by_ref() {
+                    if c == '"' && !escaped {
+                        break;
+                    }
+                    escaped = c == '\\' && !escaped;
+                }
+                out.push_str("\"\"");
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The first path segment of every item of a `{…}` group (nested groups included once).
+fn group_heads(group: &str) -> Vec<String> {
+    let mut heads = Vec::new();
+    let mut depth = 0;
+    let mut item = String::new();
+    for c in group.chars() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                heads.push(std::mem::take(&mut item));
+                continue;
+            }
+            _ => {}
+        }
+        if depth == 0 || item.is_empty() {
+            item.push(c);
+        }
+    }
+    heads.push(item);
+    heads
+        .iter()
+        .filter_map(|i| {
+            let head: String = i
+                .trim()
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            (!head.is_empty()).then_some(head)
+        })
+        .collect()
+}
+
+/// The top-level modules a piece of code names through `crate::` paths, `crate::{…}` groups
+/// (over any number of lines) included.
+fn targets(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, _) in code.match_indices("crate::") {
+        let rest = &code[i + "crate::".len()..];
+        if let Some(group) = rest.strip_prefix('{') {
+            let mut depth = 1;
+            let end = group
+                .char_indices()
+                .find(|&(_, c)| {
+                    depth += match c {
+                        '{' => 1,
+                        '}' => -1,
+                        _ => 0,
+                    };
+                    depth == 0
+                })
+                .map_or(group.len(), |(k, _)| k);
+            out.extend(group_heads(&group[..end]));
+        } else {
+            let head: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            if !head.is_empty() {
+                out.push(head);
+            }
+        }
+    }
+    out
+}
+
+/// Every top-level module each source file of the crate imports through a `crate::` path:
+/// `(importing module, imported module, file)`.
+fn imports(src: &Path) -> Vec<(String, String, String)> {
+    let mut out = Vec::new();
     let mut stack = vec![src.to_path_buf()];
     while let Some(dir) = stack.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
@@ -69,31 +194,10 @@ fn imports(src: &Path) -> BTreeMap<String, Vec<(String, String)>> {
             if module == "lib" || module == "main" {
                 continue;
             }
-            let text = std::fs::read_to_string(&path).unwrap();
-            for line in text.lines() {
-                let code = line.split("//").next().unwrap();
-                for (i, _) in code.match_indices("crate::") {
-                    let rest = &code[i + "crate::".len()..];
-                    let target: String = rest
-                        .chars()
-                        .take_while(|c| c.is_alphanumeric() || *c == '_')
-                        .collect();
-                    if !target.is_empty() && target != module {
-                        out.entry(module.clone())
-                            .or_default()
-                            .push((target, rel.display().to_string()));
-                    }
-                }
-                // `use crate::{a, b}` groups.
-                if let Some(group) = code.trim().strip_prefix("use crate::{") {
-                    for name in group.split([',', '}', ' ']).filter(|s| !s.is_empty()) {
-                        let target = name.split("::").next().unwrap().to_string();
-                        if target != module {
-                            out.entry(module.clone())
-                                .or_default()
-                                .push((target, rel.display().to_string()));
-                        }
-                    }
+            let code = code_only(&std::fs::read_to_string(&path).unwrap());
+            for target in targets(&code) {
+                if target != module && target != "self" {
+                    out.push((module.clone(), target, rel.display().to_string()));
                 }
             }
         }
@@ -102,23 +206,36 @@ fn imports(src: &Path) -> BTreeMap<String, Vec<(String, String)>> {
 }
 
 #[test]
+fn the_import_reader_finds_paths_in_every_form_and_none_in_comments() {
+    let code = code_only(
+        "use crate::a::X;\npub use crate::{b, c::{D, E}};\nuse crate::{\n    d::F,\n    e,\n};\n\
+         fn f<'a>() { crate::g::h(); let s = \"crate::no\"; let q = '\"'; crate::i::j(); }\n\
+         // crate::no\n/* crate::no */",
+    );
+    assert_eq!(targets(&code), ["a", "b", "c", "d", "e", "g", "i"]);
+}
+
+#[test]
 fn every_module_imports_only_modules_below_it_in_the_stated_order() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut wrong = Vec::new();
-    for (module, targets) in imports(&src) {
+    let found = imports(&src);
+    assert!(found.len() > 100, "{} imports found", found.len());
+    for (module, target, file) in found {
         let Some((from, _)) = layer_of(&module) else {
             wrong.push(format!("{module}: not in any layer of the stated order"));
             continue;
         };
-        for (target, file) in targets {
-            let Some((to, within)) = layer_of(&target) else {
-                continue;
-            };
-            if to > from || (to == from && !within) {
-                wrong.push(format!(
-                    "{file}: {module} imports {target}, which sits above it"
-                ));
-            }
+        let Some((to, within)) = layer_of(&target) else {
+            wrong.push(format!(
+                "{file}: crate::{target} is no module of the stated order"
+            ));
+            continue;
+        };
+        if to > from || (to == from && !within) {
+            wrong.push(format!(
+                "{file}: {module} imports {target}, which sits above it"
+            ));
         }
     }
     wrong.sort();

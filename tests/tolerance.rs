@@ -659,3 +659,52 @@ fn a_cancelled_token_stops_its_own_monte_carlo_and_no_other() {
     let b = analyze(&model, &options(Cancel::new()), &|_, _, _| {});
     assert_eq!(b.samples_done, [4096]);
 }
+
+#[test]
+fn a_cancelled_latin_hypercube_run_tallies_the_inadmissible_designs_it_evaluated() {
+    use modaltol::cancel::Cancel;
+    // Rod mass m·(L − 0.9): with L = 1 ± 60 %, about 31 % of the designs have a negative mass
+    // and fail at every speed, the rest succeed; so each Monte Carlo row's `failed` count is
+    // the number of inadmissible designs among the samples evaluated.
+    let text = common::example_text("rotating_pendulum.toml")
+        .replace("mass = \"m\"", "mass = \"m*(L-0.9)\"")
+        .replace(
+            "tolerances = { L = \"3%\" }",
+            "tolerances = { L = \"60%\" }",
+        );
+    let model = Compiled::from_str(&text, "mass.toml").unwrap();
+    let cancel = Cancel::new();
+    let opt = AnalyzeOptions {
+        speeds: vec![1.0],
+        cases: vec![case(&model, "L3")],
+        quadrature: None,
+        monte_carlo: Some(McOptions {
+            samples: 1024,
+            seed: 7,
+            sampling: Sampling::Lhs,
+        }),
+        threads: Some(1),
+        cancel: cancel.clone(),
+        ..Default::default()
+    };
+    // Cancelled after the first chunks: fewer samples than asked.
+    let a = analyze(&model, &opt, &|_, done, total| {
+        if total == 1024 && done >= 192 {
+            cancel.cancel();
+        }
+    });
+    let done = a.samples_done[0];
+    assert!(done > 0 && done < 1024, "{done}");
+    let tallied: usize = a.inadmissible[0].iter().map(|r| r.1).sum();
+    let rows: Vec<&Row> = a
+        .rows
+        .iter()
+        .filter(|r| r.method == Method::MonteCarlo)
+        .collect();
+    assert!(!rows.is_empty());
+    for r in rows {
+        let mc = r.mc.unwrap();
+        assert_eq!(mc.n + mc.failed, done);
+        assert_eq!(mc.failed, tallied, "{:?} mode {:?}", r.quantity, r.mode);
+    }
+}

@@ -194,7 +194,6 @@ impl Context<'_> {
             return;
         }
         let mut c = vec![0.0; self.store.width];
-        // Breakpoints: sign changes of D, p and s of every mode.
         // Breakpoints (and whether ω_d has a square-root edge there): sign changes of D, p
         // and s of every mode.
         let mut cuts = vec![(a, false), (b, false)];

@@ -103,12 +103,15 @@ pub fn command_with_deadline(
 /// The point at `speed` with nominal parameters from the model's initial guess, on the recorded
 /// route (which must record) or the direct one.
 pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
-    let route = if direct {
-        Route::Direct
+    // The direct route on a copy; the recorded one on the model itself, so that its program,
+    // recorded at the first speed asked, is replayed at the later ones.
+    let reference;
+    let model = if direct {
+        reference = model.clone().with_route(Route::Direct);
+        &reference
     } else {
-        Route::Recorded
+        model
     };
-    let model = &model.clone().with_route(route);
     let p = model.nominal();
     let q0 = initial_guess(model, &p, speed).unwrap();
     if !direct {
