@@ -98,6 +98,23 @@ pub(super) fn least_aligned(ctx: &Ctx, item: &Item, axis: &[Field; 3]) -> R<[Fie
     }))
 }
 
+/// Are `a` and `b` parallel (|a × b| ≤ 10⁻⁹ |a| |b|, each scaled to a largest entry of 1 first,
+/// so that the test does not depend on their lengths)? `None` where either is zero.
+pub(super) fn parallel(a: [f64; 3], b: [f64; 3]) -> Option<bool> {
+    let scale = |v: [f64; 3]| {
+        let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        (m > 0.0).then(|| v.map(|x| x / m))
+    };
+    let (a, b) = (scale(a)?, scale(b)?);
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Some(norm(c) <= 1e-9 * norm(a) * norm(b))
+}
+
 /// Refuses (nominally) parallel `axis` and `axis2`, pointing at `axis2` as `written` (or, when
 /// it was not, at the item).
 pub(super) fn not_parallel(
@@ -109,18 +126,8 @@ pub(super) fn not_parallel(
 ) -> R<()> {
     let span = written.as_ref().map_or(item.span.clone(), |a| a.span());
     if let (Some(a), Some(b)) = (known(ctx, axis)?, known(ctx, axis2)?) {
-        let scale = |v: [f64; 3]| {
-            let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            v.map(|x| x / m)
-        };
-        let (a, b) = (scale(a), scale(b));
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm(c) <= 1e-9 * norm(a) * norm(b) {
+        // A zero axis is refused where it is read; here it is not parallel to anything.
+        if parallel(a, b) == Some(true) {
             return Err(ctx.err(span, format!("{}: axis2 is parallel to axis", item.owner)));
         }
     }

@@ -3,7 +3,7 @@
 //! values. Apart from the body's other fields because it is the one field with a shape of its
 //! own and checks of its own.
 
-use super::geometry::known;
+use super::geometry::{known, parallel};
 use super::{Ctx, R};
 use crate::model::Field;
 use crate::model::schema::Num;
@@ -98,20 +98,10 @@ pub(super) fn inertia_axes(
     let (Some(a), Some(b)) = (known(ctx, x)?, known(ctx, y)?) else {
         return Ok(());
     };
-    let scale = |v: [f64; 3]| {
-        let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        (m > 0.0).then(|| v.map(|x| x / m))
-    };
-    let (Some(a), Some(b)) = (scale(a), scale(b)) else {
+    let Some(parallel) = parallel(a, b) else {
         return Err(ctx.err(span, format!("body '{name}': x_axis or y_axis is zero")));
     };
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if norm(c) <= 1e-9 * norm(a) * norm(b) {
+    if parallel {
         return Err(ctx.err(
             span,
             format!("body '{name}': x_axis and y_axis are parallel"),
