@@ -68,43 +68,6 @@ impl<T: Copy> Dual4<T> {
     }
 }
 
-/// A scalar carrying a fixed number of independent first derivatives of `f64` values:
-/// [`num_dual::Dual64`] (one) or [`Dual4<f64>`] (four).
-pub trait Directional: crate::real::Real {
-    /// Number of directions.
-    const DIRECTIONS: usize;
-
-    /// The value `re` with derivative `slope(k)` along each direction `k`.
-    fn seeded(re: f64, slope: impl Fn(usize) -> f64) -> Self;
-
-    /// The derivative along direction `k`.
-    fn part(&self, k: usize) -> f64;
-}
-
-impl Directional for num_dual::Dual64 {
-    const DIRECTIONS: usize = 1;
-
-    fn seeded(re: f64, slope: impl Fn(usize) -> f64) -> Self {
-        num_dual::Dual64::new(re, slope(0))
-    }
-
-    fn part(&self, _: usize) -> f64 {
-        self.eps
-    }
-}
-
-impl Directional for Dual4<f64> {
-    const DIRECTIONS: usize = 4;
-
-    fn seeded(re: f64, slope: impl Fn(usize) -> f64) -> Self {
-        Dual4::from_parts(re, std::array::from_fn(slope))
-    }
-
-    fn part(&self, k: usize) -> f64 {
-        self.parts()[k]
-    }
-}
-
 /* chain rule */
 impl<T: DualNum> Dual4<T> {
     #[inline]

@@ -34,11 +34,12 @@
 
 use crate::compiled::Compiled;
 use crate::frf::transfer;
+use crate::implicit;
+use crate::jet::Jet;
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
-use crate::real::Real;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use nalgebra::{Complex, DMatrix, DVector};
@@ -46,40 +47,6 @@ use num_dual::{Dual2_64, HyperDual64};
 
 /// Scalar of the mixed (pair) passes.
 type Hd = HyperDual64;
-
-/// A truncated Taylor number whose parts can be read and written one by one: hyper-dual numbers
-/// for mixed second derivatives, `Dual2` for a gradient entry and a diagonal one.
-pub trait Jet: Real {
-    /// Number of parts, the value first.
-    const PARTS: usize;
-    fn part(&self, k: usize) -> f64;
-    fn set_part(&mut self, k: usize, v: f64);
-}
-
-impl Jet for HyperDual64 {
-    const PARTS: usize = 4;
-    fn part(&self, k: usize) -> f64 {
-        [self.re, self.eps1, self.eps2, self.eps1eps2][k]
-    }
-    fn set_part(&mut self, k: usize, v: f64) {
-        *[
-            &mut self.re,
-            &mut self.eps1,
-            &mut self.eps2,
-            &mut self.eps1eps2,
-        ][k] = v;
-    }
-}
-
-impl Jet for Dual2_64 {
-    const PARTS: usize = 3;
-    fn part(&self, k: usize) -> f64 {
-        [self.re, self.v1, self.v2][k]
-    }
-    fn set_part(&mut self, k: usize, v: f64) {
-        *[&mut self.re, &mut self.v1, &mut self.v2][k] = v;
-    }
-}
 
 /// First and second derivatives at one point: per output (as [`crate::output::outputs`]
 /// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; where an output is
@@ -115,11 +82,20 @@ fn root_expansion<J: Jet>(
     j0.view_mut((0, n), (n, 1)).copy_from(&dp0);
     j0.view_mut((n, 0), (1, n)).copy_from(&w.transpose());
     let lu = j0.lu();
-    let lift = |z: C64| Complex::new(J::from(z.re), J::from(z.im));
-    let mut x: Vec<Complex<J>> = x0.iter().map(|&z| lift(z)).collect();
-    let mut lambda = lift(l0);
+    // The unknowns `[x; λ]` as real and imaginary parts, in that order.
+    let mut z: Vec<J> = x0
+        .iter()
+        .chain([&l0])
+        .flat_map(|v| [J::from(v.re), J::from(v.im)])
+        .collect();
     let cm = |a: &DMatrix<J>, i: usize, j: usize| Complex::new(a[(i, j)], J::from(0.0));
-    for _ in 0..2 {
+    let complex =
+        |z: &[J]| -> Vec<Complex<J>> { z.chunks(2).map(|c| Complex::new(c[0], c[1])).collect() };
+    // G = [P(λ) x; wᵀx − 1].
+    let bordered = |z: &[J]| -> Vec<J> {
+        let u = complex(z);
+        let (x, lambda) = (&u[..n], u[n]);
+        let lift = |z: C64| Complex::new(J::from(z.re), J::from(z.im));
         let mut g = vec![lift(C64::new(0.0, 0.0)); n + 1];
         for (i, gi) in g.iter_mut().take(n).enumerate() {
             for (j, xj) in x.iter().enumerate() {
@@ -127,28 +103,20 @@ fn root_expansion<J: Jet>(
                 *gi += pij * *xj;
             }
         }
-        for (wj, xj) in w.iter().zip(&x) {
+        for (wj, xj) in w.iter().zip(x) {
             g[n] += lift(*wj) * *xj;
         }
         g[n] -= lift(C64::new(1.0, 0.0));
-        // Correct the derivative parts only: the nominal root stays as the modal solve gave it.
-        for pk in 1..J::PARTS {
-            let rhs = DVector::from_iterator(
-                n + 1,
-                g.iter().map(|z| C64::new(z.re.part(pk), z.im.part(pk))),
-            );
-            let d = lu.solve(&rhs)?;
-            let upd = |z: &mut Complex<J>, dz: C64| {
-                z.re.set_part(pk, z.re.part(pk) - dz.re);
-                z.im.set_part(pk, z.im.part(pk) - dz.im);
-            };
-            for (xi, &di) in x.iter_mut().zip(d.iter()) {
-                upd(xi, di);
-            }
-            upd(&mut lambda, d[n]);
-        }
-    }
-    Some(lambda)
+        g.iter().flat_map(|v| [v.re, v.im]).collect()
+    };
+    let solve = |r: &[f64]| {
+        let rhs = DVector::from_iterator(n + 1, r.chunks(2).map(|c| C64::new(c[0], c[1])));
+        let d = lu.solve(&rhs)?;
+        Some(d.iter().flat_map(|v| [v.re, v.im]).collect())
+    };
+    // Corrects the derivative parts only: the nominal root stays as the modal solve gave it.
+    implicit::correct(&mut z, 2, bordered, solve)?;
+    Some(Complex::new(z[2 * n], z[2 * n + 1]))
 }
 
 /// The outputs `outs` and each mode's discriminant as jets: the pipeline at `pt` evaluated with
@@ -169,28 +137,31 @@ fn expand<J: Jet>(
     // Equilibria are factorised balanced: a model's scale does not cost the steps accuracy.
     let lu = eq.factor();
     let equations = model.equations(seeded, J::from(pt.speed), &eq.q)?;
+    // Equilibrium expansion: two chord steps with Newton's Jacobian on `[q_R; λ]`.
+    let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
+        .chain(eq.lambda.iter().copied())
+        .map(J::from)
+        .collect();
     let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
-    let mut lambda: Vec<J> = eq.lambda.iter().map(|&v| J::from(v)).collect();
-    // Equilibrium expansion: two chord iterations with Newton's Jacobian.
-    for _ in 0..2 {
-        let f = equations.residual(&q, &lambda);
-        for pk in 1..J::PARTS {
-            let rhs = DVector::from_iterator(f.len(), f.iter().map(|v| v.part(pk)));
-            let d = lu.solve(rhs.as_slice()).ok_or(PointError::Equilibrium(
-                crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
-            ))?;
-            for (k, &i) in free.iter().enumerate() {
-                let v = q[i].part(pk) - d[k];
-                q[i].set_part(pk, v);
-            }
-            for (k, l) in lambda.iter_mut().enumerate() {
-                let v = l.part(pk) - d[nf + k];
-                l.set_part(pk, v);
-            }
+    let mut unpack = |z: &[J]| -> Vec<J> {
+        for (k, &i) in free.iter().enumerate() {
+            q[i] = z[k];
         }
-    }
+        q.clone()
+    };
+    implicit::correct(
+        &mut z,
+        2,
+        |z| equations.residual(&unpack(z), &z[nf..]),
+        |r| lu.solve(r),
+    )
+    .ok_or(PointError::Equilibrium(
+        crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
+    ))?;
+    let q = unpack(&z);
+    let lambda = &z[nf..];
     let lin = equations
-        .linearize(&q, &lambda, &pt.linear.independent, None)?
+        .linearize(&q, lambda, &pt.linear.independent, None)?
         .with_ports(ports_at(model, seeded, J::from(pt.speed), &q, free)?);
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
@@ -242,7 +213,9 @@ fn expand<J: Jet>(
     // to this order (a transfer that symmetry makes zero): then |H| ≡ 0.
     let h = tf.map(|t| {
         let h = transfer(&lin, t.input, t.output, t.omega).ok_or(Missing::TransferUnbounded)?;
-        let zero = (0..J::PARTS).all(|k| h.re.part(k) == 0.0 && h.im.part(k) == 0.0);
+        let zero = [h.re, h.im]
+            .iter()
+            .all(|v| v.re() == 0.0 && (0..J::PARTS).all(|k| v.part(k) == 0.0));
         if h.magnitude().re() > 0.0 {
             Ok(h.magnitude())
         } else if zero {

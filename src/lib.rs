@@ -7,7 +7,8 @@
 //! module with its submodules counts as one; `tests/architecture.rs` enforces the order):
 //!
 //! 1. Foundations: [`real`] (the scalar trait the mechanics is generic over), [`linalg`],
-//!    [`schur`], [`rigid`], [`dual4`], [`settings`], [`threads`], [`cancel`], [`files`].
+//!    [`schur`], [`rigid`], [`dual4`], [`jet`] (Taylor numbers part by part), [`implicit`] (the
+//!    derivatives of an implicit solution), [`settings`], [`threads`], [`cancel`], [`files`].
 //! 2. Element types: [`joints`], [`cuts`], [`forces`] (each kind one file plus one list).
 //! 3. [`model`]: the file format, validated once into a [`model::Model`].
 //! 4. [`mechanics`]: kinematics, equations of motion and constraints over any [`real::Real`].
@@ -47,6 +48,8 @@ pub mod files;
 pub mod forces;
 pub mod frf;
 pub mod hessian;
+pub mod implicit;
+pub mod jet;
 pub mod joints;
 pub mod linalg;
 pub mod linearize;

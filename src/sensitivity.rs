@@ -29,8 +29,10 @@
 //! dynamic systems*, AIAA J. 37 (1999).
 
 use crate::compiled::Compiled;
-use crate::dual4::{Directional, Dual4};
+use crate::dual4::Dual4;
 use crate::frf::{Complex, transfer};
+use crate::implicit;
+use crate::jet::Jet;
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Mode, Root, Smoothness, similarities, smoothness};
@@ -380,9 +382,9 @@ struct Shift<'a> {
 }
 
 impl Shift<'_> {
-    /// The dual linearisations of the variables `group` (at most `D::DIRECTIONS`), direction
+    /// The dual linearisations of the variables `group` (at most `D::PARTS`), direction
     /// `k` along variable `group[k]`, appended to `out`.
-    fn linearizations<D: Directional>(
+    fn linearizations<D: Jet>(
         &self,
         group: &[usize],
         out: &mut Vec<DualLinearization>,
@@ -401,44 +403,60 @@ impl Shift<'_> {
         };
         let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
         let equations = self.model.equations(&pd, D::from(speed), &eq.q)?;
-        let rhs: Vec<DVector<f64>> = match self.dp {
-            Some(dp) => {
-                let rows = dp.len() / nw;
-                (group.iter())
-                    .map(|&b| {
-                        let c = self
-                            .wrt
-                            .iter()
-                            .position(|&w| w == b)
-                            .expect("b is a variable");
-                        DVector::from_iterator(rows, (0..rows).map(|r| -dp[r * nw + c]))
-                    })
-                    .collect()
-            }
-            None => {
-                let q0: Vec<D> = eq.q.iter().map(|&v| D::from(v)).collect();
-                let l0: Vec<D> = eq.lambda.iter().map(|&v| D::from(v)).collect();
-                let fb = equations.residual(&q0, &l0);
-                (0..group.len())
-                    .map(|k| DVector::from_iterator(fb.len(), fb.iter().map(|v| -v.part(k))))
-                    .collect()
-            }
+        // The shift `[dq_R; dλ]/db = −J⁻¹ ∂F/∂b`: one implicit step from the nominal solution,
+        // with `∂F/∂b` from the recorded program where there is one.
+        let nf = free.len();
+        let mut z: Vec<D> = (free.iter().map(|&i| eq.q[i]))
+            .chain(eq.lambda.iter().copied())
+            .map(D::from)
+            .collect();
+        let mut q = seeded(&eq.q, &|_, _| 0.0);
+        let singular =
+            PointError::Equilibrium(crate::equilibrium::EquilibriumError::SingularJacobian {
+                iterations: 0,
+            });
+        let column = |b: usize| {
+            self.wrt
+                .iter()
+                .position(|&w| w == b)
+                .expect("b is a variable")
         };
-        let dx = (rhs.iter().map(|r| self.lu.solve(r.as_slice())))
-            .collect::<Option<Vec<_>>>()
-            .ok_or(PointError::Equilibrium(
-                crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
-            ))?;
-        let mut dq = vec![vec![0.0; eq.q.len()]; group.len()];
+        implicit::correct(
+            &mut z,
+            1,
+            |z| match self.dp {
+                Some(dp) => (0..dp.len() / nw)
+                    .map(|r| {
+                        D::seeded(0.0, |k| {
+                            group.get(k).map_or(0.0, |&b| dp[r * nw + column(b)])
+                        })
+                    })
+                    .collect(),
+                None => {
+                    for (k, &i) in free.iter().enumerate() {
+                        q[i] = z[k];
+                    }
+                    equations.residual(&q, &z[nf..])
+                }
+            },
+            |r| self.lu.solve(r),
+        )
+        .ok_or(singular)?;
         for (k, &i) in free.iter().enumerate() {
-            for (d, x) in dq.iter_mut().zip(&dx) {
-                d[i] = x[k];
-            }
+            q[i] = z[k];
         }
-        let q = seeded(&eq.q, &|k, i| dq[k][i]);
-        let lambda = seeded(&eq.lambda, &|k, i| dx[k][free.len() + i]);
+        let lambda = &z[nf..];
+        let dq: Vec<Vec<f64>> = (0..group.len())
+            .map(|k| {
+                let mut d = vec![0.0; eq.q.len()];
+                for &i in free {
+                    d[i] = q[i].part(k);
+                }
+                d
+            })
+            .collect();
         let linear = equations
-            .linearize(&q, &lambda, &pt.linear.independent, None)?
+            .linearize(&q, lambda, &pt.linear.independent, None)?
             .with_ports(ports_at(self.model, &pd, D::from(speed), &q, free)?);
         for (k, (&b, d_equilibrium)) in group.iter().zip(dq).enumerate() {
             out.push(DualLinearization {

@@ -11,7 +11,8 @@ use std::path::Path;
 const LAYERS: &[(&[&str], bool)] = &[
     (
         &[
-            "real", "linalg", "schur", "threads", "cancel", "files", "dual4", "rigid", "settings",
+            "real", "linalg", "schur", "threads", "cancel", "files", "dual4", "jet", "implicit",
+            "rigid", "settings",
         ],
         true,
     ),

@@ -5,6 +5,7 @@
 mod common;
 
 use approx::assert_relative_eq;
+use common::pendulum::{G, pendulum};
 use common::{at, example, example_text};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::mechanics::System;
@@ -17,22 +18,6 @@ use nalgebra::DMatrix;
 use num_dual::{Dual2, Dual64};
 use std::f64::consts::{FRAC_PI_2, PI};
 
-const G: f64 = 9.80665;
-
-/// Pendulum closed form: I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0, I = mL²/3.
-/// Returns (θ*, linearised stiffness K) on the stable branch.
-fn pendulum_closed_form(w: f64) -> (f64, f64) {
-    let (m, l) = (3.0, 1.0);
-    let i = m * l * l / 3.0;
-    let theta = if w * w <= 3.0 * G / (2.0 * l) {
-        0.0
-    } else {
-        (3.0 * G / (2.0 * l * w * w)).acos()
-    };
-    let k = m * G * l / 2.0 * theta.cos() - i * w * w * (2.0 * theta).cos();
-    (theta, k)
-}
-
 #[test]
 fn pendulum_damped_frequency_matches_closed_form_on_both_branches() {
     let model = example("rotating_pendulum.toml");
@@ -42,7 +27,8 @@ fn pendulum_damped_frequency_matches_closed_form_on_both_branches() {
     for s in 0..=600 {
         let w = s as f64 * 0.01;
         let p = sweep.step(w).unwrap();
-        let (theta, k) = pendulum_closed_form(w);
+        let known = pendulum(1.0, w);
+        let (theta, k) = (known.theta, known.stiffness);
         assert!(
             (p.equilibrium.q[1] - theta).abs() < 1e-10,
             "Ω = {w}: θ = {} vs {theta}",

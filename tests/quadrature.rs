@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::pendulum::G;
+
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::Compiled;
@@ -11,25 +13,12 @@ use modaltol::model::Case;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::tolerance::Quantity;
 
-const G: f64 = 9.80665;
-const M: f64 = 3.0;
-const C: f64 = 3.0;
-
-/// The swept pendulum's exact outputs at rod length `l` and speed `w`: the pair discriminant
-/// `4Ik − c²` (ω_d = √max(0, ·)/(2I)), ω_d and |H(jΩ)|. The sweep follows the hanging branch
-/// while it is stable (Ω² ≤ 3g/2L), then the swung-out one.
+/// The swept pendulum's exact outputs at rod length `l` and speed `w` (the known answer of
+/// `tests/common/pendulum.rs`): the pair discriminant `4Ik − c²`, ω_d and |H(jΩ)|. The sweep
+/// follows the hanging branch while it is stable (Ω² ≤ 3g/2L), then the swung-out one.
 fn pendulum(l: f64, w: f64) -> (f64, f64, f64) {
-    let i = M * l * l / 3.0;
-    let k = if w * w <= 3.0 * G / (2.0 * l) {
-        l * M * G / 2.0 - i * w * w
-    } else {
-        let cos = 3.0 * G / (2.0 * l * w * w);
-        i * w * w * (1.0 - cos * cos)
-    };
-    let d = 4.0 * i * k - C * C;
-    let wd = d.max(0.0).sqrt() / (2.0 * i);
-    let re = k - i * w * w;
-    (d, wd, 1.0 / (re * re + (w * C) * (w * C)).sqrt())
+    let known = common::pendulum::pendulum(l, w);
+    (known.discriminant, known.damped_frequency, known.transfer)
 }
 
 /// Exact statistics of the pendulum at one speed for L ~ N(1, σ²).

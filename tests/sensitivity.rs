@@ -3,35 +3,24 @@
 
 mod common;
 
+use common::pendulum::G;
+
 use common::example;
 use modaltol::sensitivity::{
     Status, TransferAt, analytic, eigenvalue_derivative, finite_difference, nominal_transfer,
 };
 use modaltol::sweep::{Options, Sweep, point};
-use num_dual::{Dual64, DualNum};
+use num_dual::Dual64;
 
-const G: f64 = 9.80665;
-
-/// Linearised closed form of the pendulum, I θ̈ + c θ̇ + (mgL/2) sin θ − I Ω² sin θ cos θ = 0,
-/// differentiated in L with dual numbers: (ω_d, |H(jΩ)|, discriminant 4IK − c²).
+/// The pendulum's known answer (`tests/common/pendulum.rs`) differentiated in L by dual numbers:
+/// (ω_d, |H(jΩ)|, discriminant 4IK − c²).
 fn pendulum_closed_form(l: Dual64, w: f64) -> (Dual64, Dual64, f64) {
-    let (m, c) = (3.0, 3.0);
-    let i = l * l * (m / 3.0);
-    let k = if w * w <= 3.0 * G / (2.0 * l.re) {
-        l * (m * G / 2.0) - i * w * w
-    } else {
-        let cos = (l * w * w * 2.0).recip() * (3.0 * G);
-        i * w * w * (-cos * cos + 1.0)
-    };
-    let disc = i * k * 4.0 - c * c;
-    let wd = if disc.re > 0.0 {
-        disc.sqrt() / (i * 2.0)
-    } else {
-        Dual64::from_re(0.0)
-    };
-    let real = k - i * w * w;
-    let h = (real * real + (w * c) * (w * c)).sqrt().recip();
-    (wd, h, disc.re)
+    let known = common::pendulum::pendulum(l, w);
+    (
+        known.damped_frequency,
+        known.transfer,
+        known.discriminant.re,
+    )
 }
 
 #[test]

@@ -2,6 +2,8 @@
 
 mod common;
 
+use common::pendulum::G;
+
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::Compiled;
@@ -13,8 +15,6 @@ use modaltol::tolerance::Quantity;
 use modaltol::tolerance::{LocalModel, local_model, match_modes};
 use nalgebra::DMatrix;
 use num_dual::{Dual64, HyperDual64};
-
-const G: f64 = 9.80665;
 
 fn case(model: &Compiled, name: &str) -> Case {
     model
@@ -63,20 +63,11 @@ fn row(a: &Analysis, speed: f64, q: Quantity, method: Method) -> &Row {
         .unwrap_or_else(|| panic!("no {} {} row at {speed}", q.as_str(), method.as_str()))
 }
 
-/// Closed-form pendulum (hanging or swung-out branch) as a function of L, differentiated by
-/// dual numbers: ω_d and |H(jΩ)|.
+/// The pendulum's known answer (`tests/common/pendulum.rs`) as a function of L, differentiated
+/// by dual numbers: ω_d and |H(jΩ)|.
 fn closed_form<D: modaltol::real::Real>(l: D, w: f64) -> (D, D) {
-    let (m, c) = (3.0, 3.0);
-    let i = l * l * (m / 3.0);
-    let k = if w * w <= 3.0 * G / (2.0 * l.re()) {
-        l * (m * G / 2.0) - i * w * w
-    } else {
-        let cos = (l * w * w * 2.0).recip() * (3.0 * G);
-        i * w * w * (-cos * cos + 1.0)
-    };
-    let wd = (i * k * 4.0 - c * c).sqrt() / (i * 2.0);
-    let real = k - i * w * w;
-    (wd, (real * real + (w * c) * (w * c)).sqrt().recip())
+    let known = common::pendulum::pendulum(l, w);
+    (known.damped_frequency, known.transfer)
 }
 
 #[test]

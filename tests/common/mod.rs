@@ -6,6 +6,8 @@ use modaltol::modal::C64;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
 
+pub mod pendulum;
+
 /// The shipped example models but the rotating blade (a chain of many segments).
 pub const EXAMPLES: [&str; 8] = [
     "rotating_pendulum.toml",
