@@ -64,13 +64,30 @@ pub enum EquilibriumError {
     },
 }
 
-/// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` (the linearisation's damping and mass matrices before
-/// reduction).
-pub type Rates = (DMatrix<f64>, DMatrix<f64>);
+/// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`: the linearisation's damping and mass matrices before
+/// reduction, over the free coordinates.
+#[derive(Debug, Clone)]
+pub struct Rates {
+    /// `∂r_R/∂q̇_R`.
+    pub damping: DMatrix<f64>,
+    /// `∂r_R/∂q̈_R`.
+    pub mass: DMatrix<f64>,
+}
 
-/// `F`, its Jacobian and, on the recorded route, the [`Rates`] and the driven coordinates'
-/// rows of `r + Φ_qᵀλ`, at one point.
-pub type Evaluation = (Vec<f64>, DMatrix<f64>, Option<Rates>, Option<Vec<f64>>);
+/// The equations evaluated at one point `(q, λ)`: what Newton's method needs, and, where the
+/// route has them from the same pass, what the linearisation needs besides.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// `F`.
+    pub residual: Vec<f64>,
+    /// `∂F/∂[q_R; λ]`.
+    pub jacobian: DMatrix<f64>,
+    /// The [`Rates`], on the recorded route.
+    pub rates: Option<Rates>,
+    /// The driven coordinates' rows of `r + Φ_qᵀλ` (the drive forces), on the recorded route
+    /// and when asked for.
+    pub drive: Option<Vec<f64>>,
+}
 
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -365,8 +382,13 @@ pub trait Solvable: Equations<f64> {
     /// needs no further evaluation.
     fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
         let _ = drive;
-        let (f, j) = self.residual_and_jacobian(q, lambda);
-        (f, j, None, None)
+        let (residual, jacobian) = self.residual_and_jacobian(q, lambda);
+        Evaluation {
+            residual,
+            jacobian,
+            rates: None,
+            drive: None,
+        }
     }
 
     /// [`Solvable::evaluate`] at `q` with the least-squares multipliers there
@@ -589,10 +611,15 @@ impl<'a> Problem<'a> {
         let nx = nf + m;
         let q = q0.to_vec();
         let given = start.lambda.filter(|l| l.len() == m);
-        let (lambda, (f, jac, rates, drive), fresh) = match (given, start.jacobian) {
+        let (lambda, e, fresh) = match (given, start.jacobian) {
             (Some(l), Some(j)) if j.nrows() == nx && j.ncols() == nx => (
                 l.to_vec(),
-                (self.residual(&q, l), j.clone(), None, None),
+                Evaluation {
+                    residual: self.residual(&q, l),
+                    jacobian: j.clone(),
+                    rates: None,
+                    drive: None,
+                },
                 false,
             ),
             (Some(l), _) => (l.to_vec(), self.evaluate(&q, l, drive_wanted), true),
@@ -602,15 +629,15 @@ impl<'a> Problem<'a> {
             }
         };
         // Newton's system balanced once, from its first Jacobian (see [`Balance`]).
-        let balance = Balance::of(&jac, nf);
-        let lu = Factor::with(balance, &jac);
+        let balance = Balance::of(&e.jacobian, nf);
+        let lu = Factor::with(balance, &e.jacobian);
         Iterate {
             q,
             lambda,
-            f,
-            jac,
-            rates,
-            drive,
+            f: e.residual,
+            jac: e.jacobian,
+            rates: e.rates,
+            drive: e.drive,
             fresh,
             balance,
             lu,
@@ -834,8 +861,8 @@ impl Iterate {
     /// Evaluates `F`, the Jacobian (with the rates and, with `drive_wanted`, the drive rows)
     /// at the current point and factorises it: the chord is dropped for a Newton step.
     fn refresh(&mut self, problem: &Problem, drive_wanted: bool) {
-        (self.f, self.jac, self.rates, self.drive) =
-            problem.evaluate(&self.q, &self.lambda, drive_wanted);
+        let e = problem.evaluate(&self.q, &self.lambda, drive_wanted);
+        (self.f, self.jac, self.rates, self.drive) = (e.residual, e.jacobian, e.rates, e.drive);
         (self.lu, self.fresh, self.last_step) =
             (Factor::with(self.balance, &self.jac), true, f64::INFINITY);
     }

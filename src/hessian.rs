@@ -6,16 +6,11 @@
 //! `b + ε₁[i] + ε₂[j]` (`ε₁² = ε₂² = 0`); the `ε₁ε₂` part of any output is then `∂²f/∂b_i∂b_j`.
 //! For a single variable a `Dual2` number `b + ε[i]` gives `∂f/∂b_i` and `∂²f/∂b_i²` at once, so
 //! the gradient comes with the diagonal (checked against the first-order formulas of
-//! [`crate::sensitivity`] in the tests). No step size, no truncation error. Two implicit solves are expanded the same way, by
-//! chord iterations from the nominal solution with the nominal (`f64`) Jacobian `J₀`:
-//!
-//! ```text
-//! z ← z − J₀⁻¹ G(z, b)
-//! ```
-//!
-//! Each iteration removes one order of the error (`e_{k+1} = (I − J₀⁻¹J) e_k + O(e_k²)` with
-//! `J − J₀ = O(ε)`): the first makes the first-order parts exact, the second the second-order
-//! part.
+//! [`crate::sensitivity`] in the tests). No step size, no truncation error. Two implicit
+//! solves are expanded the same way, by two chord steps on the parts from the nominal solution
+//! with the nominal (`f64`) Jacobian `J₀` ([`crate::implicit::correct`]: the first step makes
+//! the first-order parts exact, the second the second-order part); Newton's Jacobian is
+//! factorised once for all the passes, the bordered one once per pass and root:
 //!
 //! 1. equilibrium: `G = F(q_R, λ; b)`, the equilibrium equations, `J₀` Newton's Jacobian;
 //! 2. each root: `G = [P(λ) x; wᵀx − 1]`, `P(λ) = λ²M̂ + λĈ + K̂` over hyper-duals, with `w`
@@ -33,6 +28,7 @@
 //! (derivatives of iterative solvers).
 
 use crate::compiled::Compiled;
+use crate::equilibrium::Factor;
 use crate::frf::transfer;
 use crate::implicit;
 use crate::jet::Jet;
@@ -125,6 +121,7 @@ type Jets<J> = (Vec<Result<J, Missing>>, Vec<Result<J, Missing>>);
 
 fn expand<J: Jet>(
     model: &Compiled,
+    lu: &Factor,
     seeded: &[J],
     pt: &Point,
     smooth: &[Smoothness],
@@ -134,8 +131,6 @@ fn expand<J: Jet>(
     let eq = &pt.equilibrium;
     let free = &pt.linear.free;
     let nf = free.len();
-    // Equilibria are factorised balanced: a model's scale does not cost the steps accuracy.
-    let lu = eq.factor();
     let equations = model.equations(seeded, J::from(pt.speed), &eq.q)?;
     // Equilibrium expansion: two chord steps with Newton's Jacobian on `[q_R; λ]`.
     let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
@@ -254,6 +249,9 @@ pub fn hessians(
     let nv = vars.len();
     let nm = pt.modes.len();
     let smooth = smoothness(&pt.modes);
+    // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
+    // cost the chord steps accuracy).
+    let lu = pt.equilibrium.factor();
     let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
     let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
     let mut hess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
@@ -300,7 +298,7 @@ pub fn hessians(
             .enumerate()
             .map(|(i, &v)| Dual2_64::new(v, if i == vars[a] { 1.0 } else { 0.0 }, 0.0))
             .collect();
-        let (o, d) = expand(model, &seeded, pt, &smooth, outs, tf)?;
+        let (o, d) = expand(model, &lu, &seeded, pt, &smooth, outs, tf)?;
         for (k, v) in o.iter().enumerate() {
             put(
                 Some(&mut grad[k]),
@@ -329,7 +327,7 @@ pub fn hessians(
                     Hd::new(v, e1, e2, 0.0)
                 })
                 .collect();
-            let (o, d) = expand(model, &seeded, pt, &smooth, outs, tf)?;
+            let (o, d) = expand(model, &lu, &seeded, pt, &smooth, outs, tf)?;
             for (k, v) in o.iter().enumerate() {
                 put(
                     None,

@@ -24,7 +24,7 @@
 //! evaluation at a second, perturbed set of inputs, is discarded: the caller then keeps to the
 //! direct route, which is always available.
 
-use crate::equilibrium::{Evaluation, Solvable};
+use crate::equilibrium::{Evaluation, Rates, Solvable};
 use crate::linalg::least_squares;
 use crate::linearize::{Linearization, LinearizeError, reduce};
 use crate::mechanics::System;
@@ -556,6 +556,19 @@ impl<S: Real> Linear<S> {
 }
 
 impl Linear {
+    /// As Newton's method takes it, with the drive rows when `drive`.
+    fn evaluation(self, drive: bool) -> Evaluation {
+        Evaluation {
+            residual: self.residual,
+            jacobian: self.jacobian,
+            rates: Some(Rates {
+                damping: self.damping,
+                mass: self.mass,
+            }),
+            drive: drive.then_some(self.drive),
+        }
+    }
+
     /// The same at the multipliers `λ + δ`: `F`, the Jacobian and the drive rows are affine in
     /// `λ` (by `Φ_Rᵀ`, the constraints' curvature and `Φ_Dᵀ`), and `Φ`, `Φ_R`, `C` and `M` do not
     /// depend on it.
@@ -856,13 +869,7 @@ impl Solvable for Instance<'_> {
     }
 
     fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
-        let lin = self.linear_plain(q, lambda);
-        (
-            lin.residual,
-            lin.jacobian,
-            Some((lin.damping, lin.mass)),
-            drive.then_some(lin.drive),
-        )
+        self.linear_plain(q, lambda).evaluation(drive)
     }
 
     /// One pass: the pass at `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the
@@ -879,15 +886,7 @@ impl Solvable for Instance<'_> {
             lin.shift(&lambda, 3, |k, j| d.row(nf + m + k * nf + j));
             (lambda, lin)
         });
-        (
-            lambda,
-            (
-                lin.residual,
-                lin.jacobian,
-                Some((lin.damping, lin.mass)),
-                drive.then_some(lin.drive),
-            ),
-        )
+        (lambda, lin.evaluation(drive))
     }
 
     /// The recorded drive rows are those of the model's driven coordinates, in order.

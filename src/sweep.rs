@@ -8,7 +8,7 @@
 //! the similarity of their shapes in the free coordinates, not by sorting.
 
 use crate::compiled::Compiled;
-use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Start};
+use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Rates, Settings, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, reduce};
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
@@ -429,7 +429,9 @@ fn analyse(
     };
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
     let linear = match eq.rates.take() {
-        Some((damping, mass)) => reduce(&free, &independent, &phi_r, mass, damping, stiffness)?,
+        Some(Rates { damping, mass }) => {
+            reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
+        }
         // The recorded route always gives the rates; directly otherwise.
         None => problem
             .equations()
