@@ -3,17 +3,18 @@
 //! A [`Model`] is the validated description of a mechanism. Solving thousands of operating
 //! points of it (a sweep, a Monte Carlo run, the quadrature nodes) is faster through its
 //! equations recorded once as a [`Program`]; [`Compiled`] holds the model and that recording,
-//! made on first use, and hands out each point's equations
-//! ([`Compiled::equations`], [`Compiled::problem`]) on the [`Route`] chosen when it is made.
+//! made on first use, and hands out each point's equations ([`Compiled::at`], and the solve of
+//! them, [`Compiled::problem`]) on the [`Route`] chosen when it is made.
 //! It dereferences to the model, so everything that only describes the mechanism reads it as
 //! before.
 
+use crate::equations::{Direct, Equations};
 use crate::equilibrium::Problem;
+use crate::jet::Jet;
 use crate::mechanics::{System, steady_speeds};
 use crate::model::{FieldError, Model, ModelError};
 use crate::program::{Program, Recorded};
 use crate::real::Real;
-use crate::route::{Direct, Equations};
 use std::ops::Deref;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -134,21 +135,22 @@ impl Compiled {
             .as_ref()
     }
 
-    /// The equations at parameters `p` and `speed` over any [`Real`], near the coordinates
-    /// `q`, on the model's [`Route`] (the recorded program when the model has one).
-    pub fn equations<S: Real>(
+    /// The equations at parameters `p` and `speed` over any [`Scalar`], on the model's
+    /// [`Route`]: the recorded program where the model has a valid one (recorded on first use,
+    /// near the coordinates `q`), else the generic mechanics. The one object the equilibrium
+    /// solve, the linearisation, the sensitivities and the Hessians evaluate.
+    pub fn at<S: Scalar>(
         &self,
         p: &[S],
         speed: S,
         q: &[f64],
     ) -> Result<Box<dyn Equations<S> + '_>, FieldError> {
         let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
-        Ok(match self.program(&p0, speed.re(), q) {
-            Some(program) => Box::new(Recorded {
-                program,
-                p: p.to_vec(),
-                speed,
-            }),
+        let recorded = self
+            .program(&p0, speed.re(), q)
+            .and_then(|program| S::recorded(program, p, speed));
+        Ok(match recorded {
+            Some(equations) => equations,
             None => Box::new(Direct::new(
                 System::new(&self.model, p, speed)?,
                 self.model.free(),
@@ -156,30 +158,65 @@ impl Compiled {
         })
     }
 
-    /// The equilibrium solve at parameters `p` and `speed` from near `q0`, on the model's
-    /// [`Route`].
+    /// `∂F/∂p_b` for the parameters `b` of `wrt` at parameters `p`, `speed`, coordinates `q`
+    /// and multipliers `λ` (rows of `F` × `wrt`, row-major), in one forward pass where the model
+    /// has a recorded program; `None` on the direct route, where the caller differentiates
+    /// [`Equations::residual`] over dual numbers instead.
+    pub fn parameter_jacobian(
+        &self,
+        p: &[f64],
+        speed: f64,
+        q: &[f64],
+        lambda: &[f64],
+        wrt: &[usize],
+    ) -> Option<Vec<f64>> {
+        self.program(p, speed, q)
+            .map(|program| program.parameter_derivatives(p, speed, q, lambda, wrt))
+    }
+
+    /// The equilibrium solve at parameters `p` and `speed` from near `q0`, of the equations
+    /// [`Compiled::at`] gives.
     pub fn problem(&self, p: &[f64], speed: f64, q0: &[f64]) -> Result<Problem<'_>, FieldError> {
         let names = self.coordinates.iter().map(|c| c.name.as_str()).collect();
-        let recorded = self.program(p, speed, q0).and_then(|pr| pr.at(p, speed));
-        let mut problem = match recorded {
-            Some(instance) => Problem::new(
-                Box::new(instance),
-                steady_speeds(&self.model, p, speed)?,
-                self.driven(),
-                names,
-            ),
-            None => {
-                let system = System::new(&self.model, p, speed)?;
-                let qd = system.steady_speeds();
-                Problem::new(
-                    Box::new(Direct::new(system, self.free())),
-                    qd,
-                    self.driven(),
-                    names,
-                )
-            }
-        };
+        let qd = steady_speeds(&self.model, p, speed)?;
+        let mut problem = Problem::new(self.at(p, speed, q0)?, qd, self.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
         Ok(problem)
+    }
+}
+
+/// A scalar the equations are evaluated over, and how the recorded program evaluates it: in
+/// `f64` as an [`crate::program::Instance`] (what depends on the parameters and the speed evaluated once),
+/// over the Taylor numbers of the derivatives as [`Recorded`].
+pub trait Scalar: Real {
+    /// The recorded equations at `p` and `speed`; `None` where the program cannot serve
+    /// there (then the direct route does).
+    fn recorded<'a>(
+        program: &'a Program,
+        p: &[Self],
+        speed: Self,
+    ) -> Option<Box<dyn Equations<Self> + 'a>>;
+}
+
+impl Scalar for f64 {
+    /// `None` where the values that depend on the parameters and the speed are not finite.
+    fn recorded<'a>(
+        program: &'a Program,
+        p: &[f64],
+        speed: f64,
+    ) -> Option<Box<dyn Equations<f64> + 'a>> {
+        program
+            .at(p, speed)
+            .map(|i| Box::new(i) as Box<dyn Equations<f64>>)
+    }
+}
+
+impl<J: Jet> Scalar for J {
+    fn recorded<'a>(program: &'a Program, p: &[J], speed: J) -> Option<Box<dyn Equations<J> + 'a>> {
+        Some(Box::new(Recorded {
+            program,
+            p: p.to_vec(),
+            speed,
+        }))
     }
 }

@@ -17,12 +17,9 @@
 //! Deuflhard, *Newton Methods for Nonlinear Problems* (2004), §3.1 (the natural monotonicity
 //! test, affine covariant).
 
+use crate::equations::{Equations, Evaluation, Rates};
 use crate::linalg::{Lu, least_squares};
-use crate::mechanics::dynamics::evaluate_rows;
-use crate::real::{D1, lift1};
-use crate::route::{Direct, Equations};
 use nalgebra::{DMatrix, DVector};
-use num_dual::Dual64;
 
 /// Why an equilibrium was not found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -64,31 +61,6 @@ pub enum EquilibriumError {
     },
 }
 
-/// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`: the linearisation's damping and mass matrices before
-/// reduction, over the free coordinates.
-#[derive(Debug, Clone)]
-pub struct Rates {
-    /// `∂r_R/∂q̇_R`.
-    pub damping: DMatrix<f64>,
-    /// `∂r_R/∂q̈_R`.
-    pub mass: DMatrix<f64>,
-}
-
-/// The equations evaluated at one point `(q, λ)`: what Newton's method needs, and, where the
-/// route has them from the same pass, what the linearisation needs besides.
-#[derive(Debug, Clone)]
-pub struct Evaluation {
-    /// `F`.
-    pub residual: Vec<f64>,
-    /// `∂F/∂[q_R; λ]`.
-    pub jacobian: DMatrix<f64>,
-    /// The [`Rates`], on the recorded route.
-    pub rates: Option<Rates>,
-    /// The driven coordinates' rows of `r + Φ_qᵀλ` (the drive forces), on the recorded route
-    /// and when asked for.
-    pub drive: Option<Vec<f64>>,
-}
-
 /// A converged dynamic equilibrium.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Equilibrium {
@@ -114,10 +86,15 @@ pub struct Equilibrium {
     /// whole matrix is reused by the implicit-function step of the sensitivities.
     #[serde(skip)]
     pub jacobian: DMatrix<f64>,
-    /// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at the solution, when the recorded program computed
-    /// them with the Jacobian (the linearisation takes them from here rather than computing
-    /// them again; a [`crate::sweep::Point`]'s are in its linearisation).
-    #[serde(skip)]
+}
+
+/// What a solve hands on to the linearisation: the equilibrium and, where the route computed
+/// them with the last Jacobian, the [`Rates`] there (the linearisation takes them rather than
+/// computing them again).
+#[derive(Debug, Clone)]
+pub struct Solution {
+    pub equilibrium: Equilibrium,
+    /// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R` at the solution, on the recorded route.
     pub rates: Option<Rates>,
 }
 
@@ -369,125 +346,6 @@ pub struct Start<'a> {
     pub steady_known: bool,
 }
 
-/// The equations of a point as Newton's method uses them: [`Equations`] in `f64` with the
-/// exact Jacobian and what a converged point needs besides. Implemented by the direct route
-/// ([`Direct`], here) and by the recorded program ([`crate::program::Instance`]).
-pub trait Solvable: Equations<f64> {
-    /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
-    fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>);
-
-    /// `F`, its exact Jacobian and, where the route has them from the same pass, the
-    /// [`Rates`] and (with `drive`) the driven coordinates' rows of `r + Φ_qᵀλ`: everything
-    /// the linearisation needs, so that a solve whose last Newton step is below the tolerance
-    /// needs no further evaluation.
-    fn evaluate(&self, q: &[f64], lambda: &[f64], drive: bool) -> Evaluation {
-        let _ = drive;
-        let (residual, jacobian) = self.residual_and_jacobian(q, lambda);
-        Evaluation {
-            residual,
-            jacobian,
-            rates: None,
-            drive: None,
-        }
-    }
-
-    /// [`Solvable::evaluate`] at `q` with the least-squares multipliers there
-    /// (`Φ_Rᵀ λ ≈ −r_R`), and those multipliers.
-    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation);
-
-    /// The rows `driven` of `r + Φ_qᵀλ` (with `q̇` at steady state, `q̈ = 0`): the drive forces.
-    fn drive_rows(&self, q: &[f64], lambda: &[f64], driven: &[usize]) -> Vec<f64>;
-
-    /// The largest `|F|` at each of the values `q_c + offsets[l]` of the driven coordinate `c`
-    /// (the `d`-th driven one), the rest as given.
-    fn residual_at_drive_offsets(
-        &self,
-        q: &[f64],
-        lambda: &[f64],
-        d: usize,
-        c: usize,
-        offsets: [f64; 3],
-    ) -> [f64; 3] {
-        let _ = d;
-        let mut qo = q.to_vec();
-        offsets.map(|offset| {
-            qo[c] = q[c] + offset;
-            let f = self.residual(&qo, lambda);
-            f.iter().fold(0.0f64, |a, v| a.max(v.abs()))
-        })
-    }
-
-    /// `Φ_R` (constraint equations × free coordinates) at `q`.
-    fn constraint_jacobian(&self, q: &[f64]) -> DMatrix<f64>;
-}
-
-impl Solvable for Direct<f64> {
-    /// One dual pass per free coordinate; `F` is linear in `λ`, so the `λ` columns are
-    /// `[Φ_Rᵀ; 0]`, read off `Φ_q` from those same passes.
-    fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-        let dual = self.dual();
-        let free = self.free();
-        let nf = free.len();
-        let m = lambda.len();
-        let qd: Vec<D1<f64>> = self.steady_speeds().iter().map(|&v| lift1(v)).collect();
-        let ld: Vec<D1<f64>> = lambda.iter().map(|&v| lift1(v)).collect();
-        let zero = vec![lift1(0.0); q.len()];
-        let base: Vec<D1<f64>> = q.iter().map(|&v| lift1(v)).collect();
-        let mut value = Vec::new();
-        let mut jac = DMatrix::zeros(nf + m, nf + m);
-        for (k, &i) in free.iter().enumerate() {
-            let mut qq = base.clone();
-            qq[i] = Dual64::new(q[i], 1.0);
-            let d = evaluate_rows(dual, &qq, &qd, &zero, free);
-            let g = d.with_multipliers(&ld);
-            let f: Vec<D1<f64>> = free
-                .iter()
-                .map(|&j| g[j])
-                .chain(d.phi.iter().copied())
-                .collect();
-            for (r, v) in f.iter().enumerate() {
-                jac[(r, k)] = v.eps;
-            }
-            if k == 0 {
-                value = f.iter().map(|v| v.re).collect();
-                for c in 0..m {
-                    for (r, &j) in free.iter().enumerate() {
-                        jac[(r, nf + c)] = d.phi_q[(c, j)].re;
-                    }
-                }
-            }
-        }
-        (value, jac)
-    }
-
-    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
-        let free = self.free();
-        let (nf, m) = (free.len(), self.constraints());
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, free);
-        let lambda = least_squares(
-            DMatrix::from_fn(nf, m, |i, k| d.phi_q[(k, free[i])]),
-            DVector::from_iterator(nf, free.iter().map(|&i| -d.r[i])),
-        );
-        let e = self.evaluate(q, &lambda, drive);
-        (lambda, e)
-    }
-
-    fn drive_rows(&self, q: &[f64], lambda: &[f64], driven: &[usize]) -> Vec<f64> {
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, driven);
-        let g = d.with_multipliers(lambda);
-        driven.iter().map(|&i| g[i]).collect()
-    }
-
-    fn constraint_jacobian(&self, q: &[f64]) -> DMatrix<f64> {
-        let free = self.free();
-        let zero = vec![0.0; q.len()];
-        let d = evaluate_rows(self.lifted(), q, self.steady_speeds(), &zero, free);
-        DMatrix::from_fn(self.constraints(), free.len(), |k, j| d.phi_q[(k, free[j])])
-    }
-}
-
 /// Everything needed to solve for the equilibrium of one instantiated system.
 pub struct Problem<'a> {
     pub free: Vec<usize>,
@@ -495,7 +353,7 @@ pub struct Problem<'a> {
     /// Coordinate names, for messages.
     pub names: Vec<&'a str>,
     /// The equations, evaluated by either route.
-    route: Box<dyn Solvable + 'a>,
+    route: Box<dyn Equations<f64> + 'a>,
     /// Coordinate speeds at steady state.
     pub qd: Vec<f64>,
     /// Number of constraint equations.
@@ -506,10 +364,10 @@ pub struct Problem<'a> {
 }
 
 impl<'a> Problem<'a> {
-    /// Prepares the solve of the equations `route`; `qd` are the steady-state coordinate
+    /// Prepares the solve of the equations `route` (either route's [`Equations`]); `qd` are the steady-state coordinate
     /// speeds, `driven` the driven coordinates and `names` all coordinates' names.
     pub fn new(
-        route: Box<dyn Solvable + 'a>,
+        route: Box<dyn Equations<f64> + 'a>,
         qd: Vec<f64>,
         driven: Vec<usize>,
         names: Vec<&'a str>,
@@ -526,7 +384,7 @@ impl<'a> Problem<'a> {
     }
 
     /// The equations being solved.
-    pub fn equations(&self) -> &dyn Solvable {
+    pub fn equations(&self) -> &dyn Equations<f64> {
         &*self.route
     }
 
@@ -568,7 +426,7 @@ impl<'a> Problem<'a> {
         q0: &[f64],
         start: Start,
         settings: Settings,
-    ) -> Result<Equilibrium, EquilibriumError> {
+    ) -> Result<Solution, EquilibriumError> {
         let mut it = self.start(q0, start, settings.drive_force);
         let mut converged = false;
         let mut iterations = 0;
@@ -707,7 +565,7 @@ impl<'a> Problem<'a> {
         it: Iterate,
         iterations: usize,
         drive_wanted: bool,
-    ) -> Result<Equilibrium, EquilibriumError> {
+    ) -> Result<Solution, EquilibriumError> {
         let nf = self.free.len();
         let Iterate {
             q,
@@ -738,22 +596,24 @@ impl<'a> Problem<'a> {
             return Err(EquilibriumError::NotFinite { iterations });
         }
         let constraint_violation = max_abs(&f[nf..]);
-        Ok(Equilibrium {
-            speed,
-            constraint_violation,
+        Ok(Solution {
+            equilibrium: Equilibrium {
+                speed,
+                constraint_violation,
+                residual: max_abs(&f),
+                jacobian: jac,
+                q,
+                qd: self.qd.clone(),
+                lambda,
+                drive_force,
+                iterations,
+            },
             rates,
-            residual: max_abs(&f),
-            jacobian: jac,
-            q,
-            qd: self.qd.clone(),
-            lambda,
-            drive_force,
-            iterations,
         })
     }
 
     fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
-        self.route.evaluate_fitted(q, drive)
+        self.route.evaluate_fitted(q, drive, &least_squares)
     }
 
     /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the

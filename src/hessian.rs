@@ -131,7 +131,7 @@ fn expand<J: Jet>(
     let eq = &pt.equilibrium;
     let free = &pt.linear.free;
     let nf = free.len();
-    let equations = model.equations(seeded, J::from(pt.speed), &eq.q)?;
+    let equations = model.at(seeded, J::from(pt.speed), &eq.q)?;
     // Equilibrium expansion: two chord steps with Newton's Jacobian on `[q_R; λ]`.
     let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
         .chain(eq.lambda.iter().copied())

@@ -13,7 +13,8 @@
 //! 3. [`model`]: the file format, validated once into a [`model::Model`].
 //! 4. [`mechanics`]: kinematics, equations of motion and constraints over any [`real::Real`].
 //! 5. [`linearize`]: M̂, Ĉ, K̂ in minimal coordinates (constraint stiffness included).
-//! 6. [`route`]: the equations of one operating point over any scalar, directly.
+//! 6. [`equations`]: the one interface to the equations of an operating point over any scalar
+//!    (residual, Newton's Jacobian, the rates, the linearisation), and the direct route.
 //! 7. [`equilibrium`]: the dynamic equilibrium (Newton, balanced, certified).
 //! 8. [`tape`], [`program`]: the same equations recorded once per model and replayed.
 //! 9. [`compiled`]: a model with its [`compiled::Route`] (recorded or direct) chosen once.
@@ -43,6 +44,7 @@ pub mod cancel;
 pub mod compiled;
 pub mod cuts;
 pub mod dual4;
+pub mod equations;
 pub mod equilibrium;
 pub mod files;
 pub mod forces;
@@ -67,7 +69,6 @@ pub mod real;
 pub mod report;
 pub mod results;
 pub mod rigid;
-pub mod route;
 pub mod sampling;
 pub mod schur;
 pub mod sensitivity;

@@ -24,14 +24,12 @@
 //! evaluation at a second, perturbed set of inputs, is discarded: the caller then keeps to the
 //! direct route, which is always available.
 
-use crate::equilibrium::{Evaluation, Rates, Solvable};
-use crate::linalg::least_squares;
+use crate::equations::{Equations, Evaluation, Fit, Rates};
 use crate::linearize::{Linearization, LinearizeError, reduce};
 use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use crate::model::Model;
 use crate::real::Real;
-use crate::route::Equations;
 use crate::tape::{Forward, NativePass, Rows, Seeding, Tape, Var, record};
 use nalgebra::{DMatrix, DVector};
 use std::cell::{OnceCell, RefCell};
@@ -541,6 +539,19 @@ impl<S: Real> Linear<S> {
         }
     }
 
+    /// As Newton's method takes it, with the drive rows when `drive`.
+    fn evaluation(self, drive: bool) -> Evaluation<S> {
+        Evaluation {
+            residual: self.residual,
+            jacobian: self.jacobian,
+            rates: Some(Rates {
+                damping: self.damping,
+                mass: self.mass,
+            }),
+            drive: drive.then_some(self.drive),
+        }
+    }
+
     /// The linearisation (`K` is the `q_R` block of the Jacobian, `Φ_R` its `λ` columns).
     pub fn reduce(
         self,
@@ -556,19 +567,6 @@ impl<S: Real> Linear<S> {
 }
 
 impl Linear {
-    /// As Newton's method takes it, with the drive rows when `drive`.
-    fn evaluation(self, drive: bool) -> Evaluation {
-        Evaluation {
-            residual: self.residual,
-            jacobian: self.jacobian,
-            rates: Some(Rates {
-                damping: self.damping,
-                mass: self.mass,
-            }),
-            drive: drive.then_some(self.drive),
-        }
-    }
-
     /// The same at the multipliers `λ + δ`: `F`, the Jacobian and the drive rows are affine in
     /// `λ` (by `Φ_Rᵀ`, the constraints' curvature and `Φ_Dᵀ`), and `Φ`, `Φ_R`, `C` and `M` do not
     /// depend on it.
@@ -805,11 +803,18 @@ impl Program {
 }
 
 /// The recorded program at parameters `p` and `speed` over any [`Real`]: the
-/// [`Equations`] the sensitivities and the Hessians evaluate over dual numbers.
+/// [`Equations`] the sensitivities and the Hessians evaluate over dual numbers (in `f64`,
+/// [`Instance`] evaluates what depends on the parameters and the speed once).
 pub struct Recorded<'a, S: Real> {
     pub program: &'a Program,
     pub p: Vec<S>,
     pub speed: S,
+}
+
+impl<S: Real> Recorded<'_, S> {
+    fn linear(&self, q: &[S], lambda: &[S]) -> Linear<S> {
+        self.program.linear_over(&self.p, self.speed, q, lambda)
+    }
 }
 
 impl<S: Real> Equations<S> for Recorded<'_, S> {
@@ -825,6 +830,39 @@ impl<S: Real> Equations<S> for Recorded<'_, S> {
         self.program.residual_over(&self.p, self.speed, q, lambda)
     }
 
+    fn residual_and_jacobian(&self, q: &[S], lambda: &[S]) -> (Vec<S>, DMatrix<S>) {
+        let lin = self.linear(q, lambda);
+        (lin.residual, lin.jacobian)
+    }
+
+    fn evaluate(&self, q: &[S], lambda: &[S], drive: bool) -> Evaluation<S> {
+        self.linear(q, lambda).evaluation(drive)
+    }
+
+    /// The pass at `λ = 0` gives `r_R` and `Φ_R`; a second pass is at the fitted multipliers.
+    fn evaluate_fitted(&self, q: &[S], drive: bool, fit: Fit<'_, S>) -> (Vec<S>, Evaluation<S>) {
+        let (nf, m) = (self.program.free.len(), self.program.m);
+        let lin = self.linear(q, &vec![S::from(0.0); m]);
+        let lambda = fit(
+            lin.jacobian.view((0, nf), (nf, m)).into_owned(),
+            DVector::from_iterator(nf, lin.residual[..nf].iter().map(|&v| -v)),
+        );
+        let e = self.evaluate(q, &lambda, drive);
+        (lambda, e)
+    }
+
+    /// The recorded drive rows are those of the model's driven coordinates, in order.
+    fn drive_rows(&self, q: &[S], lambda: &[S], _driven: &[usize]) -> Vec<S> {
+        self.linear(q, lambda).drive
+    }
+
+    /// The `λ` columns of the Jacobian are `[Φ_Rᵀ; 0]`.
+    fn constraint_jacobian(&self, q: &[S]) -> DMatrix<S> {
+        let (nf, m) = (self.program.free.len(), self.program.m);
+        let (_, j) = self.residual_and_jacobian(q, &vec![S::from(0.0); m]);
+        j.view((0, nf), (nf, m)).transpose()
+    }
+
     fn linearize(
         &self,
         q: &[S],
@@ -832,8 +870,7 @@ impl<S: Real> Equations<S> for Recorded<'_, S> {
         independent: &[usize],
         _stiffness: Option<&DMatrix<S>>,
     ) -> Result<Linearization<S>, LinearizeError> {
-        self.program
-            .linear_over(&self.p, self.speed, q, lambda)
+        self.linear(q, lambda)
             .reduce(&self.program.free, independent)
     }
 }
@@ -851,19 +888,6 @@ impl Equations<f64> for Instance<'_> {
         Instance::residual(self, q, lambda)
     }
 
-    fn linearize(
-        &self,
-        q: &[f64],
-        lambda: &[f64],
-        independent: &[usize],
-        _stiffness: Option<&DMatrix<f64>>,
-    ) -> Result<Linearization<f64>, LinearizeError> {
-        self.linear_plain(q, lambda)
-            .reduce(&self.program.free, independent)
-    }
-}
-
-impl Solvable for Instance<'_> {
     fn residual_and_jacobian(&self, q: &[f64], lambda: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
         Instance::residual_and_jacobian(self, q, lambda)
     }
@@ -874,11 +898,11 @@ impl Solvable for Instance<'_> {
 
     /// One pass: the pass at `λ = 0` gives `r_R` and `Φ_R`, and is then shifted to the
     /// multipliers ([`Linear::shift_multipliers`]).
-    fn evaluate_fitted(&self, q: &[f64], drive: bool) -> (Vec<f64>, Evaluation) {
+    fn evaluate_fitted(&self, q: &[f64], drive: bool, fit: Fit<'_, f64>) -> (Vec<f64>, Evaluation) {
         let (nf, m) = (self.program.free.len(), self.program.m);
         let (lambda, lin) = self.full_pass(q, &vec![0.0; m], |f, d| {
             let mut lin = Linear::from_forward(f, d, nf, m, false);
-            let lambda = least_squares(
+            let lambda = fit(
                 lin.jacobian.view((0, nf), (nf, m)).into_owned(),
                 DVector::from_iterator(nf, lin.residual[..nf].iter().map(|v| -v)),
             );
@@ -910,5 +934,16 @@ impl Solvable for Instance<'_> {
         let (nf, m) = (self.program.free.len(), self.program.m);
         let (_, j) = Instance::residual_and_jacobian(self, q, &vec![0.0; m]);
         j.view((0, nf), (nf, m)).transpose()
+    }
+
+    fn linearize(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        independent: &[usize],
+        _stiffness: Option<&DMatrix<f64>>,
+    ) -> Result<Linearization<f64>, LinearizeError> {
+        self.linear_plain(q, lambda)
+            .reduce(&self.program.free, independent)
     }
 }

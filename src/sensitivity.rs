@@ -344,9 +344,7 @@ pub fn dual_linearizations(
     let eq = &pt.equilibrium;
     let lu = eq.factor();
     // ∂F/∂p along all the variables in one pass where the model has a recorded program.
-    let dp = model
-        .program(p, speed, &eq.q)
-        .map(|program| program.parameter_derivatives(p, speed, &eq.q, &eq.lambda, wrt));
+    let dp = model.parameter_jacobian(p, speed, &eq.q, &eq.lambda, wrt);
     let at = Shift {
         model,
         p,
@@ -402,7 +400,7 @@ impl Shift<'_> {
                 .collect()
         };
         let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
-        let equations = self.model.equations(&pd, D::from(speed), &eq.q)?;
+        let equations = self.model.at(&pd, D::from(speed), &eq.q)?;
         // The shift `[dq_R; dλ]/db = −J⁻¹ ∂F/∂b`: one implicit step from the nominal solution,
         // with `∂F/∂b` from the recorded program where there is one.
         let nf = free.len();

@@ -8,7 +8,8 @@
 //! the similarity of their shapes in the free coordinates, not by sorting.
 
 use crate::compiled::Compiled;
-use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Rates, Settings, Start};
+use crate::equations::Rates;
+use crate::equilibrium::{Equilibrium, EquilibriumError, Problem, Settings, Solution, Start};
 use crate::linearize::{Linearization, LinearizeError, choose_independent, reduce};
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
@@ -290,7 +291,7 @@ pub fn point_from(
 ) -> Result<Point, PointError> {
     // On the model's route (the recorded program when there is one).
     let problem = model.problem(p, speed, q0)?;
-    let eq = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
+    let solved = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);
         if redundant.is_empty() {
@@ -309,7 +310,7 @@ pub fn point_from(
             equations: model.n_constraints(),
         }
     })?;
-    let mut first = analyse(model, p, &problem, eq, opt)?;
+    let mut first = analyse(model, p, &problem, solved, opt)?;
     if first.stable() {
         return Ok(first);
     }
@@ -366,9 +367,10 @@ pub fn point_from(
                 for (j, &i) in free.iter().enumerate() {
                     q[i] += s * amp * dir[j];
                 }
-                let Ok(eq) = problem.solve(speed, &q, Start::default(), opt.newton) else {
+                let Ok(solved) = problem.solve(speed, &q, Start::default(), opt.newton) else {
                     continue;
                 };
+                let eq = &solved.equilibrium;
                 let moved = free.iter().fold(0.0f64, |m, &i| {
                     m.max((eq.q[i] - first.equilibrium.q[i]).abs())
                 });
@@ -376,7 +378,7 @@ pub fn point_from(
                     continue;
                 }
                 let own_side = side(&eq.q, dir) * s > 0.0;
-                if let Ok(pt) = analyse(model, p, &problem, eq, opt)
+                if let Ok(pt) = analyse(model, p, &problem, solved, opt)
                     && pt.stable()
                 {
                     let kind = BranchKind::Switched {
@@ -413,7 +415,10 @@ fn analyse(
     model: &Model,
     p: &[f64],
     problem: &Problem,
-    mut eq: Equilibrium,
+    Solution {
+        equilibrium: eq,
+        rates,
+    }: Solution,
     opt: &Options,
 ) -> Result<Point, PointError> {
     let free = model.free();
@@ -428,7 +433,7 @@ fn analyse(
         choose_independent(&phi_r, &free, user)?
     };
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
-    let linear = match eq.rates.take() {
+    let linear = match rates {
         Some(Rates { damping, mass }) => {
             reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
         }

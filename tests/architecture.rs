@@ -20,7 +20,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["model"], false),
     (&["mechanics"], false),
     (&["linearize"], false),
-    (&["route"], false),
+    (&["equations"], false),
     (&["equilibrium"], false),
     (&["tape", "program"], true),
     (&["compiled"], false),

@@ -5,12 +5,12 @@ mod common;
 
 use common::example;
 use modaltol::compiled::{Compiled, Route};
-use modaltol::equilibrium::Solvable;
+use modaltol::equations::Direct;
+use modaltol::equations::Equations;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use modaltol::program::SPECIALISE_AFTER;
-use modaltol::route::Direct;
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::DMatrix;
@@ -640,4 +640,92 @@ fn without_counts(e: &str) -> String {
         .map(|w| if w.parse::<u64>().is_ok() { "N" } else { w })
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// Every method of the one equations interface gives the same numbers on both routes, over
+/// dual numbers seeded in a parameter (the scalar of the sensitivities): the residual, Newton's
+/// Jacobian, the rates, the fitted multipliers, the drive rows, the constraint Jacobian and the
+/// steady-state probe, values and derivatives alike.
+#[test]
+fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
+    type D = Dual64;
+    let re = |v: &[D]| v.iter().map(|x| x.re).collect::<Vec<f64>>();
+    let eps = |v: &[D]| v.iter().map(|x| x.eps).collect::<Vec<f64>>();
+    let same = |name: &str, what: &str, a: &[f64], b: &[f64]| {
+        assert_eq!(a.len(), b.len(), "{name}: {what} lengths");
+        let scale = b.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for (x, y) in a.iter().zip(b) {
+            assert!(close(*x, *y, scale), "{name}: {what} {x} vs {y}");
+        }
+    };
+    // The multipliers fitted as Newton fits them, here on the values only (the fit itself is
+    // the caller's; what is compared is what the routes hand it and do with its answer).
+    let fit = |a: DMatrix<D>, b: nalgebra::DVector<D>| -> Vec<D> {
+        let l = modaltol::linalg::least_squares(a.map(|v| v.re), b.map(|v| v.re));
+        l.into_iter().map(D::from_re).collect()
+    };
+    for name in EXAMPLES {
+        let recorded = example(name);
+        let direct = recorded.clone().with_route(Route::Direct);
+        for (p, speed, q, lambda) in states(name) {
+            let b = p.len() / 2;
+            let pd: Vec<D> = (p.iter().enumerate())
+                .map(|(i, &v)| D::new(v, if i == b { 1.0 } else { 0.0 }))
+                .collect();
+            let lift = |v: &[f64]| v.iter().map(|&x| D::from_re(x)).collect::<Vec<_>>();
+            let (ql, ll) = (lift(&q), lift(&lambda));
+            let a = recorded.at(&pd, D::from_re(speed), &q).unwrap();
+            let d = direct.at(&pd, D::from_re(speed), &q).unwrap();
+            assert_eq!(a.free(), d.free());
+            assert_eq!(a.constraints(), d.constraints());
+            let (fa, fd) = (a.residual(&ql, &ll), d.residual(&ql, &ll));
+            same(name, "residual", &re(&fa), &re(&fd));
+            same(name, "∂residual/∂p", &eps(&fa), &eps(&fd));
+            let (ea, ed) = (a.evaluate(&ql, &ll, true), d.evaluate(&ql, &ll, true));
+            same(name, "evaluated residual", &re(&ea.residual), &re(&fd));
+            let (ja, jd) = (ea.jacobian.as_slice(), ed.jacobian.as_slice());
+            same(name, "Jacobian", &re(ja), &re(jd));
+            same(name, "∂Jacobian/∂p", &eps(ja), &eps(jd));
+            // The recorded route has the rates and the drive rows from the same pass.
+            let rates = ea.rates.expect("the recorded route gives the rates");
+            let lin = d
+                .linearize(&ql, &ll, &recorded.free(), None)
+                .expect("linearisable");
+            same(
+                name,
+                "mass",
+                &re(rates.mass.as_slice()),
+                &re(lin.m.as_slice()),
+            );
+            let driven = recorded.driven();
+            let rows = d.drive_rows(&ql, &ll, &driven);
+            same(name, "drive rows", &re(&ea.drive.unwrap()), &re(&rows));
+            same(
+                name,
+                "drive rows (own)",
+                &re(&a.drive_rows(&ql, &ll, &driven)),
+                &re(&rows),
+            );
+            let (la, fa) = a.evaluate_fitted(&ql, false, &fit);
+            let (ld, fd) = d.evaluate_fitted(&ql, false, &fit);
+            same(name, "fitted multipliers", &re(&la), &re(&ld));
+            same(
+                name,
+                "fitted residual",
+                &re(&fa.residual),
+                &re(&fd.residual),
+            );
+            let (ca, cd) = (a.constraint_jacobian(&ql), d.constraint_jacobian(&ql));
+            same(name, "Φ_R", &re(ca.as_slice()), &re(cd.as_slice()));
+            same(name, "∂Φ_R/∂p", &eps(ca.as_slice()), &eps(cd.as_slice()));
+            for (k, &c) in driven.iter().enumerate() {
+                let offsets = [0.5, 1.5, -2.0];
+                let (oa, od) = (
+                    a.residual_at_drive_offsets(&ql, &ll, k, c, offsets),
+                    d.residual_at_drive_offsets(&ql, &ll, k, c, offsets),
+                );
+                same(name, "steady-state probe", &oa, &od);
+            }
+        }
+    }
 }

@@ -1,0 +1,124 @@
+//! The equations of one operating point, whichever way they are evaluated: the one interface
+//! the equilibrium solve, the linearisation, the sensitivities and the Hessians use.
+//!
+//! A model's equilibrium equations at fixed parameters and speed,
+//!
+//! ```text
+//! F(q_R, λ) = [ r_R(q, q̇ = [Ω; 0], q̈ = 0) + Φ_Rᵀ λ ;  Φ(q) ]
+//! ```
+//!
+//! with Newton's Jacobian `∂F/∂[q_R; λ] = [K Φ_Rᵀ; Φ_R 0]` and the rates `∂r_R/∂q̇_R`,
+//! `∂r_R/∂q̈_R`, can be evaluated two ways that give the same numbers: directly, by the generic
+//! mechanics over the caller's scalar ([`Direct`]), or through the model's recorded program
+//! ([`crate::program`]), which is faster. Both implement [`Equations`] over any [`Real`]
+//! (dual numbers seeded in the parameters give the derivatives with respect to them), so the
+//! computations above are written once and never choose between them:
+//! [`crate::compiled::Compiled::at`] makes the choice, once per model.
+
+mod direct;
+
+pub use direct::Direct;
+
+use crate::linearize::{Linearization, LinearizeError};
+use crate::real::Real;
+use nalgebra::{DMatrix, DVector};
+
+/// `∂r_R/∂q̇_R` and `∂r_R/∂q̈_R`: the linearisation's damping and mass matrices before
+/// reduction, over the free coordinates.
+#[derive(Debug, Clone)]
+pub struct Rates<S: Real = f64> {
+    /// `∂r_R/∂q̇_R`.
+    pub damping: DMatrix<S>,
+    /// `∂r_R/∂q̈_R`.
+    pub mass: DMatrix<S>,
+}
+
+/// The equations evaluated at one point `(q, λ)`: what Newton's method needs, and, where the
+/// route has them from the same pass, what the linearisation needs besides.
+#[derive(Debug, Clone)]
+pub struct Evaluation<S: Real = f64> {
+    /// `F`.
+    pub residual: Vec<S>,
+    /// `∂F/∂[q_R; λ]`.
+    pub jacobian: DMatrix<S>,
+    /// The [`Rates`], on the recorded route.
+    pub rates: Option<Rates<S>>,
+    /// The driven coordinates' rows of `r + Φ_qᵀλ` (the drive forces), on the recorded route
+    /// and when asked for.
+    pub drive: Option<Vec<S>>,
+}
+
+/// How the multipliers of an unconverged point are fitted: from `Φ_Rᵀ` (free coordinates ×
+/// constraint equations) and `−r_R`, the `λ` of `Φ_Rᵀ λ ≈ −r_R` (Newton passes a least-squares
+/// solve).
+pub type Fit<'a, S> = &'a dyn Fn(DMatrix<S>, DVector<S>) -> Vec<S>;
+
+/// The equilibrium equations and the linearisation of a model at fixed parameters and speed,
+/// over the scalar `S` (see the module documentation).
+pub trait Equations<S: Real> {
+    /// The free coordinates (indices), the unknowns `q_R`.
+    fn free(&self) -> &[usize];
+
+    /// Number of constraint equations (and multipliers).
+    fn constraints(&self) -> usize;
+
+    /// `F(q_R, λ)` at the coordinates `q` (all of them).
+    fn residual(&self, q: &[S], lambda: &[S]) -> Vec<S>;
+
+    /// `F` and its Jacobian with respect to the unknowns `x = [q_R; λ]`.
+    fn residual_and_jacobian(&self, q: &[S], lambda: &[S]) -> (Vec<S>, DMatrix<S>);
+
+    /// `F`, its exact Jacobian and, where the route has them from the same pass, the
+    /// [`Rates`] and (with `drive`) the drive rows: everything the linearisation needs, so
+    /// that a solve whose last Newton step is below the tolerance needs no further evaluation.
+    fn evaluate(&self, q: &[S], lambda: &[S], drive: bool) -> Evaluation<S> {
+        let _ = drive;
+        let (residual, jacobian) = self.residual_and_jacobian(q, lambda);
+        Evaluation {
+            residual,
+            jacobian,
+            rates: None,
+            drive: None,
+        }
+    }
+
+    /// [`Equations::evaluate`] at `q` with the multipliers `fit` gives there, and those
+    /// multipliers.
+    fn evaluate_fitted(&self, q: &[S], drive: bool, fit: Fit<'_, S>) -> (Vec<S>, Evaluation<S>);
+
+    /// The rows `driven` of `r + Φ_qᵀλ` (with `q̇` at steady state, `q̈ = 0`): the drive forces.
+    fn drive_rows(&self, q: &[S], lambda: &[S], driven: &[usize]) -> Vec<S>;
+
+    /// The largest `|F|` at each of the values `q_c + offsets[l]` of the driven coordinate `c`
+    /// (the `d`-th driven one), the rest as given.
+    fn residual_at_drive_offsets(
+        &self,
+        q: &[S],
+        lambda: &[S],
+        d: usize,
+        c: usize,
+        offsets: [f64; 3],
+    ) -> [f64; 3] {
+        let _ = d;
+        let mut qo = q.to_vec();
+        offsets.map(|offset| {
+            qo[c] = q[c] + S::from(offset);
+            let f = self.residual(&qo, lambda);
+            f.iter().fold(0.0f64, |a, v| a.max(v.re().abs()))
+        })
+    }
+
+    /// `Φ_R` (constraint equations × free coordinates) at `q`.
+    fn constraint_jacobian(&self, q: &[S]) -> DMatrix<S>;
+
+    /// The linearisation at `(q, λ)` reduced to the `independent` coordinates; `stiffness`,
+    /// when known, is the tangent stiffness `∂(r_R + Φ_Rᵀλ)/∂q_R` there (Newton's Jacobian
+    /// block), which a route may reuse.
+    fn linearize(
+        &self,
+        q: &[S],
+        lambda: &[S],
+        independent: &[usize],
+        stiffness: Option<&DMatrix<S>>,
+    ) -> Result<Linearization<S>, LinearizeError>;
+}
