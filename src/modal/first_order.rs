@@ -1,0 +1,201 @@
+//! The modes of any `M̂`, `Ĉ`, `K̂` from the 2n×2n first-order form, dividing by `M̂` or, where
+//! `M̂` is the worse conditioned, by `K̂` (see the module documentation of [`crate::modal`]).
+
+use super::pairing::pair_roots;
+use super::rigid::RigidTest;
+use super::{C64, IM_TOL, ModalError, Mode, Root, normalize};
+use crate::linalg;
+use crate::schur::Eigen;
+use nalgebra::{DMatrix, Dyn, LU};
+
+/// Condition number of `M̂` above which the modes are refused where a route divides by `M̂` (a
+/// coordinate moves next to no mass: the roots would be rounding): every root then carries
+/// errors of `ε cond(M̂)` relative to the largest (1e-4 here).
+pub(super) const MAX_MASS_CONDITION: f64 = 1e12;
+
+/// The same where a route divides by `K̂` instead (`M̂` the worse conditioned; see
+/// [`linalg::symmetric_definite`] and [`first_order_modes`]): the low modes keep a few ε
+/// whatever `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the
+/// highest, depend on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts
+/// as singular where that smallest eigenvalue carries 1 % of rounding (its frequency then
+/// 0.5 %): a coordinate moving next to no mass. A chain of a thousand segments in joint
+/// coordinates (`cond(M̂)` 3.9e12, growing like n⁴) is within.
+pub(super) const MAX_MASS_CONDITION_BY_STIFFNESS: f64 = 1e-2 / f64::EPSILON;
+
+/// The modes from the 2n×2n first-order form (any `M̂`, `Ĉ`, `K̂`; see the module
+/// documentation), unsorted.
+///
+/// The form divides by `M̂`, so every root carries errors of `ε cond(M̂)` of the largest: a
+/// long chain in joint coordinates (`cond(M̂) ∝ n⁴`) with joint damping had its first frequency
+/// 4e-5 off at 480 segments, and at 160 its vectors overflowed. Where `M̂` is ill-conditioned
+/// and `K̂` better conditioned, the roles swap: the roots `μ = 1/λ` of `μ²K̂ + μĈ + M̂` (the
+/// same equation divided by `λ²`, with the same right and left vectors) come from the form
+/// `[0 I; −K̂⁻¹M̂ −K̂⁻¹Ĉ]`, exact for the low modes whatever `cond(M̂)`. `M̂` then counts as
+/// singular as on the symmetric route (its smallest eigenvalue carrying 1 % of rounding).
+pub(super) fn first_order_modes(
+    m: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+    rigid: &RigidTest,
+) -> Result<Vec<Mode>, ModalError> {
+    let form = FirstOrderForm::new(m, c, k)?;
+    let (roots, scale) = form.roots()?;
+    Ok(pair_roots(roots, scale, rigid))
+}
+
+/// The condition number `σ_max/σ_min` of `a` (infinite where `a` is zero, `σ_min` floored at
+/// the smallest normal number); `what` names the decomposition where it fails.
+fn condition_of(a: &DMatrix<f64>, what: &'static str) -> Result<f64, ModalError> {
+    let sv = linalg::svd(a.clone(), false, false)
+        .ok_or(ModalError::NoConvergence { what })?
+        .singular_values;
+    Ok(if sv.max() == 0.0 {
+        f64::INFINITY
+    } else {
+        sv.max() / sv.min().max(f64::MIN_POSITIVE)
+    })
+}
+
+/// [`first_order_modes`]'s first-order form `[0 I; −M̂⁻¹K̂ −M̂⁻¹Ĉ]` (or, `swapped`, the form
+/// `[0 I; −K̂⁻¹M̂ −K̂⁻¹Ĉ]` of `μ = 1/λ`) with its eigendecomposition.
+pub(super) struct FirstOrderForm<'a> {
+    /// The number of coordinates (the form has twice as many rows).
+    n: usize,
+    /// The matrix the form divides by: `M̂`, or `K̂` where `swapped`.
+    divisor: &'a DMatrix<f64>,
+    /// `cond(M̂)`, for the errors.
+    condition: f64,
+    /// The form is of `μ²K̂ + μĈ + M̂` (its roots are `1/λ`).
+    swapped: bool,
+    eigen: Eigen,
+}
+
+impl<'a> FirstOrderForm<'a> {
+    /// The form of `(λ²M̂ + λĈ + K̂) x = 0`, divided by `K̂` where `M̂` is the worse conditioned
+    /// (above [`linalg::WELL_CONDITIONED`] and within [`MAX_MASS_CONDITION_BY_STIFFNESS`]),
+    /// else by `M̂`, refused above [`MAX_MASS_CONDITION`]; and its eigendecomposition.
+    pub(super) fn new(
+        m: &'a DMatrix<f64>,
+        c: &DMatrix<f64>,
+        k: &'a DMatrix<f64>,
+    ) -> Result<FirstOrderForm<'a>, ModalError> {
+        let n = m.nrows();
+        let condition = condition_of(m, "SVD of M̂")?;
+        // By K̂ where M̂ is the worse conditioned (see [`first_order_modes`]).
+        let swapped = condition > linalg::WELL_CONDITIONED
+            && condition <= MAX_MASS_CONDITION_BY_STIFFNESS
+            && condition_of(k, "SVD of K̂")? < condition;
+        if !swapped && condition > MAX_MASS_CONDITION {
+            return Err(ModalError::SingularMass { condition });
+        }
+        let (m, k) = if swapped { (k, m) } else { (m, k) };
+        let lu = m.clone().lu();
+        let mk = lu.solve(k).ok_or(ModalError::SingularMass { condition })?;
+        let mc = lu.solve(c).ok_or(ModalError::SingularMass { condition })?;
+        let mut a = DMatrix::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            a[(i, n + i)] = 1.0;
+            for j in 0..n {
+                a[(n + i, j)] = -mk[(i, j)];
+                a[(n + i, n + j)] = -mc[(i, j)];
+            }
+        }
+        let eigen = Eigen::new(a).ok_or(ModalError::NoConvergence {
+            what: "eigenvalues of the first-order form",
+        })?;
+        Ok(FirstOrderForm {
+            n,
+            divisor: m,
+            condition,
+            swapped,
+            eigen,
+        })
+    }
+
+    /// The roots `λ` with `Im λ ≥ 0` (a pair snapped to the real axis, `|Im| ≤ IM_TOL` of the
+    /// form's scale, gives both), with their vectors, and the scale of the roots
+    /// (`max|λ|` of the form, `1/min|μ|` where `swapped`).
+    pub(super) fn roots(&self) -> Result<(Vec<Root>, f64), ModalError> {
+        let (n, swapped) = (self.n, self.swapped);
+        let eig = self.eigen.values();
+        let form_scale = eig
+            .iter()
+            .fold(0.0f64, |s, l| s.max(l.norm()))
+            .max(f64::MIN_POSITIVE);
+        let scale = if swapped {
+            // The roots are 1/μ.
+            1.0 / eig
+                .iter()
+                .fold(f64::INFINITY, |s, l| s.min(l.norm()))
+                .max(f64::MIN_POSITIVE)
+        } else {
+            form_scale
+        };
+        // The left vectors of the first-order form are `[·; Mᵀ y]`.
+        let lu_t = self.divisor.transpose().lu();
+        let mut roots: Vec<Root> = Vec::with_capacity(n + 1);
+        for (k, &l0) in eig.iter().enumerate() {
+            let snapped = l0.im != 0.0 && l0.im.abs() <= IM_TOL * form_scale.max(l0.norm());
+            let l = if snapped { C64::new(l0.re, 0.0) } else { l0 };
+            // A complex root's conjugate is its partner, with conjugate vectors; a pair rounded
+            // to two real roots shares the vectors of its first.
+            if l.im < 0.0 {
+                continue;
+            }
+            if snapped && l0.im < 0.0 {
+                let twin = roots.last().expect("the pair's first root").clone();
+                let lambda = if swapped { 1.0 / l } else { l };
+                roots.push(Root { lambda, ..twin });
+                continue;
+            }
+            roots.push(self.root(k, l, &lu_t)?);
+        }
+        Ok((roots, scale))
+    }
+
+    /// The root of the form's eigenvalue `k`, at `l` (snapped), with its right vector from the
+    /// form's `[x; λx]` (the half with the smaller rounding) and its left vector `y` from the
+    /// form's `[·; Mᵀy]` (`lu_t` factorises `Mᵀ`); where `swapped`, `λ = 1/μ`, kept with
+    /// `Im λ ≥ 0`.
+    pub(super) fn root(
+        &self,
+        k: usize,
+        l: C64,
+        lu_t: &LU<f64, Dyn, Dyn>,
+    ) -> Result<Root, ModalError> {
+        let (n, eigen, condition) = (self.n, &self.eigen, self.condition);
+        // `[x; λx]`: the half that carries x with the smaller rounding.
+        let right = if l.norm() <= 1.0 {
+            eigen.right(k, l, 0..n)
+        } else {
+            eigen.right(k, l, n..2 * n) / l
+        };
+        let w2 = eigen.left(k, l, n..2 * n);
+        let left = lu_t
+            .solve(&w2.map(|z| z.re))
+            .zip(lu_t.solve(&w2.map(|z| z.im)))
+            .map(|(re, im)| re.zip_map(&im, C64::new))
+            .ok_or(ModalError::SingularMass { condition })?;
+        let root = Root {
+            lambda: l,
+            right: normalize(right),
+            left: normalize(left),
+        };
+        // A root μ of μ²K̂ + μĈ + M̂ is λ = 1/μ with the same vectors; for Im μ > 0 that has
+        // Im λ < 0, so its conjugate (vectors conjugated) is kept.
+        Ok(if self.swapped && l.im > 0.0 {
+            Root {
+                lambda: 1.0 / l.conj(),
+                right: root.right.map(|z| z.conj()),
+                left: root.left.map(|z| z.conj()),
+            }
+        } else if self.swapped {
+            Root {
+                lambda: 1.0 / l,
+                ..root
+            }
+        } else {
+            root
+        })
+    }
+}
