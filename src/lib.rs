@@ -29,7 +29,8 @@
 //!     [`propagate::Propagation`] trait.
 //! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
 //!     [`montecarlo`].
-//! 17. [`analyze`], [`shard`]: the main job, its rows, and its split across runs.
+//! 17. [`analyze`], [`request`], [`shard`]: the main job and its rows, the analysis request
+//!     both front ends check the same way, and the job's split across runs.
 //! 18. [`plots`], [`report`], [`results`]: what is written; `main.rs` parses the command line
 //!     and writes files, the Python package binds the same library.
 //!
@@ -67,6 +68,7 @@ pub mod propagate;
 pub mod quadrature;
 pub mod real;
 pub mod report;
+pub mod request;
 pub mod results;
 pub mod rigid;
 pub mod sampling;

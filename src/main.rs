@@ -13,6 +13,7 @@ use modaltol::model::{Model, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
+use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, TransferAt};
 use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
@@ -506,13 +507,39 @@ fn model_or_governor(model: &Option<PathBuf>, set: &[(String, f64)]) -> Result<C
     }
 }
 
-/// `--threads`, checked ([`settings::threads`]): a count out of bounds is bad input, one the
-/// operating system refuses a failure.
-fn checked_threads(threads: Option<usize>) -> Result<Option<usize>> {
-    settings::threads(threads).map_err(|e| match e {
-        ThreadsError::Refused { .. } => Failed(format!("--threads: {e}")).into(),
-        _ => InputError(format!("--threads {e}")).into(),
-    })
+/// A refused analysis request, in the command line's spelling: bad input, or a failure where
+/// the operating system refuses the threads.
+fn refused(e: RequestError, shard: &Option<String>, cases_chosen: bool) -> anyhow::Error {
+    let spec = shard.as_deref().unwrap_or_default();
+    match e {
+        RequestError::Threads(t @ ThreadsError::Refused { .. }) => {
+            Failed(format!("--threads: {t}")).into()
+        }
+        RequestError::NoSpeeds => {
+            InputError("no --speed given and the model has no [analysis] speed".into()).into()
+        }
+        RequestError::Speeds(s) | RequestError::ModelSpeeds(s) => {
+            InputError(format!("--speed: {s}")).into()
+        }
+        RequestError::Cases(s) => {
+            let flag = if cases_chosen { "--case: " } else { "" };
+            InputError(format!("{flag}{s}")).into()
+        }
+        RequestError::ShardWithoutMonteCarlo => {
+            InputError("--shard splits the Monte Carlo; it cannot go with --no-monte-carlo".into())
+                .into()
+        }
+        RequestError::TooManyShards { .. } => InputError(format!("--shard {spec}: {e}")).into(),
+        e => {
+            let flag = match e.setting() {
+                Setting::QuadratureTolerance => "--quadrature-tolerance",
+                Setting::Threads => "--threads",
+                Setting::Samples => "--samples",
+                _ => unreachable!("named above"),
+            };
+            InputError(format!("{flag} {e}")).into()
+        }
+    }
 }
 
 /// The model's tolerance cases, or one made of the parameters' own tolerances.
@@ -951,54 +978,41 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
         cases: only,
         display,
     } = args;
-    settings::quadrature_tolerance(quadrature_tolerance)
-        .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
-    let threads = checked_threads(threads)?;
-    let m = model_or_governor(&model, set)?;
-    let range = match &speed {
-        Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-        None => m.analysis.speed.ok_or_else(|| {
-            InputError("no --speed given and the model has no [analysis] speed".into())
-        })?,
-    };
-    settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
-    let cases = tolerance_cases(&m, &only)?;
-    if let Some(n) = samples {
-        settings::samples(n).map_err(|e| InputError(format!("--samples {e}")))?;
-    }
-    let mc = (!no_monte_carlo).then(|| McOptions {
-        samples: samples.unwrap_or(m.analysis.samples),
-        seed: seed.unwrap_or(m.analysis.seed),
-        sampling: match sampling {
-            Some(SamplingArg::Random) => Sampling::Random,
-            Some(SamplingArg::Lhs) => Sampling::Lhs,
-            Some(SamplingArg::Sobol) => Sampling::Sobol,
-            None => m.analysis.sampling,
+    let request = Request {
+        speeds: match &speed {
+            Some(s) => Speeds::Range(
+                SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+            ),
+            None => Speeds::Model,
         },
-    });
-    let split = match &shard {
-        None => Split::Whole,
-        Some(spec) => {
-            let (k, n) = settings::shard(spec).map_err(|e| InputError(format!("--shard {e}")))?;
-            if mc.is_none() {
-                return Err(InputError(
-                    "--shard splits the Monte Carlo; it cannot go with --no-monte-carlo".into(),
-                )
-                .into());
-            }
-            if let Some(mc) = &mc
-                && n > mc.samples
-            {
-                return Err(InputError(format!(
-                    "--shard {spec}: {n} shards of {} samples would leave shards without a \
-                     sample; use at most {} shards",
-                    mc.samples, mc.samples
-                ))
-                .into());
-            }
-            Split::Shard(k, n)
-        }
+        cases: only,
+        samples,
+        seed,
+        sampling: sampling.map(|s| match s {
+            SamplingArg::Random => Sampling::Random,
+            SamplingArg::Lhs => Sampling::Lhs,
+            SamplingArg::Sobol => Sampling::Sobol,
+        }),
+        monte_carlo: !no_monte_carlo,
+        quadrature: !no_quadrature,
+        quadrature_tolerance,
+        threads,
+        shard: shard
+            .as_deref()
+            .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
+            .transpose()?,
     };
+    // The settings that need no model first: a bad flag is reported before a slow load.
+    let chosen = !request.cases.is_empty();
+    let request = request.check().map_err(|e| refused(e, &shard, chosen))?;
+    let m = model_or_governor(&model, set)?;
+    let Resolved {
+        options: opt,
+        range,
+    } = request
+        .resolve(&m, cancel.clone())
+        .map_err(|e| refused(e, &shard, chosen))?;
+    let (mc, split) = (opt.monte_carlo, opt.split.clone());
     // Fail early where the results cannot be written.
     let inputs = Inputs::new(&model.iter().collect::<Vec<_>>());
     let destination = match split {
@@ -1014,26 +1028,13 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
             Destination::Directory(protect(ResultDir::create(&output)?, inputs)?)
         }
     };
-    // A shard computes Monte Carlo samples only; `merge` runs the quadrature.
-    let quadrature =
-        (!no_quadrature && !matches!(split, Split::Shard(..))).then_some(QuadOptions {
-            tolerance: quadrature_tolerance,
-        });
-    let opt = AnalyzeOptions {
-        speeds: range.speeds().collect(),
-        cases,
-        quadrature,
-        monte_carlo: mc,
-        split,
-        threads,
-        cancel: cancel.clone(),
-    };
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
         let Destination::Shard(mut f, path) = destination else {
             unreachable!("a shard's destination is its file")
         };
         let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
+        let range = range.expect("a command-line analysis runs over a range");
         let run = RunSettings::new(&range, &mc, tolerance, *n);
         let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
             return Err(Interrupted(format!(
@@ -1054,7 +1055,15 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
     let Destination::Directory(dir) = destination else {
         unreachable!("a whole run's destination is a directory")
     };
-    write_outputs(&m, &a, mc.as_ref(), threads, display.into(), dir, &output)?;
+    write_outputs(
+        &m,
+        &a,
+        mc.as_ref(),
+        opt.threads,
+        display.into(),
+        dir,
+        &output,
+    )?;
 
     Ok(())
 }

@@ -31,7 +31,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["sampling"], false),
     (&["propagate"], false),
     (&["taylor", "quadrature", "montecarlo"], false),
-    (&["analyze", "shard"], true),
+    (&["analyze", "request", "shard"], true),
     (&["plots", "report", "results"], true),
 ];
 

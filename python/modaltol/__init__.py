@@ -54,7 +54,8 @@ def _frame(columns: Mapping[str, list]) -> pd.DataFrame:
 def _speeds(speeds: Speeds | None) -> Any:
     if speeds is None or isinstance(speeds, str):
         return speeds
-    return [float(x) for x in np.asarray(speeds, dtype=float).ravel()]
+    # `tolist` makes the Python floats in C, several times faster than a comprehension.
+    return np.asarray(speeds, dtype=float).ravel().tolist()
 
 
 def _names(names: str | Iterable[str] | None) -> list[str] | None:
@@ -171,12 +172,14 @@ class Model:
         return _frame(
             self._native.sweep(
                 _speeds(speeds),
-                transfer,
-                sensitivity,
-                _names(wrt),
-                derivatives,
-                _names(independent),
-                branch,
+                {
+                    "transfer": transfer,
+                    "sensitivity": sensitivity,
+                    "wrt": _names(wrt),
+                    "derivatives": derivatives,
+                    "independent": _names(independent),
+                    "branch": branch,
+                },
             )
         )
 
@@ -268,17 +271,19 @@ class Model:
         (``None``: one per core), the command line's rules. Ctrl-C stops it."""
         d = self._native.analyze(
             _speeds(speeds),
-            _names(cases),
-            samples,
-            seed,
-            sampling,
-            monte_carlo,
-            quadrature,
-            quadrature_tolerance,
-            threads,
-            None if output is None else str(output),
-            speed_unit,
-            frequency_unit,
+            {
+                "cases": _names(cases),
+                "samples": samples,
+                "seed": seed,
+                "sampling": sampling,
+                "monte_carlo": monte_carlo,
+                "quadrature": quadrature,
+                "quadrature_tolerance": quadrature_tolerance,
+                "threads": threads,
+                "output": None if output is None else str(output),
+                "speed_unit": speed_unit,
+                "frequency_unit": frequency_unit,
+            },
         )
         return Analysis(
             tolerance=_frame(d["tolerance"]),

@@ -1,6 +1,6 @@
 """Type stubs of the native module (see modaltol/__init__.py for the documented API)."""
 
-from typing import Any
+from typing import Any, TypedDict
 
 __version__: str
 
@@ -14,6 +14,27 @@ class SolveError(RuntimeError): ...
 
 Columns = dict[str, list[Any]]
 
+class SweepOptions(TypedDict):
+    transfer: str | None
+    sensitivity: bool
+    wrt: list[str] | None
+    derivatives: str
+    independent: list[str] | None
+    branch: str
+
+class AnalyzeOptions(TypedDict):
+    cases: list[str] | None
+    samples: int | None
+    seed: int | None
+    sampling: str | None
+    monte_carlo: bool
+    quadrature: bool
+    quadrature_tolerance: float
+    threads: int | None
+    output: str | None
+    speed_unit: str
+    frequency_unit: str
+
 class NativeModel:
     @property
     def name(self) -> str: ...
@@ -24,14 +45,7 @@ class NativeModel:
     def cases(self) -> list[str]: ...
     def check(self) -> str: ...
     def sweep(
-        self,
-        speeds: str | list[float] | None = None,
-        transfer: str | None = None,
-        sensitivity: bool = False,
-        wrt: list[str] | None = None,
-        derivatives: str = "ad",
-        independent: list[str] | None = None,
-        branch: str = "stable",
+        self, speeds: str | list[float] | None, options: SweepOptions
     ) -> Columns: ...
     def modal(
         self, speed: float, independent: list[str] | None = None, branch: str = "stable"
@@ -51,19 +65,7 @@ class NativeModel:
         wrt: list[str] | None = None,
     ) -> Columns: ...
     def analyze(
-        self,
-        speeds: str | list[float] | None = None,
-        cases: list[str] | None = None,
-        samples: int | None = None,
-        seed: int | None = None,
-        sampling: str | None = None,
-        monte_carlo: bool = True,
-        quadrature: bool = True,
-        quadrature_tolerance: float = 1e-3,
-        threads: int | None = None,
-        output: str | None = None,
-        speed_unit: str = "rad/s",
-        frequency_unit: str = "rad/s",
+        self, speeds: str | list[float] | None, options: AnalyzeOptions
     ) -> dict[str, Any]: ...
 
 def load(path: str, parameters: dict[str, float] | None = None) -> NativeModel: ...

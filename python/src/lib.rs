@@ -10,15 +10,14 @@
 //! Python's signals every 50 ms, and on Ctrl-C cancels the run ([`Cancel`]) and raises
 //! `KeyboardInterrupt` once the worker has stopped.
 
-use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::analyze::analyze;
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
-use modaltol::montecarlo::McOptions;
 use modaltol::plots::{Display, FrequencyUnit};
-use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
+use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::settings::{self, ThreadsError};
 use modaltol::study::SweepStudy;
@@ -60,6 +59,28 @@ fn model_error(py: Python<'_>, e: modaltol::model::ModelError) -> PyErr {
 /// Bad arguments (names, ranges): `ValueError`.
 fn bad(msg: impl Into<String>) -> PyErr {
     PyValueError::new_err(msg.into())
+}
+
+/// A refused analysis request in the package's spelling (the keyword's name): `ValueError`,
+/// or `RuntimeError` where the operating system refuses the threads.
+fn refused(e: RequestError) -> PyErr {
+    match e {
+        RequestError::Threads(t @ ThreadsError::Refused { .. }) => {
+            PyRuntimeError::new_err(format!("threads: {t}"))
+        }
+        RequestError::NoSpeeds | RequestError::ModelSpeeds(_) => bad(e.to_string()),
+        e => {
+            let name = match e.setting() {
+                Setting::Speeds => "speeds:",
+                Setting::Cases => "cases:",
+                Setting::Samples => "samples",
+                Setting::QuadratureTolerance => "quadrature_tolerance",
+                Setting::Threads => "threads",
+                Setting::Shard => "shard",
+            };
+            bad(format!("{name} {e}"))
+        }
+    }
 }
 
 /// Runs `work` on a worker thread with the GIL released; Ctrl-C cancels `cancel`, waits for
@@ -271,6 +292,36 @@ impl NativeModel {
     }
 }
 
+/// The keywords of `Model.sweep` (the Python wrapper passes them all, as a dict).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct SweepKeywords {
+    transfer: Option<String>,
+    sensitivity: bool,
+    wrt: Option<Vec<String>>,
+    derivatives: String,
+    independent: Option<Vec<String>>,
+    branch: String,
+}
+
+/// The keywords of `Model.analyze` (the Python wrapper passes them all, as a dict): the
+/// package's spelling of a [`Request`], with the result directory and its display units.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct AnalyzeKeywords {
+    cases: Option<Vec<String>>,
+    samples: Option<i64>,
+    seed: Option<u64>,
+    sampling: Option<String>,
+    monte_carlo: bool,
+    quadrature: bool,
+    quadrature_tolerance: f64,
+    threads: Option<i64>,
+    output: Option<PathBuf>,
+    speed_unit: String,
+    frequency_unit: String,
+}
+
 #[pymethods]
 impl NativeModel {
     /// The model's name.
@@ -360,19 +411,22 @@ impl NativeModel {
     }
 
     /// The speed sweep's table (the CLI's `sweep` columns).
-    #[pyo3(signature = (speeds=None, transfer=None, sensitivity=false, wrt=None, derivatives="ad", independent=None, branch="stable"))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (speeds, options))]
     fn sweep<'py>(
         &self,
         py: Python<'py>,
         speeds: Option<&Bound<'py, PyAny>>,
-        transfer: Option<&str>,
-        sensitivity: bool,
-        wrt: Option<Vec<String>>,
-        derivatives: &str,
-        independent: Option<Vec<String>>,
-        branch: &str,
+        options: SweepKeywords,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let SweepKeywords {
+            transfer,
+            sensitivity,
+            wrt,
+            derivatives,
+            independent,
+            branch,
+        } = options;
+        let (transfer, derivatives, branch) = (transfer.as_deref(), &*derivatives, &*branch);
         let m = self.m();
         let tf = self.transfer(transfer)?;
         let cols = SweepColumns {
@@ -532,60 +586,76 @@ impl NativeModel {
 
     /// The tolerance analysis (the CLI's `analyze`): tolerance and probability tables and the
     /// summary (JSON text); with `output`, also the CLI's result directory.
-    #[pyo3(signature = (speeds=None, cases=None, samples=None, seed=None, sampling=None, monte_carlo=true, quadrature=true, quadrature_tolerance=1e-3, threads=None, output=None, speed_unit="rad/s", frequency_unit="rad/s"))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (speeds, options))]
     fn analyze<'py>(
         &self,
         py: Python<'py>,
         speeds: Option<&Bound<'py, PyAny>>,
-        cases: Option<Vec<String>>,
-        samples: Option<i64>,
-        seed: Option<u64>,
-        sampling: Option<&str>,
-        monte_carlo: bool,
-        quadrature: bool,
-        quadrature_tolerance: f64,
-        threads: Option<i64>,
-        output: Option<PathBuf>,
-        speed_unit: &str,
-        frequency_unit: &str,
+        options: AnalyzeKeywords,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let AnalyzeKeywords {
+            cases,
+            samples,
+            seed,
+            sampling,
+            monte_carlo,
+            quadrature,
+            quadrature_tolerance,
+            threads,
+            output,
+            speed_unit,
+            frequency_unit,
+        } = options;
+        let (sampling, speed_unit, frequency_unit) =
+            (sampling.as_deref(), &*speed_unit, &*frequency_unit);
         let m = self.m();
         let display = Display {
             speed: unit(speed_unit, "speed_unit")?,
             frequency: unit(frequency_unit, "frequency_unit")?,
         };
-        let w = self.speeds_or_model(speeds, &settings::analysis_speeds)?;
-        let cases = m
-            .tolerance_cases(&cases.unwrap_or_default())
-            .map_err(|e| bad(format!("cases: {e}")))?;
-        settings::quadrature_tolerance(quadrature_tolerance)
-            .map_err(|e| bad(format!("quadrature_tolerance {e}")))?;
-        let samples = samples
-            .map(|n| settings::samples(n).map_err(|e| bad(format!("samples {e}"))))
-            .transpose()?;
-        // A negative count is refused as zero is (the command line's parser refuses it too).
-        let threads = threads.map(|n| usize::try_from(n).unwrap_or(0));
-        let threads = settings::threads(threads).map_err(|e| match e {
-            ThreadsError::Refused { .. } => PyRuntimeError::new_err(format!("threads: {e}")),
-            _ => bad(format!("threads {e}")),
-        })?;
         let sampling = match sampling {
-            None => m.analysis.sampling,
-            Some("random") => Sampling::Random,
-            Some("lhs") => Sampling::Lhs,
-            Some("sobol") => Sampling::Sobol,
+            None => None,
+            Some("random") => Some(Sampling::Random),
+            Some("lhs") => Some(Sampling::Lhs),
+            Some("sobol") => Some(Sampling::Sobol),
             Some(s) => {
                 return Err(bad(format!(
                     "sampling must be \"random\", \"lhs\" or \"sobol\", got {s:?}"
                 )));
             }
         };
-        let mc = monte_carlo.then(|| McOptions {
-            samples: samples.unwrap_or(m.analysis.samples),
-            seed: seed.unwrap_or(m.analysis.seed),
+        let request = Request {
+            speeds: match speeds {
+                None => Speeds::Model,
+                Some(s) => match s.extract::<String>() {
+                    Ok(text) => Speeds::Range(
+                        SpeedRange::parse(&text).map_err(|e| bad(format!("speeds: {e}")))?,
+                    ),
+                    Err(_) => Speeds::Values(
+                        s.extract()
+                            .map_err(|_| bad("speeds: expected \"FROM:TO:STEP\" or numbers"))?,
+                    ),
+                },
+            },
+            cases: cases.unwrap_or_default(),
+            // A negative count is refused as the rule refuses any count out of range.
+            samples: samples
+                .map(|n| settings::samples(n).map_err(|e| bad(format!("samples {e}"))))
+                .transpose()?,
+            seed,
             sampling,
-        });
+            monte_carlo,
+            quadrature,
+            quadrature_tolerance,
+            // A negative count is refused as zero is (the command line's parser refuses it too).
+            threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
+            shard: None,
+        };
+        let Resolved { options: opt, .. } = request
+            .check()
+            .and_then(|r| r.resolve(m, Cancel::new()))
+            .map_err(refused)?;
+        let (mc, threads) = (opt.monte_carlo, opt.threads);
         // Fail early where the results cannot be written.
         let dir = output
             .as_ref()
@@ -596,17 +666,6 @@ impl NativeModel {
                     .map_err(|e| bad(format!("{e}: {}", e.source)))
             })
             .transpose()?;
-        let opt = AnalyzeOptions {
-            speeds: w,
-            cases,
-            quadrature: quadrature.then_some(QuadOptions {
-                tolerance: quadrature_tolerance,
-            }),
-            monte_carlo: mc,
-            split: Split::Whole,
-            threads,
-            cancel: Cancel::new(),
-        };
         let model = &*self.model;
         let a = interruptible(py, &opt.cancel, || {
             analyze(model, &opt, &|_: &str, _: usize, _: usize| {})

@@ -1,0 +1,217 @@
+//! An analysis as it is asked for (the command line's flags, the Python keywords), checked once
+//! into [`AnalyzeOptions`]: the one place where a request's limits and the model's defaults are
+//! applied, so that both front ends accept and refuse the same requests for the same reasons.
+//!
+//! A front end parses its own spellings (a `FROM:TO:STEP` string, an array, `--shard K/N`) into
+//! a [`Request`]; [`Request::check`] applies the rules that need no model (before a model file is
+//! read, so that a bad flag is reported before a slow load), [`Checked::resolve`] the rest
+//! against the model. A refusal is a [`RequestError`] naming the setting ([`Setting`]); each
+//! front end writes that name its own way (`--samples`, `samples`).
+
+use crate::analyze::{AnalyzeOptions, Split};
+use crate::cancel::Cancel;
+use crate::model::{Model, Sampling, SpeedRange};
+use crate::montecarlo::McOptions;
+use crate::quadrature::QuadOptions;
+use crate::settings::{self, ThreadsError};
+
+/// The speeds of a request.
+#[derive(Debug, Clone, Default)]
+pub enum Speeds {
+    /// The model's `[analysis] speed`.
+    #[default]
+    Model,
+    /// A range `FROM:TO:STEP` (rad/s).
+    Range(SpeedRange),
+    /// Speeds one by one (rad/s).
+    Values(Vec<f64>),
+}
+
+/// An analysis as asked for, before it is checked (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct Request {
+    pub speeds: Speeds,
+    /// The tolerance cases to run by name (none: the model's cases, or its parameters' own
+    /// tolerances).
+    pub cases: Vec<String>,
+    /// Monte Carlo samples (`None`: the model's `[analysis] samples`).
+    pub samples: Option<usize>,
+    /// The Monte Carlo seed (`None`: the model's).
+    pub seed: Option<u64>,
+    /// How the Monte Carlo samples (`None`: the model's choice).
+    pub sampling: Option<Sampling>,
+    /// Whether the Monte Carlo runs.
+    pub monte_carlo: bool,
+    /// Whether the quadrature runs.
+    pub quadrature: bool,
+    /// The quadrature's requested error, relative to each output's σ.
+    pub quadrature_tolerance: f64,
+    /// Worker threads (`None`: one per core).
+    pub threads: Option<usize>,
+    /// This run as shard `k` (from 0) of `n` of the Monte Carlo.
+    pub shard: Option<(usize, usize)>,
+}
+
+impl Default for Request {
+    /// The model's speeds, cases and Monte Carlo settings, both methods, the quadrature to
+    /// 1e-3 of σ, one thread per core, the whole run.
+    fn default() -> Self {
+        Request {
+            speeds: Speeds::Model,
+            cases: Vec::new(),
+            samples: None,
+            seed: None,
+            sampling: None,
+            monte_carlo: true,
+            quadrature: true,
+            quadrature_tolerance: QuadOptions::default().tolerance,
+            threads: None,
+            shard: None,
+        }
+    }
+}
+
+/// The setting a refusal is about, for the front end to name in its own spelling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Setting {
+    Speeds,
+    Cases,
+    Samples,
+    QuadratureTolerance,
+    Threads,
+    Shard,
+}
+
+/// Why a request is refused. Each message leaves the setting unnamed ([`RequestError::setting`]
+/// names it).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RequestError {
+    #[error("{0}")]
+    QuadratureTolerance(String),
+    #[error("{0}")]
+    Threads(ThreadsError),
+    #[error("no speeds given and the model has no [analysis] speed")]
+    NoSpeeds,
+    /// The speeds given are refused.
+    #[error("{0}")]
+    Speeds(String),
+    /// The model's own `[analysis] speed` is refused.
+    #[error("the model's [analysis] speed: {0}")]
+    ModelSpeeds(String),
+    #[error("{0}")]
+    Cases(String),
+    #[error("{0}")]
+    Samples(String),
+    #[error("splits the Monte Carlo; it cannot go without the Monte Carlo")]
+    ShardWithoutMonteCarlo,
+    #[error(
+        "{shards} shards of {samples} samples would leave shards without a sample; use at most \
+         {samples} shards"
+    )]
+    TooManyShards { shards: usize, samples: usize },
+}
+
+impl RequestError {
+    /// The setting refused.
+    pub fn setting(&self) -> Setting {
+        match self {
+            RequestError::QuadratureTolerance(_) => Setting::QuadratureTolerance,
+            RequestError::Threads(_) => Setting::Threads,
+            RequestError::NoSpeeds | RequestError::Speeds(_) | RequestError::ModelSpeeds(_) => {
+                Setting::Speeds
+            }
+            RequestError::Cases(_) => Setting::Cases,
+            RequestError::Samples(_) => Setting::Samples,
+            RequestError::ShardWithoutMonteCarlo | RequestError::TooManyShards { .. } => {
+                Setting::Shard
+            }
+        }
+    }
+}
+
+/// A request whose model-free settings passed [`Request::check`], ready to be resolved
+/// against its model.
+#[derive(Debug, Clone)]
+pub struct Checked(Request);
+
+/// A request resolved against its model: the options to run, and the speed range asked for
+/// where one was (a shard's fingerprint records it).
+#[derive(Debug, Clone)]
+pub struct Resolved {
+    pub options: AnalyzeOptions,
+    pub range: Option<SpeedRange>,
+}
+
+impl Request {
+    /// The rules that need no model: the quadrature's tolerance, then the thread count (which
+    /// the operating system may refuse: [`ThreadsError::Refused`]).
+    pub fn check(self) -> Result<Checked, RequestError> {
+        settings::quadrature_tolerance(self.quadrature_tolerance)
+            .map_err(RequestError::QuadratureTolerance)?;
+        settings::threads(self.threads).map_err(RequestError::Threads)?;
+        Ok(Checked(self))
+    }
+}
+
+impl Checked {
+    /// Resolves the request against `model`: its speeds
+    /// (at most [`settings::MAX_ANALYSIS_SPEEDS`]), its cases, the Monte Carlo's settings (the
+    /// model's where not given) and the split. A shard runs the Monte Carlo only (`merge` runs
+    /// the quadrature). `cancel` is the run's cancellation.
+    pub fn resolve(self, model: &Model, cancel: Cancel) -> Result<Resolved, RequestError> {
+        let Checked(request) = self;
+        let (speeds, range) = match request.speeds {
+            Speeds::Model => {
+                let r = model.analysis.speed.ok_or(RequestError::NoSpeeds)?;
+                settings::analysis_speeds(r.len()).map_err(RequestError::ModelSpeeds)?;
+                (r.speeds().collect(), Some(r))
+            }
+            Speeds::Range(r) => {
+                settings::analysis_speeds(r.len()).map_err(RequestError::Speeds)?;
+                (r.speeds().collect(), Some(r))
+            }
+            Speeds::Values(v) => {
+                let v = settings::values(v).map_err(RequestError::Speeds)?;
+                settings::analysis_speeds(v.len()).map_err(RequestError::Speeds)?;
+                (v, None)
+            }
+        };
+        let cases = model
+            .tolerance_cases(&request.cases)
+            .map_err(|e| RequestError::Cases(e.to_string()))?;
+        if let Some(n) = request.samples {
+            settings::samples(n).map_err(RequestError::Samples)?;
+        }
+        let monte_carlo = request.monte_carlo.then(|| McOptions {
+            samples: request.samples.unwrap_or(model.analysis.samples),
+            seed: request.seed.unwrap_or(model.analysis.seed),
+            sampling: request.sampling.unwrap_or(model.analysis.sampling),
+        });
+        let split = match (request.shard, &monte_carlo) {
+            (None, _) => Split::Whole,
+            (Some(_), None) => return Err(RequestError::ShardWithoutMonteCarlo),
+            (Some((_, n)), Some(mc)) if n > mc.samples => {
+                return Err(RequestError::TooManyShards {
+                    shards: n,
+                    samples: mc.samples,
+                });
+            }
+            (Some((k, n)), Some(_)) => Split::Shard(k, n),
+        };
+        let quadrature = (request.quadrature && request.shard.is_none()).then_some(QuadOptions {
+            tolerance: request.quadrature_tolerance,
+        });
+        Ok(Resolved {
+            options: AnalyzeOptions {
+                speeds,
+                cases,
+                quadrature,
+                monte_carlo,
+                split,
+                threads: request.threads,
+                cancel,
+            },
+            range,
+        })
+    }
+}
