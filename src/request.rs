@@ -215,3 +215,120 @@ impl Checked {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn governor() -> Model {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/governor.toml");
+        Model::from_file(&path).expect("the shipped governor")
+    }
+
+    fn resolve(request: Request) -> Result<Resolved, RequestError> {
+        request.check()?.resolve(&governor(), Cancel::new())
+    }
+
+    #[test]
+    fn a_default_request_takes_the_models_speeds_cases_and_monte_carlo_settings() {
+        let m = governor();
+        let r = resolve(Request::default()).unwrap();
+        let range = m.analysis.speed.unwrap();
+        assert_eq!(r.range, Some(range));
+        assert_eq!(r.options.speeds, range.speeds().collect::<Vec<_>>());
+        assert_eq!(r.options.cases.len(), m.tolerance_cases(&[]).unwrap().len());
+        let mc = r.options.monte_carlo.unwrap();
+        assert_eq!(
+            (mc.samples, mc.seed, mc.sampling),
+            (m.analysis.samples, m.analysis.seed, m.analysis.sampling)
+        );
+        assert!(r.options.quadrature.is_some());
+        assert!(matches!(r.options.split, Split::Whole));
+    }
+
+    #[test]
+    fn each_refusal_names_its_setting() {
+        let refused = |request: Request| resolve(request).unwrap_err();
+        let e = refused(Request {
+            quadrature_tolerance: 1.5,
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::QuadratureTolerance);
+        let e = refused(Request {
+            threads: Some(0),
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::Threads);
+        let e = refused(Request {
+            speeds: Speeds::Values(vec![1.0, f64::NAN]),
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::Speeds);
+        let e = refused(Request {
+            speeds: Speeds::Values(vec![0.0; settings::MAX_ANALYSIS_SPEEDS + 1]),
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::Speeds);
+        let e = refused(Request {
+            cases: vec!["no such case".into()],
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::Cases);
+        let e = refused(Request {
+            samples: Some(1),
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::Samples);
+    }
+
+    #[test]
+    fn a_shard_runs_the_monte_carlo_alone_and_needs_a_sample_each() {
+        let r = resolve(Request {
+            shard: Some((1, 4)),
+            samples: Some(100),
+            ..Request::default()
+        })
+        .unwrap();
+        assert!(matches!(r.options.split, Split::Shard(1, 4)));
+        assert!(r.options.quadrature.is_none(), "merge runs the quadrature");
+        let e = resolve(Request {
+            shard: Some((0, 101)),
+            samples: Some(100),
+            ..Request::default()
+        })
+        .unwrap_err();
+        assert_eq!(
+            e,
+            RequestError::TooManyShards {
+                shards: 101,
+                samples: 100
+            }
+        );
+        let e = resolve(Request {
+            shard: Some((0, 2)),
+            monte_carlo: false,
+            ..Request::default()
+        })
+        .unwrap_err();
+        assert_eq!(e, RequestError::ShardWithoutMonteCarlo);
+    }
+
+    #[test]
+    fn given_speeds_and_settings_override_the_models() {
+        let r = resolve(Request {
+            speeds: Speeds::Values(vec![0.5, 2.0]),
+            samples: Some(50),
+            seed: Some(9),
+            sampling: Some(Sampling::Sobol),
+            quadrature: false,
+            ..Request::default()
+        })
+        .unwrap();
+        assert_eq!(r.options.speeds, vec![0.5, 2.0]);
+        assert_eq!(r.range, None);
+        let mc = r.options.monte_carlo.unwrap();
+        assert_eq!((mc.samples, mc.seed, mc.sampling), (50, 9, Sampling::Sobol));
+        assert!(r.options.quadrature.is_none());
+    }
+}
