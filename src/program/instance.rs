@@ -71,7 +71,7 @@ impl Instance<'_> {
             .get_or_init(|| self.program.residual_tape().eval_static(&self.x.borrow()))
     }
 
-    /// `F(q_R, λ)`: through `full` until the residual program is made ([`SPECIALISE_AFTER`]).
+    /// `F(q_R, λ)`: through `full` until the residual program is made ([`super::SPECIALISE_AFTER`]).
     pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
         self.set(q, lambda);
         let mut work = self.work.borrow_mut();

@@ -19,7 +19,7 @@ pub struct Linear<S: Real = f64> {
     /// `∂r_R/∂q̈_R`.
     pub mass: DMatrix<S>,
     /// `∂²Φ_k/∂q_R²` for each constraint equation `k`: how the Jacobian's `q_R` block changes
-    /// with `λ_k` (see [`Linear::shift_multipliers`]). Empty from [`Program::linear_over`]:
+    /// with `λ_k` (see [`Linear::shift_multipliers`]). Empty from [`super::Program::linear_over`]:
     /// the sensitivities and Hessians do not shift multipliers, and the 12-arm governor's
     /// twelve 13×13 matrices over dual numbers were 6 % of its sensitivities.
     pub curvature: Vec<DMatrix<S>>,
