@@ -21,9 +21,21 @@ trap 'rm -rf "$dir"' EXIT
 # A probe in a copy of the page: the title becomes "loaded N/M" once the images have decoded.
 probe='<script>window.addEventListener("load",()=>{const i=[...document.images];document.title="loaded "+i.filter(x=>x.complete\&\&x.naturalWidth>0).length+"/"+i.length;});</script></body>'
 sed "s|</body>|$probe|" "$dir/out/report.html" > "$dir/out/check.html"
+# Headless Chromium has been seen to hang for good (no output, no exit) on one run in many:
+# each run is bounded, and a run that times out is tried once more before the check fails.
+browse() {
+  local attempt
+  for attempt in 1 2; do
+    if timeout -k 10 120 chromium "$@"; then
+      return 0
+    fi
+    echo "check_report: chromium did not finish (attempt $attempt of 2)" >&2
+  done
+  return 1
+}
 flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking
        --disable-component-update --disable-sync --user-data-dir="$dir/profile" --virtual-time-budget=10000)
-dom=$(chromium "${flags[@]}" --dump-dom "file://$dir/out/check.html" 2>/dev/null)
+dom=$(browse "${flags[@]}" --dump-dom "file://$dir/out/check.html" 2>/dev/null)
 title=$(printf '%s' "$dom" | grep -o '<title>[^<]*</title>' | head -1)
 loaded=$(printf '%s' "$title" | sed -n 's|.*loaded \([0-9]*\)/\([0-9]*\).*|\1 \2|p')
 read -r ok total <<<"${loaded:-0 -1}"
@@ -32,7 +44,10 @@ if [ "$total" -lt 10 ] || [ "$ok" != "$total" ]; then
   exit 1
 fi
 shot=${CHECK_REPORT_SCREENSHOT:-$dir/shot.png}
-chromium "${flags[@]}" --window-size=1100,2400 --screenshot="$shot" "file://$dir/out/report.html" >/dev/null 2>&1
+browse "${flags[@]}" --window-size=1100,2400 --screenshot="$shot" "file://$dir/out/report.html" >/dev/null 2>&1 || {
+  echo "check_report: FAILED, chromium did not take the screenshot" >&2
+  exit 1
+}
 size=$(stat -c %s "$shot")
 if [ "$size" -lt 50000 ]; then
   echo "check_report: FAILED, the screenshot is only $size bytes" >&2
