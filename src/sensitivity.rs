@@ -413,22 +413,21 @@ impl Shift<'_> {
             PointError::Equilibrium(crate::equilibrium::EquilibriumError::SingularJacobian {
                 iterations: 0,
             });
-        let column = |b: usize| {
-            self.wrt
-                .iter()
-                .position(|&w| w == b)
-                .expect("b is a variable")
-        };
+        // The columns of `dp` of the group's variables, found once.
+        let columns: Vec<usize> = (group.iter())
+            .map(|&b| {
+                self.wrt
+                    .iter()
+                    .position(|&w| w == b)
+                    .expect("b is a variable")
+            })
+            .collect();
         implicit::correct(
             &mut z,
             1,
             |z| match self.dp {
                 Some(dp) => (0..dp.len() / nw)
-                    .map(|r| {
-                        D::seeded(0.0, |k| {
-                            group.get(k).map_or(0.0, |&b| dp[r * nw + column(b)])
-                        })
-                    })
+                    .map(|r| D::seeded(0.0, |k| columns.get(k).map_or(0.0, |&c| dp[r * nw + c])))
                     .collect(),
                 None => {
                     for (k, &i) in free.iter().enumerate() {
