@@ -25,14 +25,14 @@ fn bench(c: &mut Criterion) {
         ("multi_arm_governor.toml", 1.595, 5.0),
     ] {
         let model = example(file);
-        let p = model.nominal();
+        let p = model.model().nominal();
         let name = file.trim_end_matches(".toml");
         // A point started from the previous speed's solution, as in a sweep.
         let q0 = point(
             &model,
             &p,
             speed,
-            &initial_guess(&model, &p, speed).unwrap(),
+            &initial_guess(model.model(), &p, speed).unwrap(),
             &Options::default(),
         )
         .unwrap()
@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
 
 /// The passes, a point and a sweep of one model, under `name`.
 fn passes(c: &mut Criterion, model: &Compiled, name: &str, speed: f64, to: f64, q0: &[f64]) {
-    let p = model.nominal();
+    let p = model.model().nominal();
     // The recorded program's passes at that point: the residual, Newton's Jacobian, and
     // the exact evaluation (Jacobian, C and M in one pass).
     if let Some(inst) = model

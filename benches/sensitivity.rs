@@ -19,13 +19,13 @@ fn bench(c: &mut Criterion) {
                 .join(file),
         )
         .unwrap();
-        let p = model.nominal();
-        let wrt = model.toleranced();
+        let p = model.model().nominal();
+        let wrt = model.model().toleranced();
         let tf = Some(TransferAt::at_speed(
-            &model.analysis.transfer.unwrap(),
+            &model.model().analysis.transfer.unwrap(),
             speed,
         ));
-        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
         let q = pt.equilibrium.q.clone();
         // The point interpreted, as a single point is (the ratio the goal is about).

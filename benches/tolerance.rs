@@ -18,6 +18,7 @@ fn bench(c: &mut Criterion) {
     .unwrap();
     let speeds: Vec<f64> = (0..501).map(|i| i as f64 * 0.01).collect();
     let springs: Vec<_> = model
+        .model()
         .analysis
         .cases
         .iter()
@@ -41,6 +42,7 @@ fn bench(c: &mut Criterion) {
         (
             "quadrature_501_speeds_all3",
             model
+                .model()
                 .analysis
                 .cases
                 .iter()

@@ -11,6 +11,7 @@ fn main() {
     let mc = std::env::args().nth(1).is_some_and(|s| s == "mc");
     let model = Compiled::from_file(std::path::Path::new("examples/governor.toml")).unwrap();
     let springs: Vec<_> = model
+        .model()
         .analysis
         .cases
         .iter()

@@ -11,14 +11,15 @@ fn main() {
     let speed: f64 = args.get(2).map_or(1.595, |s| s.parse().unwrap());
     let sens = args.get(3).is_some_and(|s| s == "sens");
     let model = Compiled::from_file(std::path::Path::new(file)).unwrap();
-    let p = model.nominal();
-    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let p = model.model().nominal();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let tf = model
+        .model()
         .analysis
         .transfer
         .map(|t| TransferAt::at_speed(&t, speed));
-    let wrt = model.toleranced();
+    let wrt = model.model().toleranced();
     let mut n = 0;
     for _ in 0..3000 {
         if sens {

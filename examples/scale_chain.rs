@@ -45,15 +45,15 @@ fn measure(n: usize) -> [f64; 5] {
     let cold = best(&mut || {
         // A fresh model each time: the recording is part of a cold point.
         let model = Compiled::from_str(&text, "chain.toml").unwrap();
-        let p = model.nominal();
+        let p = model.model().nominal();
         let t = Instant::now();
-        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
         point(&model, &p, speed, &q0, &Options::default()).unwrap();
         t.elapsed().as_secs_f64()
     });
     let cold_peak = peak_mb();
     let model = Compiled::from_str(&text, "chain.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let swept = best(&mut || {
         let mut sweep = Sweep::new(&model, p.clone(), Options::default());
         sweep.step(0.0).unwrap();
@@ -63,9 +63,9 @@ fn measure(n: usize) -> [f64; 5] {
         }
         t.elapsed().as_secs_f64() / 19.0
     });
-    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
-    let wrt = model.toleranced();
+    let wrt = model.model().toleranced();
     let sens = best(&mut || {
         let t = Instant::now();
         analytic(&model, &p, &pt, &wrt, None).unwrap();
@@ -100,8 +100,8 @@ fn main() {
             let model = Compiled::from_str(&text, "chain.toml")
                 .unwrap()
                 .with_route(route);
-            let p = model.nominal();
-            let q0 = initial_guess(&model, &p, 5.0).unwrap();
+            let p = model.model().nominal();
+            let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
             point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
         }
         return;
@@ -112,9 +112,9 @@ fn main() {
         let n = args[1].parse().unwrap();
         let text = with_joint_dampers(&chain(n), 1e-3);
         let model = Compiled::from_str(&text, "chain.toml").unwrap();
-        let p = model.nominal();
+        let p = model.model().nominal();
         let t = Instant::now();
-        let q0 = initial_guess(&model, &p, 5.0).unwrap();
+        let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
         let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
         let overdamped = pt
             .modes
@@ -145,8 +145,8 @@ fn main() {
         for _ in 0..rounds {
             // A fresh model each round: `problem` records its program.
             let model = Compiled::from_str(&text, "model.toml").unwrap();
-            let p = model.nominal();
-            let q0 = initial_guess(&model, &p, 5.0).unwrap();
+            let p = model.model().nominal();
+            let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
             record = record.min(time(&mut || {
                 model.problem(&p, 5.0, &q0).unwrap();
             }));
@@ -170,8 +170,8 @@ fn main() {
         // parameters at one point (the second-order method's passes), best of 3.
         let n = args[1].parse().unwrap();
         let model = Compiled::from_str(&chain(n), "chain.toml").unwrap();
-        let p = model.nominal();
-        let q0 = initial_guess(&model, &p, 5.0).unwrap();
+        let p = model.model().nominal();
+        let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
         let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
         let wrt: Vec<usize> = (0..p.len()).collect();
         let outs = outputs(pt.modes.len(), false);

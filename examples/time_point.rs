@@ -31,9 +31,9 @@ fn main() {
         .nth(1)
         .unwrap_or_else(|| "examples/governor.toml".into());
     let model = Compiled::from_file(std::path::Path::new(&file)).unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let speed = 1.595;
-    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let program = model.program(&p, speed, &q).unwrap();
@@ -56,10 +56,11 @@ fn main() {
     };
     let [linear, residual, cold] = passes();
     let tf = model
+        .model()
         .analysis
         .transfer
         .map(|t| TransferAt::at_speed(&t, speed));
-    let wrt = model.toleranced();
+    let wrt = model.model().toleranced();
     let sens = best(2000, || {
         black_box(analytic(&model, &p, &pt, &wrt, tf).unwrap());
     });

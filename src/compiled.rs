@@ -15,7 +15,6 @@ use crate::mechanics::{System, steady_speeds};
 use crate::model::{FieldError, Model, ModelError};
 use crate::program::{Program, Recorded};
 use crate::real::Real;
-use std::ops::Deref;
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -39,14 +38,6 @@ pub struct Compiled {
     model: Model,
     route: Route,
     program: OnceLock<Option<Program>>,
-}
-
-impl Deref for Compiled {
-    type Target = Model;
-
-    fn deref(&self) -> &Model {
-        &self.model
-    }
 }
 
 impl From<Model> for Compiled {
@@ -177,9 +168,14 @@ impl Compiled {
     /// The equilibrium solve at parameters `p` and `speed` from near `q0`, of the equations
     /// [`Compiled::at`] gives.
     pub fn problem(&self, p: &[f64], speed: f64, q0: &[f64]) -> Result<Problem<'_>, FieldError> {
-        let names = self.coordinates.iter().map(|c| c.name.as_str()).collect();
+        let names = self
+            .model
+            .coordinates
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
         let qd = steady_speeds(&self.model, p, speed)?;
-        let mut problem = Problem::new(self.at(p, speed, q0)?, qd, self.driven(), names);
+        let mut problem = Problem::new(self.at(p, speed, q0)?, qd, self.model.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
         Ok(problem)
     }

@@ -157,7 +157,13 @@ fn expand<J: Jet>(
     let lambda = &z[nf..];
     let lin = equations
         .linearize(&q, lambda, &pt.linear.independent, None)?
-        .with_ports(ports_at(model, seeded, J::from(pt.speed), &q, free)?);
+        .with_ports(ports_at(
+            model.model(),
+            seeded,
+            J::from(pt.speed),
+            &q,
+            free,
+        )?);
     let mats = (&lin.m, &lin.c, &lin.k);
     let one_dof = lin.m.nrows() == 1;
     // Per mode: ω_d, ζ and D, or why not.

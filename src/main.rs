@@ -769,7 +769,7 @@ fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()> {
     let CheckArgs { model } = args;
     let m = load(&model, set)?;
     let mut w = Sink::to(&None, &Inputs::default())?;
-    write!(w, "{}", report::check_summary(&m))?;
+    write!(w, "{}", report::check_summary(m.model()))?;
     w.finish()?;
 
     Ok(())
@@ -788,28 +788,28 @@ fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
     let m = load(&model, set)?;
     settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let opt = Options {
-        independent: independent(&m, &ind)?,
+        independent: independent(m.model(), &ind)?,
         no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
-    let p = m.nominal();
-    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let p = m.model().nominal();
+    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
     let result = point_at(&m, &p, speed, &opt);
     stop_if_cancelled(cancel, &output)?;
     match format {
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::modal_json(&m, speed, &result))?
+            serde_json::to_string_pretty(&report::modal_json(m.model(), speed, &result))?
         )?,
-        Format::Table => write!(w, "{}", report::modal_table(&m, speed, &result))?,
+        Format::Table => write!(w, "{}", report::modal_table(m.model(), speed, &result))?,
         Format::Csv => {
             let rows = match &result {
                 Ok(pt) => report::modes_rows(pt),
-                Err(e) => report::modes_failed_rows(&m, speed, e),
+                Err(e) => report::modes_failed_rows(m.model(), speed, e),
             };
-            write_csv(&mut w, &report::modes_header(&m), &rows)?
+            write_csv(&mut w, &report::modes_header(m.model()), &rows)?
         }
     }
     w.finish()?;
@@ -836,30 +836,30 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
     let m = load(&model, set)?;
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-        None => m.analysis.speed.ok_or_else(|| {
+        None => m.model().analysis.speed.ok_or_else(|| {
             InputError("no --speed given and the model has no [analysis] speed".into())
         })?,
     };
     let tf = tspec
         .as_deref()
-        .map(|s| parse_transfer(&m, s))
+        .map(|s| parse_transfer(m.model(), s))
         .transpose()?;
     let cols = SweepColumns {
         transfer: tf.is_some(),
         wrt: if sens {
-            design_variables(&m, &wrt)?
+            design_variables(m.model(), &wrt)?
         } else {
             Vec::new()
         },
     };
     let opt = Options {
-        independent: independent(&m, &ind)?,
+        independent: independent(m.model(), &ind)?,
         no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
     let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
     let mut csv = csv::Writer::from_writer(Sink::to(&output, &Inputs::new(&[&model]))?);
-    csv.write_record(report::sweep_header(&m, &cols))?;
+    csv.write_record(report::sweep_header(m.model(), &cols))?;
     let n = range.len();
     // Long sweeps (sensitivities at each speed, or many speeds) report their progress.
     let progress = (sens || n >= 2000).then(progress_printer);
@@ -877,7 +877,7 @@ fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
         if r.is_err() {
             failed += 1;
         }
-        for row in report::sweep_rows(&m, &cols, w, &r, &extras) {
+        for row in report::sweep_rows(m.model(), &cols, w, &r, &extras) {
             csv.write_record(&row)?;
         }
         if let Some(p) = &progress {
@@ -917,14 +917,14 @@ fn sensitivity_command(
     } = args;
     let m = load(&model, set)?;
     settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
-    let wrt = design_variables(&m, &wrt)?;
+    let wrt = design_variables(m.model(), &wrt)?;
     let tf = match tspec.as_deref() {
-        Some(s) => Some(parse_transfer(&m, s)?),
-        None => m.analysis.transfer,
+        Some(s) => Some(parse_transfer(m.model(), s)?),
+        None => m.model().analysis.transfer,
     };
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
-    let p = m.nominal();
-    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let p = m.model().nominal();
+    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let at = tf.map(|t| TransferAt::at_speed(&t, speed));
@@ -942,18 +942,23 @@ fn sensitivity_command(
             w,
             "{}",
             serde_json::to_string_pretty(&report::sensitivity_json(
-                &m, speed, method, &pt, &s, why
+                m.model(),
+                speed,
+                method,
+                &pt,
+                &s,
+                why
             ))?
         )?,
         Format::Table => write!(
             w,
             "{}",
-            report::sensitivity_table(&m, speed, method, &pt, &s, why)
+            report::sensitivity_table(m.model(), speed, method, &pt, &s, why)
         )?,
         Format::Csv => write_csv(
             &mut w,
             &report::SENSITIVITY_HEADER,
-            &report::sensitivity_rows(&m, &pt, &s, why),
+            &report::sensitivity_rows(m.model(), &pt, &s, why),
         )?,
     }
     w.finish()?;
@@ -1010,7 +1015,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
         options: opt,
         range,
     } = request
-        .resolve(&m, cancel.clone())
+        .resolve(m.model(), cancel.clone())
         .map_err(|e| refused(e, &shard, chosen))?;
     let (mc, split) = (opt.monte_carlo, opt.split.clone());
     // Fail early where the results cannot be written.
@@ -1036,7 +1041,7 @@ fn analyze_command(args: AnalyzeArgs, set: &[(String, f64)], cancel: &Cancel) ->
         let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
         let range = range.expect("a command-line analysis runs over a range");
         let run = RunSettings::new(&range, &mc, tolerance, *n);
-        let Some(file) = ShardFile::of_analysis(&m, &opt.cases, &a, &run, *k) else {
+        let Some(file) = ShardFile::of_analysis(m.model(), &opt.cases, &a, &run, *k) else {
             return Err(Interrupted(format!(
                 "{} not written (a shard is complete or absent)",
                 path.display()
@@ -1078,9 +1083,9 @@ fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Cancel) -> Res
         display,
     } = args;
     let m = model_or_governor(&model, set)?;
-    let cases = tolerance_cases(&m, &only)?;
-    let (first, states) =
-        modaltol::shard::read_all(&m, &cases, &shards).map_err(|e| InputError(e.to_string()))?;
+    let cases = tolerance_cases(m.model(), &only)?;
+    let (first, states) = modaltol::shard::read_all(m.model(), &cases, &shards)
+        .map_err(|e| InputError(e.to_string()))?;
     let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
     settings::analysis_speeds(range.len()).map_err(InputError)?;
     let mc = McOptions {
@@ -1135,6 +1140,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<
         }
         (Some(spec), None) => {
             let tf = m
+                .model()
                 .parse_response(spec)
                 .map_err(|e| InputError(format!("--transfer {spec}: {e}")))?;
             (tf, output.map(PathBuf::from).or(out))
@@ -1148,12 +1154,12 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<
                  `--transfer input={inp},output={outp}`; -o/--output now names the CSV file"
             );
             (
-                parse_transfer(&m, &format!("input={inp},output={outp}"))?,
+                parse_transfer(m.model(), &format!("input={inp},output={outp}"))?,
                 out,
             )
         }
         (None, None) => {
-            let tf = m.analysis.transfer.ok_or_else(|| {
+            let tf = m.model().analysis.transfer.ok_or_else(|| {
                 InputError(
                     "frf needs --transfer input=NAME,output=NAME (the model's [analysis] has \
                      no transfer function)"
@@ -1165,10 +1171,10 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<
     };
     settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
-    let wrt = design_variables(&m, &wrt)?;
+    let wrt = design_variables(m.model(), &wrt)?;
     let mut csv = csv::Writer::from_writer(Sink::to(&file, &Inputs::new(&[&model]))?);
-    let p = m.nominal();
-    initial_guess(&m, &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let p = m.model().nominal();
+    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
     let pt = point_at(&m, &p, speed, &Options::default())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     // Stops at the frequency after a signal.
@@ -1176,7 +1182,7 @@ fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<
     let rows = sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, frequencies)
         .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     stop_if_cancelled(cancel, &file)?;
-    csv.write_record(report::frf_header(&m, &wrt))?;
+    csv.write_record(report::frf_header(m.model(), &wrt))?;
     for row in report::frf_rows(&pt.linear, &rows) {
         csv.write_record(&row)?;
     }

@@ -389,7 +389,11 @@ impl Sampler {
             })
             .collect();
         Sampler {
-            map: DesignMap::new(study.model.nominal(), study.vars.clone(), spread.clone()),
+            map: DesignMap::new(
+                study.model.model().nominal(),
+                study.vars.clone(),
+                spread.clone(),
+            ),
             dims: n,
             opt,
             strata,
@@ -604,7 +608,7 @@ impl MonteCarlo {
         let mut tally: Vec<(String, usize, f64)> = run.pool.install(|| {
             (0..samples)
                 .into_par_iter()
-                .filter_map(|i| model.admissible(&sampler.parameters(i)).err())
+                .filter_map(|i| model.model().admissible(&sampler.parameters(i)).err())
                 .fold(Vec::new, |mut t: Vec<(String, usize, f64)>, d| {
                     match t.iter_mut().find(|x| x.0 == d.reason) {
                         Some(x) => x.1 += 1,

@@ -106,8 +106,8 @@ impl<'a> Study<'a> {
     /// Failed speeds are recorded in [`Study::failures`] and the run goes on; a cancelled run
     /// leaves the speeds after it as failures ("interrupted").
     pub fn build(model: &'a Compiled, vars: Vec<usize>, speeds: Vec<f64>, run: &Run) -> Self {
-        let transfer = model.analysis.transfer;
-        let p = model.nominal();
+        let transfer = model.model().analysis.transfer;
+        let p = model.model().nominal();
         let n = speeds.len();
         let slots: Vec<Mutex<Option<Result<LocalModel, String>>>> =
             (0..n).map(|_| Mutex::new(None)).collect();

@@ -55,7 +55,7 @@ pub fn write(
     dir.write(
         "tolerance.csv",
         &csv_bytes(
-            &report::tolerance_header(m, a),
+            &report::tolerance_header(m.model(), a),
             &report::tolerance_rows(a, partial),
         ),
     )?;
@@ -63,7 +63,7 @@ pub fn write(
         "probabilities.csv",
         &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
     )?;
-    let (plots, critical) = plots::plots(m, a, display);
+    let (plots, critical) = plots::plots(m.model(), a, display);
     let fonts = plots::fonts();
     // Rendered on the run's threads (a big model's hundreds of plots took longer to render than
     // its analysis), written in order.
@@ -89,7 +89,7 @@ pub fn write(
     dir.write(
         "report.html",
         report::report_html(
-            m,
+            m.model(),
             a,
             &plots.iter().collect::<Vec<_>>(),
             &critical,
@@ -98,7 +98,7 @@ pub fn write(
         )
         .as_bytes(),
     )?;
-    let summary = report::summary_json(m, a, mc, threads);
+    let summary = report::summary_json(m.model(), a, mc, threads);
     dir.write(
         "summary.json",
         serde_json::to_string_pretty(&summary)

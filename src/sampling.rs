@@ -89,7 +89,7 @@ pub fn sample_sweep(
         ..Options::default()
     };
     // A design that cannot exist (a negative mass, an indefinite inertia) fails at every speed.
-    if model.admissible(&p).is_err() {
+    if model.model().admissible(&p).is_err() {
         for i in 0..speeds.len() {
             visit(i, None);
         }

@@ -454,7 +454,7 @@ impl Shift<'_> {
             .collect();
         let linear = equations
             .linearize(&q, lambda, &pt.linear.independent, None)?
-            .with_ports(ports_at(self.model, &pd, D::from(speed), &q, free)?);
+            .with_ports(ports_at(self.model.model(), &pd, D::from(speed), &q, free)?);
         for (k, (&b, d_equilibrium)) in group.iter().zip(dq).enumerate() {
             out.push(DualLinearization {
                 param: b,

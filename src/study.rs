@@ -38,7 +38,7 @@ impl<'a> SweepStudy<'a> {
         derivatives: Derivatives,
     ) -> Self {
         SweepStudy {
-            sweep: Sweep::new(model, model.nominal(), options),
+            sweep: Sweep::new(model, model.model().nominal(), options),
             model,
             transfer,
             wrt,
@@ -57,7 +57,7 @@ impl<'a> SweepStudy<'a> {
             extras.transfer_defect =
                 t.and_then(|t| transfer_defect(&pt.linear, t.omega, extras.transfer.as_ref()));
             if !self.wrt.is_empty() {
-                let p = self.model.nominal();
+                let p = self.model.model().nominal();
                 match sensitivities(self.model, &p, pt, &self.wrt, t, self.derivatives) {
                     Ok(s) => extras.sensitivity = Some(s),
                     Err(e) => result = Err(e),

@@ -232,7 +232,7 @@ pub fn point_at(
     speed: f64,
     opt: &Options,
 ) -> Result<Point, PointError> {
-    let q0 = initial_guess(model, p, speed)?;
+    let q0 = initial_guess(model.model(), p, speed)?;
     let mut pt = point(model, p, speed, &q0, opt)?;
     pt.branch.origin = Origin::InitialGuess;
     Ok(pt)
@@ -298,6 +298,7 @@ pub fn point_from(
             return e;
         }
         let owners: Vec<&str> = model
+            .model()
             .constraints
             .iter()
             .flat_map(|c| std::iter::repeat_n(c.name.as_str(), c.kind.equations()))
@@ -306,11 +307,11 @@ pub fn point_from(
         names.dedup();
         EquilibriumError::RedundantConstraints {
             names,
-            rank: model.n_constraints() - redundant.len(),
-            equations: model.n_constraints(),
+            rank: model.model().n_constraints() - redundant.len(),
+            equations: model.model().n_constraints(),
         }
     })?;
-    let mut first = analyse(model, p, &problem, solved, opt)?;
+    let mut first = analyse(model.model(), p, &problem, solved, opt)?;
     if first.stable() {
         return Ok(first);
     }
@@ -341,7 +342,7 @@ pub fn point_from(
     // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep that
     // fell onto the unstable equilibrium returns to its own branch), else the side of the
     // model's initial guess (then the positive side).
-    let guess = initial_guess(model, p, speed)?;
+    let guess = initial_guess(model.model(), p, speed)?;
     let side = |q: &[f64], dir: &[f64]| -> f64 {
         free.iter()
             .enumerate()
@@ -378,7 +379,7 @@ pub fn point_from(
                     continue;
                 }
                 let own_side = side(&eq.q, dir) * s > 0.0;
-                if let Ok(pt) = analyse(model, p, &problem, solved, opt)
+                if let Ok(pt) = analyse(model.model(), p, &problem, solved, opt)
                     && pt.stable()
                 {
                     let kind = BranchKind::Switched {
@@ -637,7 +638,7 @@ impl<'a> Sweep<'a> {
         })
         .flatten();
         let fallback = std::iter::once_with(|| {
-            initial_guess(self.model, &self.params, speed).map(|q| Guess {
+            initial_guess(self.model.model(), &self.params, speed).map(|q| Guess {
                 q,
                 lambda: None,
                 jacobian: None,

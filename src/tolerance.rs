@@ -255,7 +255,7 @@ impl Spread {
         let mut sigma = vec![0.0; n];
         let mut distribution = vec![Distribution::Normal; n];
         for (i, &b) in vars.iter().enumerate() {
-            let par = &model.parameters[b];
+            let par = &model.model().parameters[b];
             distribution[i] = par.distribution;
             if let Some((_, t)) = case.tolerances.iter().find(|(p, _)| *p == b) {
                 let half = t.absolute(par.value);

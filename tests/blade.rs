@@ -236,7 +236,7 @@ fn an_overdamped_long_chain_pairs_each_modes_two_real_roots() {
 fn a_big_program_shares_its_sensitivity_pass_to_the_bit() {
     use modaltol::sensitivity::dual_linearizations;
     let model = Compiled::from_str(&blade(40), "blade40.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let pt = solve(&model, 5.0, false);
     let wrt = [0, 1, 2];
     let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();

@@ -61,10 +61,10 @@ fn critical(m: f64, l: f64) -> f64 {
 fn the_branch_followed_does_not_depend_on_the_step_and_is_the_stable_cone() {
     for (m, l, c) in [(1.0, 0.5, 0.01), (0.4, 1.0, 0.05), (3.0, 0.3, 0.002)] {
         let model = Compiled::from_str(&conical(m, l, c), "cone.toml").unwrap();
-        let ball = model.coordinate("ball.rx").unwrap();
+        let ball = model.model().coordinate("ball.rx").unwrap();
         let critical = critical(m, l);
         for step in [0.05, 0.1, 0.25] {
-            let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+            let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
             let n = (1.6 * critical / step).round() as usize;
             for i in 0..=n {
                 let w = step * i as f64;
@@ -106,7 +106,7 @@ fn the_branch_followed_does_not_depend_on_the_step_and_is_the_stable_cone() {
 #[test]
 fn modal_takes_the_stable_branch_unless_asked_and_says_which_in_every_format() {
     let model = Compiled::from_str(&conical(1.0, 0.5, 0.01), "cone.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let stable = point_at(&model, &p, 6.0, &Options::default()).unwrap();
     assert!(stable.stable());
     assert_eq!(stable.branch.as_str(), "switched");
@@ -200,7 +200,7 @@ fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
     for speeds in [vec![6.0, 7.0, 8.0], vec![0.0, 2.0, 4.0, 6.0, 7.0, 8.0]] {
         let opt = AnalyzeOptions {
             speeds: speeds.clone(),
-            cases: model.analysis.cases.clone(),
+            cases: model.model().analysis.cases.clone(),
             quadrature: Some(QuadOptions::default()),
             monte_carlo: Some(McOptions {
                 samples: 200,

@@ -197,7 +197,11 @@ fn one_mechanism_cut_at_three_places_gives_the_same_eigenvalues() {
     assert_eq!(
         models
             .iter()
-            .map(|m| (m.coordinates.len(), m.n_constraints(), m.dof()))
+            .map(|m| (
+                m.model().coordinates.len(),
+                m.model().n_constraints(),
+                m.model().dof()
+            ))
             .collect::<Vec<_>>(),
         [(7, 5, 1), (5, 3, 1), (7, 5, 1)]
     );

@@ -25,8 +25,8 @@ fn redundant_governor() -> Compiled {
 #[test]
 fn redundant_cut_joints_are_named_at_every_speed() {
     let model = redundant_governor();
-    assert_eq!(model.dof(), 1);
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    assert_eq!(model.model().dof(), 1);
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
     for w in [0.5, 1.0, 2.0] {
         let err = sweep
             .step(w)
@@ -93,7 +93,7 @@ point2 = [1.0, 0, 0]
 length = 0.2
 "#;
     let model = Compiled::from_str(text, "open_loop.toml").unwrap();
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
     for w in [0.0, 0.5, 1.0] {
         let err = sweep.step(w).expect_err("the loop cannot close");
         let msg = err.to_string();
@@ -114,12 +114,12 @@ fn repeated_eigenvalues_give_two_identical_modes() {
             "mass = 0\ninertia = [0, 0, 0]",
         );
     let model = Compiled::from_str(&text, "isotropic.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let pt = point(
         &model,
         &p,
         0.0,
-        &initial_guess(&model, &p, 0.0).unwrap(),
+        &initial_guess(model.model(), &p, 0.0).unwrap(),
         &Options::default(),
     )
     .unwrap();
@@ -156,7 +156,7 @@ fn an_unstable_equilibrium_is_reported_as_such() {
         no_branch_switch: true,
         ..Default::default()
     };
-    let pt = point(&model, &model.nominal(), 4.5, &[0.0, 0.0], &opt).unwrap();
+    let pt = point(&model, &model.model().nominal(), 4.5, &[0.0, 0.0], &opt).unwrap();
     assert_eq!(pt.modes[0].class, ModeClass::Unstable);
     assert!(pt.modes[0].root.lambda.re > 0.0 && !pt.stable());
 }
@@ -179,9 +179,9 @@ fn an_arm_hinged_about_the_spin_axis_is_a_rigid_body_mode_solved_fast() {
         &text[k + axis.len()..]
     );
     let model = Compiled::from_str(&text, "neutral.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     for w in [0.5, 1.0, 2.0] {
-        let q0 = initial_guess(&model, &p, w).unwrap();
+        let q0 = initial_guess(model.model(), &p, w).unwrap();
         let pt = point(&model, &p, w, &q0, &Options::default()).expect("a neutral equilibrium");
         assert!(
             pt.equilibrium.iterations < 20,

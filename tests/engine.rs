@@ -21,7 +21,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 #[test]
 fn pendulum_damped_frequency_matches_closed_form_on_both_branches() {
     let model = example("rotating_pendulum.toml");
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
     let (i, c) = (1.0, 3.0);
     let mut overdamped = Vec::new();
     for s in 0..=600 {
@@ -66,7 +66,7 @@ fn pendulum_hanging_position_loses_stability_at_sqrt_3g_over_2l() {
         no_branch_switch: true,
         ..Default::default()
     };
-    let p = model.nominal();
+    let p = model.model().nominal();
     let unstable = |w: f64| {
         let pt = point(&model, &p, w, &[0.0, 0.0], &hanging).unwrap();
         assert!(pt.equilibrium.q[1].abs() < 1e-12);
@@ -126,8 +126,8 @@ fn governor_collar_height(w: f64) -> f64 {
 #[test]
 fn governor_collar_height_matches_planar_energy_balance() {
     let model = example("governor.toml");
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
-    let slide = model.coordinate("slide").unwrap();
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
+    let slide = model.model().coordinate("slide").unwrap();
     for s in 0..=24 {
         let w = 0.5 * s as f64;
         let p = sweep.step(w).unwrap();
@@ -145,7 +145,7 @@ fn governor_collar_height_matches_planar_energy_balance() {
     }
     // Haug's operating point: Ω = 11.0174 rad/s holds the arms at 45° (spring at free length).
     let p = at(&model, 11.0174, &Options::default());
-    assert!(p.equilibrium.q[model.coordinate("arm1").unwrap()].abs() < 1e-4);
+    assert!(p.equilibrium.q[model.model().coordinate("arm1").unwrap()].abs() < 1e-4);
 }
 
 #[test]
@@ -155,11 +155,14 @@ fn governor_eigenvalues_independent_of_coordinate_choice() {
         let mut roots = Vec::new();
         for name in ["slide", "arm1", "arm2"] {
             let opt = Options {
-                independent: Some(vec![model.coordinate(name).unwrap()]),
+                independent: Some(vec![model.model().coordinate(name).unwrap()]),
                 ..Default::default()
             };
             let p = at(&model, w, &opt);
-            assert_eq!(p.linear.independent, vec![model.coordinate(name).unwrap()]);
+            assert_eq!(
+                p.linear.independent,
+                vec![model.model().coordinate(name).unwrap()]
+            );
             roots.push((p.modes[0].root.lambda, p.modes[0].partner.lambda));
         }
         for r in &roots[1..] {
@@ -261,11 +264,11 @@ fn linearisation_matches_finite_differences_of_reduced_equations() {
         let model = example(file);
         for w in speeds {
             let pt = at(&model, w, &Options::default());
-            let sys = System::new(&model, &model.nominal(), w).unwrap();
-            let free = model.free();
+            let sys = System::new(model.model(), &model.model().nominal(), w).unwrap();
+            let free = model.model().free();
             let ind = pt.linear.independent.clone();
             let red = Reduced {
-                model: &model,
+                model: model.model(),
                 lifted: Lifted::new(sys.clone()),
                 qd_drive: sys.steady_speeds(),
                 sys,
@@ -305,7 +308,7 @@ fn linearisation_matches_finite_differences_of_reduced_equations() {
 /// Integrates the full nonlinear pendulum (RK4) from a small perturbation and measures ω_d
 /// (zero crossings) and ζ (decay of successive extrema).
 fn pendulum_time_response(model: &Compiled, w: f64, theta0: f64) -> (f64, f64) {
-    let sys = System::new(model, &model.nominal(), w).unwrap();
+    let sys = System::new(model.model(), &model.model().nominal(), w).unwrap();
     let lifted = Lifted::new(sys);
     let accel = |t: f64, th: f64, thd: f64| {
         let q = [w * t, th];
@@ -427,7 +430,7 @@ fn gravity_off_the_spin_axis_has_no_steady_state() {
     let text = example_text("rotating_pendulum.toml");
     let text = text.replace("gravity = [0, -9.80665, 0]", "gravity = [-3, -9, 0]");
     let model = Compiled::from_str(&text, "tilted.toml").unwrap();
-    let p = model.nominal();
+    let p = model.model().nominal();
     // Wherever the spin angle starts, including where the residual is stationary in it
     // (cos q_D at 0 and π) and where the tilt lies across the swing plane (π/2).
     // Both routes (recorded program, direct evaluation).
@@ -453,14 +456,17 @@ fn a_spin_proved_symmetric_leaves_the_equations_unchanged() {
     let mut proved = Vec::new();
     for name in common::EXAMPLES {
         let model = example(name);
-        let p = model.nominal();
+        let p = model.model().nominal();
         let speed = 1.3;
-        let direct = Direct::new(System::new(&model, &p, speed).unwrap(), model.free());
-        let q0 = initial_guess(&model, &p, speed).unwrap();
-        let lambda: Vec<f64> = (0..model.n_constraints())
+        let direct = Direct::new(
+            System::new(model.model(), &p, speed).unwrap(),
+            model.model().free(),
+        );
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
+        let lambda: Vec<f64> = (0..model.model().n_constraints())
             .map(|k| 1.0 - 0.3 * k as f64)
             .collect();
-        for c in model.steady_by_symmetry(&p, speed) {
+        for c in model.model().steady_by_symmetry(&p, speed) {
             proved.push(name);
             for state in 0..4 {
                 let q: Vec<f64> = (q0.iter().enumerate())
@@ -507,8 +513,8 @@ fn a_spring_to_the_ground_is_checked_by_evaluation() {
         )
     };
     let tied = Compiled::from_str(&spring("ground"), "tied.toml").unwrap();
-    let p = tied.nominal();
-    assert!(tied.steady_by_symmetry(&p, 2.0).is_empty());
+    let p = tied.model().nominal();
+    assert!(tied.model().steady_by_symmetry(&p, 2.0).is_empty());
     for route in [Route::Recorded, Route::Direct] {
         let tied = tied.clone().with_route(route);
         let err =
@@ -516,7 +522,7 @@ fn a_spring_to_the_ground_is_checked_by_evaluation() {
         assert!(err.to_string().contains("no steady state"), "{err}");
     }
     let braced = Compiled::from_str(&spring("shaft"), "braced.toml").unwrap();
-    assert_eq!(braced.steady_by_symmetry(&p, 2.0), vec![0]);
+    assert_eq!(braced.model().steady_by_symmetry(&p, 2.0), vec![0]);
     point(&braced, &p, 2.0, &[0.3, 0.5], &Options::default()).unwrap();
 }
 
@@ -533,7 +539,7 @@ fn massless_coordinate_is_reported_as_singular_mass() {
     let model = Compiled::from_str(&text, "massless.toml").unwrap();
     let err = point(
         &model,
-        &model.nominal(),
+        &model.model().nominal(),
         1.0,
         &[0.0, 0.3],
         &Options::default(),
@@ -559,14 +565,18 @@ fn twelve_arm_governor_matches_the_two_arm_governor() {
     let many = example("multi_arm_governor.toml");
     let two = example("governor.toml");
     assert_eq!(
-        (many.bodies.len(), many.constraints.len(), many.dof()),
+        (
+            many.model().bodies.len(),
+            many.model().constraints.len(),
+            many.model().dof()
+        ),
         (32, 12, 1)
     );
-    let mut s_many = Sweep::new(&many, many.nominal(), Options::default());
-    let mut s_two = Sweep::new(&two, two.nominal(), Options::default());
+    let mut s_many = Sweep::new(&many, many.model().nominal(), Options::default());
+    let mut s_two = Sweep::new(&two, two.model().nominal(), Options::default());
     let slide = (
-        many.coordinate("slide").unwrap(),
-        two.coordinate("slide").unwrap(),
+        many.model().coordinate("slide").unwrap(),
+        two.model().coordinate("slide").unwrap(),
     );
     for i in 0..=10 {
         let w = 0.5 * i as f64;

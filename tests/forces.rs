@@ -26,8 +26,8 @@ fn equivalent(a: &Compiled, b: &Compiled, speeds: &[f64], coordinates: &[&str]) 
             let (pa, pb) = (solve(a, w, direct), solve(b, w, direct));
             same_roots(&roots(&pa), &roots(&pb), 1e-9);
             for name in coordinates {
-                let qa = pa.equilibrium.q[a.coordinate(name).unwrap()];
-                let qb = pb.equilibrium.q[b.coordinate(name).unwrap()];
+                let qa = pa.equilibrium.q[a.model().coordinate(name).unwrap()];
+                let qb = pb.equilibrium.q[b.model().coordinate(name).unwrap()];
                 assert!(
                     (qa - qb).abs() <= 1e-10,
                     "{name}: {qa} vs {qb} at {w} rad/s"
@@ -266,8 +266,8 @@ fn a_body_held_by_a_bushing_has_six_uncoupled_oscillators() {
     }
     // ∂ω_d/∂k of the x mode, exactly: ω_d = √(k/m − (c/2m)²).
     let pt = solve(&m, 0.0, false);
-    let p = m.nominal();
-    let s = analytic(&m, &p, &pt, &[m.parameter("k").unwrap()], None).unwrap();
+    let p = m.model().nominal();
+    let s = analytic(&m, &p, &pt, &[m.model().parameter("k").unwrap()], None).unwrap();
     let wd = (500.0 / 3.0 - (0.5f64 / 6.0).powi(2)).sqrt();
     let x_mode = pt
         .modes
@@ -330,7 +330,7 @@ fn a_free_joint_is_three_slides_and_a_ball() {
             + "[[joints]]\nname = \"float\"\ntype = \"free\"\nparent = \"frame\"\nchild = \"body\"\nat = [0.2, 0.1, -0.1]\n"
             + &text[end..];
         let free = model(&free);
-        assert_eq!(free.coordinates.len(), 7);
+        assert_eq!(free.model().coordinates.len(), 7);
         for w in [0.0, 3.0] {
             for direct in [false, true] {
                 same_roots(

@@ -51,8 +51,8 @@ proptest! {
         }
         if let Ok(model) = Compiled::from_bytes(&bytes, "mutant.toml") {
             // A mutant that validates must also solve or fail cleanly at a speed.
-            let p = model.nominal();
-            if let Ok(q0) = initial_guess(&model, &p, 1.0)
+            let p = model.model().nominal();
+            if let Ok(q0) = initial_guess(model.model(), &p, 1.0)
                 && let Ok(pt) = point(&model, &p, 1.0, &q0, &Options::default())
             {
                 for m in &pt.modes {
@@ -74,8 +74,8 @@ fn fuzz_corpus_replays() {
         }
         let bytes = std::fs::read(path).unwrap();
         if let Ok(model) = Compiled::from_bytes(&bytes, "corpus.toml") {
-            let p = model.nominal();
-            if let Ok(q0) = initial_guess(&model, &p, 1.0) {
+            let p = model.model().nominal();
+            if let Ok(q0) = initial_guess(model.model(), &p, 1.0) {
                 let _ = point(&model, &p, 1.0, &q0, &Options::default());
             }
         }

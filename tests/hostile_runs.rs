@@ -622,7 +622,7 @@ fn a_failed_modal_point_gives_its_reason_in_every_format() {
                 let header = r.headers().unwrap().clone();
                 let message = header.iter().position(|h| h == "message").unwrap();
                 let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
-                assert_eq!(rows.len(), model.dof().max(1), "{name}");
+                assert_eq!(rows.len(), model.model().dof().max(1), "{name}");
                 for row in rows {
                     assert_eq!(&row[2], "failed");
                     assert_eq!(row[message], reasons[0], "{name}");

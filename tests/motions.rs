@@ -160,7 +160,7 @@ fn kane(sys: &System<f64>, q: &[f64], qd: &[f64], qdd: &[f64]) -> Vec<f64> {
 #[test]
 fn the_recursive_motions_give_kanes_inertial_forces_on_every_joint_type() {
     let model = Compiled::from_str(TREE, "tree.toml").unwrap();
-    let sys = System::new(&model, &model.nominal(), 0.0).unwrap();
+    let sys = System::new(model.model(), &model.model().nominal(), 0.0).unwrap();
     let lifted = Lifted::new(sys.clone());
     let n = sys.n;
     assert_eq!(n, 1 + 3 + 2 + 2 + 3 + 6 + 1, "every joint's coordinates");

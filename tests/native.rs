@@ -34,9 +34,9 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for name in EXAMPLES {
         let model = example(name);
-        let p = model.nominal();
+        let p = model.model().nominal();
         let speed = 1.3;
-        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let program = model.program(&p, speed, &q0).unwrap();
         let inst = program.at(&p, speed).unwrap();
         let m = inst.constraints();
@@ -93,8 +93,8 @@ fn a_sweep_that_switches_to_native_code_is_the_interpreted_sweep() {
     ] {
         let run = |after: Option<usize>| {
             let model = example(name);
-            let p = model.nominal();
-            let q0 = initial_guess(&model, &p, 0.5).unwrap();
+            let p = model.model().nominal();
+            let q0 = initial_guess(model.model(), &p, 0.5).unwrap();
             point(&model, &p, 0.5, &q0, &Options::default()).unwrap();
             let program = model.program(&p, 0.5, &q0).unwrap();
             program.native_after(after);

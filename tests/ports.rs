@@ -59,8 +59,8 @@ direction = [0.2, 0.4, -1]
 fn port_vectors_are_the_derivatives_of_the_points_motion() {
     let model = governor_with_ports();
     let pt = solve(&model, 3.0, false);
-    let p = model.nominal();
-    let sys = System::new(&model, &p, 3.0).unwrap();
+    let p = model.model().nominal();
+    let sys = System::new(model.model(), &p, 3.0).unwrap();
     let q = pt.equilibrium.q.clone();
     let all: Vec<usize> = (0..q.len()).collect();
     let b = port_vectors(&sys, &q, &all);
@@ -99,8 +99,8 @@ fn port_vectors_are_the_derivatives_of_the_points_motion() {
 
 /// |H|, arg H and the analytic d|H|/dp of two transfer functions agree.
 fn same_transfer(model: &Compiled, a: (Channel, Channel), b: (Channel, Channel)) {
-    let p = model.nominal();
-    let wrt = model.toleranced();
+    let p = model.model().nominal();
+    let wrt = model.model().toleranced();
     for speed in [1.0, 2.5, 4.0] {
         for direct in [false, true] {
             let pt = solve(model, speed, direct);
@@ -137,7 +137,7 @@ fn same_transfer(model: &Compiled, a: (Channel, Channel), b: (Channel, Channel))
                     assert!(
                         (dx - dy).abs() <= 1e-9 * dx.abs().max(1e-300),
                         "d|H|/d{}: {dx} vs {dy}",
-                        model.parameters[x.param].name
+                        model.model().parameters[x.param].name
                     );
                 }
             }
@@ -148,8 +148,8 @@ fn same_transfer(model: &Compiled, a: (Channel, Channel), b: (Channel, Channel))
 #[test]
 fn a_port_at_the_collar_along_the_spindle_is_the_collar_coordinate() {
     let model = governor_with_ports();
-    let slide = model.channel("slide").unwrap();
-    let port = model.channel("collar_y").unwrap();
+    let slide = model.model().channel("slide").unwrap();
+    let port = model.model().channel("collar_y").unwrap();
     assert_eq!(port, Channel::Port(0));
     same_transfer(&model, (slide, slide), (port, port));
     // Mixed ends: a force at the collar port, the collar coordinate's response.
@@ -159,9 +159,9 @@ fn a_port_at_the_collar_along_the_spindle_is_the_collar_coordinate() {
 #[test]
 fn a_rotation_port_about_a_hinge_axis_is_the_hinge_coordinate() {
     let model = governor_with_ports();
-    let arm = model.channel("arm1").unwrap();
-    let swing = model.channel("ball1_swing").unwrap();
-    let slide = model.channel("slide").unwrap();
+    let arm = model.model().channel("arm1").unwrap();
+    let swing = model.model().channel("ball1_swing").unwrap();
+    let slide = model.model().channel("slide").unwrap();
     same_transfer(&model, (arm, slide), (swing, slide));
     same_transfer(&model, (arm, arm), (swing, swing));
 }
@@ -173,8 +173,8 @@ fn reciprocity_holds_between_any_two_ports_at_rest() {
     let model = governor_with_ports();
     let pt = solve(&model, 0.0, false);
     let (a, b) = (
-        model.channel("ball1_off").unwrap(),
-        model.channel("ball2_tilted").unwrap(),
+        model.model().channel("ball1_off").unwrap(),
+        model.model().channel("ball2_tilted").unwrap(),
     );
     for omega in [0.5, 5.0, 40.0] {
         let ab = nominal_transfer(
@@ -221,20 +221,26 @@ fn the_tolerance_analysis_of_a_port_transfer_equals_the_coordinates() {
     .unwrap();
     let by_coordinate = governor_with_ports();
     assert_eq!(
-        by_port.analysis.transfer.unwrap().input,
-        by_port.channel("collar_y").unwrap()
+        by_port.model().analysis.transfer.unwrap().input,
+        by_port.model().channel("collar_y").unwrap()
     );
-    let t = by_coordinate.analysis.transfer.unwrap();
-    assert_eq!(by_coordinate.transfer_unit(&t), "m/N");
-    let rotation = by_coordinate.channel("ball1_swing").unwrap();
+    let t = by_coordinate.model().analysis.transfer.unwrap();
+    assert_eq!(by_coordinate.model().transfer_unit(&t), "m/N");
+    let rotation = by_coordinate.model().channel("ball1_swing").unwrap();
     let mixed = modaltol::model::Transfer {
         input: rotation,
         output: t.output,
         order: 1.0,
     };
-    assert_eq!(by_coordinate.transfer_unit(&mixed), "m/(N·m)");
+    assert_eq!(by_coordinate.model().transfer_unit(&mixed), "m/(N·m)");
     let run = |m: &Compiled| {
-        let case = m.analysis.cases.iter().find(|c| c.name == "all3").unwrap();
+        let case = m
+            .model()
+            .analysis
+            .cases
+            .iter()
+            .find(|c| c.name == "all3")
+            .unwrap();
         let opt = AnalyzeOptions {
             speeds: vec![1.0, 2.5, 4.0],
             cases: vec![case.clone()],

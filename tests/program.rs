@@ -271,7 +271,7 @@ type State = (Vec<f64>, f64, Vec<f64>, Vec<f64>);
 /// parameter values off nominal.
 fn states(name: &str) -> Vec<State> {
     let model = example(name);
-    let p0 = model.nominal();
+    let p0 = model.model().nominal();
     let mut out = Vec::new();
     for (k, speed) in [0.3, 1.7, 4.2].into_iter().enumerate() {
         let p: Vec<f64> = p0
@@ -279,13 +279,13 @@ fn states(name: &str) -> Vec<State> {
             .enumerate()
             .map(|(i, v)| v * (1.0 + 0.02 * ((i + k) % 3) as f64 - 0.02))
             .collect();
-        let q: Vec<f64> = initial_guess(&model, &p, speed)
+        let q: Vec<f64> = initial_guess(model.model(), &p, speed)
             .unwrap()
             .iter()
             .enumerate()
             .map(|(i, v)| v + 0.05 * ((i * 7 + k) % 5) as f64 - 0.1)
             .collect();
-        let lambda = (0..model.n_constraints())
+        let lambda = (0..model.model().n_constraints())
             .map(|j| 3.0 - 1.3 * j as f64 + k as f64)
             .collect();
         out.push((p, speed, q, lambda));
@@ -297,8 +297,8 @@ fn states(name: &str) -> Vec<State> {
 fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() {
     for name in EXAMPLES {
         let model = example(name);
-        let p0 = model.nominal();
-        let q0 = initial_guess(&model, &p0, 1.0).unwrap();
+        let p0 = model.model().nominal();
+        let q0 = initial_guess(model.model(), &p0, 1.0).unwrap();
         let program = model.program(&p0, 1.0, &q0).unwrap();
         // The model's states, and the reference configuration at rest (exact zeros).
         let mut at = states(name);
@@ -306,7 +306,7 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
             p0.clone(),
             0.0,
             vec![0.0; q0.len()],
-            vec![0.0; model.n_constraints()],
+            vec![0.0; model.model().n_constraints()],
         ));
         let residuals = || {
             at.iter()
@@ -318,7 +318,7 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
         let before = residuals();
         assert!(program.residual_program().is_none(), "{name}");
         let inst = program.at(&p0, 1.0).unwrap();
-        let lambda = vec![0.5; model.n_constraints()];
+        let lambda = vec![0.5; model.model().n_constraints()];
         for _ in 0..SPECIALISE_AFTER {
             inst.residual(&q0, &lambda);
         }
@@ -335,15 +335,15 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
 fn the_program_reproduces_the_direct_route_on_every_example() {
     for name in EXAMPLES {
         let model = example(name);
-        let p0 = model.nominal();
-        let q0 = initial_guess(&model, &p0, 1.0).unwrap();
+        let p0 = model.model().nominal();
+        let q0 = initial_guess(model.model(), &p0, 1.0).unwrap();
         let program = model
             .program(&p0, 1.0, &q0)
             .unwrap_or_else(|| panic!("{name}: the recording was refused"));
-        let free = model.free();
+        let free = model.model().free();
         let nf = free.len();
         for (p, speed, q, lambda) in states(name) {
-            let sys = System::new(&model, &p, speed).unwrap();
+            let sys = System::new(model.model(), &p, speed).unwrap();
             let direct = Direct::new(sys.clone(), free.clone());
             let inst = program.at(&p, speed).unwrap();
             // ∂F/∂p in one pass against one dual-number residual per parameter: along all the
@@ -398,7 +398,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             // in λ through Φ_R and the constraints' curvature).
             let other: Vec<f64> = lambda.iter().map(|l| 0.3 - 2.0 * l).collect();
             let mut shifted = inst.linear(&q, &other);
-            assert_eq!(lin.drive.len(), model.driven().len());
+            assert_eq!(lin.drive.len(), model.model().driven().len());
             let delta: Vec<f64> = lambda.iter().zip(&other).map(|(a, b)| a - b).collect();
             shifted.shift_multipliers(&delta);
             for (a, b) in shifted.residual.iter().zip(&f) {
@@ -408,7 +408,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
                 assert!(close(*a, *b, js), "{name}: shifted Jacobian {a} vs {b}");
             }
             // The drive rows (values only in the pass), shifted too, against the direct route.
-            let driven = model.driven();
+            let driven = model.model().driven();
             let zero = vec![0.0; q.len()];
             let g = evaluate_rows(&Lifted::new(sys.clone()), &q, &qd, &zero, &driven)
                 .with_multipliers(&lambda);
@@ -427,7 +427,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
                 );
             }
             // C and M against the direct linearisation.
-            let m = model.n_constraints();
+            let m = model.model().n_constraints();
             let phi_r = DMatrix::from_fn(m, nf, |k, j| j_direct[(j, nf + k)]);
             let independent = if m == 0 {
                 free.clone()
@@ -457,7 +457,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
 fn sweeps_agree_with_and_without_the_program() {
     for name in EXAMPLES {
         let model = example(name);
-        let p = model.nominal();
+        let p = model.model().nominal();
         let run = |direct: bool| {
             let route = if direct {
                 Route::Direct
@@ -504,8 +504,8 @@ fn sweeps_agree_with_and_without_the_program() {
 fn every_swept_point_is_certified_by_an_exact_newton_step() {
     for name in EXAMPLES {
         let model = example(name);
-        let p = model.nominal();
-        let free = model.free();
+        let p = model.model().nominal();
+        let free = model.model().free();
         let nf = free.len();
         let options = Options::default();
         let tol = options.newton.step_tolerance;
@@ -515,7 +515,7 @@ fn every_swept_point_is_certified_by_an_exact_newton_step() {
             let speed = 0.02 * i as f64;
             let Ok(pt) = sweep.step(speed) else { continue };
             let eq = &pt.equilibrium;
-            let sys = System::new(&model, &p, speed).unwrap();
+            let sys = System::new(model.model(), &p, speed).unwrap();
             let direct = Direct::new(sys, free.clone());
             let (f, j) = direct.residual_and_jacobian(&eq.q, &eq.lambda);
             for (a, b) in eq.jacobian.iter().zip(j.iter()) {
@@ -551,14 +551,15 @@ fn governor_with_a_kinked_spring() -> Compiled {
 fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_route_serves() {
     use modaltol::sensitivity::{analytic, finite_difference};
     let model = governor_with_a_kinked_spring();
-    let p = model.nominal();
+    let p = model.model().nominal();
     let speed = 2.0;
-    let q0 = initial_guess(&model, &p, speed).unwrap();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     assert!(model.program(&p, speed, &q0).is_none());
     // Everything still runs, directly: the sweep and the sensitivities (off the kink, where the
     // finite differences are meaningful).
     let mut p1 = p.clone();
     let attach = model
+        .model()
         .parameters
         .iter()
         .position(|x| x.name == "attach")
@@ -576,7 +577,7 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
         .map(|i| sweep.step(0.125 * i as f64).unwrap())
         .next_back()
         .unwrap();
-    let wrt = model.toleranced();
+    let wrt = model.model().toleranced();
     let a = analytic(&model, &p1, &pt, &wrt, None).unwrap();
     let f = finite_difference(&model, &p1, &pt, &wrt, None).unwrap();
     for (x, y) in a.variables.iter().zip(&f.variables) {
@@ -602,17 +603,17 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
             Route::Recorded
         };
         let model = model.clone().with_route(route);
-        let mut s = Sweep::new(&model, model.nominal(), Options::default());
+        let mut s = Sweep::new(&model, model.model().nominal(), Options::default());
         [2.0, 1.5, 1.0, 0.4, 0.3, 0.75, 1.25]
             .into_iter()
             .map(|w| s.step(w).map_err(|e| e.to_string()))
             .collect::<Vec<_>>()
     };
     let (recorded, direct) = (run(false), run(true));
-    let p0 = model.nominal();
+    let p0 = model.model().nominal();
     assert!(
         model
-            .program(&p0, 2.0, &initial_guess(&model, &p0, 2.0).unwrap())
+            .program(&p0, 2.0, &initial_guess(model.model(), &p0, 2.0).unwrap())
             .is_some()
     );
     for (a, b) in recorded.iter().zip(&direct) {
@@ -689,7 +690,7 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
             // The recorded route has the rates and the drive rows from the same pass.
             let rates = ea.rates.expect("the recorded route gives the rates");
             let lin = d
-                .linearize(&ql, &ll, &recorded.free(), None)
+                .linearize(&ql, &ll, &recorded.model().free(), None)
                 .expect("linearisable");
             same(
                 name,
@@ -697,7 +698,7 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
                 &re(rates.mass.as_slice()),
                 &re(lin.m.as_slice()),
             );
-            let driven = recorded.driven();
+            let driven = recorded.model().driven();
             let rows = d.drive_rows(&ql, &ll, &driven);
             same(name, "drive rows", &re(&ea.drive.unwrap()), &re(&rows));
             same(

@@ -137,6 +137,7 @@ fn cases(model: &Compiled, names: &[&str]) -> Vec<Case> {
         .iter()
         .map(|n| {
             model
+                .model()
                 .analysis
                 .cases
                 .iter()
@@ -361,12 +362,13 @@ fn agrees_with_reference(file: &str, speeds: Vec<f64>) -> Analysis {
     let model = example(file);
     let refs = references(file);
     let names: Vec<String> = model
+        .model()
         .analysis
         .cases
         .iter()
         .map(|c| c.name.clone())
         .collect();
-    let a = quadrature_only(&model, model.analysis.cases.clone(), speeds);
+    let a = quadrature_only(&model, model.model().analysis.cases.clone(), speeds);
     assert!(a.failures.is_empty(), "{file}: {:?}", a.failures);
     let z99 = 2.575_829_303_548_901;
     let (mut inside, mut total) = (0, 0);
@@ -456,8 +458,12 @@ fn thirteen_variables_give_honest_error_estimates_below_the_monte_carlo_cost() {
     // swept nodes as a 3000-sample Monte Carlo has samples.
     let file = "multi_arm_governor_13_variables.toml";
     let model = example(file);
-    assert_eq!(model.analysis.cases[0].tolerances.len(), 13);
-    let a = quadrature_only(&model, model.analysis.cases.clone(), grid(0.0, 5.0, 0.25));
+    assert_eq!(model.model().analysis.cases[0].tolerances.len(), 13);
+    let a = quadrature_only(
+        &model,
+        model.model().analysis.cases.clone(),
+        grid(0.0, 5.0, 0.25),
+    );
     assert!(a.failures.is_empty(), "{:?}", a.failures);
     let nodes = a.quadrature_rules[0].1;
     assert!(nodes <= 3000, "{nodes} nodes");

@@ -15,7 +15,7 @@ use modaltol::report;
 
 /// An analysis of `model` over `speeds` for its first tolerance case, with a small Monte Carlo.
 fn run(model: &Compiled, speeds: &[f64]) -> modaltol::analyze::Analysis {
-    let cases = model.tolerance_cases(&[]).unwrap()[..1].to_vec();
+    let cases = model.model().tolerance_cases(&[]).unwrap()[..1].to_vec();
     let opt = AnalyzeOptions {
         speeds: speeds.to_vec(),
         cases,
@@ -244,7 +244,7 @@ fn the_checker_sees_a_legend_over_data_and_repeated_ticks() {
 fn pendulum_plots_are_readable_and_complete() {
     let m = common::example("rotating_pendulum.toml");
     let a = run(&m, &range(3.0, 4.5, 0.05));
-    let (plots, critical) = plots(&m, &a, Display::default());
+    let (plots, critical) = plots(m.model(), &a, Display::default());
     check_all(&plots);
     let stems: Vec<&str> = plots.iter().map(|p| p.stem.as_str()).collect();
     // ζ is plotted (the pendulum is damped), next to ω_d and |H|.
@@ -276,7 +276,7 @@ fn pendulum_plots_are_readable_and_complete() {
         .unwrap();
     assert!(h.svg.contains("|H| (rad/(N·m))"), "no unit on |H|");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(&m, &a, &refs, &critical, None, Display::default());
+    let html = report::report_html(m.model(), &a, &refs, &critical, None, Display::default());
     assert!(html.contains("paper, pendulum"));
     assert!(html.contains("Summary: σ where it matters"));
     assert!(html.contains("largest σ"));
@@ -291,7 +291,7 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
         speed: FrequencyUnit::Rpm,
         frequency: FrequencyUnit::Hertz,
     };
-    let (plots, critical) = plots(&m, &a, d);
+    let (plots, critical) = plots(m.model(), &a, d);
     check_all(&plots);
     let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
     assert!(c.svg.contains("speed Ω (rpm)"), "speed axis not in rpm");
@@ -324,7 +324,7 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     }
     assert!(c.svg.contains("critical speeds"), "crossings not marked");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(&m, &a, &refs, &critical, None, d);
+    let html = report::report_html(m.model(), &a, &refs, &critical, None, d);
     assert!(
         !html.contains("paper,"),
         "paper rows in another model's report"

@@ -111,13 +111,13 @@ fn check(pt: &Point, rigid: usize, what: &str) {
 fn symmetric_spinning_bodies_have_rigid_modes_and_no_spurious_instability_in_modal_and_sweep() {
     for (text, rigid, speeds) in models() {
         let model = Compiled::from_str(&text, "rigid.toml").unwrap_or_else(|e| panic!("{e}"));
-        let p = model.nominal();
+        let p = model.model().nominal();
         let mut sweep = Sweep::new(&model, p.clone(), Options::default());
         for &w in &speeds {
             let what = format!("{} Ω = {w}", &text[..60].replace('\n', " "));
             let pt = sweep.step(w).unwrap_or_else(|e| panic!("{what}: {e}"));
             check(&pt, rigid, &format!("sweep {what}"));
-            let q0 = initial_guess(&model, &p, w).unwrap();
+            let q0 = initial_guess(model.model(), &p, w).unwrap();
             let pt = point(&model, &p, w, &q0, &Options::default())
                 .unwrap_or_else(|e| panic!("{what}: {e}"));
             check(&pt, rigid, &format!("modal {what}"));
@@ -131,7 +131,7 @@ fn the_quadrature_and_the_monte_carlo_see_no_instability_in_a_rigid_body_mode() 
         let model = Compiled::from_str(&text, "rigid.toml").unwrap();
         let opt = AnalyzeOptions {
             speeds: speeds.clone(),
-            cases: model.analysis.cases.clone(),
+            cases: model.model().analysis.cases.clone(),
             quadrature: Some(QuadOptions::default()),
             monte_carlo: Some(McOptions {
                 samples: 64,
@@ -189,7 +189,7 @@ fn a_node_without_a_transfer_value_keeps_its_modes() {
     let model = Compiled::from_str(&text, "ball_rod_transfer.toml").unwrap();
     let opt = AnalyzeOptions {
         speeds: vec![0.0, 1.0],
-        cases: model.analysis.cases.clone(),
+        cases: model.model().analysis.cases.clone(),
         quadrature: Some(QuadOptions::default()),
         monte_carlo: None,
         ..Default::default()
@@ -207,9 +207,9 @@ fn a_node_without_a_transfer_value_keeps_its_modes() {
         let h = row(1.0, Quantity::TransferMagnitude, None, method);
         assert!(h.mean > 0.0 && h.missing.is_none(), "{h:?}");
     }
-    let p = model.nominal();
+    let p = model.model().nominal();
     for speed in [0.0, 1.0] {
-        let q0 = initial_guess(&model, &p, speed).unwrap();
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let nominal = point(&model, &p, speed, &q0, &Options::default()).unwrap();
         // The analysis numbers modes as its sweep tracks them: compared with the nearest.
         for mode in [1, 2] {

@@ -26,9 +26,9 @@ fn pendulum_closed_form(l: Dual64, w: f64) -> (Dual64, Dual64, f64) {
 #[test]
 fn pendulum_sensitivities_match_closed_form() {
     let model = example("rotating_pendulum.toml");
-    let tf = model.analysis.transfer.unwrap();
-    let l = model.parameter("L").unwrap();
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let tf = model.model().analysis.transfer.unwrap();
+    let l = model.model().parameter("L").unwrap();
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
     let critical = (1.5 * G).sqrt();
     let resonance = (0.75 * G).sqrt();
     let mut checked = 0;
@@ -37,7 +37,7 @@ fn pendulum_sensitivities_match_closed_form() {
         let pt = sweep.step(w).unwrap();
         let sens = analytic(
             &model,
-            &model.nominal(),
+            &model.model().nominal(),
             &pt,
             &[l],
             Some(TransferAt::at_speed(&tf, w)),
@@ -78,7 +78,7 @@ fn pendulum_sensitivities_match_closed_form() {
         let pt = common::at(&model, w, &Options::default());
         let sens = analytic(
             &model,
-            &model.nominal(),
+            &model.model().nominal(),
             &pt,
             &[l],
             Some(TransferAt::at_speed(&tf, w)),
@@ -92,11 +92,11 @@ fn pendulum_sensitivities_match_closed_form() {
 #[test]
 fn overdamped_roots_coalescing_are_flagged_not_differentiated() {
     let model = example("rotating_pendulum.toml");
-    let l = model.parameter("L").unwrap();
+    let l = model.model().parameter("L").unwrap();
     // Critical damping on the hanging branch: Ω² = 3g/2L − c²/(4I²).
     let w = (1.5 * G - 2.25f64).sqrt();
     let pt = common::at(&model, w, &Options::default());
-    let sens = analytic(&model, &model.nominal(), &pt, &[l], None).unwrap();
+    let sens = analytic(&model, &model.model().nominal(), &pt, &[l], None).unwrap();
     assert_eq!(sens.variables[0].modes[0].status, Status::NotDifferentiable);
 }
 
@@ -113,9 +113,9 @@ fn automatic_and_finite_differences_agree_for_every_example() {
         ("spinning_universal_pendulum.toml", 0.0, 6.0),
     ] {
         let model = example(file);
-        let tf = model.analysis.transfer.unwrap();
-        let wrt = model.toleranced();
-        let p = model.nominal();
+        let tf = model.model().analysis.transfer.unwrap();
+        let wrt = model.model().toleranced();
+        let p = model.model().nominal();
         let mut sweep = Sweep::new(&model, p.clone(), Options::default());
         let mut compared = 0;
         for s in 0..20 {
@@ -127,7 +127,7 @@ fn automatic_and_finite_differences_agree_for_every_example() {
             let hmag = a.transfer_magnitude.unwrap();
             for (va, vf) in a.variables.iter().zip(&f.variables) {
                 let b = p[va.param].abs();
-                let name = &model.parameters[va.param].name;
+                let name = &model.model().parameters[va.param].name;
                 match (va.d_transfer_magnitude, vf.d_transfer_magnitude) {
                     (Some(ha), Some(hf)) => assert!(
                         agree(ha, hf, 1e-9 * hmag / b + 1e-15),
@@ -175,7 +175,7 @@ fn automatic_and_finite_differences_agree_for_every_example() {
             }
         }
         assert!(
-            compared >= 20 * model.toleranced().len() / 2,
+            compared >= 20 * model.model().toleranced().len() / 2,
             "{file}: only {compared} comparisons"
         );
     }
@@ -184,8 +184,8 @@ fn automatic_and_finite_differences_agree_for_every_example() {
 #[test]
 fn governor_transfer_peaks_at_1_595() {
     let model = example("governor.toml");
-    let tf = model.analysis.transfer.unwrap();
-    let mut sweep = Sweep::new(&model, model.nominal(), Options::default());
+    let tf = model.model().analysis.transfer.unwrap();
+    let mut sweep = Sweep::new(&model, model.model().nominal(), Options::default());
     let mut best = (0.0, 0.0);
     for i in 0..=600 {
         let w = 1.3 + i as f64 * 0.001;
@@ -203,8 +203,8 @@ fn governor_transfer_peaks_at_1_595() {
 #[test]
 fn gyroscopic_example_needs_the_left_eigenvector() {
     let model = example("spinning_universal_pendulum.toml");
-    let p = model.nominal();
-    let wrt = model.toleranced();
+    let p = model.model().nominal();
+    let wrt = model.model().toleranced();
     let pt = common::at(&model, 4.0, &Options::default());
     let f = finite_difference(&model, &p, &pt, &wrt, None).unwrap();
     let a = analytic(&model, &p, &pt, &wrt, None).unwrap();
@@ -274,10 +274,10 @@ fn variables_sharing_a_pass_get_the_bits_of_passes_of_their_own() {
         "multi_arm_governor_13_variables.toml",
     ] {
         let model = example(file);
-        let p = model.nominal();
+        let p = model.model().nominal();
         let pt = common::at(&model, 1.3, &Options::default());
         let all: Vec<usize> = (0..p.len()).rev().collect();
-        for wrt in [all, model.toleranced()] {
+        for wrt in [all, model.model().toleranced()] {
             let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();
             assert_eq!(together.len(), wrt.len());
             for (shared, &b) in together.iter().zip(&wrt) {

@@ -22,8 +22,8 @@ fn examples() -> Vec<&'static str> {
 
 /// Shard 1 of 1 of a tiny run of `model` (one speed, two samples per case), written to `dir`.
 fn shard_of(model: &Compiled, dir: &Path) -> PathBuf {
-    let cases = model.tolerance_cases(&[]).unwrap();
-    let speed = model.analysis.speed.unwrap();
+    let cases = model.model().tolerance_cases(&[]).unwrap();
+    let speed = model.model().analysis.speed.unwrap();
     let range = SpeedRange {
         from: speed.from,
         to: speed.from,
@@ -32,7 +32,7 @@ fn shard_of(model: &Compiled, dir: &Path) -> PathBuf {
     let mc = McOptions {
         samples: 2,
         seed: 5,
-        sampling: model.analysis.sampling,
+        sampling: model.model().analysis.sampling,
     };
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
@@ -45,7 +45,7 @@ fn shard_of(model: &Compiled, dir: &Path) -> PathBuf {
     };
     let a = analyze(model, &opt, &|_: &str, _: usize, _: usize| {});
     let run = RunSettings::new(&range, &mc, Some(1e-3), 1);
-    let file = ShardFile::of_analysis(model, &cases, &a, &run, 0).unwrap();
+    let file = ShardFile::of_analysis(model.model(), &cases, &a, &run, 0).unwrap();
     let path = dir.join("shard-1-of-1.json");
     std::fs::write(&path, file.to_json()).unwrap();
     path
@@ -267,7 +267,7 @@ fn a_shard_of_another_model_is_refused_for_every_kind_of_field() {
                 let Ok(cases) = changed.tolerance_cases(&[]) else {
                     continue;
                 };
-                if meaning(&changed) == meaning(&original) {
+                if meaning(&changed) == meaning(original.model()) {
                     continue; // the same model (a default written out, or removed)
                 }
                 tried += 1;
@@ -297,7 +297,7 @@ type Forgery = fn(&mut ShardFile);
 fn a_shard_of_other_settings_is_refused_naming_them() {
     let dir = tempfile::tempdir().unwrap();
     let model = common::example("rotating_pendulum.toml");
-    let cases = model.tolerance_cases(&[]).unwrap();
+    let cases = model.model().tolerance_cases(&[]).unwrap();
     let shard = shard_of(&model, dir.path());
     let text = std::fs::read_to_string(&shard).unwrap();
     let file = ShardFile::parse(&text, "shard").unwrap();
@@ -320,13 +320,13 @@ fn a_shard_of_other_settings_is_refused_naming_them() {
         edit(&mut f);
         f.digest.clear();
         std::fs::write(&shard, f.to_json()).unwrap();
-        let e = read_all(&model, &cases, std::slice::from_ref(&shard)).expect_err(what);
+        let e = read_all(model.model(), &cases, std::slice::from_ref(&shard)).expect_err(what);
         assert!(e.to_string().contains(what), "{what}: {e}");
     }
     // Other tolerance cases than the shard's.
     std::fs::write(&shard, &text).unwrap();
-    let fewer = model.tolerance_cases(&["L3".into()]).unwrap();
-    let e = read_all(&model, &fewer, std::slice::from_ref(&shard)).unwrap_err();
+    let fewer = model.model().tolerance_cases(&["L3".into()]).unwrap();
+    let e = read_all(model.model(), &fewer, std::slice::from_ref(&shard)).unwrap_err();
     assert!(e.to_string().contains("tolerance cases"), "{e}");
-    read_all(&model, &cases, &[shard]).unwrap();
+    read_all(model.model(), &cases, &[shard]).unwrap();
 }

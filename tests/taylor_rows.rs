@@ -59,21 +59,22 @@ fn local_models(
     speeds: &[f64],
     reference: Option<(&[Point], &[String])>,
 ) -> Vec<(Point, LocalModel)> {
-    let p = model.nominal();
+    let p = model.model().nominal();
     let vars: Vec<usize> = match reference {
         Some((_, names)) => names
             .iter()
             .map(|n| {
                 model
+                    .model()
                     .parameters
                     .iter()
                     .position(|q| &q.name == n)
                     .expect("a parameter")
             })
             .collect(),
-        None => model.toleranced(),
+        None => model.model().toleranced(),
     };
-    let tf = model.analysis.transfer.as_ref();
+    let tf = model.model().analysis.transfer.as_ref();
     let mut sweep = Sweep::new(model, p.clone(), Options::default());
     speeds
         .iter()
@@ -122,8 +123,8 @@ fn every_taylor_row_of_the_multi_mode_examples_is_filled_whatever_their_scale() 
         let model = example(file);
         let base = local_models(&model, &speeds, None);
         let points: Vec<Point> = base.iter().map(|(pt, _)| pt.clone()).collect();
-        let names: Vec<String> = (model.toleranced().iter())
-            .map(|&b| model.parameters[b].name.clone())
+        let names: Vec<String> = (model.model().toleranced().iter())
+            .map(|&b| model.model().parameters[b].name.clone())
             .collect();
         for (pt, lm) in &base {
             // These speeds are away from any class change or repeated root: every mode is
@@ -248,8 +249,8 @@ fn a_chain_with_two_dozen_toleranced_variables_has_every_derivative_and_each_mat
     let n = 12;
     let model =
         Compiled::from_str(&toleranced_chain(n), "chain.toml").unwrap_or_else(|e| panic!("{e}"));
-    let p = model.nominal();
-    let vars = model.toleranced();
+    let p = model.model().nominal();
+    let vars = model.model().toleranced();
     assert_eq!(vars.len(), 2 * n);
     let opt = Options {
         no_branch_switch: true,
@@ -318,7 +319,7 @@ fn the_blades_analysis_has_every_taylor_row_and_no_nan_in_its_report() {
     let model = example("rotating_blade.toml");
     let opt = AnalyzeOptions {
         speeds: vec![0.0, 10.0, 20.0],
-        cases: model.analysis.cases.clone(),
+        cases: model.model().analysis.cases.clone(),
         quadrature: None,
         ..Default::default()
     };
@@ -348,9 +349,9 @@ fn the_blades_analysis_has_every_taylor_row_and_no_nan_in_its_report() {
             "{r:?}"
         );
     }
-    let summary = modaltol::report::summary_json(&model, &a, None, 1);
+    let summary = modaltol::report::summary_json(model.model(), &a, None, 1);
     assert_eq!(summary["unfilled"], serde_json::json!([]));
-    let html = modaltol::report::report_html(&model, &a, &[], &[], None, Default::default());
+    let html = modaltol::report::report_html(model.model(), &a, &[], &[], None, Default::default());
     assert!(!html.contains("NaN"), "the report prints NaN");
 }
 
@@ -371,11 +372,11 @@ fn slider(k: f64, c: f64) -> Compiled {
 #[test]
 fn a_row_without_a_value_carries_its_reason() {
     let at_rest = |model: &Compiled| {
-        let p = model.nominal();
+        let p = model.model().nominal();
         let pt = Sweep::new(model, p.clone(), Options::default())
             .step(0.0)
             .unwrap();
-        let lm = local_model(model, &p, &pt, &model.toleranced(), None, true).unwrap();
+        let lm = local_model(model, &p, &pt, &model.model().toleranced(), None, true).unwrap();
         (pt, lm)
     };
     // m = k = 1, c = 2: λ = −1 twice, ζ = c/(2√(km)) = 1, dζ/dm = −ζ/(2m).

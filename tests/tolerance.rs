@@ -18,6 +18,7 @@ use num_dual::{Dual64, HyperDual64};
 
 fn case(model: &Compiled, name: &str) -> Case {
     model
+        .model()
         .analysis
         .cases
         .iter()
@@ -113,9 +114,9 @@ fn pendulum_hessians_match_closed_form() {
     // d²ω_d/dL² and d²|H|/dL² from hyper-duals through the equilibrium and the eigenproblem,
     // against the closed form differentiated twice, on both branches.
     let model = example("rotating_pendulum.toml");
-    let p = model.nominal();
-    let vars = model.toleranced();
-    let tf = model.analysis.transfer.as_ref();
+    let p = model.model().nominal();
+    let vars = model.model().toleranced();
+    let tf = model.model().analysis.transfer.as_ref();
     let check = |w: f64, pt: &Point| {
         let lm = local_model(&model, &p, pt, &vars, tf, true).unwrap();
         let (wd, h) = closed_form(HyperDual64::new(1.0, 1.0, 1.0, 0.0), w);
@@ -148,7 +149,7 @@ fn pendulum_hessians_match_closed_form() {
 /// Hessians by central differences of the exact gradients (an independent route: the gradient
 /// code at re-solved perturbed points).
 fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
-    let tf = model.analysis.transfer.as_ref();
+    let tf = model.model().analysis.transfer.as_ref();
     let mut lm = local_model(model, p, pt, vars, tf, false).unwrap();
     let nv = vars.len();
     let opt = Options {
@@ -213,10 +214,10 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
         ("spinning_universal_pendulum.toml", vec![0.5, 2.0, 6.0]),
     ] {
         let model = example(file);
-        let p = model.nominal();
-        let vars = model.toleranced();
-        let tf = model.analysis.transfer.as_ref();
-        let q0 = initial_guess(&model, &p, speeds[0]).unwrap();
+        let p = model.model().nominal();
+        let vars = model.model().toleranced();
+        let tf = model.model().analysis.transfer.as_ref();
+        let q0 = initial_guess(model.model(), &p, speeds[0]).unwrap();
         let mut checked = 0;
         let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
         for &w in &speeds {
@@ -279,14 +280,14 @@ fn a_transfer_zero_by_symmetry_has_zero_derivatives() {
     // The gyroscopic example at rest: the cross transfer vanishes for any parameters, so |H| has
     // gradient and Hessian zero (not "not differentiable"), by either route.
     let model = example("spinning_universal_pendulum.toml");
-    let p = model.nominal();
-    let vars = model.toleranced();
-    let tf = model.analysis.transfer.as_ref();
+    let p = model.model().nominal();
+    let vars = model.model().toleranced();
+    let tf = model.model().analysis.transfer.as_ref();
     let pt = point(
         &model,
         &p,
         0.0,
-        &initial_guess(&model, &p, 0.0).unwrap(),
+        &initial_guess(model.model(), &p, 0.0).unwrap(),
         &Options::default(),
     )
     .unwrap();
@@ -392,7 +393,7 @@ fn second_order_converges_to_monte_carlo_as_the_tolerance_shrinks() {
     // Carlo (LHS, 3000 samples) must shrink like σ² (neglected higher-order terms), and at
     // 0.1 % lie inside the Monte Carlo interval: the Hessians are right.
     let model = example("governor.toml");
-    let b = model.parameter("attach").unwrap();
+    let b = model.model().parameter("attach").unwrap();
     let w = 1.595;
     let mut gaps = Vec::new();
     for pct in [3.0, 1.0, 0.1] {

@@ -56,7 +56,7 @@ fn models() -> Vec<(String, Compiled)> {
 fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
     let mut resonances = 0;
     for (name, m) in models() {
-        let Some(t) = m.analysis.transfer else {
+        let Some(t) = m.model().analysis.transfer else {
             continue;
         };
         let speed = 1.0;
@@ -64,7 +64,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
         // The modes' own frequencies: a resonance where a mode has no damping.
         let mut excitations = EXCITATIONS.to_vec();
         excitations.extend(pt.modes.iter().map(|md| md.natural_frequency));
-        let wrt = m.toleranced();
+        let wrt = m.model().toleranced();
         // Sweep rows, with the excitation at `order × speed`.
         for &order in &excitations {
             let cols = SweepColumns {
@@ -80,8 +80,8 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
                 Derivatives::Exact,
             );
             let (r, extras) = study.step(speed);
-            let header = report::sweep_header(&m, &cols);
-            for row in report::sweep_rows(&m, &cols, speed, &r, &extras) {
+            let header = report::sweep_header(m.model(), &cols);
+            for row in report::sweep_rows(m.model(), &cols, speed, &r, &extras) {
                 let what = format!("{name}: sweep, order {order:e}");
                 resonances += check_row(&header, &row, "transfer_magnitude", &what) as usize;
             }
@@ -89,7 +89,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
             let at = TransferAt::at_speed(&tf, speed);
             if let Ok(s) = sensitivity::sensitivities(
                 &m,
-                &m.nominal(),
+                &m.model().nominal(),
                 &pt,
                 &wrt,
                 Some(at),
@@ -100,11 +100,11 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
                     .iter()
                     .map(|h| h.to_string())
                     .collect();
-                for row in report::sensitivity_rows(&m, &pt, &s, why) {
+                for row in report::sensitivity_rows(m.model(), &pt, &s, why) {
                     let what = format!("{name}: sensitivity, order {order:e}");
                     check_row(&header, &row, "transfer_magnitude", &what);
                 }
-                let json = report::sensitivity_json(&m, speed, "ad", &pt, &s, why);
+                let json = report::sensitivity_json(m.model(), speed, "ad", &pt, &s, why);
                 assert_eq!(
                     json["transfer_magnitude"].is_null(),
                     json["transfer_message"].is_string(),
@@ -115,7 +115,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
         // Frequency-response rows over the same frequencies.
         let rows = sensitivity::frequency_response(
             &m,
-            &m.nominal(),
+            &m.model().nominal(),
             &pt,
             t.input,
             t.output,
@@ -123,7 +123,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
             excitations.iter().copied(),
         )
         .unwrap();
-        let header = report::frf_header(&m, &wrt);
+        let header = report::frf_header(m.model(), &wrt);
         for row in report::frf_rows(&pt.linear, &rows) {
             resonances += check_row(&header, &row, "magnitude", &format!("{name}: frf")) as usize;
         }
@@ -146,11 +146,11 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
         &[("c".into(), 0.0)],
     )
     .unwrap();
-    let t = undamped.analysis.transfer.unwrap();
+    let t = undamped.model().analysis.transfer.unwrap();
     let speed = 1.0;
     let pt = common::at(&undamped, speed, &Options::default());
     let wn = pt.modes[0].natural_frequency;
-    let wrt = undamped.toleranced();
+    let wrt = undamped.model().toleranced();
     let mut near = vec![wn];
     let (mut up, mut down) = (wn, wn);
     for _ in 0..100 {
@@ -160,7 +160,7 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
     }
     let rows = sensitivity::frequency_response(
         &undamped,
-        &undamped.nominal(),
+        &undamped.model().nominal(),
         &pt,
         t.input,
         t.output,
@@ -168,7 +168,7 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
         near.iter().copied(),
     )
     .unwrap();
-    let header = report::frf_header(&undamped, &wrt);
+    let header = report::frf_header(undamped.model(), &wrt);
     for row in report::frf_rows(&pt.linear, &rows) {
         assert!(
             check_row(&header, &row, "magnitude", "undamped pendulum near ω_n"),
@@ -193,8 +193,8 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
             transfer: true,
             wrt: wrt.clone(),
         };
-        let header = report::sweep_header(&undamped, &cols);
-        for row in report::sweep_rows(&undamped, &cols, speed, &r, &extras) {
+        let header = report::sweep_header(undamped.model(), &cols);
+        for row in report::sweep_rows(undamped.model(), &cols, speed, &r, &extras) {
             assert!(
                 check_row(&header, &row, "transfer_magnitude", "sweep near ω_n"),
                 "{row:?}"

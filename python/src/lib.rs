@@ -221,7 +221,7 @@ struct NativeModel {
 
 impl NativeModel {
     fn m(&self) -> &Model {
-        &self.model
+        self.model.model()
     }
 
     fn transfer(&self, spec: Option<&str>) -> PyResult<Option<Transfer>> {
@@ -285,7 +285,7 @@ impl NativeModel {
     /// The nominal point at `speed`.
     fn point(&self, speed: f64, opt: &Options) -> PyResult<modaltol::sweep::Point> {
         settings::speed(speed).map_err(|e| bad(format!("speed {e}")))?;
-        let p = self.model.nominal();
+        let p = self.model.model().nominal();
         initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
         point_at(&self.model, &p, speed, opt)
             .map_err(|e| SolveError::new_err(format!("speed {speed:?} rad/s failed: {e}")))
@@ -453,7 +453,7 @@ impl NativeModel {
                     break;
                 }
                 let (r, extras) = study.step(speed);
-                rows.extend(report::sweep_rows(model, &cols, speed, &r, &extras));
+                rows.extend(report::sweep_rows(model.model(), &cols, speed, &r, &extras));
             }
             rows
         })?;
@@ -527,7 +527,7 @@ impl NativeModel {
         let how = self::derivatives(derivatives)?;
         let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
             let pt = self.point(speed, &Options::default())?;
-            let p = self.model.nominal();
+            let p = self.model.model().nominal();
             let at = tf.map(|t| TransferAt::at_speed(&t, speed));
             let s =
                 sensitivity::sensitivities(&self.model, &p, &pt, &wrt, at, how).map_err(|e| {
@@ -566,7 +566,7 @@ impl NativeModel {
         let cancel = Cancel::new();
         let rows = interruptible(py, &cancel, || -> PyResult<Vec<Vec<String>>> {
             let pt = self.point(speed, &Options::default())?;
-            let p = self.model.nominal();
+            let p = self.model.model().nominal();
             // Stops at the frequency after a Ctrl-C (`interruptible` then raises).
             let freqs = freqs.into_iter().take_while(|_| !cancel.is_cancelled());
             let r = sensitivity::frequency_response(

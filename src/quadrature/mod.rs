@@ -297,7 +297,7 @@ impl<'a> Nodes<'a> {
             correlation: sub,
             covariance: DMatrix::from_fn(d, d, |i, j| spread.covariance[(active[i], active[j])]),
         };
-        let map = DesignMap::new(study.model.nominal(), sub_vars, sub_spread.clone());
+        let map = DesignMap::new(study.model.model().nominal(), sub_vars, sub_spread.clone());
         let basis = directions(&study.locals, active, &sub_spread, map.factor());
         Nodes {
             study,

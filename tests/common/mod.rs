@@ -39,8 +39,8 @@ pub fn example(name: &str) -> Compiled {
 
 /// The point at `speed` with nominal parameters, solved from the model's initial guess.
 pub fn at(model: &Compiled, speed: f64, opt: &Options) -> Point {
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
+    let p = model.model().nominal();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     point(model, &p, speed, &q0, opt).unwrap()
 }
 
@@ -114,17 +114,17 @@ pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
     } else {
         model
     };
-    let p = model.nominal();
-    let q0 = initial_guess(model, &p, speed).unwrap();
+    let p = model.model().nominal();
+    let q0 = initial_guess(model.model(), &p, speed).unwrap();
     if !direct {
         assert!(
             model.program(&p, speed, &q0).is_some(),
             "{}: the equations record as a program",
-            model.name
+            model.model().name
         );
     }
     point(model, &p, speed, &q0, &Options::default())
-        .unwrap_or_else(|e| panic!("{}: {e}", model.name))
+        .unwrap_or_else(|e| panic!("{}: {e}", model.model().name))
 }
 
 /// Every root of every mode.
