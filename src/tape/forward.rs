@@ -5,6 +5,7 @@
 //! it can move; the chain rule is applied chunk by chunk over those lanes ([`Lanes`]). The
 //! derivatives are read where the pass left them ([`Rows`]).
 
+use super::seeding::Mark;
 use super::{BLOCK, Op, Seeding, Tape, Term};
 use crate::real::Real;
 use std::borrow::Cow;
@@ -88,12 +89,12 @@ impl Tape {
         // A row holds zeros outside what its operation wrote (`dirty`); a row taken over by
         // another operation is cleared where the new one does not write.
         let rows = seeding.slots.rows + 1;
-        if work.seeding != seeding.id || work.tan.len() != rows * stride {
+        if !work.seeding.is(&seeding.id) || work.tan.len() != rows * stride {
             work.tan.clear();
             work.tan.resize(rows * stride, zero);
             work.dirty.clear();
             work.dirty.resize(rows, (0, 0));
-            work.seeding = seeding.id;
+            work.seeding = seeding.id.mark();
         }
         // What the unchecked reads and writes below rely on, besides every operand preceding its
         // operation (kept by the tape's constructors, asserted when a seeding is made) and the
@@ -370,7 +371,7 @@ pub struct Forward<S> {
     /// The lanes each tangent row's last operation wrote (zeros elsewhere).
     dirty: Vec<(usize, usize)>,
     /// The [`Seeding`] the buffer was last used with.
-    pub(super) seeding: usize,
+    pub(super) seeding: Mark,
 }
 
 impl<S> Default for Forward<S> {
@@ -379,7 +380,7 @@ impl<S> Default for Forward<S> {
             val: Vec::new(),
             tan: Vec::new(),
             dirty: Vec::new(),
-            seeding: 0,
+            seeding: Mark::default(),
         }
     }
 }

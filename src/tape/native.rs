@@ -22,6 +22,7 @@
 //! Cranelift: <https://cranelift.dev>, the code generator of Wasmtime.
 
 use super::forward::CHUNK;
+use super::seeding::Mark;
 use super::{Op, Seeding, Tape, Term};
 use cranelift_codegen::ir::{
     AbiParam, InstBuilder, MemFlagsData, StackSlotData, StackSlotKind, UserFuncName, Value, types,
@@ -48,7 +49,7 @@ pub struct NativePass {
     ops: usize,
     inputs: usize,
     /// The seeding compiled for (`None`: values only) and its row stride.
-    seeding: Option<usize>,
+    seeding: Option<Mark>,
     stride: usize,
 }
 
@@ -220,7 +221,7 @@ impl Tape {
             code,
             ops: self.ops.len(),
             inputs,
-            seeding: seeding.map(|s| s.id),
+            seeding: seeding.map(|s| s.id.mark()),
             stride,
         })
     }
@@ -237,7 +238,7 @@ impl Tape {
     ) -> (Vec<f64>, super::Rows<'w, f64>) {
         assert!(
             pass.ops == self.ops.len()
-                && pass.seeding == Some(seeding.id)
+                && pass.seeding.as_ref().is_some_and(|m| m.is(&seeding.id))
                 && x.len() >= pass.inputs
                 && fixed.len() >= self.n_static,
             "a compiled pass runs on its own program, seeding and inputs"
@@ -246,10 +247,10 @@ impl Tape {
         work.val.clear();
         work.val.resize(self.ops.len(), 0.0);
         work.val[..self.n_static].copy_from_slice(&fixed[..self.n_static]);
-        if work.seeding != seeding.id || work.tan.len() != rows * pass.stride {
+        if !work.seeding.is(&seeding.id) || work.tan.len() != rows * pass.stride {
             work.tan.clear();
             work.tan.resize(rows * pass.stride, 0.0);
-            work.seeding = seeding.id;
+            work.seeding = seeding.id.mark();
         }
         // SAFETY: the code reads and writes `val` below the program's length, `tan` below
         // `rows · stride` (the offsets of a row-per-operation seeding) and `x` below `inputs`,

@@ -7,6 +7,7 @@
 
 use super::forward::CHUNK;
 use super::{Op, Tape, Term};
+use std::sync::{Arc, Weak};
 
 impl Tape {
     /// Which lanes of [`Tape::forward`] each operation can move: input `k` moves along lane
@@ -52,7 +53,6 @@ impl Tape {
         differentiated: usize,
         rows: bool,
     ) -> Seeding {
-        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
         let inputs = seeds.iter().map(|s| s.0 + 1).max().unwrap_or(0);
         let mut input_lanes = vec![Vec::new(); inputs];
         for &(k, l) in seeds {
@@ -104,7 +104,7 @@ impl Tape {
             }
         };
         Seeding {
-            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            id: Identity::default(),
             seeds: seeds.to_vec(),
             input_lanes,
             lanes,
@@ -200,7 +200,7 @@ impl Tape {
 /// Seeds of [`Tape::forward`] with the lane range of every operation.
 #[derive(Debug, Clone)]
 pub struct Seeding {
-    pub(super) id: usize,
+    pub(super) id: Identity,
     pub(super) seeds: Vec<(usize, usize)>,
     /// The lanes of each input (by input index; the seeds regrouped).
     pub(super) input_lanes: Vec<Vec<u32>>,
@@ -230,6 +230,34 @@ impl Seeding {
     /// programs' passes do, small ones keep a row per operation.
     pub fn shares_rows(&self) -> bool {
         self.slots.reuse || self.blocks.iter().any(|b| b.slots.reuse)
+    }
+}
+
+/// Which seeding a buffer or a compiled pass was made for. A buffer keeps its tangent rows
+/// between passes along the same seeding (a row holds zeros where no operation wrote, which
+/// only holds for the seeding that wrote it), and a compiled pass runs only on its own: both
+/// recognise it by its [`Mark`]. A seeding's copies share its identity (they are the same plan);
+/// a mark keeps the identity's allocation alive, so its address is never another seeding's.
+/// No process-wide counter is involved.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Identity(Arc<()>);
+
+/// What a buffer or a compiled pass keeps of the [`Identity`] of its seeding (none: a fresh
+/// buffer, or a values-only pass).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Mark(Weak<()>);
+
+impl Identity {
+    /// The mark of this seeding.
+    pub(super) fn mark(&self) -> Mark {
+        Mark(Arc::downgrade(&self.0))
+    }
+}
+
+impl Mark {
+    /// Was this made for the seeding of identity `id`?
+    pub(super) fn is(&self, id: &Identity) -> bool {
+        std::ptr::eq(self.0.as_ptr(), Arc::as_ptr(&id.0))
     }
 }
 
