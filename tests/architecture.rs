@@ -192,7 +192,8 @@ fn imports(src: &Path) -> Vec<(String, String, String)> {
                 .to_string_lossy()
                 .trim_end_matches(".rs")
                 .to_string();
-            if module == "lib" || module == "main" {
+            // The library's roots, and the command line (a crate of its own, over the library).
+            if module == "lib" || module == "main" || module == "cli" {
                 continue;
             }
             let code = code_only(&std::fs::read_to_string(&path).unwrap());

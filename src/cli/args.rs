@@ -1,0 +1,400 @@
+//! The command line's arguments: what `--help` teaches, parsed by clap.
+
+use anyhow::Result;
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Analytical tolerance analysis of the modal characteristics of multibody systems in dynamic
+/// equilibrium.
+///
+/// A mechanism is read from a TOML model file (see docs/model-format.md). At each operating
+/// speed modaltol finds the dynamic equilibrium, linearises the equations of motion to M̂, Ĉ, K̂
+/// in minimal coordinates and solves the damped eigenproblem.
+///
+/// Units: SI throughout. Speeds and frequencies in rad/s, angles in rad, translations in m,
+/// drive forces in N·m (revolute) or N (prismatic).
+#[derive(Parser)]
+#[command(
+    name = "modaltol",
+    version,
+    about,
+    long_about,
+    after_long_help = "Exit codes: 0 success (also when a reader closes the pipe); 1 the \
+        computation failed, or an I/O error (a closed stdout, a full disk); 2 bad input (model \
+        or arguments); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM: the command stops \
+        at its next check, an analysis writes its partial result (flagged), a file is never \
+        written cut; a second signal stops it at once."
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+    /// Replace a parameter's nominal value, as if the model file said so (repeatable):
+    /// `--set L=1.02 --set m=3.1`. The value is in the parameter's unit; a tolerance given in
+    /// percent applies to the new value.
+    #[arg(long = "set", global = true, value_name = "NAME=VALUE", value_parser = parse_set)]
+    pub(crate) set: Vec<(String, f64)>,
+}
+
+/// Parses a count or seed, saying what was wrong with a negative or fractional one (clap's own
+/// parser mistakes `-5` for a flag and suggests `-- -5`).
+pub(crate) fn whole_number<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("expected a whole number ≥ 0, got '{s}'"))
+}
+
+/// Parses `--set NAME=VALUE`.
+pub(crate) fn parse_set(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, e.g. L=1.02 (got '{s}')"))?;
+    let v: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{}' is not a number", value.trim()))?;
+    if !v.is_finite() {
+        return Err(format!("{name}: the value must be finite (got {v})"));
+    }
+    Ok((name.trim().to_string(), v))
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum Format {
+    /// Text for reading.
+    Table,
+    /// Everything, for scripts.
+    Json,
+    /// The table of modes (`modal`: frequencies, damping, roots, shapes named by coordinate;
+    /// at a speed that fails, one row per degree of freedom with status `failed`) or of
+    /// derivatives (`sensitivity`: one row per mode and design variable); the last column,
+    /// `message`, says why a speed failed or |H| has no value (a resonance, an overflow).
+    Csv,
+}
+
+/// Writes a header and rows as CSV.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+pub(crate) enum SamplingArg {
+    /// Independent pseudo-random draws.
+    Random,
+    /// Latin hypercube.
+    Lhs,
+    /// Owen-scrambled Sobol sequence.
+    Sobol,
+}
+
+/// A unit for speeds or frequencies in the plots and report.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+pub(crate) enum UnitArg {
+    #[value(name = "rad/s")]
+    RadPerSecond,
+    #[value(name = "hz")]
+    Hertz,
+    #[value(name = "rpm")]
+    Rpm,
+}
+
+impl From<UnitArg> for modaltol::plots::FrequencyUnit {
+    fn from(u: UnitArg) -> Self {
+        match u {
+            UnitArg::RadPerSecond => Self::RadPerSecond,
+            UnitArg::Hertz => Self::Hertz,
+            UnitArg::Rpm => Self::Rpm,
+        }
+    }
+}
+
+/// The plots' and report's units (the CSV and JSON files stay in rad/s).
+#[derive(clap::Args, Clone, Copy)]
+pub(crate) struct DisplayArgs {
+    /// Unit of the operating speed in the plots and report.html (rad/s, hz, rpm); the CSV and
+    /// JSON files stay in rad/s.
+    #[arg(long, value_enum, default_value = "rad/s")]
+    pub(crate) speed_unit: UnitArg,
+    /// Unit of the damped natural frequencies in the plots and report.html (rad/s, hz, rpm).
+    #[arg(long, value_enum, default_value = "rad/s")]
+    pub(crate) frequency_unit: UnitArg,
+}
+
+impl From<DisplayArgs> for modaltol::plots::Display {
+    fn from(d: DisplayArgs) -> Self {
+        Self {
+            speed: d.speed_unit.into(),
+            frequency: d.frequency_unit.into(),
+        }
+    }
+}
+
+/// Which equilibrium to report where several exist at a speed.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+pub(crate) enum BranchArg {
+    /// Where the equilibrium Newton reaches is unstable (a root with positive real part:
+    /// static divergence or flutter), step off it along its unstable modes' shapes, both ways
+    /// at growing amplitudes, and report the stable equilibrium found (default).
+    Stable,
+    /// Report the equilibrium Newton reaches, stable or not (to see how an unstable one
+    /// diverges).
+    AsGiven,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+pub(crate) enum Derivatives {
+    /// Exact, by automatic differentiation through the equilibrium (default).
+    Ad,
+    /// Central finite differences of the whole pipeline, Richardson-extrapolated (a cross-check).
+    Fd,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Validate a model and summarise its bodies, joints, coordinates, constraints, degrees of
+    /// freedom and parameters.
+    Check(CheckArgs),
+    /// Equilibrium, drive force, M̂, Ĉ, K̂ and damped modes at one speed.
+    Modal(ModalArgs),
+    /// Sweep the operating speed: one CSV row per (speed, mode).
+    ///
+    /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
+    /// (underdamped|overdamped|unstable|rigid|failed; rigid: a zero root, no frequency and no
+    /// damping ratio), damped_frequency, natural_frequency (rad/s), damping_ratio (empty for a
+    /// rigid mode), eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
+    /// partner root), tuning_order (ω_d/Ω: the engine order the mode sits at, as an absorber
+    /// is tuned; empty at Ω = 0); with --transfer: transfer_magnitude (output unit per input unit, e.g.
+    /// rad/(N·m) or m/N), transfer_phase (rad); with --sensitivity, for every design variable P:
+    /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with
+    /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
+    /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
+    /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
+    /// iterations (Newton), branch (stable|switched|unstable: whether the equilibrium continued
+    /// from the previous speed was kept, or a stable one found instead), message (why a speed
+    /// failed, why the branch was switched or left unstable, a change of stability, or why |H|
+    /// has no value: "resonance" where an undamped mode sits at the excitation frequency,
+    /// "overflow" where a number is beyond floating point).
+    Sweep(SweepArgs),
+    /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
+    /// the design variables at one speed, through the move of the equilibrium.
+    Sensitivity(SensitivityArgs),
+    /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
+    /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
+    /// paper's method), second order, the invariant-based method for ω_d, the quadrature (the
+    /// whole nonlinear analysis integrated over the distribution of the design variables,
+    /// deterministically, with error estimates: right at class changes and branch switches),
+    /// "analytic" (the answer to read: the quadrature), and Monte Carlo.
+    ///
+    /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
+    /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
+    /// basis (the method an "analytic" row took), q05, q50, q95 (quantiles: quadrature and
+    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates), partial, reason
+    /// (why a row has no mean and σ), share:<parameter>; SI units, rad/s for speeds and
+    /// frequencies), DIR/probabilities.csv
+    /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
+    /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
+    /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
+    /// rows without a value grouped with their reasons under "unfilled"),
+    /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
+    /// probabilities, variance shares, a Campbell diagram with engine orders 1–3 and the
+    /// critical speeds marked) and DIR/report.html (a summary of σ by method at the largest σ,
+    /// the critical speeds and the |H| peak, then the plots). --speed-unit and
+    /// --frequency-unit show the plots and report in rpm or Hz. Without MODEL, runs the
+    /// governor example built into the binary.
+    Analyze(AnalyzeArgs),
+    /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
+    /// (same seed, same numbers): writes the same files as `analyze`, except the Monte Carlo
+    /// quantiles q05, q50, q95 (they need every sample at once; a merge leaves them empty).
+    ///
+    /// Every shard must come from the same model (with the same --set), tolerance cases,
+    /// speeds, samples, seed, sampling and quadrature options: a shard computed from anything
+    /// else is refused, naming the file and what differs. The quadrature runs with the
+    /// options the shards' run was given.
+    Merge(MergeArgs),
+    /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
+    /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
+    /// port, over a range of excitation frequencies.
+    ///
+    /// Columns: frequency (rad/s), magnitude (output unit per input unit), phase (rad), real,
+    /// imag, and d(magnitude)/d(P) for every design variable P (empty where |H| has no
+    /// derivative), message (why H has no value where it has none: "resonance", "overflow").
+    Frf(FrfArgs),
+}
+
+// Each command's arguments (their help text is on the `Command` variant).
+#[derive(clap::Args)]
+pub(crate) struct CheckArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct ModalArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: f64,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "table")]
+    pub(crate) format: Format,
+    /// Independent coordinates (joint names, comma separated), overriding the model.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) independent: Option<Vec<String>>,
+    /// Which equilibrium to report, Newton starting from the model's initial guess: every
+    /// format says which was taken and why (text: `branch:`, JSON: "branch", CSV: the
+    /// `branch` and `message` columns).
+    #[arg(long, value_enum, default_value = "stable")]
+    pub(crate) branch: BranchArg,
+    /// Write to this file instead of stdout.
+    #[arg(short, long)]
+    pub(crate) output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct SweepArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+    /// Speeds FROM:TO:STEP in rad/s (TO included); default: the model's [analysis] speed.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: Option<String>,
+    /// Independent coordinates (joint names, comma separated), overriding the model.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) independent: Option<Vec<String>>,
+    /// Which equilibrium to follow: `stable` switches to a stable one where the one continued
+    /// from the previous speed has lost its stability (the `branch` column says `switched`
+    /// and the message why); `as-given` follows the continued one, stable or not.
+    #[arg(long, value_enum, default_value = "stable")]
+    pub(crate) branch: BranchArg,
+    /// Transfer function `input=NAME,output=NAME[,order=K]` (NAME a free joint coordinate or a
+    /// [[ports]] entry): generalised force (or port force/torque) on `input`,
+    /// response of `output`, excitation at K × speed (K = 1 by default). `--transfer model`
+    /// uses the model's [analysis] transfer.
+    #[arg(long)]
+    pub(crate) transfer: Option<String>,
+    /// Add the derivatives of every mode (and of |H|) with respect to the design variables.
+    #[arg(long)]
+    pub(crate) sensitivity: bool,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) wrt: Option<Vec<String>>,
+    /// How derivatives are computed.
+    #[arg(long, value_enum, default_value = "ad")]
+    pub(crate) derivatives: Derivatives,
+    /// Write the CSV to this file instead of stdout.
+    #[arg(short, long)]
+    pub(crate) output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct SensitivityArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: f64,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) wrt: Option<Vec<String>>,
+    /// How derivatives are computed.
+    #[arg(long, value_enum, default_value = "ad")]
+    pub(crate) derivatives: Derivatives,
+    /// Transfer function `input=NAME,output=NAME[,order=K]` (free coordinates or ports);
+    /// default: the model's.
+    #[arg(long)]
+    pub(crate) transfer: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "table")]
+    pub(crate) format: Format,
+    /// Write to this file instead of stdout.
+    #[arg(short, long)]
+    pub(crate) output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct AnalyzeArgs {
+    /// Model file (TOML); default: the built-in governor example.
+    pub(crate) model: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: Option<String>,
+    /// Monte Carlo samples; default: the model's (3000 unless it says otherwise).
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
+    pub(crate) samples: Option<usize>,
+    /// Random seed; default: the model's.
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<u64>)]
+    pub(crate) seed: Option<u64>,
+    /// Worker threads for the derivatives, the quadrature and the Monte Carlo (results do
+    /// not depend on it): 1 to 1024; default: all cores.
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
+    pub(crate) threads: Option<usize>,
+    /// Skip the Monte Carlo.
+    #[arg(long)]
+    pub(crate) no_monte_carlo: bool,
+    /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
+    /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
+    /// line is refined until its error estimate meets it or the largest grid is reached.
+    #[arg(long, default_value_t = 1e-3, value_name = "REL")]
+    pub(crate) quadrature_tolerance: f64,
+    /// Skip the quadrature (the "analytic" rows then take the automatic Taylor choice).
+    #[arg(long)]
+    pub(crate) no_quadrature: bool,
+    /// Sampling of the design variables; default: the model's.
+    #[arg(long, value_enum)]
+    pub(crate) sampling: Option<SamplingArg>,
+    /// Compute only shard K of N of the Monte Carlo samples (e.g. 2/8, one per batch job)
+    /// and write DIR/shard-K-of-N.json; combine the shards with `modaltol merge`.
+    #[arg(long)]
+    pub(crate) shard: Option<String>,
+    /// Only this tolerance case of the model's [analysis] table (repeatable); default: all.
+    #[arg(long = "case", value_name = "NAME")]
+    pub(crate) cases: Vec<String>,
+    #[command(flatten)]
+    pub(crate) display: DisplayArgs,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct MergeArgs {
+    /// Model file the shards were made from; default: the built-in governor example.
+    #[arg(long)]
+    pub(crate) model: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// The shard files (shard-K-of-N.json), all N of them, in any order.
+    #[arg(required = true)]
+    pub(crate) shards: Vec<PathBuf>,
+    /// The tolerance cases the shards were run with (as given to `analyze --case`).
+    #[arg(long = "case", value_name = "NAME")]
+    pub(crate) cases: Vec<String>,
+    #[command(flatten)]
+    pub(crate) display: DisplayArgs,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct FrfArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+    /// Operating speed, rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: f64,
+    /// Transfer function `input=NAME,output=NAME` (NAME a free joint coordinate or a
+    /// [[ports]] entry): generalised force (or port force/torque) on `input`, response of
+    /// `output`; default: the model's [analysis] transfer.
+    #[arg(long)]
+    pub(crate) transfer: Option<String>,
+    /// Excitation frequencies FROM:TO:STEP in rad/s.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) freq: String,
+    /// Design variables (parameter names, comma separated); default: those with a tolerance.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) wrt: Option<Vec<String>>,
+    /// Write the CSV to this file instead of stdout. (With the older `--input A --output B`
+    /// spelling of the transfer function, `--output` names the response and `--out` the file.)
+    #[arg(short, long)]
+    pub(crate) output: Option<String>,
+    /// Older spelling: where the excitation enters (use --transfer input=…,output=…).
+    #[arg(long, hide = true)]
+    pub(crate) input: Option<String>,
+    /// Older spelling of -o/--output, kept for scripts.
+    #[arg(long, hide = true)]
+    pub(crate) out: Option<PathBuf>,
+}

@@ -1,0 +1,124 @@
+//! `modaltol analyze`.
+
+use crate::cli::*;
+use anyhow::{Context, Result};
+use modaltol::analyze::{Split, analyze};
+use modaltol::cancel::Cancel;
+use modaltol::files::{AtomicFile, Inputs, ResultDir};
+use modaltol::model::Sampling;
+use modaltol::model::SpeedRange;
+use modaltol::request::{Request, Resolved, Speeds};
+use modaltol::settings;
+use modaltol::shard::{RunSettings, ShardFile};
+use std::io::Write;
+
+/// `modaltol analyze` (see its `--help`).
+pub(crate) fn analyze_command(
+    args: AnalyzeArgs,
+    set: &[(String, f64)],
+    cancel: &Cancel,
+) -> Result<()> {
+    let AnalyzeArgs {
+        model,
+        output,
+        speed,
+        samples,
+        seed,
+        threads,
+        no_monte_carlo,
+        quadrature_tolerance,
+        no_quadrature,
+        sampling,
+        shard,
+        cases: only,
+        display,
+    } = args;
+    let request = Request {
+        speeds: match &speed {
+            Some(s) => Speeds::Range(
+                SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+            ),
+            None => Speeds::Model,
+        },
+        cases: only,
+        samples,
+        seed,
+        sampling: sampling.map(|s| match s {
+            SamplingArg::Random => Sampling::Random,
+            SamplingArg::Lhs => Sampling::Lhs,
+            SamplingArg::Sobol => Sampling::Sobol,
+        }),
+        monte_carlo: !no_monte_carlo,
+        quadrature: !no_quadrature,
+        quadrature_tolerance,
+        threads,
+        shard: shard
+            .as_deref()
+            .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
+            .transpose()?,
+    };
+    // The settings that need no model first: a bad flag is reported before a slow load.
+    let chosen = !request.cases.is_empty();
+    let request = request.check().map_err(|e| refused(e, &shard, chosen))?;
+    let m = model_or_governor(&model, set)?;
+    let Resolved {
+        options: opt,
+        range,
+    } = request
+        .resolve(m.model(), cancel.clone())
+        .map_err(|e| refused(e, &shard, chosen))?;
+    let (mc, split) = (opt.monte_carlo, opt.split.clone());
+    // Fail early where the results cannot be written.
+    let inputs = Inputs::new(&model.iter().collect::<Vec<_>>());
+    let destination = match split {
+        Split::Shard(k, n) => {
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("{}: cannot create the directory", output.display()))?;
+            let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+            refuse_input(&inputs, &path)?;
+            Destination::Shard(AtomicFile::create(&path)?, path)
+        }
+        _ => {
+            refuse_input(&inputs, &output)?;
+            Destination::Directory(protect(ResultDir::create(&output)?, inputs)?)
+        }
+    };
+    let a = analyze(&m, &opt, &progress_printer());
+    if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
+        let Destination::Shard(mut f, path) = destination else {
+            unreachable!("a shard's destination is its file")
+        };
+        let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
+        let range = range.expect("a command-line analysis runs over a range");
+        let run = RunSettings::new(&range, &mc, tolerance, *n);
+        let Some(file) = ShardFile::of_analysis(m.model(), &opt.cases, &a, &run, *k) else {
+            return Err(Interrupted(format!(
+                "{} not written (a shard is complete or absent)",
+                path.display()
+            ))
+            .into());
+        };
+        f.write_all(file.to_json().as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        f.commit()?;
+        note!(
+            "modaltol: wrote {}; combine the shards with `modaltol merge`",
+            path.display()
+        );
+        return Ok(());
+    }
+    let Destination::Directory(dir) = destination else {
+        unreachable!("a whole run's destination is a directory")
+    };
+    write_outputs(
+        &m,
+        &a,
+        mc.as_ref(),
+        opt.threads,
+        display.into(),
+        dir,
+        &output,
+    )?;
+
+    Ok(())
+}

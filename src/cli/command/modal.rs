@@ -1,0 +1,55 @@
+//! `modaltol modal`.
+
+use crate::cli::*;
+use anyhow::Result;
+use modaltol::cancel::Cancel;
+use modaltol::files::Inputs;
+use modaltol::report;
+use modaltol::settings;
+use modaltol::sweep::{Options, initial_guess, point_at};
+use std::io::Write;
+
+/// `modaltol modal` (see its `--help`).
+pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Cancel) -> Result<()> {
+    let ModalArgs {
+        model,
+        speed,
+        format,
+        independent: ind,
+        branch,
+        output,
+    } = args;
+    let m = load(&model, set)?;
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let opt = Options {
+        independent: independent(m.model(), &ind)?,
+        no_branch_switch: branch == BranchArg::AsGiven,
+        ..Default::default()
+    };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
+    let p = m.model().nominal();
+    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let result = point_at(&m, &p, speed, &opt);
+    stop_if_cancelled(cancel, &output)?;
+    match format {
+        Format::Json => writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&report::modal_json(m.model(), speed, &result))?
+        )?,
+        Format::Table => write!(w, "{}", report::modal_table(m.model(), speed, &result))?,
+        Format::Csv => {
+            let rows = match &result {
+                Ok(pt) => report::modes_rows(pt),
+                Err(e) => report::modes_failed_rows(m.model(), speed, e),
+            };
+            write_csv(&mut w, &report::modes_header(m.model()), &rows)?
+        }
+    }
+    w.finish()?;
+    if let Err(e) = result {
+        return Err(Failed(format!("speed {speed:?} rad/s failed: {e}")).into());
+    }
+
+    Ok(())
+}

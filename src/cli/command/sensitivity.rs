@@ -1,0 +1,77 @@
+//! `modaltol sensitivity`.
+
+use crate::cli::*;
+use anyhow::{Context, Result};
+use modaltol::cancel::Cancel;
+use modaltol::files::Inputs;
+use modaltol::report;
+use modaltol::sensitivity::{self, TransferAt};
+use modaltol::settings;
+use modaltol::sweep::{Options, initial_guess, point_at};
+use std::io::Write;
+
+/// `modaltol sensitivity` (see its `--help`).
+pub(crate) fn sensitivity_command(
+    args: SensitivityArgs,
+    set: &[(String, f64)],
+    cancel: &Cancel,
+) -> Result<()> {
+    let SensitivityArgs {
+        model,
+        speed,
+        wrt,
+        derivatives,
+        transfer: tspec,
+        format,
+        output,
+    } = args;
+    let m = load(&model, set)?;
+    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let wrt = design_variables(m.model(), &wrt)?;
+    let tf = match tspec.as_deref() {
+        Some(s) => Some(parse_transfer(m.model(), s)?),
+        None => m.model().analysis.transfer,
+    };
+    let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
+    let p = m.model().nominal();
+    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
+    let pt = point_at(&m, &p, speed, &Options::default())
+        .with_context(|| format!("speed {speed:?} rad/s"))?;
+    let at = tf.map(|t| TransferAt::at_speed(&t, speed));
+    let s = sensitivity::sensitivities(&m, &p, &pt, &wrt, at, how(derivatives))
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let why = report::transfer_defect_at(&pt, at.as_ref());
+    stop_if_cancelled(cancel, &output)?;
+    let method = if derivatives == Derivatives::Ad {
+        "ad"
+    } else {
+        "fd"
+    };
+    match format {
+        Format::Json => writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&report::sensitivity_json(
+                m.model(),
+                speed,
+                method,
+                &pt,
+                &s,
+                why
+            ))?
+        )?,
+        Format::Table => write!(
+            w,
+            "{}",
+            report::sensitivity_table(m.model(), speed, method, &pt, &s, why)
+        )?,
+        Format::Csv => write_csv(
+            &mut w,
+            &report::SENSITIVITY_HEADER,
+            &report::sensitivity_rows(m.model(), &pt, &s, why),
+        )?,
+    }
+    w.finish()?;
+
+    Ok(())
+}

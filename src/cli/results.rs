@@ -1,0 +1,62 @@
+//! What `analyze` and `merge` write: the result directory or a shard, and the notes on it.
+
+use crate::cli::*;
+use anyhow::Result;
+use modaltol::compiled::Compiled;
+use modaltol::files::ResultDir;
+use modaltol::montecarlo::McOptions;
+use modaltol::report;
+use std::io::Write;
+
+/// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
+pub(crate) fn write_outputs(
+    m: &Compiled,
+    a: &modaltol::analyze::Analysis,
+    mc: Option<&McOptions>,
+    threads: Option<usize>,
+    display: modaltol::plots::Display,
+    dir: ResultDir,
+    output: &std::path::Path,
+) -> Result<()> {
+    let used = threads.unwrap_or_else(rayon::current_num_threads);
+    let written = modaltol::results::write(m, a, mc, used, display, dir)?;
+    for (stem, e) in &written.missing_png {
+        note!("modaltol: no PNG for {stem}: {e}");
+    }
+    let partial = written.partial;
+    note!(
+        "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
+        a.analytic_seconds,
+        a.quadrature_seconds
+            .map_or(String::new(), |t| format!(", quadrature {t:.3} s")),
+        a.monte_carlo_seconds.map_or(String::new(), |t| format!(
+            ", Monte Carlo {t:.3} s (ratio {:.0})",
+            t / a.analytic_seconds
+        )),
+        output.display()
+    );
+    for w in report::inadmissible_warnings(a) {
+        note!("modaltol: warning: {w}");
+    }
+    if !a.failures.is_empty() {
+        note!(
+            "modaltol: {} speed(s) failed; see summary.json",
+            a.failures.len()
+        );
+    }
+    for line in report::unfilled_lines(a) {
+        note!("modaltol: note: {line}");
+    }
+    if partial {
+        if a.samples_done.is_empty() {
+            note!("modaltol: partial result (interrupted): not every speed was analysed");
+        } else {
+            note!(
+                "modaltol: partial result (interrupted): Monte Carlo samples done per case {:?}",
+                a.samples_done
+            );
+        }
+        return Err(Interrupted("the outputs hold a partial result".into()).into());
+    }
+    Ok(())
+}
