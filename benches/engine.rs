@@ -1,10 +1,11 @@
 //! One modal point (equilibrium + linearisation + modes), the recorded program's passes there
 //! and a 501-point sweep of each example, interpreted and with the program compiled to native
-//! code (`Program::native_after`; the same results, a long run's speed).
+//! code (`Tier::Native`; the same results, a long run's speed).
 //! Run with `cargo bench --bench engine`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::compiled::Compiled;
+use modaltol::program::Tier;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::hint::black_box;
 
@@ -38,29 +39,37 @@ fn bench(c: &mut Criterion) {
         .unwrap()
         .equilibrium
         .q;
-        let program = model.program(&p, speed, &q0);
-        for native in [false, true] {
-            if let Some(program) = program {
-                program.native_after(native.then_some(0));
-            }
-            let name = if native {
+        for tier in [Tier::Many, Tier::Native] {
+            let name = if tier == Tier::Native {
                 format!("{name}/native")
             } else {
                 name.to_string()
             };
-            passes(c, &model, &name, speed, to, &q0);
+            passes(c, &model, &name, speed, to, &q0, tier);
         }
     }
 }
 
-/// The passes, a point and a sweep of one model, under `name`.
-fn passes(c: &mut Criterion, model: &Compiled, name: &str, speed: f64, to: f64, q0: &[f64]) {
+/// The passes, a point and a sweep of one model at `tier`, under `name`.
+fn passes(
+    c: &mut Criterion,
+    model: &Compiled,
+    name: &str,
+    speed: f64,
+    to: f64,
+    q0: &[f64],
+    tier: Tier,
+) {
     let p = model.model().nominal();
+    let options = Options {
+        tier,
+        ..Options::default()
+    };
     // The recorded program's passes at that point: the residual, Newton's Jacobian, and
     // the exact evaluation (Jacobian, C and M in one pass).
     if let Some(inst) = model
         .program(&p, speed, q0)
-        .and_then(|program| program.at(&p, speed))
+        .and_then(|program| program.at(&p, speed, tier))
     {
         let lambda = point(model, &p, speed, q0, &Options::default())
             .unwrap()
@@ -77,13 +86,13 @@ fn passes(c: &mut Criterion, model: &Compiled, name: &str, speed: f64, to: f64, 
         });
     }
     c.bench_function(&format!("{name}/modal_point"), |b| {
-        b.iter(|| point(model, &p, black_box(speed), q0, &Options::default()).unwrap())
+        b.iter(|| point(model, &p, black_box(speed), q0, &options).unwrap())
     });
     let mut g = c.benchmark_group(format!("{name}/sweep_501"));
     g.sample_size(10);
     g.bench_function("sweep", |b| {
         b.iter(|| {
-            let mut s = Sweep::new(model, p.clone(), Options::default());
+            let mut s = Sweep::new(model, p.clone(), options.clone());
             for i in 0..501 {
                 let _ = black_box(s.step(to * i as f64 / 500.0));
             }

@@ -28,10 +28,8 @@ fn bench(c: &mut Criterion) {
         let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
         let q = pt.equilibrium.q.clone();
-        // The point interpreted, as a single point is (the ratio the goal is about).
-        if let Some(program) = model.program(&p, speed, &q) {
-            program.native_after(None);
-        }
+        // The point interpreted (a sweep's tier, `Options::default()`), as the ratio the goal
+        // is about has it.
         let name = file.trim_end_matches(".toml");
         c.bench_function(&format!("{name}/modal_point"), |b| {
             b.iter(|| point(&model, &p, black_box(speed), &q, &Options::default()).unwrap())

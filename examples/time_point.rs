@@ -3,11 +3,12 @@
 //! at 1.595 rad/s and all its sensitivities there, in µs (the last two in the same rounds'
 //! conditions, so their ratio is not skewed by the machine's phases), then the gradients and
 //! Hessians of every output along the toleranced parameters (best of 15 rounds of 100).
-//! The same with the program's passes compiled to native code (`Program::native_after`).
+//! The same with the program's passes compiled to native code (`Tier::Native`).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::compiled::Compiled;
 use modaltol::hessian::hessians;
 use modaltol::output::outputs;
+use modaltol::program::Tier;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -37,11 +38,13 @@ fn main() {
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let program = model.program(&p, speed, &q).unwrap();
-    // Interpreted first: the rounds below would otherwise compile the passes midway.
-    program.native_after(None);
-    let inst = program.at(&p, speed).unwrap();
-    // Exact evaluation, residual and a cold modal point (s).
-    let passes = || {
+    // Exact evaluation, residual and a cold modal point (s), at a sweep's tier or compiled.
+    let passes = |tier: Tier| {
+        let inst = program.at(&p, speed, tier).unwrap();
+        let options = Options {
+            tier,
+            ..Options::default()
+        };
         [
             best(20000, || {
                 black_box(inst.linear(black_box(&q), &l));
@@ -50,11 +53,11 @@ fn main() {
                 black_box(inst.residual(black_box(&q), &l));
             }),
             best(5000, || {
-                black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
+                black_box(point(&model, &p, speed, black_box(&q), &options).unwrap());
             }),
         ]
     };
-    let [linear, residual, cold] = passes();
+    let [linear, residual, cold] = passes(Tier::Many);
     let tf = model
         .model()
         .analysis
@@ -84,11 +87,10 @@ fn main() {
         wrt.len(),
         second * 1e6
     );
-    program.native_after(Some(0));
     let t = Instant::now();
-    inst.linear(&q, &l);
+    program.at(&p, speed, Tier::Native).unwrap().linear(&q, &l);
     let compile = t.elapsed().as_secs_f64();
-    let [native_linear, native_residual, native_cold] = passes();
+    let [native_linear, native_residual, native_cold] = passes(Tier::Native);
     println!(
         "native code (compiled in {:.1} ms): exact evaluation {:.2} µs, residual {:.2} µs, \
          modal point {:.2} µs",

@@ -13,7 +13,7 @@ use crate::equilibrium::Problem;
 use crate::jet::Jet;
 use crate::mechanics::{System, steady_speeds};
 use crate::model::{FieldError, Model, ModelError};
-use crate::program::{Program, Recorded};
+use crate::program::{Program, Recorded, Tier};
 use crate::real::Real;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -135,11 +135,12 @@ impl Compiled {
         p: &[S],
         speed: S,
         q: &[f64],
+        tier: Tier,
     ) -> Result<Box<dyn Equations<S> + '_>, FieldError> {
         let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
         let recorded = self
             .program(&p0, speed.re(), q)
-            .and_then(|program| S::recorded(program, p, speed));
+            .and_then(|program| S::recorded(program, p, speed, tier));
         Ok(match recorded {
             Some(equations) => equations,
             None => Box::new(Direct::new(
@@ -166,8 +167,14 @@ impl Compiled {
     }
 
     /// The equilibrium solve at parameters `p` and `speed` from near `q0`, of the equations
-    /// [`Compiled::at`] gives.
-    pub fn problem(&self, p: &[f64], speed: f64, q0: &[f64]) -> Result<Problem<'_>, FieldError> {
+    /// [`Compiled::at`] gives at `tier`.
+    pub fn problem(
+        &self,
+        p: &[f64],
+        speed: f64,
+        q0: &[f64],
+        tier: Tier,
+    ) -> Result<Problem<'_>, FieldError> {
         let names = self
             .model
             .coordinates
@@ -175,7 +182,8 @@ impl Compiled {
             .map(|c| c.name.as_str())
             .collect();
         let qd = steady_speeds(&self.model, p, speed)?;
-        let mut problem = Problem::new(self.at(p, speed, q0)?, qd, self.model.driven(), names);
+        let mut problem =
+            Problem::new(self.at(p, speed, q0, tier)?, qd, self.model.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
         Ok(problem)
     }
@@ -185,12 +193,14 @@ impl Compiled {
 /// `f64` as an [`crate::program::Instance`] (what depends on the parameters and the speed evaluated once),
 /// over the Taylor numbers of the derivatives as [`Recorded`].
 pub trait Scalar: Real {
-    /// The recorded equations at `p` and `speed`; `None` where the program cannot serve
-    /// there (then the direct route does).
+    /// The recorded equations at `p` and `speed`, the `f64` passes run at `tier` (the jets'
+    /// passes are interpreted at every tier); `None` where the program cannot serve there
+    /// (then the direct route does).
     fn recorded<'a>(
         program: &'a Program,
         p: &[Self],
         speed: Self,
+        tier: Tier,
     ) -> Option<Box<dyn Equations<Self> + 'a>>;
 }
 
@@ -200,15 +210,21 @@ impl Scalar for f64 {
         program: &'a Program,
         p: &[f64],
         speed: f64,
+        tier: Tier,
     ) -> Option<Box<dyn Equations<f64> + 'a>> {
         program
-            .at(p, speed)
+            .at(p, speed, tier)
             .map(|i| Box::new(i) as Box<dyn Equations<f64>>)
     }
 }
 
 impl<J: Jet> Scalar for J {
-    fn recorded<'a>(program: &'a Program, p: &[J], speed: J) -> Option<Box<dyn Equations<J> + 'a>> {
+    fn recorded<'a>(
+        program: &'a Program,
+        p: &[J],
+        speed: J,
+        _: Tier,
+    ) -> Option<Box<dyn Equations<J> + 'a>> {
         Some(Box::new(Recorded {
             program,
             p: p.to_vec(),

@@ -36,6 +36,7 @@ use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
+use crate::program::Tier;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use nalgebra::{Complex, DMatrix, DVector};
@@ -131,7 +132,7 @@ fn expand<J: Jet>(
     let eq = &pt.equilibrium;
     let free = &pt.linear.free;
     let nf = free.len();
-    let equations = model.at(seeded, J::from(pt.speed), &eq.q)?;
+    let equations = model.at(seeded, J::from(pt.speed), &eq.q, Tier::Few)?;
     // Equilibrium expansion: two chord steps with Newton's Jacobian on `[q_R; λ]`.
     let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
         .chain(eq.lambda.iter().copied())

@@ -20,6 +20,7 @@
 
 use crate::modal::ModeClass;
 use crate::model::Sampling;
+use crate::program::Tier;
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::tolerance::{Spread, value};
@@ -448,33 +449,40 @@ type SampleResult = Vec<(f64, Events)>;
 
 /// Sweeps the design `p` across the study's speeds and reads every output there, with what
 /// happened to the sample.
-fn run_sample(study: &Study, p: Vec<f64>) -> SampleResult {
+fn run_sample(study: &Study, p: Vec<f64>, tier: Tier) -> SampleResult {
     let outs = &study.outputs;
     let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
-    sample_sweep(study.model, p, &study.speeds, &study.nominal, |i, pts| {
-        let Some((nom, pt, switches)) = pts else {
-            out.extend(std::iter::repeat_n(
-                (f64::NAN, Events::default()),
-                outs.len(),
-            ));
-            return;
-        };
-        let tf = study.transfer_at(i);
-        let unstable = !pt.stable();
-        let other_branch = switches != study.branches[i];
-        out.extend(outs.iter().map(|o| {
-            let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
-            let events = Events {
-                class_changed: o
-                    .mode
-                    .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
-                overdamped: class == Some(ModeClass::Overdamped),
-                unstable,
-                other_branch,
+    sample_sweep(
+        study.model,
+        p,
+        &study.speeds,
+        &study.nominal,
+        tier,
+        |i, pts| {
+            let Some((nom, pt, switches)) = pts else {
+                out.extend(std::iter::repeat_n(
+                    (f64::NAN, Events::default()),
+                    outs.len(),
+                ));
+                return;
             };
-            (value(pt, o, tf).unwrap_or(f64::NAN), events)
-        }));
-    });
+            let tf = study.transfer_at(i);
+            let unstable = !pt.stable();
+            let other_branch = switches != study.branches[i];
+            out.extend(outs.iter().map(|o| {
+                let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
+                let events = Events {
+                    class_changed: o
+                        .mode
+                        .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
+                    overdamped: class == Some(ModeClass::Overdamped),
+                    unstable,
+                    other_branch,
+                };
+                (value(pt, o, tf).unwrap_or(f64::NAN), events)
+            }));
+        },
+    );
     out
 }
 
@@ -550,6 +558,8 @@ impl MonteCarlo {
         let opt = self.options;
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
         let sampler = Sampler::new(study, spread, opt);
+        let here = (self.chunks.len() * CHUNK).min(opt.samples);
+        let tier = Tier::for_points(here * speeds);
         let mut out = TreeFold::default();
         let mut done = 0;
         if let Some(v) = values.as_deref_mut() {
@@ -563,7 +573,7 @@ impl MonteCarlo {
             let results: Vec<SampleResult> = run.pool.install(|| {
                 (start..end)
                     .into_par_iter()
-                    .map(|i| run_sample(study, sampler.parameters(i)))
+                    .map(|i| run_sample(study, sampler.parameters(i), tier))
                     .collect()
             });
             let mut acc = vec![vec![Moments::default(); outs]; speeds];

@@ -10,6 +10,7 @@
 use crate::compiled::Compiled;
 use crate::equilibrium::Settings;
 use crate::model::Distribution;
+use crate::program::Tier;
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{Spread, match_modes};
 use nalgebra::{DMatrix, DVector};
@@ -72,12 +73,14 @@ pub fn correlation_factor(c: &DMatrix<f64>) -> DMatrix<f64> {
 /// that it follows the branch a sweep from the lowest speed follows), its modes matched to the
 /// nominal ones by shape. `visit(i, point)` gets, per speed, the nominal point and the sample's
 /// with the number of branch switches the sample's sweep made up to there, or `None` where
-/// either failed or the sample has another number of modes.
+/// either failed or the sample has another number of modes. The recorded program's passes
+/// run at `tier`, chosen by the caller for all its sweeps ([`Tier::for_points`]).
 pub fn sample_sweep(
     model: &Compiled,
     p: Vec<f64>,
     speeds: &[f64],
     nominal: &[Option<Point>],
+    tier: Tier,
     mut visit: impl FnMut(usize, Option<(&Point, &Point, usize)>),
 ) {
     // Samples do not report drive forces.
@@ -86,6 +89,7 @@ pub fn sample_sweep(
             drive_force: false,
             ..Settings::default()
         },
+        tier,
         ..Options::default()
     };
     // A design that cannot exist (a negative mass, an indefinite inertia) fails at every speed.

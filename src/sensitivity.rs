@@ -38,6 +38,7 @@ use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Mode, Root, Smoothness, similarities, smoothness};
 use crate::model::{Channel, Transfer};
 use crate::pair;
+use crate::program::Tier;
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -400,7 +401,7 @@ impl Shift<'_> {
                 .collect()
         };
         let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
-        let equations = self.model.at(&pd, D::from(speed), &eq.q)?;
+        let equations = self.model.at(&pd, D::from(speed), &eq.q, Tier::Few)?;
         // The shift `[dq_R; dλ]/db = −J⁻¹ ∂F/∂b`: one implicit step from the nominal solution,
         // with `∂F/∂b` from the recorded program where there is one.
         let nf = free.len();

@@ -14,6 +14,7 @@ use crate::linearize::{Linearization, LinearizeError, choose_independent, reduce
 use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, ModalError, Mode, ModeClass, match_shapes, modes, permute};
 use crate::model::{FieldError, Model};
+use crate::program::Tier;
 use nalgebra::{DMatrix, DVector};
 
 /// Why a speed produced no result.
@@ -201,6 +202,20 @@ pub struct Options {
     pub newton: Settings,
     /// Do not look for a stable branch when the equilibrium found is unstable.
     pub no_branch_switch: bool,
+    /// How the recorded program's passes run: [`Tier::Many`] (a sweep's) by default; a single
+    /// point asks for [`Tier::Few`], a Monte Carlo run for [`Tier::Native`]. The results are
+    /// the same at every tier, only the time differs.
+    pub tier: Tier,
+}
+
+impl Options {
+    /// The defaults for a single point ([`Tier::Few`]).
+    pub fn single() -> Options {
+        Options {
+            tier: Tier::Few,
+            ..Options::default()
+        }
+    }
 }
 
 /// The model's initial guesses at parameters `p` and `speed`.
@@ -290,7 +305,7 @@ pub fn point_from(
     opt: &Options,
 ) -> Result<Point, PointError> {
     // On the model's route (the recorded program when there is one).
-    let problem = model.problem(p, speed, q0)?;
+    let problem = model.problem(p, speed, q0, opt.tier)?;
     let solved = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
         // A failed solve with redundant cut joints is reported as such, naming them.
         let redundant = problem.redundant_equations(q0);

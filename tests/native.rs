@@ -4,8 +4,8 @@
 mod common;
 
 use common::{EXAMPLES, example};
-use modaltol::program::Linear;
-use modaltol::sweep::{Options, Sweep, initial_guess, point};
+use modaltol::program::{Linear, Tier};
+use modaltol::sweep::{Options, Sweep, initial_guess};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -38,7 +38,8 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
         let speed = 1.3;
         let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let program = model.program(&p, speed, &q0).unwrap();
-        let inst = program.at(&p, speed).unwrap();
+        let inst = program.at(&p, speed, Tier::Many).unwrap();
+        let native = program.at(&p, speed, Tier::Native).unwrap();
         let m = inst.constraints();
         // States near and far from equilibrium, some where the mechanics overflows.
         let states: Vec<(Vec<f64>, Vec<f64>)> = (0..40)
@@ -54,26 +55,28 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
                 (q, l)
             })
             .collect();
-        program.native_after(None);
         let interpreted: Vec<(Vec<f64>, Vec<f64>)> = states
             .iter()
             .map(|(q, l)| (numbers(&inst.linear(q, l)), inst.residual(q, l)))
             .collect();
-        assert!(!program.is_native());
-        program.native_after(Some(0));
+        assert!(
+            !program.is_native(),
+            "{name}: compiled only when a caller asks"
+        );
         for ((q, l), (linear, residual)) in states.iter().zip(&interpreted) {
             assert!(
-                same(&numbers(&inst.linear(q, l)), linear),
+                same(&numbers(&native.linear(q, l)), linear),
                 "{name}: exact evaluation at {q:?}"
             );
             assert!(
-                same(&inst.residual(q, l), residual),
+                same(&native.residual(q, l), residual),
                 "{name}: residual at {q:?}"
             );
         }
         assert!(program.is_native(), "{name}: its program is compiled");
-        program.native_after(None);
-        assert!(!program.is_native(), "{name}: compiled code turned off");
+        // The interpreted instance stays interpreted, with the same numbers.
+        let (q, l) = &states[0];
+        assert!(same(&inst.residual(q, l), &interpreted[0].1), "{name}");
         // Some states are finite, some not: both kinds were compared.
         assert!(
             interpreted
@@ -85,31 +88,39 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
 }
 
 #[test]
-fn a_sweep_that_switches_to_native_code_is_the_interpreted_sweep() {
+fn a_sweep_gives_the_same_points_at_every_tier() {
     for name in [
         "governor.toml",
         "multi_arm_governor.toml",
         "spinning_universal_pendulum.toml",
     ] {
-        let run = |after: Option<usize>| {
+        let run = |tier: Tier| {
             let model = example(name);
             let p = model.model().nominal();
-            let q0 = initial_guess(model.model(), &p, 0.5).unwrap();
-            point(&model, &p, 0.5, &q0, &Options::default()).unwrap();
-            let program = model.program(&p, 0.5, &q0).unwrap();
-            program.native_after(after);
-            let mut sweep = Sweep::new(&model, p.clone(), Options::default());
+            let options = Options {
+                tier,
+                ..Options::default()
+            };
+            let mut sweep = Sweep::new(&model, p.clone(), options);
             let points: Vec<String> = (0..=120)
                 .map(|i| format!("{:?}", sweep.step(0.025 * i as f64)))
                 .collect();
-            (points, program.is_native())
+            let q0 = initial_guess(model.model(), &p, 0.5).unwrap();
+            let program = model.program(&p, 0.5, &q0).unwrap();
+            (
+                points,
+                program.is_native(),
+                program.residual_program().is_some(),
+            )
         };
-        let (interpreted, native_before) = run(None);
-        // Switches in the middle of the sweep.
-        let (switched, native_after) = run(Some(150));
-        assert!(!native_before && native_after, "{name}");
-        for (a, b) in interpreted.iter().zip(&switched) {
+        let (few, native_few, _) = run(Tier::Few);
+        let (many, native_many, specialised_many) = run(Tier::Many);
+        let (native, native_native, _) = run(Tier::Native);
+        assert!(!native_few && !native_many && native_native, "{name}");
+        assert!(specialised_many, "{name}");
+        for ((a, b), c) in few.iter().zip(&many).zip(&native) {
             assert_eq!(a, b, "{name}");
+            assert_eq!(a, c, "{name}");
         }
     }
 }

@@ -10,7 +10,7 @@ use modaltol::equations::Equations;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
-use modaltol::program::SPECIALISE_AFTER;
+use modaltol::program::Tier;
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::DMatrix;
@@ -310,18 +310,18 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
         ));
         let residuals = || {
             at.iter()
-                .map(|(p, speed, q, lambda)| program.at(p, *speed).unwrap().residual(q, lambda))
+                .map(|(p, speed, q, lambda)| {
+                    (program.at(p, *speed, Tier::Few).unwrap()).residual(q, lambda)
+                })
                 .collect::<Vec<_>>()
         };
-        // The first residuals run through the program with the rates (the recording's check
-        // among them), the later ones through the program of `F` alone.
+        // A few residuals run through the program with the rates (the recording's check among
+        // them); once a sweep's tier has made the program of `F` alone, through that.
         let before = residuals();
         assert!(program.residual_program().is_none(), "{name}");
-        let inst = program.at(&p0, 1.0).unwrap();
+        let inst = program.at(&p0, 1.0, Tier::Many).unwrap();
         let lambda = vec![0.5; model.model().n_constraints()];
-        for _ in 0..SPECIALISE_AFTER {
-            inst.residual(&q0, &lambda);
-        }
+        inst.residual(&q0, &lambda);
         assert!(program.residual_program().is_some(), "{name}");
         let after = residuals();
         for (b, a) in before.iter().zip(&after) {
@@ -345,7 +345,7 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
         for (p, speed, q, lambda) in states(name) {
             let sys = System::new(model.model(), &p, speed).unwrap();
             let direct = Direct::new(sys.clone(), free.clone());
-            let inst = program.at(&p, speed).unwrap();
+            let inst = program.at(&p, speed, Tier::Many).unwrap();
             // ∂F/∂p in one pass against one dual-number residual per parameter: along all the
             // parameters, and along some of them in another order.
             let np = p.len();
@@ -675,8 +675,8 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
                 .collect();
             let lift = |v: &[f64]| v.iter().map(|&x| D::from_re(x)).collect::<Vec<_>>();
             let (ql, ll) = (lift(&q), lift(&lambda));
-            let a = recorded.at(&pd, D::from_re(speed), &q).unwrap();
-            let d = direct.at(&pd, D::from_re(speed), &q).unwrap();
+            let a = recorded.at(&pd, D::from_re(speed), &q, Tier::Few).unwrap();
+            let d = direct.at(&pd, D::from_re(speed), &q, Tier::Few).unwrap();
             assert_eq!(a.free(), d.free());
             assert_eq!(a.constraints(), d.constraints());
             let (fa, fd) = (a.residual(&ql, &ll), d.residual(&ql, &ll));

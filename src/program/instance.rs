@@ -24,6 +24,8 @@ pub(super) fn inputs<S: Real>(p: &[S], speed: S, q: &[S], lambda: &[S], nf: usiz
 #[derive(Debug)]
 pub struct Instance<'a> {
     pub(super) program: &'a Program,
+    /// How its `f64` passes run.
+    pub(super) tier: super::Tier,
     /// The static values of `residual`, once it is used.
     pub(super) residual: OnceCell<Vec<f64>>,
     pub(super) full: Vec<f64>,
@@ -71,18 +73,18 @@ impl Instance<'_> {
             .get_or_init(|| self.program.residual_tape().eval_static(&self.x.borrow()))
     }
 
-    /// `F(q_R, λ)`: through `full` until the residual program is made ([`super::SPECIALISE_AFTER`]).
+    /// `F(q_R, λ)`: through `full` or the residual's own program, as the [`super::Tier`] says.
     pub fn residual(&self, q: &[f64], lambda: &[f64]) -> Vec<f64> {
         self.set(q, lambda);
         let mut work = self.work.borrow_mut();
         let (pr, x) = (self.program, self.x.borrow());
-        let mut f = match pr.specialised() {
+        let mut f = match pr.residual_at(self.tier) {
             None => {
                 let mut f = pr.full.eval(&self.full, &x, &mut work.values);
                 f.truncate(pr.free.len() + pr.m);
                 f
             }
-            Some(tape) => match pr.native().and_then(|n| n.residual.as_ref()) {
+            Some(tape) => match pr.native(self.tier).and_then(|n| n.residual.as_ref()) {
                 Some(pass) => tape.eval_native(pass, self.residual_static(), &x, &mut work.values),
                 None => tape.eval(self.residual_static(), &x, &mut work.values),
             },
@@ -176,7 +178,7 @@ impl Instance<'_> {
         let pr = self.program;
         let mut work = self.work.borrow_mut();
         let x = self.x.borrow();
-        let (f, d) = match pr.native().and_then(|n| n.full.as_ref()) {
+        let (f, d) = match pr.native(self.tier).and_then(|n| n.full.as_ref()) {
             Some(pass) => {
                 pr.full
                     .forward_native(pass, &self.full, &x, &pr.linear, &mut work.linear)

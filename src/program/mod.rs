@@ -6,7 +6,7 @@
 //! coordinates, the free coordinates' rates and the multipliers as inputs:
 //!
 //! * `residual`: `F(q_R, λ) = [r_R + Φ_Rᵀ λ; Φ]` at `q̇_R = q̈_R = 0` (folded in), made when
-//!   the residual is evaluated often (see [`SPECIALISE_AFTER`]);
+//!   the residual is evaluated often (a sweep: see [`Tier`]);
 //! * `full`: the same rows with `q̇_R` and `q̈_R` as inputs, so that one forward pass with the
 //!   lanes `(q_k, q̇_k, q̈_k)` of each free coordinate gives Newton's Jacobian (whose `q_R` block
 //!   is `K`), `C` and `M`; `F` is linear in `λ`, so the Jacobian's `λ` columns are `[Φ_Rᵀ; 0]`,
@@ -42,7 +42,6 @@ use crate::model::Model;
 use crate::real::Real;
 use crate::tape::{NativePass, Seeding, Tape, Var, record};
 use std::cell::{OnceCell, RefCell};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock, RwLock};
 
 /// The recorded equations of one model (see the module documentation).
@@ -52,7 +51,8 @@ pub struct Program {
     n: usize,
     free: Vec<usize>,
     m: usize,
-    residual: Residual,
+    /// The program of `F` alone at zero rates, made from `full` when first needed.
+    residual: OnceLock<Tape>,
     /// `full`, with the drive rows.
     full: Tape,
     /// The inputs the trace was recorded at (where `residual` is replayed).
@@ -70,42 +70,55 @@ pub struct Program {
     /// `residual` with the other parameters and the speed static, and its lanes along those
     /// (`∂F/∂p`), made when first needed.
     parametric: Parametric,
-    /// When the `f64` passes run as native code.
-    tier: Tier,
+    /// The `f64` passes compiled to native code, made when [`Tier::Native`] first asks.
+    native: Arc<OnceLock<Native>>,
 }
 
-/// Evaluations of a program after which its `f64` passes are compiled to native code
-/// ([`crate::tape::NativePass`]): compiling takes 10–400 ms and saves 1–14 µs an evaluation
-/// on the shipped examples, so a single point or a sweep stays interpreted and a Monte Carlo
-/// run or a quadrature switches early in its course. The compiled passes give the same
-/// results to the bit.
+/// How a program's `f64` passes run, chosen by the caller for the work ahead: every tier gives
+/// the same results to the bit (the folded rates are zeros, and `F`'s signed zeros are made
+/// `+0`; the compiled passes do the interpreter's arithmetic), only the time differs.
+///
+/// Making the residual's own program costs 9–15 residual passes (the shipped examples and
+/// chains of 40 and 160 segments) and saves a third of each later one, so it pays back after
+/// 30–50 residuals: a single point (two or three residuals) never pays for it, a sweep pays
+/// once. Compiling to native code takes 10–400 ms and saves 1–14 µs an evaluation on the
+/// shipped examples, so it pays back after some tens of thousands of evaluations
+/// ([`NATIVE_AFTER`]): a Monte Carlo run's, not a sweep's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum Tier {
+    /// A few evaluations (one point): a residual is `full`'s value pass at zero rates (the
+    /// rates' terms evaluated and added as zeros, about 1.4 residuals), unless the residual's
+    /// own program is made already.
+    Few,
+    /// Many (a sweep): the residual's own program, made at the first residual.
+    #[default]
+    Many,
+    /// Tens of thousands (a Monte Carlo run): [`Tier::Many`]'s programs compiled to native
+    /// code ([`crate::tape::NativePass`]) at the first evaluation.
+    Native,
+}
+
+/// Evaluations (exact evaluations and residuals) from which compiling the passes to native
+/// code pays back (see [`Tier`]).
 pub const NATIVE_AFTER: usize = 20_000;
 
-/// Residuals evaluated through `full` before `residual` is made from it. Until then a residual
-/// is `full`'s value pass at zero rates: the rates' terms evaluated and added as zeros, where
-/// `residual` folds them away, so such a pass costs about 1.4 residuals. Making `residual` costs
-/// 9–15 of those passes (the shipped examples and chains of 40 and 160 segments), so it pays
-/// back after 30–50 residuals. A single cold point evaluates two or three residuals, a sweep or
-/// a Monte Carlo run thousands: the first never pay for it, the second pay once, at about the
-/// break-even (the rent-or-buy rule). Both give the same values to the bit (the folded terms
-/// are zeros, and `F`'s signed zeros are made `+0`), so when a run switches does not change its
-/// results.
-pub const SPECIALISE_AFTER: usize = 32;
+/// Exact evaluations and residuals of a warm-started point of a sweep, about: a Newton solve
+/// of two or three steps and the linearisation's pass.
+pub const EVALUATIONS_PER_POINT: usize = 4;
 
-/// The program of `F` alone at zero rates, made from `full` when first needed.
-#[derive(Debug)]
-struct Residual {
-    tape: OnceLock<Tape>,
-    /// Residuals evaluated through `full` so far.
-    through_full: AtomicUsize,
-}
-
-impl Clone for Residual {
-    fn clone(&self) -> Self {
-        Residual {
-            tape: self.tape.clone(),
-            through_full: AtomicUsize::new(self.through_full.load(Ordering::Relaxed)),
+impl Tier {
+    /// The tier for about `evaluations` exact evaluations and residuals of one program.
+    pub fn for_evaluations(evaluations: usize) -> Tier {
+        if evaluations >= NATIVE_AFTER {
+            Tier::Native
+        } else {
+            Tier::Many
         }
+    }
+
+    /// The tier for `points` points of sweeps (samples or quadrature nodes × speeds).
+    pub fn for_points(points: usize) -> Tier {
+        Tier::for_evaluations(points.saturating_mul(EVALUATIONS_PER_POINT))
     }
 }
 
@@ -124,42 +137,12 @@ impl Clone for Parametric {
     }
 }
 
-/// The native code of a [`Program`] and when it is made.
-#[derive(Debug)]
-struct Tier {
-    /// Exact evaluations and residuals so far.
-    evaluations: AtomicUsize,
-    /// Compile once `evaluations` reaches this (`usize::MAX`: never).
-    after: AtomicUsize,
-    native: OnceLock<Native>,
-}
-
 /// The compiled `full` pass with [`Program::linear`]'s lanes, and the compiled residual (each
 /// `None` where its program is not compiled).
 #[derive(Debug)]
 struct Native {
     full: Option<NativePass>,
     residual: Option<NativePass>,
-}
-
-impl Default for Tier {
-    fn default() -> Self {
-        Tier {
-            evaluations: AtomicUsize::new(0),
-            after: AtomicUsize::new(NATIVE_AFTER),
-            native: OnceLock::new(),
-        }
-    }
-}
-
-/// A copy counts its evaluations afresh and compiles its own code.
-impl Clone for Tier {
-    fn clone(&self) -> Self {
-        let tier = Tier::default();
-        tier.after
-            .store(self.after.load(Ordering::Relaxed), Ordering::Relaxed);
-        tier
-    }
 }
 
 /// What the recorded function returns: `F`, that is the free coordinates' rows of
@@ -248,15 +231,12 @@ impl Program {
             n,
             free,
             m,
-            residual: Residual {
-                tape: OnceLock::new(),
-                through_full: AtomicUsize::new(0),
-            },
+            residual: OnceLock::new(),
             recorded_at: x,
             full,
             jacobian: OnceLock::new(),
             linear,
-            tier: Tier::default(),
+            native: Arc::default(),
         };
         program.reproduces(model, p, speed, q).then_some(program)
     }
@@ -287,7 +267,7 @@ impl Program {
             };
             let qd = sys.steady_speeds();
             let direct = equilibrium_residual(&Lifted::new(sys), &self.free, q, &qd, l);
-            let Some(here) = self.at(p, w).map(|i| i.residual(q, l)) else {
+            let Some(here) = self.at(p, w, Tier::Few).map(|i| i.residual(q, l)) else {
                 return false;
             };
             let scale = direct.iter().fold(1.0f64, |s, v| s.max(v.abs()));
@@ -299,10 +279,10 @@ impl Program {
         })
     }
 
-    /// `residual`, made now where it is not yet (see [`SPECIALISE_AFTER`]): `full` replayed with
+    /// `residual`, made now where it is not yet (see [`Tier`]): `full` replayed with
     /// the rates as zeros, then pruned to `F` and ordered.
     fn residual_tape(&self) -> &Tape {
-        self.residual.tape.get_or_init(|| {
+        self.residual.get_or_init(|| {
             let (np, n, nf) = (self.np, self.n, self.free.len());
             let rates: Vec<(usize, f64)> = (np + 1 + n..np + 1 + n + 2 * nf)
                 .map(|k| (k, 0.0))
@@ -317,60 +297,39 @@ impl Program {
         })
     }
 
-    /// The program of `F` alone, where it is made yet (see [`SPECIALISE_AFTER`]).
+    /// The program of `F` alone, where it is made yet (see [`Tier`]).
     pub fn residual_program(&self) -> Option<&Tape> {
-        self.residual.tape.get()
+        self.residual.get()
     }
 
-    /// `residual` where it is made or due, counting one more residual through `full` where not.
-    fn specialised(&self) -> Option<&Tape> {
-        if let Some(tape) = self.residual.tape.get() {
-            return Some(tape);
+    /// The residual's own program where `tier` asks for it or it is made already (`None`:
+    /// residuals through `full`).
+    fn residual_at(&self, tier: Tier) -> Option<&Tape> {
+        match tier {
+            Tier::Few => self.residual.get(),
+            Tier::Many | Tier::Native => Some(self.residual_tape()),
         }
-        let count = self.residual.through_full.fetch_add(1, Ordering::Relaxed);
-        (count >= SPECIALISE_AFTER).then(|| self.residual_tape())
     }
 
-    /// Compile the `f64` passes to native code after `evaluations` more exact evaluations and
-    /// residuals of the program (`None`: never; `Some(0)`: at the next). The default is
-    /// [`NATIVE_AFTER`] evaluations; the results are the same either way, only the time
-    /// differs (timings compare the two with this). `None` also turns compiled code off.
-    pub fn native_after(&self, evaluations: Option<usize>) {
-        let at = evaluations.map_or(usize::MAX, |n| {
-            n.saturating_add(self.tier.evaluations.load(Ordering::Relaxed))
-        });
-        self.tier.after.store(at, Ordering::Relaxed);
-    }
-
-    /// Does the exact evaluation run as native code now (see [`Program::native_after`])?
+    /// Is the native code made (by a [`Tier::Native`] evaluation)?
     pub fn is_native(&self) -> bool {
-        self.tier.after.load(Ordering::Relaxed) != usize::MAX
-            && self.tier.native.get().is_some_and(|n| n.full.is_some())
+        self.native.get().is_some_and(|n| n.full.is_some())
     }
 
-    /// The native code, counting one evaluation; compiled here once they reach the threshold
-    /// (`None` while interpreted, and always where [`Program::native_after`] said never).
-    fn native(&self) -> Option<&Native> {
-        let after = self.tier.after.load(Ordering::Relaxed);
-        if after == usize::MAX {
-            return None;
-        }
-        if let Some(native) = self.tier.native.get() {
-            return Some(native);
-        }
-        let count = self.tier.evaluations.fetch_add(1, Ordering::Relaxed);
-        (count >= after).then(|| {
-            self.tier.native.get_or_init(|| Native {
+    /// The native code where `tier` asks for it, compiled at the first such call.
+    fn native(&self, tier: Tier) -> Option<&Native> {
+        (tier == Tier::Native).then(|| {
+            self.native.get_or_init(|| Native {
                 full: self.full.compile_forward(&self.linear),
                 residual: self.residual_tape().compile_eval(),
             })
         })
     }
 
-    /// The program at parameters `p` and `speed`: the parts that depend on them alone
-    /// evaluated. `None` where one of those is not finite: a field of the model does not
-    /// evaluate there (the direct route names it).
-    pub fn at(&self, p: &[f64], speed: f64) -> Option<Instance<'_>> {
+    /// The program at parameters `p` and `speed`, its passes run at `tier`: the parts that
+    /// depend on them alone evaluated. `None` where one of those is not finite: a field of the
+    /// model does not evaluate there (the direct route names it).
+    pub fn at(&self, p: &[f64], speed: f64, tier: Tier) -> Option<Instance<'_>> {
         let x = inputs(
             p,
             speed,
@@ -381,6 +340,7 @@ impl Program {
         let full = self.full.eval_static(&x);
         full.iter().all(|x| x.is_finite()).then(|| Instance {
             program: self,
+            tier,
             residual: OnceCell::new(),
             full,
             x: RefCell::new(x),

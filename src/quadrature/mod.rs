@@ -57,6 +57,7 @@ mod roots;
 mod rules;
 mod sums;
 
+use crate::program::Tier;
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::sweep::Point;
@@ -323,34 +324,41 @@ impl<'a> Nodes<'a> {
 
     /// Sweeps the design `params` across the speeds as a sample is ([`sample_sweep`]) and
     /// keeps its carriers and branch counts.
-    fn sweep(&self, params: Vec<f64>) -> Sweep {
+    fn sweep(&self, params: Vec<f64>, tier: Tier) -> Sweep {
         let (study, width, modes) = (self.study, self.width, self.modes);
         let speeds = &study.speeds;
         let mut branch = vec![None; speeds.len()];
         let mut carriers = vec![f64::NAN; speeds.len() * width];
-        sample_sweep(study.model, params, speeds, &study.nominal, |i, pts| {
-            let Some((_, pt, switches)) = pts else { return };
-            let c = &mut carriers[i * width..(i + 1) * width];
-            for (m, mode) in pt.modes.iter().enumerate() {
-                let (a, b) = (mode.root.lambda, mode.partner.lambda);
-                c[2 * m] = (a + b).re;
-                c[2 * m + 1] = (a * b).re;
-            }
-            if let Some(tf) = study.transfer_at(i) {
-                let o = Output {
-                    quantity: Quantity::TransferMagnitude,
-                    mode: None,
-                };
-                c[2 * modes] = value(pt, &o, Some(tf)).unwrap_or(f64::NAN);
-            } else {
-                c[2 * modes] = 0.0;
-            }
-            // The node holds where its modes do: an |H| without a value (a resonance at this
-            // node) leaves |H| alone without one, not the modes' outputs.
-            if c[..2 * modes].iter().all(|v| v.is_finite()) {
-                branch[i] = Some(switches as u32);
-            }
-        });
+        sample_sweep(
+            study.model,
+            params,
+            speeds,
+            &study.nominal,
+            tier,
+            |i, pts| {
+                let Some((_, pt, switches)) = pts else { return };
+                let c = &mut carriers[i * width..(i + 1) * width];
+                for (m, mode) in pt.modes.iter().enumerate() {
+                    let (a, b) = (mode.root.lambda, mode.partner.lambda);
+                    c[2 * m] = (a + b).re;
+                    c[2 * m + 1] = (a * b).re;
+                }
+                if let Some(tf) = study.transfer_at(i) {
+                    let o = Output {
+                        quantity: Quantity::TransferMagnitude,
+                        mode: None,
+                    };
+                    c[2 * modes] = value(pt, &o, Some(tf)).unwrap_or(f64::NAN);
+                } else {
+                    c[2 * modes] = 0.0;
+                }
+                // The node holds where its modes do: an |H| without a value (a resonance at this
+                // node) leaves |H| alone without one, not the modes' outputs.
+                if c[..2 * modes].iter().all(|v| v.is_finite()) {
+                    branch[i] = Some(switches as u32);
+                }
+            },
+        );
         Sweep { branch, carriers }
     }
 
@@ -367,12 +375,13 @@ impl<'a> Nodes<'a> {
             .flat_map(|(li, _)| (0..finest).step_by(stride).map(move |j| (li, j)))
             .filter(|&(li, j)| store.data[li][j].is_none())
             .collect();
+        let tier = Tier::for_points(todo.len() * self.study.speeds.len());
         let done = std::sync::atomic::AtomicUsize::new(count.swept);
         let new: Vec<Sweep> = run.pool.install(|| {
             todo.par_iter()
                 .map(|&(li, j)| {
                     let t = grid(finest, j);
-                    let s = self.sweep(self.parameters(&lines[li], t));
+                    let s = self.sweep(self.parameters(&lines[li], t), tier);
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     (run.progress)(n, count.budget);
                     s

@@ -73,7 +73,7 @@ pub(crate) fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel)
     let mut csv = csv::Writer::from_writer(Sink::to(&file, &Inputs::new(&[&model]))?);
     let p = m.model().nominal();
     initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point_at(&m, &p, speed, &Options::default())
+    let pt = point_at(&m, &p, speed, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     // Stops at the frequency after a signal.
     let frequencies = range.speeds().take_while(|_| !cancel.is_cancelled());

@@ -4,6 +4,7 @@ use crate::cli::*;
 use anyhow::Result;
 use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
+use modaltol::program::Tier;
 use modaltol::report;
 use modaltol::settings;
 use modaltol::sweep::{Options, initial_guess, point_at};
@@ -24,6 +25,7 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
     let opt = Options {
         independent: independent(m.model(), &ind)?,
         no_branch_switch: branch == BranchArg::AsGiven,
+        tier: Tier::Few,
         ..Default::default()
     };
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;

@@ -35,7 +35,7 @@ pub(crate) fn sensitivity_command(
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = m.model().nominal();
     initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point_at(&m, &p, speed, &Options::default())
+    let pt = point_at(&m, &p, speed, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let at = tf.map(|t| TransferAt::at_speed(&t, speed));
     let s = sensitivity::sensitivities(&m, &p, &pt, &wrt, at, how(derivatives))
