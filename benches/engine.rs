@@ -5,7 +5,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::compiled::Compiled;
-use modaltol::program::Tier;
+use modaltol::program::{Tier, Workspace};
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::hint::black_box;
 
@@ -67,9 +67,10 @@ fn passes(
     };
     // The recorded program's passes at that point: the residual, Newton's Jacobian, and
     // the exact evaluation (Jacobian, C and M in one pass).
+    let workspace = Workspace::default();
     if let Some(inst) = model
         .program(&p, speed, q0)
-        .and_then(|program| program.at(&p, speed, tier))
+        .and_then(|program| program.at(&p, speed, tier, &workspace))
     {
         let lambda = point(model, &p, speed, q0, &Options::default())
             .unwrap()

@@ -16,7 +16,7 @@ use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
 use modaltol::output::outputs;
-use modaltol::program::Tier;
+use modaltol::program::{Tier, Workspace};
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::time::Instant;
@@ -154,7 +154,9 @@ fn main() {
             let p = model.model().nominal();
             let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
             record = record.min(time(&mut || {
-                model.problem(&p, 5.0, &q0, Tier::Few).unwrap();
+                model
+                    .problem(&p, 5.0, &q0, (Tier::Few, &Workspace::default()))
+                    .unwrap();
             }));
             after = after.min(time(&mut || {
                 point(&model, &p, 5.0, &q0, &single).unwrap();

@@ -8,7 +8,7 @@
 use modaltol::compiled::Compiled;
 use modaltol::hessian::hessians;
 use modaltol::output::outputs;
-use modaltol::program::Tier;
+use modaltol::program::{Tier, Workspace};
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -39,8 +39,9 @@ fn main() {
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let program = model.program(&p, speed, &q).unwrap();
     // Exact evaluation, residual and a cold modal point (s), at a sweep's tier or compiled.
+    let workspace = Workspace::default();
     let passes = |tier: Tier| {
-        let inst = program.at(&p, speed, tier).unwrap();
+        let inst = program.at(&p, speed, tier, &workspace).unwrap();
         let options = Options {
             tier,
             ..Options::default()
@@ -88,7 +89,9 @@ fn main() {
         second * 1e6
     );
     let t = Instant::now();
-    program.at(&p, speed, Tier::Native).unwrap().linear(&q, &l);
+    (program.at(&p, speed, Tier::Native, &Workspace::default()))
+        .unwrap()
+        .linear(&q, &l);
     let compile = t.elapsed().as_secs_f64();
     let [native_linear, native_residual, native_cold] = passes(Tier::Native);
     println!(

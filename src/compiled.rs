@@ -13,7 +13,7 @@ use crate::equilibrium::Problem;
 use crate::jet::Jet;
 use crate::mechanics::{System, steady_speeds};
 use crate::model::{FieldError, Model, ModelError};
-use crate::program::{Program, Recorded, Tier};
+use crate::program::{Program, Recorded, Tier, Workspace};
 use crate::real::Real;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -129,18 +129,19 @@ impl Compiled {
     /// The equations at parameters `p` and `speed` over any [`Scalar`], on the model's
     /// [`Route`]: the recorded program where the model has a valid one (recorded on first use,
     /// near the coordinates `q`), else the generic mechanics. The one object the equilibrium
-    /// solve, the linearisation, the sensitivities and the Hessians evaluate.
-    pub fn at<S: Scalar>(
-        &self,
+    /// solve, the linearisation, the sensitivities and the Hessians evaluate. The recorded
+    /// program's passes run at the caller's [`Tier`] in the caller's [`Workspace`].
+    pub fn at<'a, S: Scalar>(
+        &'a self,
         p: &[S],
         speed: S,
         q: &[f64],
-        tier: Tier,
-    ) -> Result<Box<dyn Equations<S> + '_>, FieldError> {
+        (tier, workspace): (Tier, &'a Workspace),
+    ) -> Result<Box<dyn Equations<S> + 'a>, FieldError> {
         let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
         let recorded = self
             .program(&p0, speed.re(), q)
-            .and_then(|program| S::recorded(program, p, speed, tier));
+            .and_then(|program| S::recorded(program, p, speed, (tier, workspace)));
         Ok(match recorded {
             Some(equations) => equations,
             None => Box::new(Direct::new(
@@ -158,23 +159,23 @@ impl Compiled {
         &self,
         p: &[f64],
         speed: f64,
-        q: &[f64],
-        lambda: &[f64],
+        (q, lambda): (&[f64], &[f64]),
         wrt: &[usize],
+        workspace: &Workspace,
     ) -> Option<Vec<f64>> {
         self.program(p, speed, q)
-            .map(|program| program.parameter_derivatives(p, speed, q, lambda, wrt))
+            .map(|program| program.parameter_derivatives(p, speed, (q, lambda), wrt, workspace))
     }
 
     /// The equilibrium solve at parameters `p` and `speed` from near `q0`, of the equations
-    /// [`Compiled::at`] gives at `tier`.
-    pub fn problem(
-        &self,
+    /// [`Compiled::at`] gives at `tier` in `workspace`.
+    pub fn problem<'a>(
+        &'a self,
         p: &[f64],
         speed: f64,
         q0: &[f64],
-        tier: Tier,
-    ) -> Result<Problem<'_>, FieldError> {
+        run: (Tier, &'a Workspace),
+    ) -> Result<Problem<'a>, FieldError> {
         let names = self
             .model
             .coordinates
@@ -182,8 +183,7 @@ impl Compiled {
             .map(|c| c.name.as_str())
             .collect();
         let qd = steady_speeds(&self.model, p, speed)?;
-        let mut problem =
-            Problem::new(self.at(p, speed, q0, tier)?, qd, self.model.driven(), names);
+        let mut problem = Problem::new(self.at(p, speed, q0, run)?, qd, self.model.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
         Ok(problem)
     }
@@ -193,14 +193,14 @@ impl Compiled {
 /// `f64` as an [`crate::program::Instance`] (what depends on the parameters and the speed evaluated once),
 /// over the Taylor numbers of the derivatives as [`Recorded`].
 pub trait Scalar: Real {
-    /// The recorded equations at `p` and `speed`, the `f64` passes run at `tier` (the jets'
-    /// passes are interpreted at every tier); `None` where the program cannot serve there
-    /// (then the direct route does).
+    /// The recorded equations at `p` and `speed`, their passes run in `workspace` (the `f64`
+    /// passes at `tier`; the jets' are interpreted at every tier); `None` where the program
+    /// cannot serve there (then the direct route does).
     fn recorded<'a>(
         program: &'a Program,
         p: &[Self],
         speed: Self,
-        tier: Tier,
+        run: (Tier, &'a Workspace),
     ) -> Option<Box<dyn Equations<Self> + 'a>>;
 }
 
@@ -210,10 +210,10 @@ impl Scalar for f64 {
         program: &'a Program,
         p: &[f64],
         speed: f64,
-        tier: Tier,
+        (tier, workspace): (Tier, &'a Workspace),
     ) -> Option<Box<dyn Equations<f64> + 'a>> {
         program
-            .at(p, speed, tier)
+            .at(p, speed, tier, workspace)
             .map(|i| Box::new(i) as Box<dyn Equations<f64>>)
     }
 }
@@ -223,12 +223,13 @@ impl<J: Jet> Scalar for J {
         program: &'a Program,
         p: &[J],
         speed: J,
-        _: Tier,
+        (_, workspace): (Tier, &'a Workspace),
     ) -> Option<Box<dyn Equations<J> + 'a>> {
         Some(Box::new(Recorded {
             program,
             p: p.to_vec(),
             speed,
+            workspace,
         }))
     }
 }

@@ -36,7 +36,7 @@ use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
-use crate::program::Tier;
+use crate::program::{Tier, Workspace};
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Point, PointError};
 use nalgebra::{Complex, DMatrix, DVector};
@@ -120,19 +120,33 @@ fn root_expansion<J: Jet>(
 /// the parameters `seeded` (the reason where an output is not differentiable there).
 type Jets<J> = (Vec<Result<J, Missing>>, Vec<Result<J, Missing>>);
 
-fn expand<J: Jet>(
-    model: &Compiled,
-    lu: &Factor,
-    seeded: &[J],
-    pt: &Point,
-    smooth: &[Smoothness],
-    outs: &[Output],
+/// What every pass of one point's expansion shares: the point, Newton's Jacobian factorised
+/// once, the outputs, and the working memory of the recorded program's passes.
+struct Expansion<'a> {
+    model: &'a Compiled,
+    lu: Factor,
+    pt: &'a Point,
+    smooth: Vec<Smoothness>,
+    outs: &'a [Output],
     tf: Option<TransferAt>,
-) -> Result<Jets<J>, PointError> {
+    workspace: Workspace,
+}
+
+fn expand<J: Jet>(x: &Expansion<'_>, seeded: &[J]) -> Result<Jets<J>, PointError> {
+    let Expansion {
+        model,
+        lu,
+        pt,
+        smooth,
+        outs,
+        tf,
+        workspace,
+    } = x;
+    let (pt, outs, tf) = (*pt, *outs, *tf);
     let eq = &pt.equilibrium;
     let free = &pt.linear.free;
     let nf = free.len();
-    let equations = model.at(seeded, J::from(pt.speed), &eq.q, Tier::Few)?;
+    let equations = model.at(seeded, J::from(pt.speed), &eq.q, (Tier::Few, workspace))?;
     // Equilibrium expansion: two chord steps with Newton's Jacobian on `[q_R; λ]`.
     let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
         .chain(eq.lambda.iter().copied())
@@ -171,7 +185,7 @@ fn expand<J: Jet>(
     let mode_values: Vec<[Result<J, Missing>; 3]> = pt
         .modes
         .iter()
-        .zip(smooth)
+        .zip(smooth.iter())
         .enumerate()
         .map(|(i, (md, &why))| {
             let not = Missing::Mode { mode: i, why };
@@ -255,10 +269,17 @@ pub fn hessians(
 ) -> Result<Hessians, PointError> {
     let nv = vars.len();
     let nm = pt.modes.len();
-    let smooth = smoothness(&pt.modes);
     // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
-    // cost the chord steps accuracy).
-    let lu = pt.equilibrium.factor();
+    // cost the chord steps accuracy), and one workspace for every pass.
+    let x = Expansion {
+        model,
+        lu: pt.equilibrium.factor(),
+        pt,
+        smooth: smoothness(&pt.modes),
+        outs,
+        tf,
+        workspace: Workspace::default(),
+    };
     let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
     let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
     let mut hess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
@@ -305,7 +326,7 @@ pub fn hessians(
             .enumerate()
             .map(|(i, &v)| Dual2_64::new(v, if i == vars[a] { 1.0 } else { 0.0 }, 0.0))
             .collect();
-        let (o, d) = expand(model, &lu, &seeded, pt, &smooth, outs, tf)?;
+        let (o, d) = expand(&x, &seeded)?;
         for (k, v) in o.iter().enumerate() {
             put(
                 Some(&mut grad[k]),
@@ -334,7 +355,7 @@ pub fn hessians(
                     Hd::new(v, e1, e2, 0.0)
                 })
                 .collect();
-            let (o, d) = expand(model, &lu, &seeded, pt, &smooth, outs, tf)?;
+            let (o, d) = expand(&x, &seeded)?;
             for (k, v) in o.iter().enumerate() {
                 put(
                     None,

@@ -20,7 +20,7 @@
 
 use crate::modal::ModeClass;
 use crate::model::Sampling;
-use crate::program::Tier;
+use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::tolerance::{Spread, value};
@@ -449,7 +449,7 @@ type SampleResult = Vec<(f64, Events)>;
 
 /// Sweeps the design `p` across the study's speeds and reads every output there, with what
 /// happened to the sample.
-fn run_sample(study: &Study, p: Vec<f64>, tier: Tier) -> SampleResult {
+fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResult {
     let outs = &study.outputs;
     let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
     sample_sweep(
@@ -457,7 +457,7 @@ fn run_sample(study: &Study, p: Vec<f64>, tier: Tier) -> SampleResult {
         p,
         &study.speeds,
         &study.nominal,
-        tier,
+        run,
         |i, pts| {
             let Some((nom, pt, switches)) = pts else {
                 out.extend(std::iter::repeat_n(
@@ -573,7 +573,9 @@ impl MonteCarlo {
             let results: Vec<SampleResult> = run.pool.install(|| {
                 (start..end)
                     .into_par_iter()
-                    .map(|i| run_sample(study, sampler.parameters(i), tier))
+                    .map_init(Workspace::default, |workspace, i| {
+                        run_sample(study, sampler.parameters(i), (tier, workspace))
+                    })
                     .collect()
             });
             let mut acc = vec![vec![Moments::default(); outs]; speeds];

@@ -10,7 +10,7 @@
 use crate::compiled::Compiled;
 use crate::equilibrium::Settings;
 use crate::model::Distribution;
-use crate::program::Tier;
+use crate::program::{Tier, Workspace};
 use crate::sweep::{Options, Point, Sweep};
 use crate::tolerance::{Spread, match_modes};
 use nalgebra::{DMatrix, DVector};
@@ -74,13 +74,14 @@ pub fn correlation_factor(c: &DMatrix<f64>) -> DMatrix<f64> {
 /// nominal ones by shape. `visit(i, point)` gets, per speed, the nominal point and the sample's
 /// with the number of branch switches the sample's sweep made up to there, or `None` where
 /// either failed or the sample has another number of modes. The recorded program's passes
-/// run at `tier`, chosen by the caller for all its sweeps ([`Tier::for_points`]).
+/// run at `tier`, chosen by the caller for all its sweeps ([`Tier::for_points`]), in the
+/// caller's `workspace` (one per worker thread).
 pub fn sample_sweep(
     model: &Compiled,
     p: Vec<f64>,
     speeds: &[f64],
     nominal: &[Option<Point>],
-    tier: Tier,
+    (tier, workspace): (Tier, &Workspace),
     mut visit: impl FnMut(usize, Option<(&Point, &Point, usize)>),
 ) {
     // Samples do not report drive forces.
@@ -99,7 +100,7 @@ pub fn sample_sweep(
         }
         return;
     }
-    let mut sweep = Sweep::new(model, p, options);
+    let mut sweep = Sweep::in_workspace(model, p, options, workspace);
     let mut started = false;
     let mut switches = 0;
     for (i, (&w, nom)) in speeds.iter().zip(nominal).enumerate() {

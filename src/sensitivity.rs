@@ -38,7 +38,7 @@ use crate::mechanics::ports::ports_at;
 use crate::modal::{C64, Mode, Root, Smoothness, similarities, smoothness};
 use crate::model::{Channel, Transfer};
 use crate::pair;
-use crate::program::Tier;
+use crate::program::{Tier, Workspace};
 use crate::sweep::{Options, Point, PointError, point};
 use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
@@ -344,8 +344,10 @@ pub fn dual_linearizations(
     let speed = pt.speed;
     let eq = &pt.equilibrium;
     let lu = eq.factor();
+    // One workspace for every pass of this call.
+    let workspace = Workspace::default();
     // ∂F/∂p along all the variables in one pass where the model has a recorded program.
-    let dp = model.parameter_jacobian(p, speed, &eq.q, &eq.lambda, wrt);
+    let dp = model.parameter_jacobian(p, speed, (&eq.q, &eq.lambda), wrt, &workspace);
     let at = Shift {
         model,
         p,
@@ -353,6 +355,7 @@ pub fn dual_linearizations(
         lu: &lu,
         dp: dp.as_deref(),
         wrt,
+        workspace: &workspace,
     };
     let mut out = Vec::with_capacity(wrt.len());
     for group in wrt.chunks(4) {
@@ -378,6 +381,8 @@ struct Shift<'a> {
     dp: Option<&'a [f64]>,
     /// All the variables (the columns of `dp`).
     wrt: &'a [usize],
+    /// Where the recorded program's passes run.
+    workspace: &'a Workspace,
 }
 
 impl Shift<'_> {
@@ -401,7 +406,7 @@ impl Shift<'_> {
                 .collect()
         };
         let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
-        let equations = self.model.at(&pd, D::from(speed), &eq.q, Tier::Few)?;
+        let equations = (self.model).at(&pd, D::from(speed), &eq.q, (Tier::Few, self.workspace))?;
         // The shift `[dq_R; dλ]/db = −J⁻¹ ∂F/∂b`: one implicit step from the nominal solution,
         // with `∂F/∂b` from the recorded program where there is one.
         let nf = free.len();

@@ -4,7 +4,7 @@
 mod common;
 
 use common::{EXAMPLES, example};
-use modaltol::program::{Linear, Tier};
+use modaltol::program::{Linear, Tier, Workspace};
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -38,8 +38,9 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
         let speed = 1.3;
         let q0 = initial_guess(model.model(), &p, speed).unwrap();
         let program = model.program(&p, speed, &q0).unwrap();
-        let inst = program.at(&p, speed, Tier::Many).unwrap();
-        let native = program.at(&p, speed, Tier::Native).unwrap();
+        let (w1, w2) = (Workspace::default(), Workspace::default());
+        let inst = program.at(&p, speed, Tier::Many, &w1).unwrap();
+        let native = program.at(&p, speed, Tier::Native, &w2).unwrap();
         let m = inst.constraints();
         // States near and far from equilibrium, some where the mechanics overflows.
         let states: Vec<(Vec<f64>, Vec<f64>)> = (0..40)

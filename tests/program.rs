@@ -10,7 +10,7 @@ use modaltol::equations::Equations;
 use modaltol::linearize::{choose_independent, linearize};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
-use modaltol::program::Tier;
+use modaltol::program::{Tier, Workspace};
 use modaltol::sweep::{Options, Sweep, initial_guess};
 use modaltol::tape::{Forward, Seeding, Tape, Var, record};
 use nalgebra::DMatrix;
@@ -311,7 +311,10 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
         let residuals = || {
             at.iter()
                 .map(|(p, speed, q, lambda)| {
-                    (program.at(p, *speed, Tier::Few).unwrap()).residual(q, lambda)
+                    (program
+                        .at(p, *speed, Tier::Few, &Workspace::default())
+                        .unwrap())
+                    .residual(q, lambda)
                 })
                 .collect::<Vec<_>>()
         };
@@ -319,7 +322,8 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
         // them); once a sweep's tier has made the program of `F` alone, through that.
         let before = residuals();
         assert!(program.residual_program().is_none(), "{name}");
-        let inst = program.at(&p0, 1.0, Tier::Many).unwrap();
+        let workspace = Workspace::default();
+        let inst = program.at(&p0, 1.0, Tier::Many, &workspace).unwrap();
         let lambda = vec![0.5; model.model().n_constraints()];
         inst.residual(&q0, &lambda);
         assert!(program.residual_program().is_some(), "{name}");
@@ -345,15 +349,16 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
         for (p, speed, q, lambda) in states(name) {
             let sys = System::new(model.model(), &p, speed).unwrap();
             let direct = Direct::new(sys.clone(), free.clone());
-            let inst = program.at(&p, speed, Tier::Many).unwrap();
+            let workspace = Workspace::default();
+            let inst = program.at(&p, speed, Tier::Many, &workspace).unwrap();
             // ∂F/∂p in one pass against one dual-number residual per parameter: along all the
             // parameters, and along some of them in another order.
             let np = p.len();
             let all: Vec<usize> = (0..np).collect();
             let some: Vec<usize> = (0..np).rev().step_by(2).collect();
             let (dp, dsome) = (
-                program.parameter_derivatives(&p, speed, &q, &lambda, &all),
-                program.parameter_derivatives(&p, speed, &q, &lambda, &some),
+                program.parameter_derivatives(&p, speed, (&q, &lambda), &all, &workspace),
+                program.parameter_derivatives(&p, speed, (&q, &lambda), &some, &workspace),
             );
             for b in 0..np {
                 let pd: Vec<Dual64> = p
@@ -668,6 +673,7 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
     for name in EXAMPLES {
         let recorded = example(name);
         let direct = recorded.clone().with_route(Route::Direct);
+        let workspace = Workspace::default();
         for (p, speed, q, lambda) in states(name) {
             let b = p.len() / 2;
             let pd: Vec<D> = (p.iter().enumerate())
@@ -675,8 +681,8 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
                 .collect();
             let lift = |v: &[f64]| v.iter().map(|&x| D::from_re(x)).collect::<Vec<_>>();
             let (ql, ll) = (lift(&q), lift(&lambda));
-            let a = recorded.at(&pd, D::from_re(speed), &q, Tier::Few).unwrap();
-            let d = direct.at(&pd, D::from_re(speed), &q, Tier::Few).unwrap();
+            let a = (recorded.at(&pd, D::from_re(speed), &q, (Tier::Few, &workspace))).unwrap();
+            let d = (direct.at(&pd, D::from_re(speed), &q, (Tier::Few, &workspace))).unwrap();
             assert_eq!(a.free(), d.free());
             assert_eq!(a.constraints(), d.constraints());
             let (fa, fd) = (a.residual(&ql, &ll), d.residual(&ql, &ll));

@@ -3,7 +3,7 @@
 
 use super::Program;
 use super::linear::Linear;
-use super::scratch::Work;
+use super::workspace::Work;
 use crate::real::Real;
 use crate::tape::Rows;
 use nalgebra::DMatrix;
@@ -31,7 +31,8 @@ pub struct Instance<'a> {
     pub(super) full: Vec<f64>,
     /// The input vector, with the parameters and the speed in place.
     pub(super) x: RefCell<Vec<f64>>,
-    pub(super) work: RefCell<Work>,
+    /// Its scratch space, the caller's ([`super::Workspace`]).
+    pub(super) work: &'a RefCell<Work>,
 }
 
 /// Newton's Jacobian `∂F/∂[q_R; λ]` from the derivatives `d` (rows of `F`, `lanes` each) whose

@@ -27,14 +27,14 @@
 mod instance;
 mod linear;
 mod routes;
-mod scratch;
+mod workspace;
 
 pub use instance::Instance;
 pub use linear::Linear;
 pub use routes::Recorded;
+pub use workspace::Workspace;
 
 use instance::inputs;
-use scratch::{POOL, with_buffer};
 
 use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
@@ -267,7 +267,9 @@ impl Program {
             };
             let qd = sys.steady_speeds();
             let direct = equilibrium_residual(&Lifted::new(sys), &self.free, q, &qd, l);
-            let Some(here) = self.at(p, w, Tier::Few).map(|i| i.residual(q, l)) else {
+            let workspace = Workspace::default();
+            let Some(here) = (self.at(p, w, Tier::Few, &workspace)).map(|i| i.residual(q, l))
+            else {
                 return false;
             };
             let scale = direct.iter().fold(1.0f64, |s, v| s.max(v.abs()));
@@ -326,10 +328,16 @@ impl Program {
         })
     }
 
-    /// The program at parameters `p` and `speed`, its passes run at `tier`: the parts that
-    /// depend on them alone evaluated. `None` where one of those is not finite: a field of the
-    /// model does not evaluate there (the direct route names it).
-    pub fn at(&self, p: &[f64], speed: f64, tier: Tier) -> Option<Instance<'_>> {
+    /// The program at parameters `p` and `speed`, its passes run at `tier` in `workspace`: the
+    /// parts that depend on them alone evaluated. `None` where one of those is not finite: a
+    /// field of the model does not evaluate there (the direct route names it).
+    pub fn at<'a>(
+        &'a self,
+        p: &[f64],
+        speed: f64,
+        tier: Tier,
+        workspace: &'a Workspace,
+    ) -> Option<Instance<'a>> {
         let x = inputs(
             p,
             speed,
@@ -344,7 +352,7 @@ impl Program {
             residual: OnceCell::new(),
             full,
             x: RefCell::new(x),
-            work: RefCell::new(POOL.with(|p| p.borrow_mut().pop()).unwrap_or_default()),
+            work: &workspace.work,
         })
     }
 }
@@ -362,14 +370,14 @@ impl Program {
     /// `∂F/∂p_b` for the parameters `b` of `wrt` at parameters `p`, `speed`, `q` and `λ`: one
     /// forward pass along them (rows of `F` × `wrt`, row-major), where one dual-number residual
     /// per parameter would give one column each. What depends on the other parameters only is
-    /// evaluated without lanes, once per call.
+    /// evaluated without lanes, once per call. The pass runs in `workspace`.
     pub fn parameter_derivatives(
         &self,
         p: &[f64],
         speed: f64,
-        q: &[f64],
-        lambda: &[f64],
+        (q, lambda): (&[f64], &[f64]),
         wrt: &[usize],
+        workspace: &Workspace,
     ) -> Vec<f64> {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let known = |sets: &[(Vec<usize>, ParameterPass)]| {
@@ -391,14 +399,21 @@ impl Program {
         });
         let (tape, seeding) = &*pass;
         let fixed = tape.eval_static(&x);
-        with_buffer(|work| tape.forward(&fixed, &x, seeding, work).1)
+        workspace.with_buffer(|work| tape.forward(&fixed, &x, seeding, work).1)
     }
 
-    /// `F`, its Jacobian, `C` and `M` over any [`Real`] (without the constraints' curvature).
-    pub fn linear_over<S: Real>(&self, p: &[S], speed: S, q: &[S], lambda: &[S]) -> Linear<S> {
+    /// `F`, its Jacobian, `C` and `M` over any [`Real`] (without the constraints' curvature),
+    /// the pass run in `workspace`.
+    pub fn linear_over<S: Real>(
+        &self,
+        p: &[S],
+        speed: S,
+        (q, lambda): (&[S], &[S]),
+        workspace: &Workspace,
+    ) -> Linear<S> {
         let x = inputs(p, speed, q, lambda, self.free.len());
         let fixed = self.full.eval_static(&x);
-        with_buffer(|work| {
+        workspace.with_buffer(|work| {
             let (f, d) = self.full.forward_rows(&fixed, &x, &self.linear, work);
             Linear::from_forward(f, &d, self.free.len(), self.m, false)
         })

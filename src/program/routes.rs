@@ -2,7 +2,7 @@
 //! `f64` with what depends on the parameters and the speed evaluated once ([`Instance`]).
 
 use super::linear::Linear;
-use super::{Instance, Program};
+use super::{Instance, Program, Workspace};
 use crate::equations::{Equations, Evaluation, Fit};
 use crate::linearize::{Linearization, LinearizeError};
 use crate::real::Real;
@@ -15,11 +15,14 @@ pub struct Recorded<'a, S: Real> {
     pub program: &'a Program,
     pub p: Vec<S>,
     pub speed: S,
+    /// Where its passes run.
+    pub workspace: &'a Workspace,
 }
 
 impl<S: Real> Recorded<'_, S> {
     fn linear(&self, q: &[S], lambda: &[S]) -> Linear<S> {
-        self.program.linear_over(&self.p, self.speed, q, lambda)
+        self.program
+            .linear_over(&self.p, self.speed, (q, lambda), self.workspace)
     }
 }
 

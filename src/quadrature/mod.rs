@@ -57,7 +57,7 @@ mod roots;
 mod rules;
 mod sums;
 
-use crate::program::Tier;
+use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::sweep::Point;
@@ -324,7 +324,7 @@ impl<'a> Nodes<'a> {
 
     /// Sweeps the design `params` across the speeds as a sample is ([`sample_sweep`]) and
     /// keeps its carriers and branch counts.
-    fn sweep(&self, params: Vec<f64>, tier: Tier) -> Sweep {
+    fn sweep(&self, params: Vec<f64>, run: (Tier, &Workspace)) -> Sweep {
         let (study, width, modes) = (self.study, self.width, self.modes);
         let speeds = &study.speeds;
         let mut branch = vec![None; speeds.len()];
@@ -334,7 +334,7 @@ impl<'a> Nodes<'a> {
             params,
             speeds,
             &study.nominal,
-            tier,
+            run,
             |i, pts| {
                 let Some((_, pt, switches)) = pts else { return };
                 let c = &mut carriers[i * width..(i + 1) * width];
@@ -379,9 +379,9 @@ impl<'a> Nodes<'a> {
         let done = std::sync::atomic::AtomicUsize::new(count.swept);
         let new: Vec<Sweep> = run.pool.install(|| {
             todo.par_iter()
-                .map(|&(li, j)| {
+                .map_init(Workspace::default, |workspace, &(li, j)| {
                     let t = grid(finest, j);
-                    let s = self.sweep(self.parameters(&lines[li], t), tier);
+                    let s = self.sweep(self.parameters(&lines[li], t), (tier, workspace));
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     (run.progress)(n, count.budget);
                     s

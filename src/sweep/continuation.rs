@@ -1,0 +1,308 @@
+//! A sweep over speeds: continuation of the equilibrium (a predictor over the last solutions)
+//! and tracking of the modes by their shapes.
+
+use super::point::{BranchKind, Origin, Point, PointError};
+use super::solve::point_from;
+use super::{Options, initial_guess};
+use crate::compiled::Compiled;
+use crate::equilibrium::{EquilibriumError, Start};
+use crate::modal::{C64, match_shapes, permute};
+use crate::program::Workspace;
+use nalgebra::{DMatrix, DVector};
+
+/// Fraction of the way from the unstable equilibrium to the stable one found beyond which the
+/// previous solution shows that the sweep was not on the unstable branch (see [`Sweep::step`]).
+const RETURN_FRACTION: f64 = 0.1;
+
+/// Solutions the predictor extrapolates from (up to a cubic).
+const PREDICTOR_NODES: usize = 4;
+
+/// A Newton start: coordinates, and the multipliers and a Jacobian for chord steps where known.
+struct Guess {
+    q: Vec<f64>,
+    lambda: Option<Vec<f64>>,
+    jacobian: Option<DMatrix<f64>>,
+    origin: Origin,
+}
+
+/// A converged state kept for continuation.
+struct Solved {
+    speed: f64,
+    q: Vec<f64>,
+    lambda: Vec<f64>,
+    /// Newton's Jacobian there.
+    jacobian: DMatrix<f64>,
+    /// The point was found by a switch of branch.
+    switched: bool,
+}
+
+impl Solved {
+    fn from(pt: &Point) -> Self {
+        Solved {
+            speed: pt.speed,
+            q: pt.equilibrium.q.clone(),
+            lambda: pt.equilibrium.lambda.clone(),
+            jacobian: pt.equilibrium.jacobian.clone(),
+            switched: pt.switched_from.is_some(),
+        }
+    }
+}
+
+/// A sweep over speeds with continuation of the equilibrium and tracking of the modes.
+pub struct Sweep<'a> {
+    model: &'a Compiled,
+    params: Vec<f64>,
+    options: Options,
+    /// The last solutions, newest first (at most [`PREDICTOR_NODES`]), for the predictor.
+    history: Vec<Solved>,
+    /// The steady-state check passed at an earlier speed (the parameters do not change).
+    steady_known: bool,
+    last_shapes: Option<Vec<DVector<C64>>>,
+    last_stable: Option<bool>,
+    /// Where the recorded program's passes run.
+    workspace: Memory<'a>,
+}
+
+/// A sweep's working memory: its own, or lent by a caller that runs many sweeps on one
+/// thread (a Monte Carlo or quadrature worker).
+enum Memory<'a> {
+    Own(Box<Workspace>),
+    Lent(&'a Workspace),
+}
+
+impl Memory<'_> {
+    fn get(&self) -> &Workspace {
+        match self {
+            Memory::Own(w) => w,
+            Memory::Lent(w) => w,
+        }
+    }
+}
+
+impl<'a> Sweep<'a> {
+    /// A sweep of the design `params` with its own working memory.
+    pub fn new(model: &'a Compiled, params: Vec<f64>, options: Options) -> Self {
+        Sweep::with_memory(model, params, options, Memory::Own(Box::default()))
+    }
+
+    /// A sweep of the design `params` whose passes run in the caller's `workspace`.
+    pub fn in_workspace(
+        model: &'a Compiled,
+        params: Vec<f64>,
+        options: Options,
+        workspace: &'a Workspace,
+    ) -> Self {
+        Sweep::with_memory(model, params, options, Memory::Lent(workspace))
+    }
+
+    fn with_memory(
+        model: &'a Compiled,
+        params: Vec<f64>,
+        options: Options,
+        workspace: Memory<'a>,
+    ) -> Self {
+        Sweep {
+            model,
+            params,
+            options,
+            history: Vec::new(),
+            steady_known: false,
+            last_shapes: None,
+            last_stable: None,
+            workspace,
+        }
+    }
+
+    /// Continues from `pt` as if it had been solved last (its equilibrium, Jacobian and mode
+    /// shapes): a Monte Carlo sample starts from the nominal point at its first speed instead of
+    /// the model's initial guess.
+    pub fn warm_start(&mut self, pt: &Point) {
+        self.history = vec![Solved::from(pt)];
+        self.last_shapes = Some(pt.shapes.clone());
+        self.last_stable = Some(pt.stable());
+    }
+
+    /// Solves the next speed. Failures leave the continuation state as it was.
+    ///
+    /// The Newton start is the extrapolation of the last solutions (coordinates and
+    /// multipliers: up to a cubic on a smooth branch, down to the secant where the higher
+    /// orders do not settle, so that a branch that has just bent away from a bifurcation is
+    /// followed, not jumped over) with the secant
+    /// extrapolation of their Jacobians for chord steps; then the last solution with its
+    /// Jacobian; then the model's initial guess.
+    pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
+        // The extrapolated start first.
+        let mut predicted: Option<Guess> = None;
+        let nodes: Vec<&Solved> = self.history.iter().collect();
+        if nodes.len() >= 2 {
+            let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
+                let weights = extrapolation(speed, nodes)?;
+                let mut out = vec![0.0; field(nodes[0]).len()];
+                for (w, s) in weights.iter().zip(nodes) {
+                    for (o, v) in out.iter_mut().zip(field(s)) {
+                        *o += w * v;
+                    }
+                }
+                Some(out)
+            };
+            let diff = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+            };
+            // Each higher order where its correction to the one below is small against that
+            // one's own correction (a smooth branch); not past the first that is not (say
+            // just past a bifurcation, where the branch has a kink).
+            let mut order = 0;
+            let mut q: Option<Vec<f64>> = None;
+            let mut correction = f64::INFINITY;
+            for k in 1..nodes.len() {
+                let Some(next) = predict(&nodes[..=k], |s| &s.q) else {
+                    break;
+                };
+                let c = diff(&next, q.as_deref().unwrap_or(&nodes[0].q));
+                if k > 1 && c > 0.1 * correction {
+                    break;
+                }
+                (order, q, correction) = (k, Some(next), c);
+            }
+            if let Some(q) = q {
+                // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²)
+                // rather than O(Δspeed), so that a point usually takes two residuals, not three.
+                let n = nodes[0].jacobian.nrows();
+                let jacobian = predict(&nodes[..2], |s| s.jacobian.as_slice())
+                    .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
+                    .map(|j| DMatrix::from_vec(n, n, j));
+                predicted = Some(Guess {
+                    q,
+                    lambda: predict(&nodes[..=order], |s| &s.lambda),
+                    jacobian,
+                    origin: Origin::Continued {
+                        speed: nodes[0].speed,
+                    },
+                });
+            }
+        }
+        let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
+            iterations: 0,
+        }));
+        // Then the last solution with its Jacobian, then the model's initial guess, each made
+        // only when the starts before it failed.
+        let last = std::iter::once_with(|| {
+            nodes.first().map(|s1| Guess {
+                q: s1.q.clone(),
+                lambda: Some(s1.lambda.clone()),
+                jacobian: Some(s1.jacobian.clone()),
+                origin: Origin::Continued { speed: s1.speed },
+            })
+        })
+        .flatten();
+        let fallback = std::iter::once_with(|| {
+            initial_guess(self.model.model(), &self.params, speed).map(|q| Guess {
+                q,
+                lambda: None,
+                jacobian: None,
+                origin: Origin::InitialGuess,
+            })
+        });
+        for guess in predicted.into_iter().chain(last).map(Ok).chain(fallback) {
+            let guess = guess?;
+            let start = Start {
+                lambda: guess.lambda.as_deref(),
+                jacobian: guess.jacobian.as_ref(),
+                steady_known: self.steady_known,
+            };
+            let q0 = &guess.q;
+            result = point_from(
+                self.model,
+                &self.params,
+                speed,
+                q0,
+                start,
+                &self.options,
+                self.workspace.get(),
+            );
+            if let Ok(pt) = &mut result {
+                pt.branch.origin = guess.origin;
+                break;
+            }
+        }
+        let mut pt = result?;
+        if let Some(unstable) = &pt.switched_from {
+            // Did the branch followed lose its stability, or did Newton from the previous
+            // solution fall onto an unstable equilibrium nearby (near a pitchfork the stable
+            // branch moves like √Δspeed) and the switch return to the branch followed (the
+            // search leans towards the start, see `point_from`)? With u the unstable
+            // equilibrium and f the stable one found, the previous solution p lies near u in
+            // the first case (it drifts by O(Δspeed) while f − u is O(√Δspeed) or O(1)) and on
+            // f's side of u in the second.
+            if let Some(prev) = self.history.first() {
+                let (mut pf, mut ff) = (0.0, 0.0);
+                for ((p, f), u) in prev.q.iter().zip(&pt.equilibrium.q).zip(unstable) {
+                    pf += (p - u) * (f - u);
+                    ff += (f - u) * (f - u);
+                }
+                // Right after a switch the predictor has a single solution to go on, and a
+                // return to the same side is a return to the branch just switched to.
+                pt.new_branch =
+                    !(ff > 0.0 && pf > 0.0 && (prev.switched || pf > RETURN_FRACTION * ff));
+            }
+            // A switch starts the predictor's history anew: extrapolating through solutions of
+            // another branch leads Newton back onto it.
+            self.history.clear();
+        }
+        if let Some(prev) = &self.last_shapes
+            && prev.len() == pt.modes.len()
+        {
+            let order = match_shapes(prev, &pt.shapes);
+            pt.modes = permute(std::mem::take(&mut pt.modes), &order);
+            pt.shapes = permute(std::mem::take(&mut pt.shapes), &order);
+            if let BranchKind::Unstable { mode, .. } = &mut pt.branch.kind
+                && let Some(j) = order.iter().position(|&k| k == *mode)
+            {
+                *mode = j;
+            }
+        }
+        if let Some(was) = self.last_stable
+            && was != pt.stable()
+            && pt.note.is_none()
+        {
+            pt.note = Some(if was {
+                "stability lost since the previous speed".into()
+            } else {
+                "stability regained since the previous speed".into()
+            });
+        }
+        self.history.truncate(PREDICTOR_NODES - 1);
+        self.history.insert(0, Solved::from(&pt));
+        self.steady_known = true;
+        self.last_shapes = Some(pt.shapes.clone());
+        self.last_stable = Some(pt.stable());
+        Ok(pt)
+    }
+}
+
+/// Weights of the solutions `solved` (newest first) that extrapolate them to `speed`:
+/// Lagrange through their speeds. `None` when the speed is more than two steps beyond the
+/// newest or two speeds coincide.
+fn extrapolation(speed: f64, solved: &[&Solved]) -> Option<Vec<f64>> {
+    let nodes: Vec<f64> = solved.iter().map(|s| s.speed).collect();
+    let dw = nodes[0] - nodes[1];
+    let distinct = nodes
+        .iter()
+        .enumerate()
+        .all(|(i, a)| nodes[..i].iter().all(|b| (a - b).abs() > 1e-12 * a.abs()));
+    if !distinct || ((speed - nodes[0]) / dw).abs() > 2.0 {
+        return None;
+    }
+    Some(
+        (0..nodes.len())
+            .map(|i| {
+                (0..nodes.len())
+                    .filter(|&j| j != i)
+                    .map(|j| (speed - nodes[j]) / (nodes[i] - nodes[j]))
+                    .product()
+            })
+            .collect(),
+    )
+}

@@ -1,0 +1,292 @@
+//! One operating point: Newton from a guess, the stable branch looked for past a divergence,
+//! the linearisation and the modes.
+
+use super::point::{Branch, BranchKind, Origin, Point, PointError};
+use super::{Options, initial_guess};
+use crate::compiled::Compiled;
+use crate::equations::Rates;
+use crate::equilibrium::{EquilibriumError, Problem, Solution, Start};
+use crate::linearize::{choose_independent, reduce};
+use crate::mechanics::ports::ports_at;
+use crate::modal::{C64, Mode, ModeClass, modes};
+use crate::model::Model;
+use crate::program::Workspace;
+use nalgebra::{DMatrix, DVector};
+
+/// Solves one operating point from the guess `q0`.
+pub fn point(
+    model: &Compiled,
+    p: &[f64],
+    speed: f64,
+    q0: &[f64],
+    opt: &Options,
+) -> Result<Point, PointError> {
+    let workspace = Workspace::default();
+    point_from(model, p, speed, q0, Start::default(), opt, &workspace)
+}
+
+/// Solves one operating point from the model's initial guess (what `modal` reports).
+pub fn point_at(
+    model: &Compiled,
+    p: &[f64],
+    speed: f64,
+    opt: &Options,
+) -> Result<Point, PointError> {
+    let q0 = initial_guess(model.model(), p, speed)?;
+    let mut pt = point(model, p, speed, &q0, opt)?;
+    pt.branch.origin = Origin::InitialGuess;
+    Ok(pt)
+}
+
+/// Amplitudes (rad or m at the largest coordinate of a mode's shape) of the steps off an
+/// unstable equilibrium from which Newton looks for a stable one, nearest first.
+const SEARCH_AMPLITUDES: [f64; 6] = [1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0];
+
+/// The directions to search along for a stable equilibrium: the real and imaginary parts of
+/// each unstable mode's shape in the free coordinates (a flutter mode's two parts span its
+/// plane of motion: a conical pendulum's two tilts), largest growth first, each scaled to a
+/// largest entry of 1; with the mode, its root and which part.
+fn search_directions(first: &Point) -> Vec<(usize, C64, bool, Vec<f64>)> {
+    let mut unstable: Vec<usize> = (0..first.modes.len())
+        .filter(|&k| first.modes[k].class == ModeClass::Unstable)
+        .collect();
+    unstable.sort_by(|&a, &b| {
+        let re = |k: usize| {
+            first.modes[k]
+                .root
+                .lambda
+                .re
+                .max(first.modes[k].partner.lambda.re)
+        };
+        re(b).total_cmp(&re(a))
+    });
+    let mut out = Vec::new();
+    for k in unstable {
+        let z = &first.shapes[k];
+        let top = z.iter().fold(0.0f64, |s, v| s.max(v.norm()));
+        for imaginary in [false, true] {
+            let d: Vec<f64> = z
+                .iter()
+                .map(|v| if imaginary { v.im } else { v.re })
+                .collect();
+            let big = d.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            // A part that is only rounding of the other gives no new direction.
+            if big > 1e-3 * top {
+                let root = first.modes[k].root.lambda;
+                out.push((k, root, imaginary, d.iter().map(|v| v / big).collect()));
+            }
+        }
+    }
+    out
+}
+
+/// As [`point`], with more to start Newton from (see [`Start`]), the recorded program's
+/// passes run in `workspace`.
+pub fn point_from(
+    model: &Compiled,
+    p: &[f64],
+    speed: f64,
+    q0: &[f64],
+    start: Start,
+    opt: &Options,
+    workspace: &Workspace,
+) -> Result<Point, PointError> {
+    // On the model's route (the recorded program when there is one).
+    let problem = model.problem(p, speed, q0, (opt.tier, workspace))?;
+    let solved = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
+        // A failed solve with redundant cut joints is reported as such, naming them.
+        let redundant = problem.redundant_equations(q0);
+        if redundant.is_empty() {
+            return e;
+        }
+        let owners: Vec<&str> = model
+            .model()
+            .constraints
+            .iter()
+            .flat_map(|c| std::iter::repeat_n(c.name.as_str(), c.kind.equations()))
+            .collect();
+        let mut names: Vec<String> = redundant.iter().map(|&k| owners[k].to_string()).collect();
+        names.dedup();
+        EquilibriumError::RedundantConstraints {
+            names,
+            rank: model.model().n_constraints() - redundant.len(),
+            equations: model.model().n_constraints(),
+        }
+    })?;
+    let mut first = analyse(model.model(), p, &problem, solved, opt)?;
+    if first.stable() {
+        return Ok(first);
+    }
+    // The most unstable mode, for the record.
+    let worst = (0..first.modes.len())
+        .filter(|&k| first.modes[k].class == ModeClass::Unstable)
+        .max_by(|&a, &b| {
+            let re = |k: usize| first.modes[k].root.lambda.re;
+            re(a).total_cmp(&re(b))
+        })
+        .map(|k| (k, first.modes[k].root.lambda));
+    let unstable = |searched: bool| {
+        let (mode, root) = worst.unwrap_or_default();
+        BranchKind::Unstable {
+            mode,
+            re: root.re,
+            im: root.im,
+            searched,
+        }
+    };
+    let directions = search_directions(&first);
+    if opt.no_branch_switch || directions.is_empty() {
+        first.branch.kind = unstable(!opt.no_branch_switch);
+        first.branch.kind = unstable(false);
+        return Ok(first);
+    }
+    let free = &first.linear.free;
+    // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep that
+    // fell onto the unstable equilibrium returns to its own branch), else the side of the
+    // model's initial guess (then the positive side).
+    let guess = initial_guess(model.model(), p, speed)?;
+    let side = |q: &[f64], dir: &[f64]| -> f64 {
+        free.iter()
+            .enumerate()
+            .map(|(k, &i)| dir[k] * (q[i] - first.equilibrium.q[i]))
+            .sum()
+    };
+    // A stable equilibrium on the side stepped to is taken at once; one that Newton reached
+    // across the unstable equilibrium only if no step finds one on its own side.
+    let mut across = None;
+    for amp in SEARCH_AMPLITUDES {
+        for (k, root, imaginary_part, dir) in &directions {
+            let mut lean = side(q0, dir);
+            if lean.abs() <= 1e-9 {
+                lean = side(&guess, dir);
+            }
+            let signs = if lean < -1e-9 {
+                [-1.0, 1.0]
+            } else {
+                [1.0, -1.0]
+            };
+            for s in signs {
+                let mut q = first.equilibrium.q.clone();
+                for (j, &i) in free.iter().enumerate() {
+                    q[i] += s * amp * dir[j];
+                }
+                let Ok(solved) = problem.solve(speed, &q, Start::default(), opt.newton) else {
+                    continue;
+                };
+                let eq = &solved.equilibrium;
+                let moved = free.iter().fold(0.0f64, |m, &i| {
+                    m.max((eq.q[i] - first.equilibrium.q[i]).abs())
+                });
+                if moved < 1e-7 {
+                    continue;
+                }
+                let own_side = side(&eq.q, dir) * s > 0.0;
+                if let Ok(pt) = analyse(model.model(), p, &problem, solved, opt)
+                    && pt.stable()
+                {
+                    let kind = BranchKind::Switched {
+                        mode: *k,
+                        re: root.re,
+                        im: root.im,
+                        imaginary_part: *imaginary_part,
+                        sign: s,
+                        amplitude: amp,
+                    };
+                    let pt = Point {
+                        switched_from: Some(first.equilibrium.q.clone()),
+                        new_branch: true,
+                        branch: Branch {
+                            kind,
+                            ..first.branch.clone()
+                        },
+                        ..pt
+                    };
+                    if own_side {
+                        return Ok(pt);
+                    }
+                    across.get_or_insert(pt);
+                }
+            }
+        }
+    }
+    first.branch.kind = unstable(true);
+    Ok(across.unwrap_or(first))
+}
+
+/// Linearises and solves the modes at a converged equilibrium.
+fn analyse(
+    model: &Model,
+    p: &[f64],
+    problem: &Problem,
+    Solution {
+        equilibrium: eq,
+        rates,
+    }: Solution,
+    opt: &Options,
+) -> Result<Point, PointError> {
+    let free = model.free();
+    let nf = free.len();
+    // Φ_R from the λ columns of Newton's Jacobian, which are [Φ_Rᵀ; 0].
+    let m = eq.lambda.len();
+    let phi_r = DMatrix::from_fn(m, nf, |k, j| eq.jacobian[(j, nf + k)]);
+    let user = opt.independent.as_deref().or(model.independent.as_deref());
+    let independent = if m == 0 {
+        free.clone()
+    } else {
+        choose_independent(&phi_r, &free, user)?
+    };
+    let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
+    let linear = match rates {
+        Some(Rates { damping, mass }) => {
+            reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
+        }
+        // The recorded route always gives the rates; directly otherwise.
+        None => problem
+            .equations()
+            .linearize(&eq.q, &eq.lambda, &independent, Some(&stiffness))?,
+    };
+    let linear = linear.with_ports(ports_at(model, p, eq.speed, &eq.q, &free)?);
+    let modes = modes(&linear.m, &linear.c, &linear.k, eq.speed)?;
+    let shapes = shapes(&linear.basis, &modes);
+    Ok(Point {
+        speed: eq.speed,
+        equilibrium: eq,
+        linear,
+        modes,
+        shapes,
+        note: None,
+        switched_from: None,
+        new_branch: false,
+        branch: Branch {
+            origin: Origin::Given,
+            kind: BranchKind::Stable,
+        },
+    })
+}
+
+/// Each mode's shape over all the coordinates, `basis · x` with `x` its right vector, summed over
+/// the basis's nonzero entries only: a tree's basis is a selection (one entry a row), so that
+/// this is O(n) a mode where the dense product is O(n²), a large part of a big model's point.
+fn shapes(basis: &DMatrix<f64>, modes: &[Mode]) -> Vec<DVector<C64>> {
+    let rows: Vec<Vec<(usize, f64)>> = basis
+        .row_iter()
+        .map(|r| {
+            r.iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(c, v)| (c, *v))
+                .collect()
+        })
+        .collect();
+    modes
+        .iter()
+        .map(|m| {
+            let x = &m.root.right;
+            DVector::from_iterator(
+                rows.len(),
+                rows.iter()
+                    .map(|r| r.iter().map(|&(c, v)| x[c] * v).sum::<C64>()),
+            )
+        })
+        .collect()
+}
