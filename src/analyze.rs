@@ -15,7 +15,7 @@ use crate::modal::ModeClass;
 use crate::model::Case;
 use crate::montecarlo::{self, Block, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
-use crate::propagate::{Propagation, Run, Study};
+use crate::propagate::{Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
@@ -165,16 +165,23 @@ pub struct Analysis {
     pub inadmissible: Vec<Vec<(String, usize, f64)>>,
     /// With [`Split::Shard`]: this shard's chunk moments per case, in chunk order.
     pub shard_states: Vec<Vec<Block>>,
-    /// The run's [`Cancel`] token was cancelled before the end (see
-    /// [`AnalyzeOptions::cancel`]).
-    pub cancelled: bool,
+    /// How the run ended: [`Termination::Cancelled`] where a stage stopped early because the
+    /// run's [`Cancel`] token was cancelled (see [`AnalyzeOptions::cancel`]), as the stages'
+    /// estimates report it.
+    pub termination: Termination,
 }
 
 impl Analysis {
-    /// Was the run cancelled before it was done: a speed of the sweep, a case of the
-    /// quadrature or Monte Carlo samples left out?
+    /// Did a stage stop early (a speed of the sweep, a case of the quadrature, Monte Carlo
+    /// samples left out)?
+    pub fn cancelled(&self) -> bool {
+        self.termination == Termination::Cancelled
+    }
+
+    /// Is the result partial: cancelled, or fewer Monte Carlo samples than the `asked` (a
+    /// merge of the shards of a cancelled run)?
     pub fn interrupted(&self, asked: usize) -> bool {
-        self.cancelled || self.samples_done.iter().any(|&n| n < asked)
+        self.cancelled() || self.samples_done.iter().any(|&n| n < asked)
     }
 }
 
@@ -214,15 +221,18 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .collect();
     let taylor_seconds = t0.elapsed().as_secs_f64();
     let tq = Instant::now();
+    let mut termination = study.termination;
+    let mut ended = |how: Termination| termination = termination.and(how);
     let quad: Vec<Option<QuadResult>> = match opt.quadrature {
         Some(options) => spreads
             .iter()
             .zip(&opt.cases)
             .map(|(s, case)| {
                 let progress = stage(&format!("quadrature {}", case.name));
-                Quadrature { options }
-                    .propagate(&study, s, &run.with_progress(&progress))
-                    .value
+                let estimate =
+                    Quadrature { options }.propagate(&study, s, &run.with_progress(&progress));
+                ended(estimate.termination);
+                estimate.value
             })
             .collect(),
         None => vec![None; spreads.len()],
@@ -237,7 +247,9 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     let mut rows = Vec::new();
     let mut probabilities = Vec::new();
     for (ci, s) in spreads.iter().enumerate() {
-        let taylor = Taylor.propagate(&study, s, &run).value;
+        let taylor = Taylor.propagate(&study, s, &run);
+        ended(taylor.termination);
+        let taylor = taylor.value;
         for (si, (lm, stats)) in study.locals.iter().zip(taylor).enumerate() {
             let (Some(lm), Some(stats)) = (lm, stats) else {
                 continue;
@@ -256,6 +268,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .map(|mc| monte_carlo(&study, &spreads, opt, mc, &run, &stage));
     let monte_carlo_seconds = mc.as_ref().map(|_| t1.elapsed().as_secs_f64());
     let mc = mc.unwrap_or_default();
+    ended(mc.termination);
     rows.extend(mc.rows);
     probabilities.extend(mc.probabilities);
     let Study {
@@ -278,7 +291,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         samples_done: mc.samples_done,
         inadmissible: mc.inadmissible,
         shard_states: mc.shard_states,
-        cancelled: opt.cancel.is_cancelled(),
+        termination,
     }
 }
 
@@ -309,6 +322,7 @@ fn quadrature_probabilities(study: &Study, case: usize, q: &QuadResult) -> Vec<P
 /// What the Monte Carlo stage adds to an [`Analysis`].
 #[derive(Debug, Default)]
 struct MonteCarloPart {
+    termination: Termination,
     rows: Vec<Row>,
     probabilities: Vec<ProbabilityRow>,
     samples_done: Vec<usize>,
@@ -345,17 +359,20 @@ where
             }
             Split::Shard(k, n) => {
                 let method = MonteCarlo::shard(mc, *k, *n);
-                let states = method.propagate(study, s, &run).value;
-                part.shard_states.push(states.fold.into_blocks());
+                let states = method.propagate(study, s, &run);
+                part.termination = part.termination.and(states.termination);
+                part.shard_states.push(states.value.fold.into_blocks());
                 continue;
             }
             Split::Whole => {
                 if opt.cancel.is_cancelled() {
+                    part.termination = Termination::Cancelled;
                     part.samples_done.push(0);
                     continue;
                 }
-                let r = MonteCarlo::whole(mc).propagate(study, s, &run).value;
-                (r.stats, r.samples)
+                let r = MonteCarlo::whole(mc).propagate(study, s, &run);
+                part.termination = part.termination.and(r.termination);
+                (r.value.stats, r.value.samples)
             }
         };
         part.samples_done.push(done);

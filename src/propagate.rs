@@ -50,6 +50,9 @@ pub struct Study<'a> {
     pub branches: Vec<usize>,
     /// Speeds whose nominal point or local model failed, with the reason, by speed.
     pub failures: Vec<(f64, String)>,
+    /// [`Termination::Cancelled`] where the run was cancelled before the sweep's last speed
+    /// (the speeds left are failures, "interrupted").
+    pub termination: Termination,
 }
 
 /// How a run is controlled from outside: cancellation, the worker threads, progress.
@@ -75,12 +78,24 @@ impl Run<'_> {
 }
 
 /// Why a method stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Termination {
     /// Everything asked was computed.
+    #[default]
     Completed,
     /// The run was cancelled: the value covers what was done before (possibly nothing).
     Cancelled,
+}
+
+impl Termination {
+    /// How a run of two stages ended: cancelled where either was.
+    pub fn and(self, other: Termination) -> Termination {
+        if self == Termination::Cancelled {
+            self
+        } else {
+            other
+        }
+    }
 }
 
 /// What a method gives: its value and why it stopped.
@@ -114,11 +129,13 @@ impl<'a> Study<'a> {
         let done = AtomicUsize::new(0);
         let mut failures = Vec::new();
         let mut nominal = Vec::with_capacity(n);
+        let mut termination = Termination::Completed;
         run.pool.install(|| {
             rayon::scope(|scope| {
                 let mut sweep = Sweep::new(model, p.clone(), Options::default());
                 for (i, &w) in speeds.iter().enumerate() {
                     if run.cancel.is_cancelled() {
+                        termination = Termination::Cancelled;
                         failures.push((w, "interrupted".to_string()));
                         nominal.push(None);
                         continue;
@@ -173,6 +190,7 @@ impl<'a> Study<'a> {
             nominal,
             locals,
             transfer,
+            termination,
             failures,
         }
     }

@@ -51,7 +51,7 @@ pub fn write(
     display: Display,
     mut dir: ResultDir,
 ) -> Result<Written, FileError> {
-    let partial = a.cancelled || mc.is_some_and(|mc| a.interrupted(mc.samples));
+    let partial = a.cancelled() || mc.is_some_and(|mc| a.interrupted(mc.samples));
     dir.write(
         "tolerance.csv",
         &csv_bytes(

@@ -670,7 +670,7 @@ impl NativeModel {
         let a = interruptible(py, &opt.cancel, || {
             analyze(model, &opt, &|_: &str, _: usize, _: usize| {})
         })?;
-        if a.cancelled {
+        if a.cancelled() {
             // Ctrl-C arrived between the worker's last check and its end.
             return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
         }

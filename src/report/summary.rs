@@ -96,7 +96,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
                                           "samples_done": a.samples_done, "partial": a.interrupted(m.samples),
                                           "inadmissible_samples": inadmissible_summary(a)})),
-        "partial": a.cancelled || mc.is_some_and(|m| a.interrupted(m.samples)),
+        "partial": a.cancelled() || mc.is_some_and(|m| a.interrupted(m.samples)),
         "ratio_monte_carlo_to_analytic": a.monte_carlo_seconds.map(|m| m / a.analytic_seconds),
         "ratio_monte_carlo_to_quadrature": a.monte_carlo_seconds.zip(a.quadrature_seconds).map(|(m, q)| m / q),
         "paper": paper_timings(model).map(|(example, analytic, mc, ratio)| json!({
