@@ -1,0 +1,344 @@
+//! Monte Carlo check of the analytic propagation: sample the design variables, re-run the whole
+//! pipeline (equilibrium sweep, linearisation, modes, transfer function) per sample.
+//!
+//! Reproducibility: sample `i` draws from its own ChaCha8 stream `(seed, i)`; Latin hypercube
+//! strata come from one hash permutation per variable ([`permute`]) keyed from a stream reserved
+//! for it; scrambled Sobol points are a function of `(i, dimension, seed)`. Samples are evaluated
+//! in parallel (rayon) in chunks, and the chunks' moments are combined along one fixed binary
+//! tree over the chunk indices ([`TreeFold`]), so the output is bit-identical for any number of
+//! threads or shards, and memory does not grow with the number of samples (at most
+//! [`MAX_SAMPLES`](crate::settings::MAX_SAMPLES); the values kept for quantiles are capped by [`MAX_KEPT_VALUES`]).
+//!
+//! Per speed and output: mean and σ (one-pass central moments up to the fourth), their 95 %
+//! confidence intervals, the samples that failed (no equilibrium or no modes) and those whose
+//! mode changed class against the nominal design. Modes are matched to the nominal ones by shape.
+//!
+//! The interval of the mean is Student's t. The interval of σ is the asymptotic one from the
+//! sample kurtosis κ: `Var(s²) ≈ s⁴ (κ − (n−3)/(n−1)) / n`, so it stays honest for skewed,
+//! heavy-tailed outputs (|H| at a stationary point is χ²-like, κ ≈ 15), where the χ² interval,
+//! valid for normal outputs only, would be several times too narrow.
+
+mod moments;
+mod sampler;
+
+pub use moments::{Block, ChunkState, Events, Moments, TreeFold, block_layout};
+pub use sampler::{Sampler, permute};
+
+use crate::modal::ModeClass;
+use crate::model::Sampling;
+use crate::program::{Tier, Workspace};
+use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
+use crate::sampling::sample_sweep;
+use crate::tolerance::{Spread, value};
+use rayon::prelude::*;
+
+/// Monte Carlo settings.
+#[derive(Debug, Clone, Copy)]
+pub struct McOptions {
+    pub samples: usize,
+    pub seed: u64,
+    pub sampling: Sampling,
+}
+
+/// Statistics of one output at one speed.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct McStat {
+    /// Samples that gave a value.
+    pub n: usize,
+    pub mean: f64,
+    pub std: f64,
+    pub mean_ci: (f64, f64),
+    pub std_ci: (f64, f64),
+    /// Samples where the point failed.
+    pub failed: usize,
+    /// Samples whose mode had another class than the nominal one.
+    pub class_changed: usize,
+    /// Samples whose output's mode was overdamped (ω_d and ζ rows; 0 for the transfer).
+    pub overdamped: usize,
+    /// Samples whose equilibrium was unstable.
+    pub unstable: usize,
+    /// Samples on another equilibrium branch than the nominal design (another number of
+    /// branch switches since the lowest speed).
+    pub other_branch: usize,
+    /// The 5, 50 and 95 % sample quantiles (linear interpolation between order statistics),
+    /// where the run kept the values (see [`MonteCarlo::quantiles`]).
+    pub quantiles: Option<[f64; 3]>,
+}
+
+/// Sample quantile of sorted values (linear interpolation between order statistics,
+/// Hyndman & Fan's type 7).
+pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
+    match sorted.len() {
+        0 => f64::NAN,
+        n => {
+            let h = (n - 1) as f64 * q;
+            let (lo, frac) = (h.floor() as usize, h - h.floor());
+            let hi = (lo + 1).min(n - 1);
+            sorted[lo] + frac * (sorted[hi] - sorted[lo])
+        }
+    }
+}
+
+/// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
+/// the thread that folds it): the value (NaN where the output or the whole point failed) and
+/// what happened to the sample there.
+type SampleResult = Vec<(f64, Events)>;
+
+/// Sweeps the design `p` across the study's speeds and reads every output there, with what
+/// happened to the sample.
+fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResult {
+    let outs = &study.outputs;
+    let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
+    sample_sweep(
+        study.model,
+        p,
+        &study.speeds,
+        &study.nominal,
+        run,
+        |i, pts| {
+            let Some((nom, pt, switches)) = pts else {
+                out.extend(std::iter::repeat_n(
+                    (f64::NAN, Events::default()),
+                    outs.len(),
+                ));
+                return;
+            };
+            let tf = study.transfer_at(i);
+            let unstable = !pt.stable();
+            let other_branch = switches != study.branches[i];
+            out.extend(outs.iter().map(|o| {
+                let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
+                let events = Events {
+                    class_changed: o
+                        .mode
+                        .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
+                    overdamped: class == Some(ModeClass::Overdamped),
+                    unstable,
+                    other_branch,
+                };
+                (value(pt, o, tf).unwrap_or(f64::NAN), events)
+            }));
+        },
+    );
+    out
+}
+
+/// Samples per chunk: the unit of parallel work, of interruption and of sharding.
+pub const CHUNK: usize = 64;
+
+/// Number of chunks for `samples` samples.
+pub fn chunks(samples: usize) -> usize {
+    samples.div_ceil(CHUNK)
+}
+
+/// The chunks `[from, to)` of shard `k` (0-based) of `n`: contiguous, as even as possible.
+pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize> {
+    let c = chunks(samples);
+    (c * k / n)..(c * (k + 1) / n)
+}
+
+/// The Monte Carlo as a propagation method: the samples of `chunks` (samples
+/// `CHUNK·i .. CHUNK·(i+1)` of chunk `i`), each a whole sweep, their moments folded along the
+/// fixed tree (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct MonteCarlo {
+    pub options: McOptions,
+    /// The chunks evaluated here: all of them, or one shard's.
+    pub chunks: std::ops::Range<usize>,
+    /// Keep every value for the 5/50/95 % quantiles (a whole run, unless more than
+    /// [`MAX_KEPT_VALUES`] values would be kept).
+    pub quantiles: bool,
+}
+
+/// What a [`MonteCarlo`] run gives.
+#[derive(Debug, Clone)]
+pub struct McResult {
+    /// Each chunk's moments, in chunk order (folded).
+    pub fold: TreeFold,
+    /// Statistics `[speed][output]` of the chunks done, with the quantiles where they were
+    /// kept.
+    pub stats: Vec<Vec<McStat>>,
+    /// Samples evaluated (fewer than asked where the run was cancelled).
+    pub samples: usize,
+}
+
+impl MonteCarlo {
+    /// All samples of `options`.
+    pub fn whole(options: McOptions) -> MonteCarlo {
+        MonteCarlo {
+            options,
+            chunks: 0..chunks(options.samples),
+            quantiles: true,
+        }
+    }
+
+    /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), no quantiles.
+    pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo {
+        MonteCarlo {
+            options,
+            chunks: shard_chunks(options.samples, k, n),
+            quantiles: false,
+        }
+    }
+
+    /// Evaluates the chunks and folds each chunk's moments `[speed][output]` in chunk order
+    /// ([`TreeFold`]); stops early (fewer chunks, [`Termination::Cancelled`]) when the run is
+    /// cancelled. Progress counts the samples done in this call. With `values`, also keeps
+    /// every finite value per `[speed · outputs + output]`, in sample order (for quantiles).
+    fn run_chunks(
+        &self,
+        study: &Study,
+        spread: &Spread,
+        run: &Run,
+        mut values: Option<&mut Vec<Vec<f32>>>,
+    ) -> (TreeFold, Termination) {
+        let opt = self.options;
+        let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+        let sampler = Sampler::new(study, spread, opt);
+        let here = (self.chunks.len() * CHUNK).min(opt.samples);
+        let tier = Tier::for_points(here * speeds);
+        let mut out = TreeFold::default();
+        let mut done = 0;
+        if let Some(v) = values.as_deref_mut() {
+            v.resize(speeds * outs, Vec::new());
+        }
+        for chunk in self.chunks.clone() {
+            if run.cancel.is_cancelled() {
+                return (out, Termination::Cancelled);
+            }
+            let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(opt.samples));
+            let results: Vec<SampleResult> = run.pool.install(|| {
+                (start..end)
+                    .into_par_iter()
+                    .map_init(Workspace::default, |workspace, i| {
+                        run_sample(study, sampler.parameters(i), (tier, workspace))
+                    })
+                    .collect()
+            });
+            let mut acc = vec![vec![Moments::default(); outs]; speeds];
+            for r in results {
+                for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
+                    if v.is_finite() {
+                        m.add(v);
+                        if let Some(vals) = values.as_deref_mut() {
+                            vals[k].push(v as f32);
+                        }
+                    } else {
+                        m.failed += 1;
+                    }
+                    m.count(events);
+                }
+            }
+            out.push(Block {
+                level: 0,
+                index: chunk,
+                moments: acc,
+            });
+            done += end - start;
+            (run.progress)(done, opt.samples);
+        }
+        (out, Termination::Completed)
+    }
+
+    /// The samples `0..samples` of `spread` whose design is not physically admissible
+    /// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first
+    /// offending value)`, most frequent first. They fail at every speed; this says why.
+    /// `samples` may be fewer than the run's (a cancelled run): they are still the run's
+    /// designs (the Latin hypercube's strata are those of every sample asked).
+    pub fn inadmissible(
+        &self,
+        study: &Study,
+        spread: &Spread,
+        samples: usize,
+        run: &Run,
+    ) -> Vec<(String, usize, f64)> {
+        let model = study.model;
+        let sampler = Sampler::new(study, spread, self.options);
+        let mut tally: Vec<(String, usize, f64)> = run.pool.install(|| {
+            (0..samples)
+                .into_par_iter()
+                .filter_map(|i| model.model().admissible(&sampler.parameters(i)).err())
+                .fold(Vec::new, |mut t: Vec<(String, usize, f64)>, d| {
+                    match t.iter_mut().find(|x| x.0 == d.reason) {
+                        Some(x) => x.1 += 1,
+                        None => t.push((d.reason, 1, d.value)),
+                    }
+                    t
+                })
+                .reduce(Vec::new, |mut a, b| {
+                    for (r, n, v) in b {
+                        match a.iter_mut().find(|x| x.0 == r) {
+                            Some(x) => x.1 += n,
+                            None => a.push((r, n, v)),
+                        }
+                    }
+                    a
+                })
+        });
+        tally.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+        tally
+    }
+}
+
+impl Propagation for MonteCarlo {
+    type Value = McResult;
+
+    fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McResult> {
+        let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+        let samples = self.options.samples;
+        let keep = self.quantiles && samples.saturating_mul(speeds * outs) <= MAX_KEPT_VALUES;
+        let mut values = Vec::new();
+        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut values));
+        let (mut stats, done) = statistics(&fold, speeds, outs, samples);
+        if keep {
+            for (st, vals) in stats.iter_mut().flatten().zip(values) {
+                let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
+                v.sort_by(f64::total_cmp);
+                if !v.is_empty() {
+                    st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
+                }
+            }
+        }
+        Estimate {
+            value: McResult {
+                fold,
+                stats,
+                samples: done,
+            },
+            termination,
+        }
+    }
+}
+
+/// At most this many values (`samples × speeds × outputs`) are kept for the quantiles of a
+/// whole run (4 bytes each); a larger run reports no quantiles.
+pub const MAX_KEPT_VALUES: usize = 100_000_000;
+
+/// Statistics `[speed][output]` of the chunks folded, and the number of samples (of `asked`)
+/// they cover.
+pub fn statistics(
+    fold: &TreeFold,
+    speeds: usize,
+    outs: usize,
+    asked: usize,
+) -> (Vec<Vec<McStat>>, usize) {
+    let total = fold
+        .total()
+        .unwrap_or_else(|| vec![vec![Moments::default(); outs]; speeds]);
+    // From the chunks covered, not from the moments: a run with no outputs (every nominal
+    // speed failed) still evaluated its samples.
+    let samples = match (fold.stack.first(), fold.stack.last()) {
+        (Some(a), Some(b)) => {
+            (b.chunks().end.saturating_mul(CHUNK)).min(asked)
+                - (a.chunks().start * CHUNK).min(asked)
+        }
+        _ => 0,
+    };
+    (
+        total
+            .iter()
+            .map(|row| row.iter().map(Moments::stat).collect())
+            .collect(),
+        samples,
+    )
+}

@@ -1,0 +1,293 @@
+//! One-pass moments of the samples' outputs, combined chunk by chunk along a fixed tree
+//! (Welford, Terriberry, Pébay), so that a run's result does not depend on its threads or shards.
+
+use super::McStat;
+use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+
+/// One-pass central moments (Welford, extended to the fourth moment by Terriberry), with the
+/// counts of failed and class-changed samples; combinable (Pébay's pairwise formulas).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Moments {
+    n: usize,
+    mean: f64,
+    m2: f64,
+    m3: f64,
+    m4: f64,
+    pub(super) failed: usize,
+    class_changed: usize,
+    #[serde(default)]
+    overdamped: usize,
+    #[serde(default)]
+    unstable: usize,
+    #[serde(default)]
+    other_branch: usize,
+}
+
+/// Moments of one chunk (or block of chunks) of samples: `[speed][output]`.
+pub type ChunkState = Vec<Vec<Moments>>;
+
+/// The moments of the aligned block of chunks `[index·2^level, (index+1)·2^level)`: a node of
+/// the one binary tree over global chunk indices along which every run combines its chunks.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Block {
+    pub level: u32,
+    pub index: usize,
+    pub moments: ChunkState,
+}
+
+impl Block {
+    /// The chunks this block covers.
+    pub fn chunks(&self) -> std::ops::Range<usize> {
+        let w = 1usize.checked_shl(self.level).unwrap_or(usize::MAX);
+        self.index.saturating_mul(w)..(self.index.saturating_add(1)).saturating_mul(w)
+    }
+}
+
+/// The maximal aligned blocks `(level, index)` of the chunks `range`, in order: what a
+/// [`TreeFold`] fed those chunks keeps (the largest aligned block that fits, greedily).
+pub fn block_layout(range: std::ops::Range<usize>) -> Vec<(u32, usize)> {
+    let mut out = Vec::new();
+    let mut x = range.start;
+    while x < range.end {
+        let mut level = 0u32;
+        while level < 62 && x.is_multiple_of(2usize << level) && x + (2usize << level) <= range.end
+        {
+            level += 1;
+        }
+        out.push((level, x >> level));
+        x += 1usize << level;
+    }
+    out
+}
+
+/// Combines chunk moments along a fixed binary tree over the chunk indices, in memory
+/// logarithmic in their number.
+///
+/// Pébay's pairwise combination is exact in arithmetic but not associative in floating point,
+/// so the order of combination must not depend on how the work was split. Here it does not: a
+/// block is only ever combined with its sibling, so a whole run pushing chunk after chunk, and a
+/// merge pushing the blocks its shards kept (each shard keeps the maximal aligned blocks of its
+/// range, at most two per level), build the same tree and give bit-identical statistics. The
+/// stack holds at most one block per level: memory does not grow with the sample count.
+#[derive(Debug, Clone, Default)]
+pub struct TreeFold {
+    pub(super) stack: Vec<Block>,
+}
+
+impl TreeFold {
+    /// Adds the next block; blocks must come in chunk order without gaps (shards read from
+    /// files are checked against [`block_layout`] first, see [`crate::shard`]).
+    pub fn push(&mut self, mut b: Block) {
+        while let Some(top) = self.stack.last() {
+            if top.level == b.level && top.index % 2 == 0 && top.index + 1 == b.index {
+                let mut left = self.stack.pop().expect("a top");
+                for (ra, rb) in left.moments.iter_mut().zip(&b.moments) {
+                    for (x, y) in ra.iter_mut().zip(rb) {
+                        x.combine(y);
+                    }
+                }
+                left.level += 1;
+                left.index /= 2;
+                b = left;
+            } else {
+                break;
+            }
+        }
+        self.stack.push(b);
+    }
+
+    /// The maximal aligned blocks of the chunks pushed, in chunk order.
+    pub fn into_blocks(self) -> Vec<Block> {
+        self.stack
+    }
+
+    /// All blocks combined from left to right (the same order for a run and a merge).
+    pub fn total(&self) -> Option<ChunkState> {
+        let mut it = self.stack.iter();
+        let mut acc = it.next()?.moments.clone();
+        for b in it {
+            for (ra, rb) in acc.iter_mut().zip(&b.moments) {
+                for (x, y) in ra.iter_mut().zip(rb) {
+                    x.combine(y);
+                }
+            }
+        }
+        Some(acc)
+    }
+}
+
+impl Moments {
+    /// Merges `b` (later samples) into `self` (Pébay 2008, eqs. 2.1–2.4).
+    pub fn combine(&mut self, b: &Moments) {
+        let (fa, fb) = (self.failed + b.failed, self.class_changed + b.class_changed);
+        let events = (
+            self.overdamped + b.overdamped,
+            self.unstable + b.unstable,
+            self.other_branch + b.other_branch,
+        );
+        if b.n == 0 {
+        } else if self.n == 0 {
+            *self = *b;
+        } else {
+            let (na, nb) = (self.n as f64, b.n as f64);
+            let n = na + nb;
+            let d = b.mean - self.mean;
+            let (d2, d3, d4) = (d * d, d * d * d, d * d * d * d);
+            let m4 = self.m4
+                + b.m4
+                + d4 * na * nb * (na * na - na * nb + nb * nb) / (n * n * n)
+                + 6.0 * d2 * (na * na * b.m2 + nb * nb * self.m2) / (n * n)
+                + 4.0 * d * (na * b.m3 - nb * self.m3) / n;
+            let m3 = self.m3
+                + b.m3
+                + d3 * na * nb * (na - nb) / (n * n)
+                + 3.0 * d * (na * b.m2 - nb * self.m2) / n;
+            let m2 = self.m2 + b.m2 + d2 * na * nb / n;
+            self.mean += d * nb / n;
+            self.m2 = m2;
+            self.m3 = m3;
+            self.m4 = m4;
+            self.n += b.n;
+        }
+        self.failed = fa;
+        self.class_changed = fb;
+        (self.overdamped, self.unstable, self.other_branch) = events;
+    }
+
+    pub(super) fn add(&mut self, x: f64) {
+        let n1 = self.n as f64;
+        self.n += 1;
+        let n = self.n as f64;
+        let d = x - self.mean;
+        let dn = d / n;
+        let dn2 = dn * dn;
+        let t1 = d * dn * n1;
+        self.mean += dn;
+        self.m4 += t1 * dn2 * (n * n - 3.0 * n + 3.0) + 6.0 * dn2 * self.m2 - 4.0 * dn * self.m3;
+        self.m3 += t1 * dn * (n - 2.0) - 3.0 * dn * self.m2;
+        self.m2 += t1;
+    }
+
+    pub(super) fn stat(&self) -> McStat {
+        let n = self.n;
+        let var = if n > 1 {
+            self.m2 / (n - 1) as f64
+        } else {
+            f64::NAN
+        };
+        let std = var.sqrt();
+        let (mean_ci, std_ci) = if n > 3 {
+            let dof = (n - 1) as f64;
+            let t = StudentsT::new(0.0, 1.0, dof).map_or(1.96, |d| d.inverse_cdf(0.975));
+            let half = t * std / (n as f64).sqrt();
+            // Asymptotic interval of σ from the sample kurtosis (normal outputs: κ = 3).
+            let kurt = if self.m2 > 0.0 {
+                n as f64 * self.m4 / (self.m2 * self.m2)
+            } else {
+                3.0
+            };
+            let se = ((kurt - (n as f64 - 3.0) / (n as f64 - 1.0)).max(0.0) / n as f64).sqrt();
+            let z = Normal::standard().inverse_cdf(0.975);
+            let lo = std * (1.0 - z * se).max(0.0).sqrt();
+            let hi = std * (1.0 + z * se).sqrt();
+            ((self.mean - half, self.mean + half), (lo, hi))
+        } else {
+            ((f64::NAN, f64::NAN), (f64::NAN, f64::NAN))
+        };
+        McStat {
+            n,
+            mean: if n > 0 { self.mean } else { f64::NAN },
+            std,
+            mean_ci,
+            std_ci,
+            failed: self.failed,
+            class_changed: self.class_changed,
+            overdamped: self.overdamped,
+            unstable: self.unstable,
+            other_branch: self.other_branch,
+            quantiles: None,
+        }
+    }
+
+    /// Values folded in.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Samples without a value.
+    pub fn failed(&self) -> usize {
+        self.failed
+    }
+
+    /// The event counts: class changed, overdamped, unstable, other branch.
+    pub fn events(&self) -> [usize; 4] {
+        [
+            self.class_changed,
+            self.overdamped,
+            self.unstable,
+            self.other_branch,
+        ]
+    }
+
+    /// Mean and the sums of the 2nd, 3rd and 4th powers of deviations.
+    pub fn central(&self) -> [f64; 4] {
+        [self.mean, self.m2, self.m3, self.m4]
+    }
+
+    /// Counts one sample's events.
+    pub(super) fn count(&mut self, e: Events) {
+        self.class_changed += usize::from(e.class_changed);
+        self.overdamped += usize::from(e.overdamped);
+        self.unstable += usize::from(e.unstable);
+        self.other_branch += usize::from(e.other_branch);
+    }
+}
+
+/// What happened to one sample at one speed, for one output.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Events {
+    /// The output's mode has another class than the nominal one.
+    pub class_changed: bool,
+    /// The output's mode is overdamped.
+    pub overdamped: bool,
+    /// The sample's equilibrium is unstable.
+    pub unstable: bool,
+    /// The sample is on another branch than the nominal design.
+    pub other_branch: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streaming_moments_match_two_pass() {
+        let xs: Vec<f64> = (0..1000)
+            .map(|i| ((i * 7919) % 1000) as f64 / 100.0 + (i as f64 * 0.37).sin().powi(3))
+            .collect();
+        let mut w = Moments::default();
+        xs.iter().for_each(|&x| w.add(x));
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let m2: f64 = xs.iter().map(|x| (x - mean).powi(2)).sum();
+        let m3: f64 = xs.iter().map(|x| (x - mean).powi(3)).sum();
+        let m4: f64 = xs.iter().map(|x| (x - mean).powi(4)).sum();
+        assert!((w.mean - mean).abs() < 1e-12 * mean.abs());
+        assert!((w.m2 - m2).abs() < 1e-10 * m2);
+        assert!((w.m3 - m3).abs() < 1e-8 * m3.abs().max(m2));
+        assert!((w.m4 - m4).abs() < 1e-10 * m4);
+        // Combining two halves gives the moments of the whole.
+        let (mut a, mut b) = (Moments::default(), Moments::default());
+        xs[..377].iter().for_each(|&x| a.add(x));
+        xs[377..].iter().for_each(|&x| b.add(x));
+        a.combine(&b);
+        assert_eq!(a.n, w.n);
+        assert!((a.mean - w.mean).abs() < 1e-12 * w.mean.abs());
+        assert!((a.m2 - w.m2).abs() < 1e-10 * w.m2);
+        assert!((a.m3 - w.m3).abs() < 1e-8 * w.m3.abs().max(w.m2));
+        assert!((a.m4 - w.m4).abs() < 1e-10 * w.m4);
+        // Normal-like data: the σ interval is close to the χ² one, about ±1.96/√(2n).
+        let s = w.stat();
+        assert!(s.std_ci.0 < s.std && s.std < s.std_ci.1);
+    }
+}
