@@ -34,7 +34,7 @@ pub struct Point {
     /// the stable branch found instead: the coordinates of that unstable equilibrium.
     pub switched_from: Option<Vec<f64>>,
     /// This point is on another branch than the previous speed's: the branch followed lost
-    /// its stability and the sweep switched (see [`Sweep::step`]).
+    /// its stability and the sweep switched (see [`Sweep::step`](super::Sweep::step)).
     pub new_branch: bool,
     /// Which equilibrium this is and why it is the one reported.
     pub branch: Branch,
@@ -94,7 +94,7 @@ pub enum BranchKind {
     /// The equilibrium Newton reached is unstable through `mode` (0-based here, 1-based in
     /// JSON; among the point's modes) and reported as it is:
     /// `searched` says whether a stable one was looked for along the unstable modes (and none
-    /// found) or not (switching off, [`Options::no_branch_switch`]).
+    /// found) or not (switching off, [`Options::no_branch_switch`](super::Options::no_branch_switch)).
     Unstable {
         #[serde(serialize_with = "one_based")]
         mode: usize,
