@@ -16,7 +16,9 @@
 //! 6. [`equations`]: the one interface to the equations of an operating point over any scalar
 //!    (residual, Newton's Jacobian, the rates, the linearisation), and the direct route.
 //! 7. [`equilibrium`]: the dynamic equilibrium (Newton, balanced, certified).
-//! 8. [`tape`], [`program`]: the same equations recorded once per model and replayed.
+//! 8. [`tape`], [`program`]: the same equations recorded once per model and replayed; the
+//!    caller says how ([`program::Tier`]: one point, a sweep, a long run compiled to native
+//!    code) and lends the working memory ([`program::Workspace`]): no hidden state.
 //! 9. [`compiled`]: a model with its [`compiled::Route`] (recorded or direct) chosen once.
 //! 10. [`pair`], [`modal`], [`output`], [`frf`]: damped modes, the pair maps, the outputs, |H|.
 //! 11. [`sweep`]: a point (equilibrium, linearisation, modes) and the continuation over speeds;
@@ -31,8 +33,10 @@
 //!     [`montecarlo`].
 //! 17. [`analyze`], [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
-//! 18. [`plots`], [`report`], [`results`]: what is written; `main.rs` parses the command line
-//!     and writes files, the Python package binds the same library.
+//! 18. [`plots`], [`report`], [`results`]: what is written; the command line (`src/main.rs`
+//!     and `src/cli/`, a crate of its own over this one: its arguments, the inputs they name,
+//!     where the results go, signals, one file per subcommand) parses and writes, the Python
+//!     package binds the same library.
 //!
 //! The mechanics is generic over the scalar type so automatic differentiation gives exact
 //! derivatives everywhere; [`program`] traces that generic code once per model ([`tape`]) so
