@@ -16,6 +16,7 @@ use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::plots::{Display, FrequencyUnit};
+use modaltol::program::Tier;
 use modaltol::report::{self, SweepColumns};
 use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
@@ -469,7 +470,10 @@ impl NativeModel {
         independent: Option<Vec<String>>,
         branch: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let opt = self.options_on(independent, branch)?;
+        let opt = Options {
+            tier: Tier::Few,
+            ..self.options_on(independent, branch)?
+        };
         let pt = py.detach(|| self.point(speed, &opt))?;
         let m = self.m();
         let d = PyDict::new(py);
@@ -526,7 +530,7 @@ impl NativeModel {
         };
         let how = self::derivatives(derivatives)?;
         let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
-            let pt = self.point(speed, &Options::default())?;
+            let pt = self.point(speed, &Options::single())?;
             let p = self.model.model().nominal();
             let at = tf.map(|t| TransferAt::at_speed(&t, speed));
             let s =
@@ -565,7 +569,7 @@ impl NativeModel {
         let freqs = self::speeds(freq, "freq", &|n| settings::table(n, header.len()))?;
         let cancel = Cancel::new();
         let rows = interruptible(py, &cancel, || -> PyResult<Vec<Vec<String>>> {
-            let pt = self.point(speed, &Options::default())?;
+            let pt = self.point(speed, &Options::single())?;
             let p = self.model.model().nominal();
             // Stops at the frequency after a Ctrl-C (`interruptible` then raises).
             let freqs = freqs.into_iter().take_while(|_| !cancel.is_cancelled());
