@@ -3,6 +3,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::compiled::Compiled;
+use modaltol::program::Workspace;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
@@ -35,7 +36,9 @@ fn bench(c: &mut Criterion) {
             b.iter(|| point(&model, &p, black_box(speed), &q, &Options::default()).unwrap())
         });
         c.bench_function(&format!("{name}/sensitivities_all_variables"), |b| {
-            b.iter(|| analytic(&model, &p, &pt, black_box(&wrt), tf).unwrap())
+            b.iter(|| {
+                analytic(&model, &p, &pt, black_box(&wrt), tf, &Workspace::default()).unwrap()
+            })
         });
     }
 }

@@ -2,6 +2,7 @@
 //! sensitivities at that point) for `perf record`.
 //! `cargo run --release --example profile_point -- examples/governor.toml 1.595 [sens]`.
 use modaltol::compiled::Compiled;
+use modaltol::program::Workspace;
 use modaltol::sensitivity::{TransferAt, analytic};
 use modaltol::sweep::{Options, initial_guess, point};
 
@@ -23,7 +24,10 @@ fn main() {
     let mut n = 0;
     for _ in 0..3000 {
         if sens {
-            n += analytic(&model, &p, &pt, &wrt, tf).unwrap().variables.len();
+            n += analytic(&model, &p, &pt, &wrt, tf, &Workspace::default())
+                .unwrap()
+                .variables
+                .len();
         } else {
             n += point(&model, &p, speed, &pt.equilibrium.q, &Options::default())
                 .unwrap()

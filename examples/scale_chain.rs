@@ -69,7 +69,7 @@ fn measure(n: usize) -> [f64; 5] {
     let wrt = model.model().toleranced();
     let sens = best(&mut || {
         let t = Instant::now();
-        analytic(&model, &p, &pt, &wrt, None).unwrap();
+        analytic(&model, &p, &pt, &wrt, None, &Workspace::default()).unwrap();
         t.elapsed().as_secs_f64()
     });
     [cold, swept, sens, cold_peak, peak_mb()]
@@ -186,7 +186,7 @@ fn main() {
         let best = (0..3)
             .map(|_| {
                 let t = Instant::now();
-                hessians(&model, &p, &pt, &wrt, &outs, None).unwrap();
+                hessians(&model, &p, &pt, &wrt, &outs, None, &Workspace::default()).unwrap();
                 t.elapsed().as_secs_f64()
             })
             .fold(f64::INFINITY, f64::min);

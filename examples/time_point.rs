@@ -6,11 +6,12 @@
 //! The same with the program's passes compiled to native code (`Tier::Native`).
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::compiled::Compiled;
+use modaltol::equilibrium::Start;
 use modaltol::hessian::hessians;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
 use modaltol::sensitivity::{TransferAt, analytic};
-use modaltol::sweep::{Options, initial_guess, point};
+use modaltol::sweep::{Options, initial_guess, point, point_from};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -38,7 +39,8 @@ fn main() {
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
     let program = model.program(&p, speed, &q).unwrap();
-    // Exact evaluation, residual and a cold modal point (s), at a sweep's tier or compiled.
+    // Exact evaluation, residual and a cold modal point (s), at a sweep's tier or compiled, in
+    // one working memory as a sweep or an analysis keeps it.
     let workspace = Workspace::default();
     let passes = |tier: Tier| {
         let inst = program.at(&p, speed, tier, &workspace).unwrap();
@@ -54,7 +56,17 @@ fn main() {
                 black_box(inst.residual(black_box(&q), &l));
             }),
             best(5000, || {
-                black_box(point(&model, &p, speed, black_box(&q), &options).unwrap());
+                let start = Start::default();
+                let pt = point_from(
+                    &model,
+                    &p,
+                    speed,
+                    black_box(&q),
+                    start,
+                    &options,
+                    &workspace,
+                );
+                black_box(pt.unwrap());
             }),
         ]
     };
@@ -66,7 +78,7 @@ fn main() {
         .map(|t| TransferAt::at_speed(&t, speed));
     let wrt = model.model().toleranced();
     let sens = best(2000, || {
-        black_box(analytic(&model, &p, &pt, &wrt, tf).unwrap());
+        black_box(analytic(&model, &p, &pt, &wrt, tf, &workspace).unwrap());
     });
     println!(
         "exact evaluation {:.2} µs, residual {:.2} µs, modal point {:.2} µs, sensitivities \
@@ -81,12 +93,20 @@ fn main() {
     // Gradients and Hessians of every output (the second-order method's passes).
     let outs = outputs(pt.modes.len(), tf.is_some());
     let second = best(100, || {
-        black_box(hessians(&model, &p, &pt, &wrt, &outs, tf).unwrap());
+        black_box(hessians(&model, &p, &pt, &wrt, &outs, tf, &workspace).unwrap());
     });
     println!(
         "gradients and Hessians ({} variables) {:.2} µs",
         wrt.len(),
         second * 1e6
+    );
+    // `point` on its own: the working memory made afresh at each call (what one `modal` does).
+    let fresh = best(5000, || {
+        black_box(point(&model, &p, speed, black_box(&q), &Options::default()).unwrap());
+    });
+    println!(
+        "modal point with fresh working memory {:.2} µs",
+        fresh * 1e6
     );
     let t = Instant::now();
     (program.at(&p, speed, Tier::Native, &Workspace::default()))

@@ -129,7 +129,7 @@ struct Expansion<'a> {
     smooth: Vec<Smoothness>,
     outs: &'a [Output],
     tf: Option<TransferAt>,
-    workspace: Workspace,
+    workspace: &'a Workspace,
 }
 
 fn expand<J: Jet>(x: &Expansion<'_>, seeded: &[J]) -> Result<Jets<J>, PointError> {
@@ -266,11 +266,12 @@ pub fn hessians(
     vars: &[usize],
     outs: &[Output],
     tf: Option<TransferAt>,
+    workspace: &Workspace,
 ) -> Result<Hessians, PointError> {
     let nv = vars.len();
     let nm = pt.modes.len();
     // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
-    // cost the chord steps accuracy), and one workspace for every pass.
+    // cost the chord steps accuracy); the caller's workspace for every pass.
     let x = Expansion {
         model,
         lu: pt.equilibrium.factor(),
@@ -278,7 +279,7 @@ pub fn hessians(
         smooth: smoothness(&pt.modes),
         outs,
         tf,
-        workspace: Workspace::default(),
+        workspace,
     };
     let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
     let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];

@@ -20,6 +20,7 @@
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::Transfer;
+use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
@@ -130,6 +131,9 @@ impl<'a> Study<'a> {
         let mut failures = Vec::new();
         let mut nominal = Vec::with_capacity(n);
         let mut termination = Termination::Completed;
+        // The local models' working memory: one workspace per task running at once, taken
+        // from and given back to this list.
+        let memory: Mutex<Vec<Workspace>> = Mutex::new(Vec::new());
         run.pool.install(|| {
             rayon::scope(|scope| {
                 let mut sweep = Sweep::new(model, p.clone(), Options::default());
@@ -142,12 +146,16 @@ impl<'a> Study<'a> {
                     }
                     match sweep.step(w) {
                         Ok(pt) => {
-                            let (slot, done, pt_local, p, vars) =
-                                (&slots[i], &done, pt.clone(), &p, &vars);
+                            let (slot, done, pt_local, p, vars, memory) =
+                                (&slots[i], &done, pt.clone(), &p, &vars, &memory);
                             scope.spawn(move |_| {
+                                let lock = || memory.lock().unwrap_or_else(|e| e.into_inner());
+                                let workspace = lock().pop().unwrap_or_default();
+                                let tf = transfer.as_ref();
                                 let lm =
-                                    local_model(model, p, &pt_local, vars, transfer.as_ref(), true)
+                                    local_model(model, p, &pt_local, vars, tf, true, &workspace)
                                         .map_err(|e| format!("derivatives: {e}"));
+                                lock().push(workspace);
                                 *slot.lock().expect("unpoisoned") = Some(lm);
                                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                                 (run.progress)(d, n);

@@ -286,9 +286,10 @@ pub fn sensitivities(
     wrt: &[usize],
     tf: Option<TransferAt>,
     how: Derivatives,
+    workspace: &Workspace,
 ) -> Result<Sensitivity, PointError> {
     match how {
-        Derivatives::Exact => analytic(model, p, pt, wrt, tf),
+        Derivatives::Exact => analytic(model, p, pt, wrt, tf, workspace),
         Derivatives::FiniteDifference => finite_difference(model, p, pt, wrt, tf),
     }
 }
@@ -314,7 +315,7 @@ pub fn frequency_response(
     wrt: &[usize],
     frequencies: impl Iterator<Item = f64>,
 ) -> Result<Vec<ResponseRow>, PointError> {
-    let duals = dual_linearizations(model, p, pt, wrt)?;
+    let duals = dual_linearizations(model, p, pt, wrt, &Workspace::default())?;
     Ok(frequencies
         .map(|f| ResponseRow {
             frequency: f,
@@ -340,14 +341,13 @@ pub fn dual_linearizations(
     p: &[f64],
     pt: &Point,
     wrt: &[usize],
+    workspace: &Workspace,
 ) -> Result<Vec<DualLinearization>, PointError> {
     let speed = pt.speed;
     let eq = &pt.equilibrium;
     let lu = eq.factor();
-    // One workspace for every pass of this call.
-    let workspace = Workspace::default();
     // ∂F/∂p along all the variables in one pass where the model has a recorded program.
-    let dp = model.parameter_jacobian(p, speed, (&eq.q, &eq.lambda), wrt, &workspace);
+    let dp = model.parameter_jacobian(p, speed, (&eq.q, &eq.lambda), wrt, workspace);
     let at = Shift {
         model,
         p,
@@ -355,7 +355,7 @@ pub fn dual_linearizations(
         lu: &lu,
         dp: dp.as_deref(),
         wrt,
-        workspace: &workspace,
+        workspace,
     };
     let mut out = Vec::with_capacity(wrt.len());
     for group in wrt.chunks(4) {
@@ -496,6 +496,7 @@ pub fn analytic(
     pt: &Point,
     wrt: &[usize],
     tf: Option<TransferAt>,
+    workspace: &Workspace,
 ) -> Result<Sensitivity, PointError> {
     let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
     let mut variables = Vec::with_capacity(wrt.len());
@@ -505,7 +506,7 @@ pub fn analytic(
         param: b,
         linear: lin,
         d_equilibrium: dq,
-    } in dual_linearizations(model, p, pt, wrt)?
+    } in dual_linearizations(model, p, pt, wrt, workspace)?
     {
         let eps = |a: &DMatrix<Dual64>| a.map(|v| v.eps);
         let (dm, dc, dk) = (eps(&lin.m), eps(&lin.c), eps(&lin.k));

@@ -58,7 +58,8 @@ impl<'a> SweepStudy<'a> {
                 t.and_then(|t| transfer_defect(&pt.linear, t.omega, extras.transfer.as_ref()));
             if !self.wrt.is_empty() {
                 let p = self.model.model().nominal();
-                match sensitivities(self.model, &p, pt, &self.wrt, t, self.derivatives) {
+                let (wrt, how, workspace) = (&self.wrt, self.derivatives, self.sweep.workspace());
+                match sensitivities(self.model, &p, pt, wrt, t, how, workspace) {
                     Ok(s) => extras.sensitivity = Some(s),
                     Err(e) => result = Err(e),
                 }

@@ -31,6 +31,7 @@ use crate::modal::{Smoothness, smoothness};
 use crate::model::{Case, Distribution, Transfer};
 use crate::output::Missing;
 use crate::pair;
+use crate::program::Workspace;
 use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
@@ -88,8 +89,9 @@ fn first(
     vars: &[usize],
     outs: &[Output],
     tf: Option<TransferAt>,
+    workspace: &Workspace,
 ) -> Result<FirstOrder, PointError> {
-    let s = analytic(model, p, pt, vars, tf)?;
+    let s = analytic(model, p, pt, vars, tf, workspace)?;
     let smooth = smoothness(&pt.modes);
     let finite = |g: Vec<f64>| {
         if g.iter().all(|x| x.is_finite()) {
@@ -182,11 +184,12 @@ pub fn local_model(
     vars: &[usize],
     transfer: Option<&Transfer>,
     hessian: bool,
+    workspace: &Workspace,
 ) -> Result<LocalModel, PointError> {
     let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
     let outs = outputs(pt.modes.len(), tf.is_some());
     if !hessian {
-        let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf)?;
+        let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf, workspace)?;
         return Ok(LocalModel {
             vars: vars.to_vec(),
             hess: grad
@@ -206,7 +209,7 @@ pub fn local_model(
         });
     }
     // Gradients and Hessians together from the second-order passes.
-    let h = hessians(model, p, pt, vars, &outs, tf)?;
+    let h = hessians(model, p, pt, vars, &outs, tf, workspace)?;
     let value = outs
         .iter()
         .map(|o| value(pt, o, tf).unwrap_or(f64::NAN))

@@ -11,6 +11,7 @@ mod common;
 use common::solve;
 use modaltol::compiled::Compiled;
 use modaltol::modal::{C64, ModeClass, similarity};
+use modaltol::program::Workspace;
 
 /// Uniform blade: length 1 m, μ = 2 kg/m, EI = 50 N·m², spinning about z, flapping along z.
 pub fn blade(n: usize) -> String {
@@ -239,9 +240,9 @@ fn a_big_program_shares_its_sensitivity_pass_to_the_bit() {
     let p = model.model().nominal();
     let pt = solve(&model, 5.0, false);
     let wrt = [0, 1, 2];
-    let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();
+    let together = dual_linearizations(&model, &p, &pt, &wrt, &Workspace::default()).unwrap();
     for (shared, &b) in together.iter().zip(&wrt) {
-        let alone = dual_linearizations(&model, &p, &pt, &[b])
+        let alone = dual_linearizations(&model, &p, &pt, &[b], &Workspace::default())
             .unwrap()
             .remove(0);
         assert!(

@@ -16,6 +16,7 @@ use modaltol::mechanics::System;
 use modaltol::mechanics::kinematics::poses;
 use modaltol::mechanics::ports::port_vectors;
 use modaltol::model::Channel;
+use modaltol::program::Workspace;
 use modaltol::sensitivity::{TransferAt, analytic, nominal_transfer};
 
 fn governor_with_ports() -> Compiled {
@@ -126,8 +127,8 @@ fn same_transfer(model: &Compiled, a: (Channel, Channel), b: (Channel, Channel))
                     "{ha:?} vs {hb:?} at {speed} rad/s, ω = {omega}"
                 );
                 let (sa, sb) = (
-                    analytic(model, &p, &pt, &wrt, Some(ta)).unwrap(),
-                    analytic(model, &p, &pt, &wrt, Some(tb)).unwrap(),
+                    analytic(model, &p, &pt, &wrt, Some(ta), &Workspace::default()).unwrap(),
+                    analytic(model, &p, &pt, &wrt, Some(tb), &Workspace::default()).unwrap(),
                 );
                 for (x, y) in sa.variables.iter().zip(&sb.variables) {
                     let (dx, dy) = (

@@ -583,7 +583,7 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
         .next_back()
         .unwrap();
     let wrt = model.model().toleranced();
-    let a = analytic(&model, &p1, &pt, &wrt, None).unwrap();
+    let a = analytic(&model, &p1, &pt, &wrt, None, &Workspace::default()).unwrap();
     let f = finite_difference(&model, &p1, &pt, &wrt, None).unwrap();
     for (x, y) in a.variables.iter().zip(&f.variables) {
         let (dx, dy) = (x.modes[0].d_damped_frequency, y.modes[0].d_damped_frequency);

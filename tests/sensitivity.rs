@@ -4,6 +4,7 @@
 mod common;
 
 use common::pendulum::G;
+use modaltol::program::Workspace;
 
 use common::example;
 use modaltol::sensitivity::{
@@ -41,6 +42,7 @@ fn pendulum_sensitivities_match_closed_form() {
             &pt,
             &[l],
             Some(TransferAt::at_speed(&tf, w)),
+            &Workspace::default(),
         )
         .unwrap();
         let (wd, h, disc) = pendulum_closed_form(Dual64::new(1.0, 1.0), w);
@@ -82,6 +84,7 @@ fn pendulum_sensitivities_match_closed_form() {
             &pt,
             &[l],
             Some(TransferAt::at_speed(&tf, w)),
+            &Workspace::default(),
         )
         .unwrap();
         let dh = sens.variables[0].d_transfer_magnitude.unwrap();
@@ -96,7 +99,15 @@ fn overdamped_roots_coalescing_are_flagged_not_differentiated() {
     // Critical damping on the hanging branch: Ω² = 3g/2L − c²/(4I²).
     let w = (1.5 * G - 2.25f64).sqrt();
     let pt = common::at(&model, w, &Options::default());
-    let sens = analytic(&model, &model.model().nominal(), &pt, &[l], None).unwrap();
+    let sens = analytic(
+        &model,
+        &model.model().nominal(),
+        &pt,
+        &[l],
+        None,
+        &Workspace::default(),
+    )
+    .unwrap();
     assert_eq!(sens.variables[0].modes[0].status, Status::NotDifferentiable);
 }
 
@@ -122,7 +133,7 @@ fn automatic_and_finite_differences_agree_for_every_example() {
             let w = from + (to - from) * s as f64 / 19.0;
             let pt = sweep.step(w).unwrap();
             let t = Some(TransferAt::at_speed(&tf, w));
-            let a = analytic(&model, &p, &pt, &wrt, t).unwrap();
+            let a = analytic(&model, &p, &pt, &wrt, t, &Workspace::default()).unwrap();
             let f = finite_difference(&model, &p, &pt, &wrt, t).unwrap();
             let hmag = a.transfer_magnitude.unwrap();
             for (va, vf) in a.variables.iter().zip(&f.variables) {
@@ -207,7 +218,7 @@ fn gyroscopic_example_needs_the_left_eigenvector() {
     let wrt = model.model().toleranced();
     let pt = common::at(&model, 4.0, &Options::default());
     let f = finite_difference(&model, &p, &pt, &wrt, None).unwrap();
-    let a = analytic(&model, &p, &pt, &wrt, None).unwrap();
+    let a = analytic(&model, &p, &pt, &wrt, None, &Workspace::default()).unwrap();
     let mut worst_symmetric = 0.0f64;
     for (k, &b) in wrt.iter().enumerate() {
         // Re-derive M̂', Ĉ', K̂' by central differences to feed both formulas.
@@ -278,10 +289,11 @@ fn variables_sharing_a_pass_get_the_bits_of_passes_of_their_own() {
         let pt = common::at(&model, 1.3, &Options::default());
         let all: Vec<usize> = (0..p.len()).rev().collect();
         for wrt in [all, model.model().toleranced()] {
-            let together = dual_linearizations(&model, &p, &pt, &wrt).unwrap();
+            let together =
+                dual_linearizations(&model, &p, &pt, &wrt, &Workspace::default()).unwrap();
             assert_eq!(together.len(), wrt.len());
             for (shared, &b) in together.iter().zip(&wrt) {
-                let alone = dual_linearizations(&model, &p, &pt, &[b])
+                let alone = dual_linearizations(&model, &p, &pt, &[b], &Workspace::default())
                     .unwrap()
                     .remove(0);
                 assert_eq!(shared.param, b);

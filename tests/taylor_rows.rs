@@ -15,6 +15,7 @@ use modaltol::analyze::{AnalyzeOptions, Method, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::modal::{Smoothness, smoothness};
 use modaltol::output::{Missing, Quantity};
+use modaltol::program::Workspace;
 use modaltol::sweep::{Options, Point, Sweep};
 use modaltol::tolerance::{LocalModel, local_model, match_modes};
 use nalgebra::DMatrix;
@@ -84,7 +85,8 @@ fn local_models(
             if let Some((r, _)) = reference {
                 pt = match_modes(&r[i], pt);
             }
-            let lm = local_model(model, &p, &pt, &vars, tf, true).expect("derivatives");
+            let lm = local_model(model, &p, &pt, &vars, tf, true, &Workspace::default())
+                .expect("derivatives");
             (pt, lm)
         })
         .collect()
@@ -267,7 +269,16 @@ fn a_chain_with_two_dozen_toleranced_variables_has_every_derivative_and_each_mat
             let mut pp = p.clone();
             pp[b] += s * step;
             let q = modaltol::sweep::point(&model, &pp, pt.speed, &pt.equilibrium.q, &opt).unwrap();
-            local_model(&model, &pp, &match_modes(&pt, q), &vars, None, false).unwrap()
+            local_model(
+                &model,
+                &pp,
+                &match_modes(&pt, q),
+                &vars,
+                None,
+                false,
+                &Workspace::default(),
+            )
+            .unwrap()
         };
         let (up, down) = (side(1.0), side(-1.0));
         (0..outs)
@@ -376,7 +387,16 @@ fn a_row_without_a_value_carries_its_reason() {
         let pt = Sweep::new(model, p.clone(), Options::default())
             .step(0.0)
             .unwrap();
-        let lm = local_model(model, &p, &pt, &model.model().toleranced(), None, true).unwrap();
+        let lm = local_model(
+            model,
+            &p,
+            &pt,
+            &model.model().toleranced(),
+            None,
+            true,
+            &Workspace::default(),
+        )
+        .unwrap();
         (pt, lm)
     };
     // m = k = 1, c = 2: λ = −1 twice, ζ = c/(2√(km)) = 1, dζ/dm = −ζ/(2m).

@@ -3,6 +3,7 @@
 mod common;
 
 use common::pendulum::G;
+use modaltol::program::Workspace;
 
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
@@ -118,7 +119,7 @@ fn pendulum_hessians_match_closed_form() {
     let vars = model.model().toleranced();
     let tf = model.model().analysis.transfer.as_ref();
     let check = |w: f64, pt: &Point| {
-        let lm = local_model(&model, &p, pt, &vars, tf, true).unwrap();
+        let lm = local_model(&model, &p, pt, &vars, tf, true, &Workspace::default()).unwrap();
         let (wd, h) = closed_form(HyperDual64::new(1.0, 1.0, 1.0, 0.0), w);
         let hwd = lm.hess[0].as_ref().unwrap()[(0, 0)];
         assert!(
@@ -150,7 +151,7 @@ fn pendulum_hessians_match_closed_form() {
 /// code at re-solved perturbed points).
 fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
     let tf = model.model().analysis.transfer.as_ref();
-    let mut lm = local_model(model, p, pt, vars, tf, false).unwrap();
+    let mut lm = local_model(model, p, pt, vars, tf, false, &Workspace::default()).unwrap();
     let nv = vars.len();
     let opt = Options {
         independent: Some(pt.linear.independent.clone()),
@@ -170,7 +171,7 @@ fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize])
                 pt,
                 point(model, &pp, pt.speed, &pt.equilibrium.q, &opt).unwrap(),
             );
-            local_model(model, &pp, &q, vars, tf, false).unwrap()
+            local_model(model, &pp, &q, vars, tf, false, &Workspace::default()).unwrap()
         };
         let (up, down) = (side(1.0), side(-1.0));
         let column = |slot: &mut Result<DMatrix<f64>, Missing>,
@@ -222,7 +223,8 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
         let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
         for &w in &speeds {
             let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
-            let exact = local_model(&model, &p, &pt, &vars, tf, true).unwrap();
+            let exact =
+                local_model(&model, &p, &pt, &vars, tf, true, &Workspace::default()).unwrap();
             let fd = differenced_hessians(&model, &p, &pt, &vars);
             // Gradients from the second-order passes equal the first-order sensitivities
             // (eigenvalue-derivative formula with left vectors).
@@ -293,7 +295,7 @@ fn a_transfer_zero_by_symmetry_has_zero_derivatives() {
     .unwrap();
     let k = pt.modes.len() * 2; // |H| follows ω_d and ζ of every mode
     for hessian in [false, true] {
-        let lm = local_model(&model, &p, &pt, &vars, tf, hessian).unwrap();
+        let lm = local_model(&model, &p, &pt, &vars, tf, hessian, &Workspace::default()).unwrap();
         assert_eq!(lm.value[k], 0.0);
         assert!(
             lm.grad[k].as_ref().unwrap().iter().all(|&g| g == 0.0),

@@ -7,6 +7,7 @@ mod common;
 
 use modaltol::compiled::Compiled;
 use modaltol::model::Transfer;
+use modaltol::program::Workspace;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::study::SweepStudy;
@@ -94,6 +95,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
                 &wrt,
                 Some(at),
                 Derivatives::Exact,
+                &Workspace::default(),
             ) {
                 let why = report::transfer_defect_at(&pt, Some(&at));
                 let header: Vec<String> = report::SENSITIVITY_HEADER

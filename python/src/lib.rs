@@ -16,7 +16,7 @@ use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::plots::{Display, FrequencyUnit};
-use modaltol::program::Tier;
+use modaltol::program::{Tier, Workspace};
 use modaltol::report::{self, SweepColumns};
 use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
@@ -533,10 +533,16 @@ impl NativeModel {
             let pt = self.point(speed, &Options::single())?;
             let p = self.model.model().nominal();
             let at = tf.map(|t| TransferAt::at_speed(&t, speed));
-            let s =
-                sensitivity::sensitivities(&self.model, &p, &pt, &wrt, at, how).map_err(|e| {
-                    SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}"))
-                })?;
+            let s = sensitivity::sensitivities(
+                &self.model,
+                &p,
+                &pt,
+                &wrt,
+                at,
+                how,
+                &Workspace::default(),
+            )
+            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
             let why = report::transfer_defect_at(&pt, at.as_ref());
             Ok(report::sensitivity_rows(self.m(), &pt, &s, why))
         })?;

@@ -85,6 +85,11 @@ impl<'a> Sweep<'a> {
         Sweep::with_memory(model, params, options, Memory::Own(Box::default()))
     }
 
+    /// The working memory its passes run in (lent on to the derivatives at its points).
+    pub fn workspace(&self) -> &Workspace {
+        self.workspace.get()
+    }
+
     /// A sweep of the design `params` whose passes run in the caller's `workspace`.
     pub fn in_workspace(
         model: &'a Compiled,

@@ -4,6 +4,7 @@ use crate::cli::*;
 use anyhow::{Context, Result};
 use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
+use modaltol::program::Workspace;
 use modaltol::report;
 use modaltol::sensitivity::{self, TransferAt};
 use modaltol::settings;
@@ -38,8 +39,16 @@ pub(crate) fn sensitivity_command(
     let pt = point_at(&m, &p, speed, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let at = tf.map(|t| TransferAt::at_speed(&t, speed));
-    let s = sensitivity::sensitivities(&m, &p, &pt, &wrt, at, how(derivatives))
-        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let s = sensitivity::sensitivities(
+        &m,
+        &p,
+        &pt,
+        &wrt,
+        at,
+        how(derivatives),
+        &Workspace::default(),
+    )
+    .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     let why = report::transfer_defect_at(&pt, at.as_ref());
     stop_if_cancelled(cancel, &output)?;
     let method = if derivatives == Derivatives::Ad {
