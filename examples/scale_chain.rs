@@ -11,10 +11,19 @@
 //! most of its modes overdamped; `… -- record n` (or a model file instead of n): the cold point
 //! split into recording the program and the point after it (from the initial guess), and the
 //! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process;
-//! `… -- hessians n`: the gradients and Hessians along the chain's parameters at one point.
+//! `… -- hessians n`: the gradients and Hessians along the chain's parameters at one point;
+//! `… -- tolerances n [--monte-carlo] k …` (issue 38's family): the analysis of the n-segment
+//! chain (default 40) whose first k segments carry their own toleranced `mu` and `EI` (2k
+//! independent variables), 13 speeds over 0–60 rad/s, two threads: the time of the Taylor
+//! methods (the nominal sweep, gradients and Hessians included), of the quadrature (and its
+//! nodes) and of a 3000-sample Monte Carlo, the rows each method filled, and the growth
+//! exponents of the times in the number of variables.
+use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
+use modaltol::model::Sampling;
+use modaltol::montecarlo::McOptions;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
 use modaltol::sensitivity::analytic;
@@ -23,7 +32,7 @@ use std::time::Instant;
 
 #[path = "common/chain.rs"]
 mod common_chain;
-use common_chain::{chain, with_joint_dampers};
+use common_chain::{chain, chain_toleranced, with_joint_dampers};
 
 /// Peak resident memory of this process (MB), from `/proc/self/status`.
 fn peak_mb() -> f64 {
@@ -49,7 +58,8 @@ fn measure(n: usize) -> [f64; 5] {
         let p = model.model().nominal();
         let t = Instant::now();
         let q0 = initial_guess(model.model(), &p, speed).unwrap();
-        point(&model, &p, speed, &q0, &Options::default()).unwrap();
+        // As `modal` solves it.
+        point(&model, &p, speed, &q0, &Options::single()).unwrap();
         t.elapsed().as_secs_f64()
     });
     let cold_peak = peak_mb();
@@ -85,8 +95,74 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
     sxy / sxx
 }
 
+/// `tolerances n [--monte-carlo] k …` (see the module documentation).
+fn tolerances(args: &[String]) {
+    let monte_carlo = args.iter().any(|a| a == "--monte-carlo");
+    let nums: Vec<usize> = args
+        .iter()
+        .filter(|a| !a.starts_with("--"))
+        .map(|a| a.parse().unwrap())
+        .collect();
+    let n = nums.first().copied().unwrap_or(40);
+    let ks = if nums.len() > 1 {
+        nums[1..].to_vec()
+    } else {
+        vec![5, 10, 20]
+    };
+    println!(
+        "{n}-segment chain, 13 speeds: variables | Taylor s | quadrature s (nodes) | Monte Carlo s \
+         | rows filled: first order, second order, quadrature"
+    );
+    let mut rows = Vec::new();
+    for k in ks {
+        let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+        let cases = model.model().tolerance_cases(&[]).unwrap();
+        let options = AnalyzeOptions {
+            speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
+            cases,
+            monte_carlo: monte_carlo.then_some(McOptions {
+                samples: 3000,
+                seed: 1,
+                sampling: Sampling::Random,
+            }),
+            threads: Some(2),
+            ..AnalyzeOptions::default()
+        };
+        let a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
+        let filled = |m: Method| {
+            let of: Vec<&Row> = a.rows.iter().filter(|r| r.method == m).collect();
+            let done = of.iter().filter(|r| r.std.is_finite()).count();
+            format!("{done}/{}", of.len())
+        };
+        let nodes: usize = a.quadrature_rules.iter().map(|r| r.1).sum();
+        let (taylor, quad) = (a.analytic_seconds, a.quadrature_seconds.unwrap_or(f64::NAN));
+        let mc = a.monte_carlo_seconds.unwrap_or(f64::NAN);
+        println!(
+            "{:9} | {taylor:8.3} | {quad:8.3} ({nodes}) | {mc:8.3} | {}, {}, {}",
+            2 * k,
+            filled(Method::FirstOrder),
+            filled(Method::SecondOrder),
+            filled(Method::Quadrature)
+        );
+        rows.push([2.0 * k as f64, taylor, quad]);
+    }
+    if rows.len() >= 2 {
+        let x: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+        let fit = |j: usize| exponent(&x, &rows.iter().map(|r| r[j]).collect::<Vec<_>>());
+        println!(
+            "growth in the variables p: Taylor p^{:.2}, quadrature p^{:.2}",
+            fit(1),
+            fit(2)
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("tolerances") {
+        tolerances(&args[1..]);
+        return;
+    }
     if args.first().map(String::as_str) == Some("cold") {
         // Profiling driver: `cold n reps [direct]` repeats the cold point (for `perf record`;
         // `direct` without the recorded program).

@@ -252,3 +252,58 @@ fn a_big_program_shares_its_sensitivity_pass_to_the_bit() {
         );
     }
 }
+
+/// Issue 38's benchmark family (`examples/scale_chain.rs -- tolerances`): the chain whose first
+/// k segments carry their own `mu` and `EI` is, at the nominal values, the same mechanism as
+/// the chain with shared ones (the same modes at every speed), and it has 2k toleranced
+/// variables, one per segment parameter, each with its own tolerance.
+#[test]
+fn the_toleranced_chain_is_the_chain_with_a_variable_per_segment_parameter() {
+    let n = 6;
+    let shared = Compiled::from_str(&chain::chain(n), "chain.toml").unwrap();
+    for k in [1, 3, 6] {
+        let own = Compiled::from_str(&chain::chain_toleranced(n, k), "chain.toml")
+            .unwrap_or_else(|e| panic!("k = {k}: {e}"));
+        let m = own.model();
+        let toleranced = m.toleranced();
+        assert_eq!(toleranced.len(), 2 * k, "k = {k}");
+        let names: Vec<&str> = toleranced
+            .iter()
+            .map(|&i| m.parameters[i].name.as_str())
+            .collect();
+        for i in 0..k {
+            assert!(names.contains(&format!("mu_{i}").as_str()), "{names:?}");
+            assert!(names.contains(&format!("EI_{i}").as_str()), "{names:?}");
+        }
+        for w in [0.0, 20.0, 60.0] {
+            common::same_roots(
+                &common::roots(&solve(&shared, w, false)),
+                &common::roots(&solve(&own, w, false)),
+                1e-12,
+            );
+        }
+        // Each own parameter reaches the mechanism: changing the first segment's `EI` or the
+        // last own segment's `mu` moves the modes.
+        let base = common::roots(&solve(&own, 20.0, false));
+        let last = k - 1;
+        for (from, to) in [
+            (
+                "EI_0 = { value = 50.0,".to_string(),
+                "EI_0 = { value = 60.0,".to_string(),
+            ),
+            (
+                format!("mu_{last} = {{ value = 2.0,"),
+                format!("mu_{last} = {{ value = 2.5,"),
+            ),
+        ] {
+            let text = chain::chain_toleranced(n, k).replace(&from, &to);
+            assert_ne!(text, chain::chain_toleranced(n, k), "{from}");
+            let changed = Compiled::from_str(&text, "chain.toml").unwrap();
+            let moved = common::roots(&solve(&changed, 20.0, false));
+            assert!(
+                base.iter().zip(&moved).any(|(x, y)| (x - y).norm() > 1e-6),
+                "k = {k}: {to}"
+            );
+        }
+    }
+}

@@ -42,3 +42,43 @@ pub fn with_joint_dampers(text: &str, alpha: f64) -> String {
         &format!("stiffness = \"EI/h\"\ndamping = \"{alpha}*EI/h\"\n"),
     )
 }
+
+/// The chain of [`chain`] with its first `k` segments' own `mu_i` (2 %) and `EI_i` (5 %), every
+/// one toleranced on its own and independent (`2k` toleranced variables); the other segments
+/// keep the shared `mu` and `EI`, with no tolerance. A segment's spring is its own `EI_i` over
+/// `h` (twice that at the clamp), its mass and inertia its own `mu_i`'s.
+pub fn chain_toleranced(n: usize, k: usize) -> String {
+    assert!(k <= n, "at most one set of parameters a segment");
+    let mut s = chain(n)
+        .replace("mu = { value = 2.0, tolerance = \"2%\" }", "mu = 2.0")
+        .replace("EI = { value = 50.0, tolerance = \"5%\" }", "EI = 50.0");
+    let own: String = (0..k)
+        .map(|i| {
+            format!(
+                "mu_{i} = {{ value = 2.0, tolerance = \"2%\" }}\n\
+                 EI_{i} = {{ value = 50.0, tolerance = \"5%\" }}\n"
+            )
+        })
+        .collect();
+    s = s.replacen("h = ", &format!("{own}h = "), 1);
+    // Segment i's block runs from its `[[bodies]]` header to the next one.
+    let mut out = String::new();
+    for (i, block) in s.split("[[bodies]]\nname = \"s").enumerate() {
+        if i == 0 {
+            out += block;
+            continue;
+        }
+        let seg = i - 1;
+        let block = if seg < k {
+            block
+                .replace("\"mu*h", &format!("\"mu_{seg}*h"))
+                .replace("\"2*EI/h\"", &format!("\"2*EI_{seg}/h\""))
+                .replace("\"EI/h\"", &format!("\"EI_{seg}/h\""))
+        } else {
+            block.to_string()
+        };
+        out += "[[bodies]]\nname = \"s";
+        out += &block;
+    }
+    out
+}
