@@ -84,7 +84,7 @@ pub struct Program {
 /// once. Compiling to native code takes 10–400 ms and saves 1–14 µs an evaluation on the
 /// shipped examples, so it pays back after some tens of thousands of evaluations
 /// ([`NATIVE_AFTER`]): a Monte Carlo run's, not a sweep's.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Tier {
     /// A few evaluations (one point): a residual is `full`'s value pass at zero rates (the
     /// rates' terms evaluated and added as zeros, about 1.4 residuals), unless the residual's
