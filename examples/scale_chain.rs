@@ -273,6 +273,46 @@ fn main() {
         );
         return;
     }
+    if args.first().map(String::as_str) == Some("local") {
+        // `local n k`: at one point (5 rad/s) of the n-segment chain with 2k toleranced
+        // variables, the gradients of every output (first order) and the gradients and
+        // Hessians (second order), best of 3.
+        let n: usize = args[1].parse().unwrap();
+        let k: usize = args[2].parse().unwrap();
+        let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+        let p = model.model().nominal();
+        let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
+        let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
+        let wrt: Vec<usize> = model.model().tolerance_cases(&[]).unwrap()[0]
+            .tolerances
+            .iter()
+            .map(|t| t.0)
+            .collect();
+        let outs = outputs(pt.modes.len(), false);
+        let ws = Workspace::default();
+        let best = |f: &mut dyn FnMut()| {
+            (0..3)
+                .map(|_| {
+                    let t = Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let g = best(&mut || {
+            analytic(&model, &p, &pt, &wrt, None, &ws).unwrap();
+        });
+        let h = best(&mut || {
+            hessians(&model, &p, &pt, &wrt, &outs, None, &ws).unwrap();
+        });
+        println!(
+            "{n} segments, {} variables: gradients {:.2} ms, gradients and Hessians {:.2} ms",
+            wrt.len(),
+            g * 1e3,
+            h * 1e3
+        );
+        return;
+    }
     if args.first().map(String::as_str) == Some("one") {
         let n = args[1].parse().unwrap();
         let [cold, swept, sens, cold_mb, mb] = measure(n);

@@ -150,6 +150,10 @@ pub struct Analysis {
     pub probabilities: Vec<ProbabilityRow>,
     /// The Taylor methods (nominal sweep, derivatives, first/second order, invariant).
     pub analytic_seconds: f64,
+    /// Of which the first-order stage (the nominal sweep and the exact gradients at every
+    /// speed) and the second-order stage (the exact Hessians).
+    pub first_order_seconds: f64,
+    pub second_order_seconds: f64,
     pub quadrature_seconds: Option<f64>,
     /// Per case: the quadrature's rule in words and its number of swept nodes.
     pub quadrature_rules: Vec<(String, usize)>,
@@ -275,6 +279,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         vars,
         failures,
         nominal,
+        seconds: (first_order_seconds, second_order_seconds),
         ..
     } = study;
     Analysis {
@@ -283,6 +288,8 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         rows,
         probabilities,
         analytic_seconds,
+        first_order_seconds,
+        second_order_seconds,
         quadrature_seconds,
         quadrature_rules,
         monte_carlo_seconds,

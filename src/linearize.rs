@@ -75,6 +75,33 @@ impl<T: Real> Linearization<T> {
         }
     }
 
+    /// Number by number, `f` of this linearisation's and `other`'s (two linearisations of one
+    /// point, over different scalars: the parts of two directions joined into one number).
+    pub fn zip<U: Real, V: Real>(
+        &self,
+        other: &Linearization<U>,
+        f: impl Fn(T, U) -> V + Copy,
+    ) -> Linearization<V> {
+        let both = |a: &DMatrix<T>, b: &DMatrix<U>| a.zip_map(b, f);
+        Linearization {
+            free: self.free.clone(),
+            independent: self.independent.clone(),
+            basis: both(&self.basis, &other.basis),
+            m_full: both(&self.m_full, &other.m_full),
+            c_full: both(&self.c_full, &other.c_full),
+            k_full: both(&self.k_full, &other.k_full),
+            m: both(&self.m, &other.m),
+            c: both(&self.c, &other.c),
+            k: both(&self.k, &other.k),
+            ports: self
+                .ports
+                .iter()
+                .zip(&other.ports)
+                .map(|(a, b)| a.iter().zip(b).map(|(&x, &y)| f(x, y)).collect())
+                .collect(),
+        }
+    }
+
     /// Attaches the ports' vectors `b` over the free coordinates, reduced to `Rᵀ b`.
     pub fn with_ports(mut self, full: Vec<Vec<T>>) -> Self {
         self.ports = full

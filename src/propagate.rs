@@ -24,9 +24,11 @@ use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
-use crate::tolerance::{LocalModel, Output, Spread, local_model, outputs};
+use crate::tolerance::{LocalModel, Output, Spread, add_hessians, local_model, outputs};
+use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
 
 /// The deterministic part of an analysis, shared by every method and case (see the module
 /// documentation).
@@ -54,6 +56,9 @@ pub struct Study<'a> {
     /// [`Termination::Cancelled`] where the run was cancelled before the sweep's last speed
     /// (the speeds left are failures, "interrupted").
     pub termination: Termination,
+    /// Wall time of the first-order stage (the nominal sweep and the exact gradients) and of
+    /// the second-order stage (the exact Hessians), seconds.
+    pub seconds: (f64, f64),
 }
 
 /// How a run is controlled from outside: cancellation, the worker threads, progress.
@@ -117,10 +122,14 @@ pub trait Propagation {
 
 impl<'a> Study<'a> {
     /// The nominal sweep of `model` over `speeds` and, at each point, the local model for
-    /// `vars` (with Hessians). The sweep is sequential (continuation); each point's local model
-    /// is independent, so it is handed to the other workers as soon as the point is solved.
-    /// Failed speeds are recorded in [`Study::failures`] and the run goes on; a cancelled run
-    /// leaves the speeds after it as failures ("interrupted").
+    /// `vars`, in two stages: the values and exact gradients (first order), then the exact
+    /// Hessians (second order), each timed ([`Study::seconds`]). The sweep is sequential
+    /// (continuation); each point's gradients are independent, so they are handed to the
+    /// other workers as soon as the point is solved; the Hessians are computed point by point
+    /// in parallel after. Failed speeds are recorded in [`Study::failures`] and the run goes
+    /// on (a point whose Hessians fail keeps its first-order model, every Hessian saying why);
+    /// a cancelled run leaves the speeds after it as failures ("interrupted") and the
+    /// Hessians not yet computed as "not computed".
     pub fn build(model: &'a Compiled, vars: Vec<usize>, speeds: Vec<f64>, run: &Run) -> Self {
         let transfer = model.model().analysis.transfer;
         let p = model.model().nominal();
@@ -134,6 +143,9 @@ impl<'a> Study<'a> {
         // The local models' working memory: one workspace per task running at once, taken
         // from and given back to this list.
         let memory: Mutex<Vec<Workspace>> = Mutex::new(Vec::new());
+        let start = Instant::now();
+        // Progress counts both stages: the gradients, then the Hessians, of every speed.
+        let total = 2 * n;
         run.pool.install(|| {
             rayon::scope(|scope| {
                 let mut sweep = Sweep::new(model, p.clone(), Options::default());
@@ -153,12 +165,12 @@ impl<'a> Study<'a> {
                                 let workspace = lock().pop().unwrap_or_default();
                                 let tf = transfer.as_ref();
                                 let lm =
-                                    local_model(model, p, &pt_local, vars, tf, true, &workspace)
+                                    local_model(model, p, &pt_local, vars, tf, false, &workspace)
                                         .map_err(|e| format!("derivatives: {e}"));
                                 lock().push(workspace);
                                 *slot.lock().expect("unpoisoned") = Some(lm);
                                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                                (run.progress)(d, n);
+                                (run.progress)(d, total);
                             });
                             nominal.push(Some(pt));
                         }
@@ -170,7 +182,8 @@ impl<'a> Study<'a> {
                 }
             })
         });
-        let locals: Vec<Option<LocalModel>> = slots
+        let first_order = start.elapsed().as_secs_f64();
+        let mut locals: Vec<Option<LocalModel>> = slots
             .into_iter()
             .map(|m| m.into_inner().expect("unpoisoned"))
             .zip(&speeds)
@@ -182,6 +195,26 @@ impl<'a> Study<'a> {
                 }
             })
             .collect();
+        let start = Instant::now();
+        done.store(n, Ordering::Relaxed);
+        run.pool.install(|| {
+            locals.par_iter_mut().zip(&nominal).for_each_init(
+                Workspace::default,
+                |workspace, (lm, pt)| {
+                    if let (Some(lm), Some(pt)) = (lm, pt)
+                        && !run.cancel.is_cancelled()
+                    {
+                        add_hessians(model, &p, pt, lm, transfer.as_ref(), workspace);
+                    }
+                    let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    (run.progress)(d, total);
+                },
+            )
+        });
+        if run.cancel.is_cancelled() {
+            termination = Termination::Cancelled;
+        }
+        let second_order = start.elapsed().as_secs_f64();
         failures.sort_by(|a, b| a.0.total_cmp(&b.0));
         let modes = nominal
             .iter()
@@ -200,6 +233,7 @@ impl<'a> Study<'a> {
             transfer,
             termination,
             failures,
+            seconds: (first_order, second_order),
         }
     }
 

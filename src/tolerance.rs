@@ -229,6 +229,34 @@ pub fn local_model(
     })
 }
 
+/// Adds the exact Hessians (and the gradients of the same passes' discriminants' Hessians)
+/// to a first-order local model `lm` of the point `pt` ([`local_model`] without them): the
+/// second-order stage of a study. Where the second-order passes fail, every Hessian says why
+/// and the first-order model stays.
+pub fn add_hessians(
+    model: &Compiled,
+    p: &[f64],
+    pt: &Point,
+    lm: &mut LocalModel,
+    transfer: Option<&Transfer>,
+    workspace: &Workspace,
+) {
+    let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
+    match hessians(model, p, pt, &lm.vars, &lm.outputs, tf, workspace) {
+        Ok(h) => {
+            lm.hess = h.outputs;
+            for (d, h) in lm.disc.iter_mut().zip(h.discriminant) {
+                d.2 = h;
+            }
+        }
+        Err(e) => {
+            let why = Missing::Failed(format!("second-order derivatives: {e}"));
+            lm.hess.iter_mut().for_each(|h| *h = Err(why.clone()));
+            lm.disc.iter_mut().for_each(|d| d.2 = Err(why.clone()));
+        }
+    }
+}
+
 /// Each mode's discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` at a point.
 fn discriminants(pt: &Point) -> Vec<f64> {
     pt.modes

@@ -1,5 +1,7 @@
 //! Tolerance propagation against closed forms and Monte Carlo (3000 samples, seed 1).
 
+#[path = "../examples/common/chain.rs"]
+mod chain;
 mod common;
 
 use common::pendulum::G;
@@ -207,6 +209,66 @@ fn exact_value(lm: &LocalModel, k: usize) -> f64 {
         .unwrap_or_else(|| lm.disc[k - lm.value.len()].0)
 }
 
+/// Compares the exact gradients and Hessians of `model` at `speeds` with central differences
+/// of the exact gradients; returns how many Hessians were compared.
+fn check_hessians(file: &str, model: &Compiled, speeds: &[f64]) -> usize {
+    let p = model.model().nominal();
+    let vars = model.model().toleranced();
+    let tf = model.model().analysis.transfer.as_ref();
+    let q0 = initial_guess(model.model(), &p, speeds[0]).unwrap();
+    let mut checked = 0;
+    let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
+    for &w in speeds {
+        let pt = point(model, &p, w, &q0, &Options::default()).unwrap();
+        let exact = local_model(model, &p, &pt, &vars, tf, true, &Workspace::default()).unwrap();
+        let fd = differenced_hessians(model, &p, &pt, &vars);
+        // Gradients from the second-order passes equal the first-order sensitivities
+        // (eigenvalue-derivative formula with left vectors).
+        let grads = exact.grad.iter().zip(&fd.grad).chain(
+            exact
+                .disc
+                .iter()
+                .map(|d| &d.1)
+                .zip(fd.disc.iter().map(|d| &d.1)),
+        );
+        for (k, (a, b)) in grads.enumerate() {
+            assert_eq!(a.is_ok(), b.is_ok(), "{file} Ω = {w} gradient #{k}");
+            if let (Ok(a), Ok(b)) = (a, b) {
+                let scale = a.iter().chain(b).fold(1e-300f64, |s, x| s.max(x.abs()));
+                for (x, y) in a.iter().zip(b) {
+                    assert!(
+                        (x - y).abs() <= 1e-9 * scale,
+                        "{file} Ω = {w} gradient #{k}: {a:?} vs {b:?}"
+                    );
+                }
+            }
+        }
+        let pairs = exact.hess.iter().zip(&fd.hess).chain(
+            exact
+                .disc
+                .iter()
+                .map(|d| &d.2)
+                .zip(fd.disc.iter().map(|d| &d.2)),
+        );
+        for (k, (a, b)) in pairs.enumerate() {
+            let (Ok(a), Ok(b)) = (a, b) else {
+                assert!(a.is_err() || b.is_ok(), "{file} Ω = {w} #{k}: exact only");
+                continue;
+            };
+            // Central differences: O(h²) truncation and O(ε/h) rounding, about 1e-6 relative,
+            // and no better than 1e-9 |f|/b² where the curvature vanishes.
+            let natural = exact_value(&exact, k).abs() / b_min2;
+            let scale = a.amax().max(b.amax()).max(1e-4 * natural);
+            assert!(
+                (a - b).amax() <= 1e-5 * scale,
+                "{file} Ω = {w} output #{k}: exact {a} vs differenced {b}"
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
+
 #[test]
 fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
     for (file, speeds) in [
@@ -214,65 +276,45 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
         ("governor.toml", vec![0.5, 1.595, 3.0, 4.5]),
         ("spinning_universal_pendulum.toml", vec![0.5, 2.0, 6.0]),
     ] {
-        let model = example(file);
-        let p = model.model().nominal();
-        let vars = model.model().toleranced();
-        let tf = model.model().analysis.transfer.as_ref();
-        let q0 = initial_guess(model.model(), &p, speeds[0]).unwrap();
-        let mut checked = 0;
-        let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
-        for &w in &speeds {
-            let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
-            let exact =
-                local_model(&model, &p, &pt, &vars, tf, true, &Workspace::default()).unwrap();
-            let fd = differenced_hessians(&model, &p, &pt, &vars);
-            // Gradients from the second-order passes equal the first-order sensitivities
-            // (eigenvalue-derivative formula with left vectors).
-            let grads = exact.grad.iter().zip(&fd.grad).chain(
-                exact
-                    .disc
-                    .iter()
-                    .map(|d| &d.1)
-                    .zip(fd.disc.iter().map(|d| &d.1)),
-            );
-            for (k, (a, b)) in grads.enumerate() {
-                assert_eq!(a.is_ok(), b.is_ok(), "{file} Ω = {w} gradient #{k}");
-                if let (Ok(a), Ok(b)) = (a, b) {
-                    let scale = a.iter().chain(b).fold(1e-300f64, |s, x| s.max(x.abs()));
-                    for (x, y) in a.iter().zip(b) {
-                        assert!(
-                            (x - y).abs() <= 1e-9 * scale,
-                            "{file} Ω = {w} gradient #{k}: {a:?} vs {b:?}"
-                        );
-                    }
-                }
-            }
-            let pairs = exact.hess.iter().zip(&fd.hess).chain(
-                exact
-                    .disc
-                    .iter()
-                    .map(|d| &d.2)
-                    .zip(fd.disc.iter().map(|d| &d.2)),
-            );
-            for (k, (a, b)) in pairs.enumerate() {
-                let (Ok(a), Ok(b)) = (a, b) else {
-                    assert!(a.is_err() || b.is_ok(), "{file} Ω = {w} #{k}: exact only");
-                    continue;
-                };
-                // Central differences: O(h²) truncation and O(ε/h) rounding, about 1e-6 relative,
-                // and no better than 1e-9 |f|/b² where the curvature vanishes.
-                let natural = exact_value(&exact, k).abs() / b_min2;
-                let scale = a.amax().max(b.amax()).max(1e-4 * natural);
-                assert!(
-                    (a - b).amax() <= 1e-5 * scale,
-                    "{file} Ω = {w} output #{k}: exact {a} vs differenced {b}"
-                );
-                checked += 1;
-            }
-        }
+        let checked = check_hessians(file, &example(file), &speeds);
         assert!(
             checked >= speeds.len() * 2,
             "{file}: only {checked} Hessians compared"
+        );
+    }
+}
+
+/// The toleranced chain of `n` segments with joint dampers (every segment's own μ and EI): many
+/// modes, many variables.
+fn damped_chain(n: usize) -> String {
+    chain::with_joint_dampers(&chain::chain_toleranced(n, n), 0.004)
+}
+
+#[test]
+fn hessians_of_many_modes_and_variables_match_differences_whichever_pairs_couple() {
+    // Three kinds of mixed terms: none (the chain's equilibrium does not move and each μ and
+    // EI enters the matrices linearly: every pair's matrices' mixed derivative is zero and
+    // left out), a few (a joint stiffness EI₀·κ: only that pair has its own pass), and all
+    // (under gravity the chain droops, so every variable moves the equilibrium). Each against
+    // central differences of the exact gradients, every mode and the discriminants.
+    let none = damped_chain(5);
+    let few = none
+        .replace("\"2*EI_0/h\"", "\"2*EI_0*kappa/h\"")
+        .replace("h = ", "kappa = { value = 1.0, tolerance = \"3%\" }\nh = ");
+    let all = chain::with_joint_dampers(&chain::chain_toleranced(4, 4), 0.004)
+        .replace("gravity = [0, 0, 0]", "gravity = [0, 0, -9.81]");
+    assert_ne!(few, none);
+    for (what, text, speeds) in [
+        ("no coupled pair", none, vec![0.0, 4.0, 20.0]),
+        ("one coupled pair", few, vec![4.0, 20.0]),
+        ("every pair coupled", all, vec![3.0, 15.0]),
+    ] {
+        let model = Compiled::from_str(&text, "chain.toml").unwrap();
+        let modes = model.model().toleranced().len();
+        let checked = check_hessians(what, &model, &speeds);
+        assert!(
+            checked >= speeds.len() * modes,
+            "{what}: only {checked} Hessians compared"
         );
     }
 }

@@ -25,8 +25,10 @@ pub(crate) fn write_outputs(
     }
     let partial = written.partial;
     note!(
-        "modaltol: analytic (Taylor) {:.3} s{}{}; wrote {}",
+        "modaltol: analytic (Taylor) {:.3} s (gradients {:.3} s, Hessians {:.3} s){}{}; wrote {}",
         a.analytic_seconds,
+        a.first_order_seconds,
+        a.second_order_seconds,
         a.quadrature_seconds
             .map_or(String::new(), |t| format!(", quadrature {t:.3} s")),
         a.monte_carlo_seconds.map_or(String::new(), |t| format!(

@@ -87,6 +87,8 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "cases": cases,
         "methods": ["first_order", "second_order", "invariant", "quadrature", "analytic", "monte_carlo"],
         "analytic_seconds": a.analytic_seconds,
+        "first_order_seconds": a.first_order_seconds,
+        "second_order_seconds": a.second_order_seconds,
         "quadrature_seconds": a.quadrature_seconds,
         "quadrature": a.quadrature_seconds.map(|t| json!({"seconds": t,
             "cases": a.cases.iter().zip(&a.quadrature_rules).map(|(c, (rule, nodes))|

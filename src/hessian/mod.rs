@@ -1,0 +1,513 @@
+//! Exact first and second derivatives of the modal outputs with respect to design variables.
+//!
+//! Three kinds of forward passes through the equilibrium and the linearisation (the generic
+//! mechanics over truncated Taylor numbers; the equilibrium expanded by two chord steps with
+//! Newton's Jacobian, factorised once for all, [`crate::implicit::correct`]), then the roots
+//! and outputs in closed form:
+//!
+//! 1. **Per variable** `b_a`: a `Dual2` pass (`b + ε e_a`) gives the matrices' first and
+//!    second derivatives along it (`M̂_a`, `M̂_aa`, …, the basis and the ports likewise).
+//! 2. **Screening the pairs**: the mixed derivatives of the matrices `M̂_ab` vanish for most
+//!    pairs of a real tolerance stack (a mass and a stiffness of two different parts, when the
+//!    equilibrium does not move). One `Dual2` pass along a fixed direction `w` with irregular
+//!    entries gives `Σ_ab w_a w_b M̂_ab`; where every number of it is zero, every mixed
+//!    derivative is (the sum is a polynomial in `w` that vanishes identically only if its
+//!    coefficients do: a zero at `w` otherwise is a coincidence of measure zero, Schwartz
+//!    1980). Otherwise one hyper-dual pass `(e_a, w)` per variable gives row `a`'s sum
+//!    `Σ_b w_b M̂_ab`, and only the pairs of two variables whose rows do not vanish get a
+//!    hyper-dual pass `(e_a, e_b)` of their own. So the passes number `p + 1` where the mixed
+//!    derivatives vanish, and at most `1 + 2p + p(p−1)/2` where they do not.
+//! 3. **Roots** ([`root::RootTerms`]): each simple root's bordered eigen-equations are
+//!    factorised once; the root's first and second derivatives follow in closed form from the
+//!    matrices' derivatives, one solve per variable and `O(n)` per pair.
+//! 4. **Outputs**: ω_d, ζ and the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` are the generic maps of
+//!    the roots (through the pair invariants, smooth where the roots coalesce), evaluated over
+//!    `Dual2` (a variable: its gradient entry and diagonal Hessian entry) or hyper-dual numbers
+//!    (a pair: the mixed entry) built from the roots' parts; `H(jω)` is the generic transfer
+//!    function over the linearisation's parts. For one degree of freedom the pair invariants
+//!    come straight from the matrices (`λ₁+λ₂ = −ĉ/m̂`, `λ₁λ₂ = k̂/m̂`).
+//!
+//! No step size, no truncation error.
+//!
+//! # Reference
+//! Fike & Alonso (2011), *The development of hyper-dual numbers for exact second-derivative
+//! calculations*, AIAA 2011-886; Griewank & Walther, *Evaluating Derivatives* (2008), §15
+//! (derivatives of iterative solvers); Walther, *Computing sparse Hessians with automatic
+//! differentiation*, ACM TOMS 34 (2008), for exploiting the pairs that vanish; Schwartz, *Fast
+//! probabilistic algorithms for verification of polynomial identities*, J. ACM 27 (1980).
+
+mod root;
+
+use crate::compiled::Compiled;
+use crate::equilibrium::Factor;
+use crate::frf::transfer;
+use crate::implicit;
+use crate::jet::Jet;
+use crate::linearize::Linearization;
+use crate::mechanics::ports::ports_at;
+use crate::modal::{C64, Smoothness, smoothness};
+use crate::output::{Missing, Output, Quantity};
+use crate::pair;
+use crate::program::{Tier, Workspace};
+use crate::sensitivity::TransferAt;
+use crate::sweep::{Point, PointError};
+use nalgebra::{Complex, DMatrix};
+use num_dual::{Dual2_64, HyperDual64};
+use root::{Along, RootTerms};
+
+/// Scalar of the mixed (pair) passes.
+type Hd = HyperDual64;
+
+/// First and second derivatives at one point: per output (as [`crate::output::outputs`]
+/// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; where an output is
+/// not differentiable there (roots coalescing or repeated, a rigid-body mode, `H` through zero),
+/// the reason instead.
+#[derive(Debug, Clone)]
+pub struct Hessians {
+    pub gradients: Vec<Result<Vec<f64>, Missing>>,
+    pub outputs: Vec<Result<DMatrix<f64>, Missing>>,
+    pub discriminant_gradients: Vec<Result<Vec<f64>, Missing>>,
+    pub discriminant: Vec<Result<DMatrix<f64>, Missing>>,
+}
+
+/// What every pass of one point shares: the point, Newton's Jacobian factorised once, and the
+/// working memory of the recorded program's passes.
+struct Expansion<'a> {
+    model: &'a Compiled,
+    lu: Factor,
+    pt: &'a Point,
+    workspace: &'a Workspace,
+}
+
+impl Expansion<'_> {
+    /// The linearisation (ports included) at the parameters `seeded`: the equilibrium expanded
+    /// by two chord steps with Newton's Jacobian on `[q_R; λ]`, then the generic linearisation
+    /// over the jets, which carries the move of the equilibrium and of the independent basis.
+    fn linearization<J: Jet>(&self, seeded: &[J]) -> Result<Linearization<J>, PointError> {
+        let Expansion {
+            model,
+            lu,
+            pt,
+            workspace,
+        } = self;
+        let eq = &pt.equilibrium;
+        let free = &pt.linear.free;
+        let nf = free.len();
+        let equations = model.at(seeded, J::from(pt.speed), &eq.q, (Tier::Few, workspace))?;
+        let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
+            .chain(eq.lambda.iter().copied())
+            .map(J::from)
+            .collect();
+        let mut q: Vec<J> = eq.q.iter().map(|&v| J::from(v)).collect();
+        let mut unpack = |z: &[J]| -> Vec<J> {
+            for (k, &i) in free.iter().enumerate() {
+                q[i] = z[k];
+            }
+            q.clone()
+        };
+        implicit::correct(
+            &mut z,
+            2,
+            |z| equations.residual(&unpack(z), &z[nf..]),
+            |r| lu.solve(r),
+        )
+        .ok_or(PointError::Equilibrium(
+            crate::equilibrium::EquilibriumError::SingularJacobian { iterations: 0 },
+        ))?;
+        let q = unpack(&z);
+        let lambda = &z[nf..];
+        Ok(equations
+            .linearize(&q, lambda, &pt.linear.independent, None)?
+            .with_ports(ports_at(
+                model.model(),
+                seeded,
+                J::from(pt.speed),
+                &q,
+                free,
+            )?))
+    }
+}
+
+/// The parameters `p` as jets whose part `k` of variable `a` (parameter `vars[a]`) is
+/// `part(a, k)`, the other parameters constant.
+fn seed<J: Jet>(p: &[f64], vars: &[usize], part: impl Fn(usize, usize) -> f64) -> Vec<J> {
+    let mut s: Vec<J> = p.iter().map(|&v| J::from(v)).collect();
+    for (a, &i) in vars.iter().enumerate() {
+        s[i] = J::seeded(p[i], |k| part(a, k));
+    }
+    s
+}
+
+/// Entry `a` of the screening direction `w`: irregular (a golden-ratio sequence), of one
+/// magnitude, alternating in sign. The results do not depend on it: a pair is left out only
+/// where its mixed derivatives are zero.
+fn screening(a: usize) -> f64 {
+    let g = 0.618_033_988_749_895 * (a as f64 + 1.0);
+    let w = 0.5 + (g - g.floor());
+    if a % 2 == 0 { w } else { -w }
+}
+
+/// Is part `k` of every number the roots and the transfer function read (the reduced
+/// matrices, the basis, the ports) zero?
+fn vanishes<J: Jet>(lin: &Linearization<J>, k: usize) -> bool {
+    let zero = |v: &J| v.part(k) == 0.0;
+    [&lin.m, &lin.c, &lin.k, &lin.basis]
+        .iter()
+        .all(|a| a.iter().all(zero))
+        && lin.ports.iter().flatten().all(zero)
+}
+
+/// Part `k` of a matrix of jets.
+fn part<J: Jet>(a: &DMatrix<J>, k: usize) -> DMatrix<f64> {
+    a.map(|v| v.part(k))
+}
+
+/// Which variables have mixed second derivatives of the matrices with some other variable
+/// (step 2 of the module documentation): none where the pass along `w` has no second part.
+fn rows_with_mixed_terms(
+    x: &Expansion<'_>,
+    p: &[f64],
+    vars: &[usize],
+) -> Result<Vec<bool>, PointError> {
+    let nv = vars.len();
+    if nv < 2 {
+        return Ok(vec![false; nv]);
+    }
+    let along_w = x.linearization(&seed::<Dual2_64>(p, vars, |a, k| {
+        if k == 0 { screening(a) } else { 0.0 }
+    }))?;
+    if vanishes(&along_w, 1) {
+        return Ok(vec![false; nv]);
+    }
+    let rows: Vec<bool> = (0..nv)
+        .map(|a| {
+            let row = x.linearization(&seed::<Hd>(p, vars, |b, k| match k {
+                0 => f64::from(u8::from(a == b)),
+                1 => screening(b),
+                _ => 0.0,
+            }))?;
+            Ok(!vanishes(&row, 2))
+        })
+        .collect::<Result<_, PointError>>()?;
+    // A pair's mixed term is in both of its rows: one row alone has none.
+    Ok(if rows.iter().filter(|&&r| r).count() < 2 {
+        vec![false; nv]
+    } else {
+        rows
+    })
+}
+
+/// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
+enum Partner {
+    Conjugate,
+    Own(RootTerms),
+}
+
+/// The roots' terms of every simple mode, or why the mode's roots have none.
+fn root_terms(
+    pt: &Point,
+    smooth: &[Smoothness],
+    along: &[Along<'_>],
+) -> Vec<Result<(RootTerms, Partner), Missing>> {
+    let lin = &pt.linear;
+    let mats = (&lin.m, &lin.c, &lin.k);
+    pt.modes
+        .iter()
+        .zip(smooth)
+        .enumerate()
+        .map(|(i, (md, &why))| {
+            if why != Smoothness::Simple {
+                return Err(Missing::Mode { mode: i, why });
+            }
+            let singular = Missing::SingularExpansion { mode: i };
+            let (r, q) = (&md.root, &md.partner);
+            let conjugate = q.lambda == r.lambda.conj()
+                && q.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
+                && q.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj());
+            let first = RootTerms::new(r, mats, along).ok_or(singular.clone())?;
+            let partner = if conjugate {
+                Partner::Conjugate
+            } else {
+                Partner::Own(RootTerms::new(q, mats, along).ok_or(singular)?)
+            };
+            Ok((first, partner))
+        })
+        .collect()
+}
+
+/// One root as a complex jet from its value and parts.
+fn complex_jet<J: Jet>(l: C64, parts: &[C64]) -> Complex<J> {
+    Complex::new(
+        J::seeded(l.re, |k| parts[k].re),
+        J::seeded(l.im, |k| parts[k].im),
+    )
+}
+
+/// The outputs `outs` and each mode's discriminant as jets, from the modes' roots as jets
+/// (`roots(i)`, or why not) and, where a transfer function is asked for or the model has one
+/// degree of freedom, the linearisation over the same jets.
+fn outputs_at<J: Jet>(
+    pt: &Point,
+    (smooth, outs, tf): (&[Smoothness], &[Output], Option<TransferAt>),
+    lin: Option<&Linearization<J>>,
+    roots: impl Fn(usize) -> Result<(Complex<J>, Complex<J>), Missing>,
+) -> Jets<J> {
+    let one_dof = pt.linear.m.nrows() == 1;
+    // Per mode: ω_d, ζ and D, or why not.
+    let mode_values: Vec<[Result<J, Missing>; 3]> = pt
+        .modes
+        .iter()
+        .zip(smooth)
+        .enumerate()
+        .map(|(i, (md, &why))| {
+            let not = Missing::Mode { mode: i, why };
+            match why {
+                Smoothness::Rigid => {
+                    return [
+                        Err(not.clone()),
+                        Err(Missing::RigidDamping { mode: i }),
+                        Err(not),
+                    ];
+                }
+                Smoothness::Repeated { .. } => {
+                    return [Err(not.clone()), Err(not.clone()), Err(not)];
+                }
+                _ => {}
+            }
+            // Coalescing roots are not differentiable one by one; their sum and product
+            // are, and for one degree of freedom come straight from the matrices.
+            let roots = roots(i);
+            let invariants = match (one_dof, lin) {
+                (true, Some(lin)) => {
+                    let (m0, c0, k0) = (lin.m[(0, 0)], lin.c[(0, 0)], lin.k[(0, 0)]);
+                    Ok((-c0 / m0, k0 / m0))
+                }
+                _ => roots.clone().map(|(l1, l2)| ((l1 + l2).re, (l1 * l2).re)),
+            };
+            let wd = roots.map(|(l1, _)| {
+                if md.root.lambda.im > 0.0 {
+                    l1.im
+                } else {
+                    J::from(0.0)
+                }
+            });
+            let zeta = invariants.clone().map(|(s, pr)| pair::damping_ratio(s, pr));
+            let d = invariants.map(|(s, pr)| pair::discriminant(s, pr));
+            [wd, zeta, d]
+        })
+        .collect();
+    // |H| is not differentiable where H passes through zero, unless H vanishes identically
+    // to this order (a transfer that symmetry makes zero): then |H| ≡ 0.
+    let h = tf.zip(lin).map(|(t, lin)| {
+        let h = transfer(lin, t.input, t.output, t.omega).ok_or(Missing::TransferUnbounded)?;
+        let zero = [h.re, h.im]
+            .iter()
+            .all(|v| v.re() == 0.0 && (0..J::PARTS).all(|k| v.part(k) == 0.0));
+        if h.magnitude().re() > 0.0 {
+            Ok(h.magnitude())
+        } else if zero {
+            Ok(J::from(0.0))
+        } else {
+            Err(Missing::TransferZero)
+        }
+    });
+    let outputs = outs
+        .iter()
+        .map(|o| match (o.quantity, o.mode) {
+            (Quantity::DampedFrequency, Some(k)) => mode_values[k][0].clone(),
+            (Quantity::DampingRatio, Some(k)) => mode_values[k][1].clone(),
+            (Quantity::TransferMagnitude, _) => h.clone().unwrap_or(Err(Missing::NoValue)),
+            _ => Err(Missing::NoValue),
+        })
+        .collect();
+    (
+        outputs,
+        mode_values.into_iter().map(|[_, _, d]| d).collect(),
+    )
+}
+
+/// The outputs `outs` and each mode's discriminant as jets.
+type Jets<J> = (Vec<Result<J, Missing>>, Vec<Result<J, Missing>>);
+
+/// Stores one gradient entry and one Hessian entry (both halves), or the first reason why not.
+fn put(
+    g: Option<&mut Result<Vec<f64>, Missing>>,
+    h: &mut Result<DMatrix<f64>, Missing>,
+    (a, b): (usize, usize),
+    first: Result<f64, Missing>,
+    second: Result<f64, Missing>,
+) {
+    let finite = |x: Result<f64, Missing>| {
+        x.and_then(|x| {
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                Err(Missing::NotFinite)
+            }
+        })
+    };
+    if let Some(g) = g
+        && let Ok(v) = g
+    {
+        match finite(first) {
+            Ok(x) => v[a] = x,
+            Err(e) => *g = Err(e),
+        }
+    }
+    if let Ok(m) = h {
+        match finite(second) {
+            Ok(x) => {
+                m[(a, b)] = x;
+                m[(b, a)] = x;
+            }
+            Err(e) => *h = Err(e),
+        }
+    }
+}
+
+/// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
+/// discriminant with respect to the parameters `vars`, at the nominal point `pt` of parameters
+/// `p` (see the module documentation for the passes).
+pub fn hessians(
+    model: &Compiled,
+    p: &[f64],
+    pt: &Point,
+    vars: &[usize],
+    outs: &[Output],
+    tf: Option<TransferAt>,
+    workspace: &Workspace,
+) -> Result<Hessians, PointError> {
+    let nv = vars.len();
+    let nm = pt.modes.len();
+    // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
+    // cost the chord steps accuracy); the caller's workspace for every pass.
+    let x = Expansion {
+        model,
+        lu: pt.equilibrium.factor(),
+        pt,
+        workspace,
+    };
+    let smooth = smoothness(&pt.modes);
+    let shared = (smooth.as_slice(), outs, tf);
+    // The linearisation over jets is needed beyond the roots for |H| and for one degree of
+    // freedom's invariants.
+    let whole = tf.is_some() || pt.linear.m.nrows() == 1;
+    let singles: Vec<Linearization<Dual2_64>> = (0..nv)
+        .map(|a| {
+            x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
+                f64::from(u8::from(a == b && k == 0))
+            }))
+        })
+        .collect::<Result<_, _>>()?;
+    let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
+    let derivatives: Vec<[DMatrix<f64>; 6]> = singles
+        .iter()
+        .map(|s| {
+            [
+                part(&s.m, 0),
+                part(&s.c, 0),
+                part(&s.k, 0),
+                part(&s.m, 1),
+                part(&s.c, 1),
+                part(&s.k, 1),
+            ]
+        })
+        .collect();
+    let along: Vec<Along<'_>> = derivatives
+        .iter()
+        .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
+        .collect();
+    let roots = root_terms(pt, &smooth, &along);
+    let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
+    let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
+    let mut hess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
+    let mut dhess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); nm];
+    // The two roots of mode `i` as jets, their parts given by `parts(terms)`.
+    type Parts = (C64, Vec<C64>);
+    let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| {
+        let (r, q) = roots[i].as_ref().map_err(Clone::clone)?;
+        let first: Parts = (r.lambda(), parts(r));
+        let second: Parts = match q {
+            Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
+            Partner::Own(q) => (q.lambda(), parts(q)),
+        };
+        Ok::<_, Missing>((first, second))
+    };
+    for a in 0..nv {
+        let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then_some(&singles[a]), |i| {
+            pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
+                .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
+        });
+        for (k, v) in o.iter().enumerate() {
+            put(
+                Some(&mut grad[k]),
+                &mut hess[k],
+                (a, a),
+                v.clone().map(|x| x.v1),
+                v.clone().map(|x| x.v2),
+            );
+        }
+        for (k, v) in d.iter().enumerate() {
+            put(
+                Some(&mut dgrad[k]),
+                &mut dhess[k],
+                (a, a),
+                v.clone().map(|x| x.v1),
+                v.clone().map(|x| x.v2),
+            );
+        }
+        for b in a + 1..nv {
+            // The matrices' mixed derivatives: their own pass where they may not vanish.
+            let mixed: Option<Linearization<Hd>> = if mixed_rows[a] && mixed_rows[b] {
+                Some(x.linearization(&seed::<Hd>(p, vars, |c, k| match k {
+                    0 => f64::from(u8::from(c == a)),
+                    1 => f64::from(u8::from(c == b)),
+                    _ => 0.0,
+                }))?)
+            } else {
+                None
+            };
+            let second = mixed
+                .as_ref()
+                .map(|l| [part(&l.m, 2), part(&l.c, 2), part(&l.k, 2)]);
+            let second = second.as_ref().map(|s| (&s[0], &s[1], &s[2]));
+            let lin = whole.then(|| {
+                let joined = singles[a].zip(&singles[b], |u, v| Hd::new(u.re, u.v1, v.v1, 0.0));
+                match &mixed {
+                    Some(m) => joined.zip(m, |u, v| Hd::new(u.re, u.eps1, u.eps2, v.eps1eps2)),
+                    None => joined,
+                }
+            });
+            let (o, d) = outputs_at::<Hd>(pt, shared, lin.as_ref(), |i| {
+                pair_of(i, &|t| {
+                    vec![t.first[a], t.first[b], t.mixed((a, b), second)]
+                })
+                .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
+            });
+            for (k, v) in o.iter().enumerate() {
+                put(
+                    None,
+                    &mut hess[k],
+                    (a, b),
+                    Ok(0.0),
+                    v.clone().map(|x| x.eps1eps2),
+                );
+            }
+            for (k, v) in d.iter().enumerate() {
+                put(
+                    None,
+                    &mut dhess[k],
+                    (a, b),
+                    Ok(0.0),
+                    v.clone().map(|x| x.eps1eps2),
+                );
+            }
+        }
+    }
+    Ok(Hessians {
+        gradients: grad,
+        outputs: hess,
+        discriminant_gradients: dgrad,
+        discriminant: dhess,
+    })
+}
