@@ -12,12 +12,14 @@
 //! split into recording the program and the point after it (from the initial guess), and the
 //! same point on the direct route, best of 20 (of 300 for models under 20 kB) in this process;
 //! `… -- hessians n`: the gradients and Hessians along the chain's parameters at one point;
-//! `… -- tolerances n [--monte-carlo] k …` (issue 38's family): the analysis of the n-segment
-//! chain (default 40) whose first k segments carry their own toleranced `mu` and `EI` (2k
-//! independent variables), 13 speeds over 0–60 rad/s, two threads: the time of the Taylor
-//! methods (the nominal sweep, gradients and Hessians included), of the quadrature (and its
-//! nodes) and of a 3000-sample Monte Carlo, the rows each method filled, and the growth
-//! exponents of the times in the number of variables.
+//! `… -- tolerances n [--monte-carlo] [--no-quadrature] k …` (issue 38's family): the analysis
+//! of the n-segment chain (default 40) whose first k segments carry their own toleranced `mu`
+//! and `EI` (2k independent variables), 13 speeds over 0–60 rad/s, two threads: the time of
+//! the first-order stage (the nominal sweep and the gradients), of the second-order stage (the
+//! Hessians), of all the Taylor methods, of the quadrature (and its nodes) and of a
+//! 3000-sample Monte Carlo, the rows each method filled, the peak memory so far, and the
+//! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
+//! alone, and with the Hessians, at one point of that chain.
 use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
@@ -26,6 +28,7 @@ use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
+use modaltol::quadrature::QuadOptions;
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::time::Instant;
@@ -98,6 +101,7 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
 /// `tolerances n [--monte-carlo] k …` (see the module documentation).
 fn tolerances(args: &[String]) {
     let monte_carlo = args.iter().any(|a| a == "--monte-carlo");
+    let quadrature = !args.iter().any(|a| a == "--no-quadrature");
     let nums: Vec<usize> = args
         .iter()
         .filter(|a| !a.starts_with("--"))
@@ -110,8 +114,9 @@ fn tolerances(args: &[String]) {
         vec![5, 10, 20]
     };
     println!(
-        "{n}-segment chain, 13 speeds: variables | Taylor s | quadrature s (nodes) | Monte Carlo s \
-         | rows filled: first order, second order, quadrature"
+        "{n}-segment chain, 13 speeds: variables | first order s | second order s | Taylor s \
+         | quadrature s (nodes) | Monte Carlo s | rows filled: first order, second order, \
+         quadrature | peak MB"
     );
     let mut rows = Vec::new();
     for k in ks {
@@ -120,6 +125,7 @@ fn tolerances(args: &[String]) {
         let options = AnalyzeOptions {
             speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
             cases,
+            quadrature: quadrature.then(QuadOptions::default),
             monte_carlo: monte_carlo.then_some(McOptions {
                 samples: 3000,
                 seed: 1,
@@ -137,22 +143,28 @@ fn tolerances(args: &[String]) {
         let nodes: usize = a.quadrature_rules.iter().map(|r| r.1).sum();
         let (taylor, quad) = (a.analytic_seconds, a.quadrature_seconds.unwrap_or(f64::NAN));
         let mc = a.monte_carlo_seconds.unwrap_or(f64::NAN);
+        let (first, second) = (a.first_order_seconds, a.second_order_seconds);
         println!(
-            "{:9} | {taylor:8.3} | {quad:8.3} ({nodes}) | {mc:8.3} | {}, {}, {}",
+            "{:9} | {first:8.3} | {second:8.3} | {taylor:8.3} | {quad:8.3} ({nodes}) | {mc:8.3} \
+             | {}, {}, {} | {:.0}",
             2 * k,
             filled(Method::FirstOrder),
             filled(Method::SecondOrder),
-            filled(Method::Quadrature)
+            filled(Method::Quadrature),
+            peak_mb()
         );
-        rows.push([2.0 * k as f64, taylor, quad]);
+        rows.push([2.0 * k as f64, first, second, taylor, quad]);
     }
     if rows.len() >= 2 {
         let x: Vec<f64> = rows.iter().map(|r| r[0]).collect();
         let fit = |j: usize| exponent(&x, &rows.iter().map(|r| r[j]).collect::<Vec<_>>());
         println!(
-            "growth in the variables p: Taylor p^{:.2}, quadrature p^{:.2}",
+            "growth in the variables p: first order p^{:.2}, second order p^{:.2}, Taylor \
+             p^{:.2}, quadrature p^{:.2}",
             fit(1),
-            fit(2)
+            fit(2),
+            fit(3),
+            fit(4)
         );
     }
 }

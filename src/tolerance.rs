@@ -366,8 +366,8 @@ pub fn sigma_of(v: f64) -> f64 {
 /// variables the diagonal term uses each variable's fourth moment.
 pub fn second_order(value: f64, grad: &[f64], hess: &DMatrix<f64>, s: &Spread) -> Stat {
     let n = grad.len();
-    let hs = hess * &s.covariance;
-    let mean = value + 0.5 * hs.trace();
+    // tr(HΣ) = Σ H_ij Σ_ji: O(p²), no product formed.
+    let mean = value + 0.5 * hess.component_mul(&s.covariance.transpose()).sum();
     let first: f64 = (0..n)
         .map(|i| {
             (0..n)
@@ -395,7 +395,8 @@ pub fn second_order(value: f64, grad: &[f64], hess: &DMatrix<f64>, s: &Spread) -
         }
         v
     } else {
-        0.5 * (&hs * &hs).trace()
+        let hs = hess * &s.covariance;
+        0.5 * hs.component_mul(&hs.transpose()).sum()
     };
     Stat {
         mean,

@@ -45,7 +45,7 @@ use crate::implicit;
 use crate::jet::Jet;
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
-use crate::modal::{C64, Smoothness, smoothness};
+use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
 use crate::program::{Tier, Workspace};
@@ -144,7 +144,7 @@ fn seed<J: Jet>(p: &[f64], vars: &[usize], part: impl Fn(usize, usize) -> f64) -
 fn screening(a: usize) -> f64 {
     let g = 0.618_033_988_749_895 * (a as f64 + 1.0);
     let w = 0.5 + (g - g.floor());
-    if a % 2 == 0 { w } else { -w }
+    if a.is_multiple_of(2) { w } else { -w }
 }
 
 /// Is part `k` of every number the roots and the transfer function read (the reduced
@@ -200,7 +200,7 @@ fn rows_with_mixed_terms(
 /// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
 enum Partner {
     Conjugate,
-    Own(RootTerms),
+    Own(Box<RootTerms>),
 }
 
 /// The roots' terms of every simple mode, or why the mode's roots have none.
@@ -210,27 +210,45 @@ fn root_terms(
     along: &[Along<'_>],
 ) -> Vec<Result<(RootTerms, Partner), Missing>> {
     let lin = &pt.linear;
-    let mats = (&lin.m, &lin.c, &lin.k);
-    pt.modes
+    // The roots that need terms of their own: each simple mode's root, and its partner where
+    // that is not the conjugate.
+    let mut wanted: Vec<&Root> = Vec::new();
+    let conjugate: Vec<bool> = pt
+        .modes
         .iter()
         .zip(smooth)
-        .enumerate()
-        .map(|(i, (md, &why))| {
-            if why != Smoothness::Simple {
-                return Err(Missing::Mode { mode: i, why });
-            }
-            let singular = Missing::SingularExpansion { mode: i };
+        .map(|(md, &why)| {
             let (r, q) = (&md.root, &md.partner);
             let conjugate = q.lambda == r.lambda.conj()
                 && q.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
                 && q.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj());
-            let first = RootTerms::new(r, mats, along).ok_or(singular.clone())?;
+            if why == Smoothness::Simple {
+                wanted.push(r);
+                if !conjugate {
+                    wanted.push(q);
+                }
+            }
+            conjugate
+        })
+        .collect();
+    let mut terms = RootTerms::all(&wanted, (&lin.m, &lin.c, &lin.k), along).into_iter();
+    smooth
+        .iter()
+        .zip(conjugate)
+        .enumerate()
+        .map(|(i, (&why, conjugate))| {
+            if why != Smoothness::Simple {
+                return Err(Missing::Mode { mode: i, why });
+            }
+            let first = terms.next().flatten();
             let partner = if conjugate {
-                Partner::Conjugate
+                Some(Partner::Conjugate)
             } else {
-                Partner::Own(RootTerms::new(q, mats, along).ok_or(singular)?)
+                terms.next().flatten().map(|t| Partner::Own(Box::new(t)))
             };
-            Ok((first, partner))
+            first
+                .zip(partner)
+                .ok_or(Missing::SingularExpansion { mode: i })
         })
         .collect()
 }
@@ -392,27 +410,28 @@ pub fn hessians(
     // The linearisation over jets is needed beyond the roots for |H| and for one degree of
     // freedom's invariants.
     let whole = tf.is_some() || pt.linear.m.nrows() == 1;
-    let singles: Vec<Linearization<Dual2_64>> = (0..nv)
-        .map(|a| {
-            x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
-                f64::from(u8::from(a == b && k == 0))
-            }))
-        })
-        .collect::<Result<_, _>>()?;
+    // Per variable: the matrices' first and second derivatives along it, and the whole
+    // linearisation where more than the roots reads it (kept only then: at 160 variables of an
+    // 80-segment chain the linearisations would be most of the memory).
+    let mut singles: Vec<Linearization<Dual2_64>> = Vec::new();
+    let mut derivatives: Vec<[DMatrix<f64>; 6]> = Vec::with_capacity(nv);
+    for a in 0..nv {
+        let s = x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
+            f64::from(u8::from(a == b && k == 0))
+        }))?;
+        derivatives.push([
+            part(&s.m, 0),
+            part(&s.c, 0),
+            part(&s.k, 0),
+            part(&s.m, 1),
+            part(&s.c, 1),
+            part(&s.k, 1),
+        ]);
+        if whole {
+            singles.push(s);
+        }
+    }
     let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
-    let derivatives: Vec<[DMatrix<f64>; 6]> = singles
-        .iter()
-        .map(|s| {
-            [
-                part(&s.m, 0),
-                part(&s.c, 0),
-                part(&s.k, 0),
-                part(&s.m, 1),
-                part(&s.c, 1),
-                part(&s.k, 1),
-            ]
-        })
-        .collect();
     let along: Vec<Along<'_>> = derivatives
         .iter()
         .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
@@ -434,7 +453,7 @@ pub fn hessians(
         Ok::<_, Missing>((first, second))
     };
     for a in 0..nv {
-        let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then_some(&singles[a]), |i| {
+        let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then(|| &singles[a]), |i| {
             pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
                 .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
         });

@@ -34,24 +34,12 @@ fn times(a: &DMatrix<f64>, x: &DVector<C64>) -> DVector<C64> {
     r.zip_map(&i, C64::new)
 }
 
-/// A real matrix transposed times a complex vector.
-fn times_transposed(a: &DMatrix<f64>, x: &DVector<C64>) -> DVector<C64> {
-    let (re, im) = (x.map(|z| z.re), x.map(|z| z.im));
-    let (r, i) = (a.tr_mul(&re), a.tr_mul(&im));
-    r.zip_map(&i, C64::new)
-}
-
 /// Three real matrices: `(M̂, Ĉ, K̂)` or their derivatives.
 pub type Triple<'a> = (&'a DMatrix<f64>, &'a DMatrix<f64>, &'a DMatrix<f64>);
 
 /// `P(λ) v = λ²(M v) + λ(C v) + K v` for one variable's matrices.
 fn pencil(l: C64, (m, c, k): Triple<'_>, v: &DVector<C64>) -> DVector<C64> {
     times(m, v) * (l * l) + times(c, v) * l + times(k, v)
-}
-
-/// `P(λ)ᵀ v`.
-fn pencil_transposed(l: C64, (m, c, k): Triple<'_>, v: &DVector<C64>) -> DVector<C64> {
-    times_transposed(m, v) * (l * l) + times_transposed(c, v) * l + times_transposed(k, v)
 }
 
 /// `yᵀ v` without conjugation.
@@ -82,10 +70,29 @@ pub struct RootTerms {
 /// A variable's first and second derivatives of `(M̂, Ĉ, K̂)` along itself.
 pub type Along<'a> = (Triple<'a>, Triple<'a>);
 
-impl RootTerms {
-    /// The terms of `root` of the nominal matrices `(m, c, k)`, with `along[a]` variable `a`'s
-    /// derivatives of the matrices; `None` where the bordered equations are exactly singular.
-    pub fn new(root: &Root, (m, c, k): Triple<'_>, along: &[Along<'_>]) -> Option<RootTerms> {
+/// A root's terms while the variables are added (see [`RootTerms::all`]).
+struct Partial {
+    lambda: C64,
+    left: DVector<C64>,
+    lu: nalgebra::LU<C64, nalgebra::Dyn, nalgebra::Dyn>,
+    den: C64,
+    ymx: C64,
+    /// `P'ᵀy`, shared by every `u_a`.
+    dpty: DVector<C64>,
+    first: Vec<C64>,
+    diagonal: Vec<C64>,
+    alpha: Vec<C64>,
+    /// `x_a` and `u_a` as columns.
+    xs: DMatrix<C64>,
+    us: DMatrix<C64>,
+    /// A solve with the bordered matrix failed.
+    failed: bool,
+}
+
+impl Partial {
+    /// The bordered equations of `root` factorised, with what every variable shares; `None`
+    /// where they are exactly singular.
+    fn new(root: &Root, (m, c, k): Triple<'_>, nv: usize) -> Option<Partial> {
         let n = m.nrows();
         let (l, x, y) = (root.lambda, &root.right, &root.left);
         let cm = |a: &DMatrix<f64>| a.map(|v| C64::new(v, 0.0));
@@ -103,43 +110,121 @@ impl RootTerms {
         if !lu.is_invertible() {
             return None;
         }
-        let den = dot(y, &dpx);
-        let ymx = dot(y, &times(m, x));
-        // P'ᵀy, shared by every u_a.
-        let dpty = dp.transpose() * y;
-        let nv = along.len();
-        let (mut first, mut diagonal, mut alpha) = (vec![], vec![], vec![]);
-        let mut xs = DMatrix::<C64>::zeros(n, nv);
-        let mut us = DMatrix::<C64>::zeros(n, nv);
-        for (a, &((ma, ca, ka), second)) in along.iter().enumerate() {
-            let pax = pencil(l, (ma, ca, ka), x);
-            let la = -dot(y, &pax) / den;
-            let rhs =
-                DVector::from_iterator(n + 1, pax.iter().map(|v| -v).chain([C64::new(0.0, 0.0)]));
-            let sol = lu.solve(&rhs)?;
-            xs.column_mut(a).copy_from(&sol.rows(0, n));
-            let al = dot(y, &(times(ma, x) * (l * 2.0) + times(ca, x)));
-            let u = pencil_transposed(l, (ma, ca, ka), y) + &dpty * la;
-            us.column_mut(a).copy_from(&u);
-            let caa = dot(y, &pencil(l, second, x));
-            let cross = dot(&u, &sol.rows(0, n).into_owned());
-            diagonal.push(-(caa + al * la * 2.0 + la * la * ymx * 2.0 + cross * 2.0) / den);
-            first.push(la);
-            alpha.push(al);
-        }
-        let ux = us.transpose() * &xs;
-        let cross = &ux + ux.transpose();
-        Some(RootTerms {
+        Some(Partial {
             lambda: l,
-            right: x.clone(),
             left: y.clone(),
-            den,
-            ymx,
-            first,
-            diagonal,
-            alpha,
-            cross,
+            lu,
+            den: dot(y, &dpx),
+            ymx: dot(y, &(&mc * x)),
+            dpty: dp.transpose() * y,
+            first: Vec::with_capacity(nv),
+            diagonal: Vec::with_capacity(nv),
+            alpha: Vec::with_capacity(nv),
+            xs: DMatrix::zeros(n, nv),
+            us: DMatrix::zeros(n, nv),
+            failed: false,
         })
+    }
+
+    /// The root's terms, the cross products `u_aᵀx_b + u_bᵀx_a` of every pair taken at once.
+    fn finish(self, root: &Root) -> RootTerms {
+        let ux = self.us.transpose() * &self.xs;
+        RootTerms {
+            lambda: self.lambda,
+            right: root.right.clone(),
+            left: self.left,
+            den: self.den,
+            ymx: self.ymx,
+            first: self.first,
+            diagonal: self.diagonal,
+            alpha: self.alpha,
+            cross: &ux + ux.transpose(),
+        }
+    }
+}
+
+impl RootTerms {
+    /// The terms of each of `roots` of the nominal matrices `(m, c, k)`, with `along[a]`
+    /// variable `a`'s derivatives of the matrices; `None` for a root whose bordered equations
+    /// are exactly singular. The matrices' products with the roots' vectors are taken for all
+    /// the roots at once (one matrix product per variable and matrix, not one matrix–vector
+    /// product per root).
+    pub fn all(
+        roots: &[&Root],
+        (m, c, k): Triple<'_>,
+        along: &[Along<'_>],
+    ) -> Vec<Option<RootTerms>> {
+        let n = m.nrows();
+        let nv = along.len();
+        // The roots' right (or left) vectors as the columns of a real and an imaginary part.
+        let split = |left: bool| {
+            let v = |j: usize| {
+                if left {
+                    &roots[j].left
+                } else {
+                    &roots[j].right
+                }
+            };
+            (
+                DMatrix::from_fn(n, roots.len(), |i, j| v(j)[i].re),
+                DMatrix::from_fn(n, roots.len(), |i, j| v(j)[i].im),
+            )
+        };
+        let (xs_all, ys_all) = (split(false), split(true));
+        // `a Z` (or `aᵀ Z`) for the complex matrix `Z` given by its parts.
+        let product = |a: &DMatrix<f64>, (re, im): &(DMatrix<f64>, DMatrix<f64>), t: bool| {
+            let (r, i) = if t {
+                (a.tr_mul(re), a.tr_mul(im))
+            } else {
+                (a * re, a * im)
+            };
+            r.zip_map(&i, C64::new)
+        };
+        let mut terms: Vec<Option<Partial>> = roots
+            .iter()
+            .map(|root| Partial::new(root, (m, c, k), nv))
+            .collect();
+        for (a, &((ma, ca, ka), (m2, c2, k2))) in along.iter().enumerate() {
+            let [mx, cx, kx, m2x, c2x, k2x] =
+                [ma, ca, ka, m2, c2, k2].map(|mat| product(mat, &xs_all, false));
+            let [mty, cty, kty] = [ma, ca, ka].map(|mat| product(mat, &ys_all, true));
+            for (j, t) in terms.iter_mut().enumerate() {
+                let Some(t) = t.as_mut().filter(|t| !t.failed) else {
+                    continue;
+                };
+                let col = |z: &DMatrix<C64>| z.column(j).into_owned();
+                let pencil = |l: C64, (m, c, k): (&DMatrix<C64>, &DMatrix<C64>, &DMatrix<C64>)| {
+                    col(m) * (l * l) + col(c) * l + col(k)
+                };
+                let l = t.lambda;
+                let pax = pencil(l, (&mx, &cx, &kx));
+                let la = -dot(&t.left, &pax) / t.den;
+                let rhs = DVector::from_iterator(
+                    n + 1,
+                    pax.iter().map(|v| -v).chain([C64::new(0.0, 0.0)]),
+                );
+                let Some(sol) = t.lu.solve(&rhs) else {
+                    t.failed = true;
+                    continue;
+                };
+                let xa = sol.rows(0, n).into_owned();
+                let al = dot(&t.left, &(col(&mx) * (l * 2.0) + col(&cx)));
+                let u = pencil(l, (&mty, &cty, &kty)) + &t.dpty * la;
+                let caa = dot(&t.left, &pencil(l, (&m2x, &c2x, &k2x)));
+                let cross = dot(&u, &xa);
+                t.diagonal
+                    .push(-(caa + al * la * 2.0 + la * la * t.ymx * 2.0 + cross * 2.0) / t.den);
+                t.first.push(la);
+                t.alpha.push(al);
+                t.xs.column_mut(a).copy_from(&xa);
+                t.us.column_mut(a).copy_from(&u);
+            }
+        }
+        terms
+            .into_iter()
+            .zip(roots)
+            .map(|(t, root)| t.filter(|t| !t.failed).map(|t| t.finish(root)))
+            .collect()
     }
 
     /// The root's value.
