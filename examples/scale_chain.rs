@@ -19,7 +19,9 @@
 //! Hessians), of all the Taylor methods, of the quadrature (and its nodes) and of a
 //! 3000-sample Monte Carlo, the rows each method filled, the peak memory so far, and the
 //! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
-//! alone, and with the Hessians, at one point of that chain.
+//! alone, and with the Hessians, at one point of that chain; `… -- governor [--monte-carlo]
+//! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
+//! variables.
 use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
@@ -98,10 +100,8 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
     sxy / sxx
 }
 
-/// `tolerances n [--monte-carlo] k …` (see the module documentation).
+/// `tolerances n [--monte-carlo] [--no-quadrature] k …` (see the module documentation).
 fn tolerances(args: &[String]) {
-    let monte_carlo = args.iter().any(|a| a == "--monte-carlo");
-    let quadrature = !args.iter().any(|a| a == "--no-quadrature");
     let nums: Vec<usize> = args
         .iter()
         .filter(|a| !a.starts_with("--"))
@@ -113,17 +113,68 @@ fn tolerances(args: &[String]) {
     } else {
         vec![5, 10, 20]
     };
+    let models = ks.iter().map(|&k| chain_toleranced(n, k)).collect();
+    let speeds = (0..13).map(|i| 5.0 * i as f64).collect();
+    family(&format!("{n}-segment chain"), models, speeds, args);
+}
+
+/// `governor [--monte-carlo] [--no-quadrature]`: the 12-arm governor with 13 toleranced
+/// variables (`examples/multi_arm_governor_13_variables.toml`: the spring and each arm's link
+/// attachment) and with 37 (each arm's ball mass and link length too), 13 speeds over
+/// 0.5–3.5 rad/s.
+fn governor(args: &[String]) {
+    let thirteen = include_str!("multi_arm_governor_13_variables.toml").to_string();
+    let mut more = thirteen.clone();
+    let mut own = String::new();
+    let mut tolerances = String::new();
+    for arm in 1..=12 {
+        more = more
+            .replacen(
+                "mass = \"2*ball_mass/arms\"",
+                &format!("mass = \"2*ball_mass_{arm}/arms\""),
+                1,
+            )
+            .replacen(
+                "length = \"link_length\"",
+                &format!("length = \"link_length_{arm}\""),
+                1,
+            );
+        own += &format!(
+            "ball_mass_{arm} = {{ value = 1.0, tolerance = \"3%\" }}\n\
+             link_length_{arm} = {{ value = 0.10922, tolerance = \"0.5%\" }}\n"
+        );
+        tolerances += &format!(", ball_mass_{arm} = \"3%\", link_length_{arm} = \"0.5%\"");
+    }
+    assert!(!more.contains("\"2*ball_mass/arms\"") && !more.contains("\"link_length\""));
+    let more = more
+        .replacen("arms = 12.0", &format!("{own}arms = 12.0"), 1)
+        .replacen(
+            "attach12 = \"3%\" }",
+            &format!("attach12 = \"3%\"{tolerances} }}"),
+            1,
+        );
+    let speeds = (0..13).map(|i| 0.5 + 0.25 * i as f64).collect();
+    family("12-arm governor", vec![thirteen, more], speeds, args);
+}
+
+/// The analysis of each of `models` (one tolerance case each, more variables from one to the
+/// next) over `speeds` on two threads: per method the time, the quadrature's nodes and the
+/// rows filled, and the growth exponents of the times in the number of variables.
+fn family(what: &str, models: Vec<String>, speeds: Vec<f64>, args: &[String]) {
+    let monte_carlo = args.iter().any(|a| a == "--monte-carlo");
+    let quadrature = !args.iter().any(|a| a == "--no-quadrature");
     println!(
-        "{n}-segment chain, 13 speeds: variables | first order s | second order s | Taylor s \
+        "{what}, {} speeds: variables | first order s | second order s | Taylor s \
          | quadrature s (nodes) | Monte Carlo s | rows filled: first order, second order, \
-         quadrature | peak MB"
+         quadrature | peak MB",
+        speeds.len()
     );
     let mut rows = Vec::new();
-    for k in ks {
-        let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+    for text in models {
+        let model = Compiled::from_str(&text, "model.toml").unwrap();
         let cases = model.model().tolerance_cases(&[]).unwrap();
         let options = AnalyzeOptions {
-            speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
+            speeds: speeds.clone(),
             cases,
             quadrature: quadrature.then(QuadOptions::default),
             monte_carlo: monte_carlo.then_some(McOptions {
@@ -147,13 +198,13 @@ fn tolerances(args: &[String]) {
         println!(
             "{:9} | {first:8.3} | {second:8.3} | {taylor:8.3} | {quad:8.3} ({nodes}) | {mc:8.3} \
              | {}, {}, {} | {:.0}",
-            2 * k,
+            a.vars.len(),
             filled(Method::FirstOrder),
             filled(Method::SecondOrder),
             filled(Method::Quadrature),
             peak_mb()
         );
-        rows.push([2.0 * k as f64, first, second, taylor, quad]);
+        rows.push([a.vars.len() as f64, first, second, taylor, quad]);
     }
     if rows.len() >= 2 {
         let x: Vec<f64> = rows.iter().map(|r| r[0]).collect();
@@ -171,6 +222,10 @@ fn tolerances(args: &[String]) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("governor") {
+        governor(&args[1..]);
+        return;
+    }
     if args.first().map(String::as_str) == Some("tolerances") {
         tolerances(&args[1..]);
         return;
