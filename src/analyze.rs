@@ -73,6 +73,9 @@ pub struct Row {
     pub quantiles: Option<[f64; 3]>,
     /// Error estimates of the mean and σ (quadrature).
     pub errors: Option<(f64, f64)>,
+    /// Whether those error estimates meet the requested accuracy (quadrature: see
+    /// [`QuadStat::within_request`]).
+    pub within_request: Option<bool>,
     /// Why the method gives no mean and σ here (`mean`, `std` are then NaN).
     pub missing: Option<Missing>,
 }
@@ -421,6 +424,7 @@ fn monte_carlo_rows(study: &Study, si: usize, case: usize, stats: &[McStat]) -> 
             basis: None,
             quantiles: st.quantiles,
             errors: None,
+            within_request: None,
             missing: if !st.mean.is_finite() {
                 Some(nominal.map_or(Missing::NoValue, |pt| no_value(pt, o)))
             } else {
@@ -461,6 +465,7 @@ fn analytic_rows(
             basis,
             quantiles: None,
             errors: None,
+            within_request: None,
             missing,
         }
     };
@@ -505,6 +510,7 @@ fn analytic_rows(
             rows.push(Row {
                 quantiles: q.as_ref().ok().map(|q| q.quantiles),
                 errors: q.as_ref().ok().map(|q| (q.mean_error, q.std_error)),
+                within_request: q.as_ref().ok().map(|q| q.within_request),
                 ..row(o, Method::Quadrature, stat, None, None)
             });
         }
@@ -512,6 +518,7 @@ fn analytic_rows(
             Some(Ok(q)) => Row {
                 quantiles: Some(q.quantiles),
                 errors: Some((q.mean_error, q.std_error)),
+                within_request: Some(q.within_request),
                 ..row(
                     o,
                     Method::Analytic,

@@ -11,6 +11,7 @@ use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::Case;
 use modaltol::quadrature::{Event, QuadOptions};
+use modaltol::report::{outside_request, outside_request_lines};
 use modaltol::tolerance::Quantity;
 
 /// The swept pendulum's exact outputs at rod length `l` and speed `w` (the known answer of
@@ -582,4 +583,62 @@ fn uniform_tolerance_matches_exact_moments() {
             );
         }
     }
+}
+
+#[test]
+fn rows_outside_the_requested_accuracy_are_named() {
+    // The rotating pendulum's case L6 at the default request of 1e-3 and at one no rule can
+    // meet (1e-13 of σ: below the evaluation's own precision). Each quadrature row says
+    // whether its error estimates meet the request, recomputed here from its columns; the rows
+    // that do not are listed per output, and the report's lines name the case.
+    let model = example("rotating_pendulum.toml");
+    let speeds: Vec<f64> = (0..12).map(|i| 0.5 * i as f64).collect();
+    let mut outside_at = Vec::new();
+    for tolerance in [1e-3, 1e-13] {
+        let opt = AnalyzeOptions {
+            speeds: speeds.clone(),
+            cases: cases(&model, &["L6"]),
+            quadrature: Some(QuadOptions { tolerance }),
+            monte_carlo: None,
+            ..Default::default()
+        };
+        let a = analyze(&model, &opt, &|_, _, _| {});
+        let quad: Vec<&Row> = a
+            .rows
+            .iter()
+            .filter(|r| r.method == Method::Quadrature && r.errors.is_some())
+            .collect();
+        assert!(!quad.is_empty());
+        for r in &quad {
+            let (em, es) = r.errors.unwrap();
+            let largest = quad
+                .iter()
+                .filter(|s| s.quantity == r.quantity && s.mode == r.mode)
+                .fold(0.0f64, |m, s| m.max(s.std));
+            let target = tolerance * r.std.max(0.02 * largest);
+            assert_eq!(
+                r.within_request,
+                Some(em <= target && es <= target),
+                "{tolerance}: {} at {}",
+                r.quantity.as_str(),
+                r.speed
+            );
+        }
+        let outside: usize = outside_request(&a).iter().map(|o| o.speeds.len()).sum();
+        let flagged = quad
+            .iter()
+            .filter(|r| r.within_request == Some(false))
+            .count();
+        assert_eq!(outside, flagged);
+        let lines = outside_request_lines(&a);
+        assert_eq!(lines.len(), usize::from(outside > 0));
+        if outside > 0 {
+            assert!(lines[0].contains("case 'L6'") && lines[0].contains(&format!("{outside} row")));
+        }
+        outside_at.push((outside, quad.len()));
+    }
+    // Most rows meet the default request; no row meets the impossible one.
+    let ((loose, n), (strict, m)) = (outside_at[0], outside_at[1]);
+    assert!(loose * 10 < n, "{loose} of {n} rows outside 1e-3");
+    assert_eq!(strict, m, "rows inside 1e-13 of σ");
 }

@@ -298,7 +298,8 @@ fn hessians_of_many_modes_and_variables_match_differences_whichever_pairs_couple
     // (under gravity the chain droops, so every variable moves the equilibrium). Each against
     // central differences of the exact gradients, every mode, the discriminants and |H| (a
     // transfer across the chain at twice the speed: the linearisation's parts joined per pair).
-    let none = damped_chain(5) + "[analysis]\ntransfer = { input = \"j1\", output = \"j4\", order = 2 }\n";
+    let none =
+        damped_chain(5) + "[analysis]\ntransfer = { input = \"j1\", output = \"j4\", order = 2 }\n";
     let few = none
         .replace("\"2*EI_0/h\"", "\"2*EI_0*kappa/h\"")
         .replace("h = ", "kappa = { value = 1.0, tolerance = \"3%\" }\nh = ");

@@ -183,7 +183,9 @@ pub(crate) enum Command {
     /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
     /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
     /// basis (the method an "analytic" row took), q05, q50, q95 (quantiles: quadrature and
-    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates), partial, reason
+    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates), within_request
+    /// (whether they meet --quadrature-tolerance; rows that do not are also named on stderr, in
+    /// the report and in summary.json's quadrature_outside_request), partial, reason
     /// (why a row has no mean and σ), share:<parameter>; SI units, rad/s for speeds and
     /// frequencies), DIR/probabilities.csv
     /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,

@@ -49,6 +49,9 @@ pub(crate) fn write_outputs(
     for line in report::unfilled_lines(a) {
         note!("modaltol: note: {line}");
     }
+    for line in report::outside_request_lines(a) {
+        note!("modaltol: note: {line}");
+    }
     if partial {
         if a.samples_done.is_empty() {
             note!("modaltol: partial result (interrupted): not every speed was analysed");

@@ -16,7 +16,9 @@
 //!    1980). Otherwise one hyper-dual pass `(e_a, w)` per variable gives row `a`'s sum
 //!    `Σ_b w_b M̂_ab`, and only the pairs of two variables whose rows do not vanish get a
 //!    hyper-dual pass `(e_a, e_b)` of their own. So the passes number `p + 1` where the mixed
-//!    derivatives vanish, and at most `1 + 2p + p(p−1)/2` where they do not.
+//!    derivatives vanish, and at most `1 + 2p + p(p−1)/2` where they do not. (With few
+//!    variables the screening is shortened where it cannot pay: up to three pairs get their
+//!    own passes unscreened, and up to five variables skip the rows' passes.)
 //! 3. **Roots** ([`root::RootTerms`]): each simple root's bordered eigen-equations are
 //!    factorised once; the root's first and second derivatives follow in closed form from the
 //!    matrices' derivatives, one solve per variable and `O(n)` per pair.
@@ -170,14 +172,25 @@ fn rows_with_mixed_terms(
     vars: &[usize],
 ) -> Result<Vec<bool>, PointError> {
     let nv = vars.len();
-    if nv < 2 {
+    let pairs = nv * nv.saturating_sub(1) / 2;
+    if pairs == 0 {
         return Ok(vec![false; nv]);
+    }
+    // Screening costs a pass and saves the pairs' passes only where they are zero: with up
+    // to three pairs (three variables) it cannot save much and, where the pairs do couple
+    // (a governor's few variables all move its equilibrium), it costs a pass in seven.
+    if pairs <= 3 {
+        return Ok(vec![true; nv]);
     }
     let along_w = x.linearization(&seed::<Dual2_64>(p, vars, |a, k| {
         if k == 0 { screening(a) } else { 0.0 }
     }))?;
     if vanishes(&along_w, 1) {
         return Ok(vec![false; nv]);
+    }
+    // The rows' passes (p of them) pay only where the pairs are many.
+    if pairs <= 2 * nv {
+        return Ok(vec![true; nv]);
     }
     let rows: Vec<bool> = (0..nv)
         .map(|a| {

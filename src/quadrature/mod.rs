@@ -67,7 +67,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use rules::{Levels, Line, Rule, design, grid};
 use statrs::distribution::{ContinuousCDF, Normal};
-use sums::{converged, evaluate};
+use sums::{converged, evaluate, within};
 
 /// Settings of the quadrature.
 #[derive(Debug, Clone, Copy)]
@@ -94,6 +94,10 @@ pub struct QuadStat {
     /// Error estimates of the mean and of σ.
     pub mean_error: f64,
     pub std_error: f64,
+    /// Do both error estimates meet the requested accuracy ([`QuadOptions::tolerance`],
+    /// relative to the larger of this σ and 2 % of the output's largest σ over the speeds)?
+    /// Where not, the rule's finest grid was reached first: the row says so.
+    pub within_request: bool,
 }
 
 /// A change of character whose probability is reported.
@@ -258,6 +262,14 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         }
         level += 1;
     }
+    let met = within(&result.0, tolerance);
+    for (row, within) in result.0.iter_mut().zip(met) {
+        for (stat, ok) in row.iter_mut().zip(within) {
+            if let (Some(stat), Some(ok)) = (stat, ok) {
+                stat.within_request = ok;
+            }
+        }
+    }
     QuadResult {
         stats: result.0,
         probabilities: result.1,
@@ -417,6 +429,7 @@ fn deterministic(values: &[Vec<f64>], nominal: &[Option<Point>], modes: usize) -
                         quantiles: [v; 3],
                         mean_error: 0.0,
                         std_error: 0.0,
+                        within_request: true,
                     })
                 })
                 .collect()

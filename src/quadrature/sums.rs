@@ -176,6 +176,8 @@ pub(super) fn evaluate(
                         } else {
                             f64::INFINITY
                         },
+                        // Decided once the refinement stops ([`within`]).
+                        within_request: false,
                     })
                 })
                 .collect();
@@ -236,23 +238,40 @@ pub(super) fn converged(
     result: &(Vec<Vec<Option<QuadStat>>>, Vec<Vec<Probability>>),
     tol: f64,
 ) -> bool {
-    let outs = result.0.first().map_or(0, |r| r.len());
-    for o in 0..outs {
-        let largest = result
-            .0
-            .iter()
-            .filter_map(|r| r[o].map(|s| s.std))
-            .fold(0.0f64, f64::max);
-        for row in &result.0 {
-            if let Some(s) = row[o] {
-                let target = tol * s.std.max(0.02 * largest);
-                if !(s.mean_error <= target && s.std_error <= target) {
-                    return false;
-                }
-            }
-        }
-    }
-    result.1.iter().flatten().all(|p| p.error <= 5.0 * tol)
+    within(&result.0, tol)
+        .iter()
+        .flatten()
+        .all(|&ok| ok != Some(false))
+        && result.1.iter().flatten().all(|p| p.error <= 5.0 * tol)
+}
+
+/// Per speed and output (`stats[speed][output]`), whether both error estimates meet the
+/// requested accuracy `tol`, relative to the larger of the row's σ and 2 % of the output's
+/// largest σ over the speeds; `None` where there is no statistic.
+pub(super) fn within(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<bool>>> {
+    let outs = stats.first().map_or(0, |r| r.len());
+    let largest: Vec<f64> = (0..outs)
+        .map(|o| {
+            stats
+                .iter()
+                .filter_map(|r| r[o].map(|s| s.std))
+                .fold(0.0f64, f64::max)
+        })
+        .collect();
+    stats
+        .iter()
+        .map(|row| {
+            row.iter()
+                .zip(&largest)
+                .map(|(s, &largest)| {
+                    s.map(|s| {
+                        let target = tol * s.std.max(0.02 * largest);
+                        s.mean_error <= target && s.std_error <= target
+                    })
+                })
+                .collect()
+        })
+        .collect()
 }
 
 #[cfg(test)]

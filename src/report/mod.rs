@@ -11,6 +11,7 @@
 //! number that is not there is written) and re-exports every public item, so that callers
 //! name them `report::…`.
 
+mod accuracy;
 mod check;
 mod frf;
 mod html;
@@ -21,6 +22,7 @@ mod sweep;
 mod tolerance;
 mod unfilled;
 
+pub use accuracy::{Outside, outside_request, outside_request_lines};
 pub use check::check_summary;
 pub use frf::{frf_header, frf_rows};
 pub use html::report_html;

@@ -3,7 +3,7 @@
 //! and failures, and every row without a value. Its own file because it condenses the whole
 //! run into one document.
 
-use super::unfilled;
+use super::{outside_request, unfilled};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
@@ -105,6 +105,9 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
             "note": "Kim & Yoo (2007), Tables 1–2, 2007 hardware, 3000 samples",
             "example": example, "analytic_seconds": analytic, "monte_carlo_seconds": mc, "ratio": ratio})),
         "failures": a.failures.iter().map(|(w, m)| json!({"speed": w, "message": m})).collect::<Vec<_>>(),
+        "quadrature_outside_request": outside_request(a).iter().map(|o| json!({
+            "case": a.cases[o.case].name, "quantity": o.quantity.as_str(), "mode": o.mode.map(|m| m + 1),
+            "rows": o.speeds.len(), "speeds": o.speeds})).collect::<Vec<_>>(),
         "unfilled": unfilled(a).iter().map(|u| json!({
             "case": a.cases[u.case].name, "method": u.method.as_str(), "quantity": u.quantity.as_str(),
             "mode": u.mode.map(|m| m + 1), "reason": u.reason, "rows": u.speeds.len(),

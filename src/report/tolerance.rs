@@ -29,6 +29,7 @@ pub fn tolerance_header(model: &Model, a: &Analysis) -> Vec<String> {
         "q95",
         "mean_error",
         "std_error",
+        "within_request",
         "partial",
         "reason",
     ]
@@ -82,6 +83,7 @@ pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
                 Some((em, es)) => v.extend([opt(Some(em)), opt(Some(es))]),
                 None => v.extend(std::iter::repeat_n(String::new(), 2)),
             }
+            v.push(r.within_request.map_or(String::new(), |w| w.to_string()));
             v.push(partial.to_string());
             v.push(r.missing.as_ref().map_or(String::new(), |m| m.to_string()));
             match &r.shares {

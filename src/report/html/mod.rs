@@ -6,7 +6,7 @@
 mod first_order;
 mod sigma;
 
-use super::{inadmissible_warnings, paper_timings, unfilled};
+use super::{inadmissible_warnings, outside_request_lines, paper_timings, unfilled};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
@@ -44,6 +44,9 @@ pub fn report_html(
     critical_table(&mut h, a, critical, d);
     failures(&mut h, a);
     h.push_str(&unfilled_table(a));
+    for line in outside_request_lines(a) {
+        let _ = writeln!(h, "<p><b>Note:</b> {}</p>", esc(&line));
+    }
     reading_guide(&mut h);
     figures(&mut h, plots);
     let _ = writeln!(h, "</body></html>");

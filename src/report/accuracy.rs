@@ -1,0 +1,94 @@
+//! The quadrature rows whose error estimates exceed the requested accuracy: the refinement
+//! reached its finest grid first. They keep their values (with their error estimates); this
+//! says plainly which they are, in `summary.json`, the report and on stderr.
+
+use crate::analyze::{Analysis, Method};
+use crate::tolerance::Quantity;
+
+/// Quadrature rows of one case and output whose error estimates exceed the request.
+#[derive(Debug, Clone)]
+pub struct Outside {
+    pub case: usize,
+    pub quantity: Quantity,
+    /// 0-based mode, `None` for |H|.
+    pub mode: Option<usize>,
+    /// The speeds of those rows (rad/s).
+    pub speeds: Vec<f64>,
+}
+
+/// Every quadrature row outside the requested accuracy, grouped by case and output, in the
+/// rows' order.
+pub fn outside_request(a: &Analysis) -> Vec<Outside> {
+    let mut out: Vec<Outside> = Vec::new();
+    for r in &a.rows {
+        if r.method != Method::Quadrature || r.within_request != Some(false) {
+            continue;
+        }
+        let same = |o: &Outside| o.case == r.case && o.quantity == r.quantity && o.mode == r.mode;
+        match out.iter_mut().find(|o| same(o)) {
+            Some(o) => o.speeds.push(r.speed),
+            None => out.push(Outside {
+                case: r.case,
+                quantity: r.quantity,
+                mode: r.mode,
+                speeds: vec![r.speed],
+            }),
+        }
+    }
+    out
+}
+
+/// The output's name in words (`damped_frequency of mode 2`).
+pub fn output_name(quantity: Quantity, mode: Option<usize>) -> String {
+    mode.map_or(quantity.as_str().to_string(), |m| {
+        format!("{} of mode {}", quantity.as_str(), m + 1)
+    })
+}
+
+/// Speeds as a range in words.
+pub fn speed_range(speeds: &[f64]) -> String {
+    let lo = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if lo.to_bits() == hi.to_bits() {
+        format!("at {lo} rad/s")
+    } else {
+        format!("between {lo} and {hi} rad/s")
+    }
+}
+
+/// One line per case: how many quadrature rows are outside the requested accuracy, and for
+/// which outputs (empty when every row meets it).
+pub fn outside_request_lines(a: &Analysis) -> Vec<String> {
+    let groups = outside_request(a);
+    (0..a.cases.len())
+        .filter_map(|case| {
+            let of: Vec<&Outside> = groups.iter().filter(|o| o.case == case).collect();
+            if of.is_empty() {
+                return None;
+            }
+            let rows: usize = of.iter().map(|o| o.speeds.len()).sum();
+            let outputs: Vec<String> = of
+                .iter()
+                .take(4)
+                .map(|o| {
+                    format!(
+                        "{} {}",
+                        output_name(o.quantity, o.mode),
+                        speed_range(&o.speeds)
+                    )
+                })
+                .collect();
+            let more = if of.len() > 4 {
+                format!(" and {} more outputs", of.len() - 4)
+            } else {
+                String::new()
+            };
+            Some(format!(
+                "case '{}': the quadrature's error estimate exceeds the requested accuracy at \
+                 {rows} row(s) (within_request = false in tolerance.csv): {}{more}",
+                a.cases[case].name,
+                outputs.join("; ")
+            ))
+        })
+        .collect()
+}
