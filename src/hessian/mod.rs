@@ -19,7 +19,7 @@
 //!    derivatives vanish, and at most `1 + 2p + p(p−1)/2` where they do not. (With few
 //!    variables the screening is shortened where it cannot pay: up to three pairs get their
 //!    own passes unscreened, and up to five variables skip the rows' passes.)
-//! 3. **Roots** ([`root::RootTerms`]): each simple root's bordered eigen-equations are
+//! 3. **Roots** (`root.rs`): each simple root's bordered eigen-equations are
 //!    factorised once; the root's first and second derivatives follow in closed form from the
 //!    matrices' derivatives, one solve per variable and `O(n)` per pair.
 //! 4. **Outputs**: ω_d, ζ and the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4` are the generic maps of
@@ -470,23 +470,11 @@ pub fn hessians(
             pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
                 .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
         });
-        for (k, v) in o.iter().enumerate() {
-            put(
-                Some(&mut grad[k]),
-                &mut hess[k],
-                (a, a),
-                v.clone().map(|x| x.v1),
-                v.clone().map(|x| x.v2),
-            );
-        }
-        for (k, v) in d.iter().enumerate() {
-            put(
-                Some(&mut dgrad[k]),
-                &mut dhess[k],
-                (a, a),
-                v.clone().map(|x| x.v1),
-                v.clone().map(|x| x.v2),
-            );
+        for (jets, g, h) in [(&o, &mut grad, &mut hess), (&d, &mut dgrad, &mut dhess)] {
+            for (k, v) in jets.iter().enumerate() {
+                let (first, second) = (v.clone().map(|x| x.v1), v.clone().map(|x| x.v2));
+                put(Some(&mut g[k]), &mut h[k], (a, a), first, second);
+            }
         }
         for b in a + 1..nv {
             // The matrices' mixed derivatives: their own pass where they may not vanish.
@@ -516,23 +504,16 @@ pub fn hessians(
                 })
                 .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
             });
-            for (k, v) in o.iter().enumerate() {
-                put(
-                    None,
-                    &mut hess[k],
-                    (a, b),
-                    Ok(0.0),
-                    v.clone().map(|x| x.eps1eps2),
-                );
-            }
-            for (k, v) in d.iter().enumerate() {
-                put(
-                    None,
-                    &mut dhess[k],
-                    (a, b),
-                    Ok(0.0),
-                    v.clone().map(|x| x.eps1eps2),
-                );
+            for (jets, h) in [(&o, &mut hess), (&d, &mut dhess)] {
+                for (k, v) in jets.iter().enumerate() {
+                    put(
+                        None,
+                        &mut h[k],
+                        (a, b),
+                        Ok(0.0),
+                        v.clone().map(|x| x.eps1eps2),
+                    );
+                }
             }
         }
     }
