@@ -124,8 +124,9 @@ fn interruptible<T: Send>(
 
 /// A table (header and string cells, as the CLI writes them) as a dict of typed columns: a
 /// column whose cells all read `true`/`false` is bool; one whose cells all read as integers is
-/// int; one whose non-empty cells all read as numbers is float (empty cells NaN); any other is
-/// str (empty cells None). The CLI's cells
+/// int; one whose non-empty cells all read `true`/`false` holds bools and None (a flag that
+/// applies to some rows only, like `within_request`); one whose non-empty cells all read as
+/// numbers is float (empty cells NaN); any other is str (empty cells None). The CLI's cells
 /// are shortest round-trip decimals, so the floats are the library's bit for bit.
 fn table<'py>(
     py: Python<'py>,
@@ -147,9 +148,23 @@ fn table<'py>(
             })
             .collect();
         let bools: Option<Vec<bool>> = cells.iter().map(|c| c.parse().ok()).collect();
+        // `true`/`false` where the column applies, empty where it does not.
+        let some_bools: Option<Vec<Option<bool>>> = cells
+            .iter()
+            .map(|c| {
+                if c.is_empty() {
+                    Some(None)
+                } else {
+                    c.parse().ok().map(Some)
+                }
+            })
+            .collect();
         let column = match (ints, floats, bools) {
             (_, _, Some(b)) if !cells.is_empty() => PyList::new(py, b)?,
             (Some(i), _, _) if !cells.is_empty() => PyList::new(py, i)?,
+            _ if some_bools.is_some() && cells.iter().any(|c| !c.is_empty()) => {
+                PyList::new(py, some_bools.unwrap_or_default())?
+            }
             (_, Some(f), _) if cells.iter().any(|c| !c.is_empty()) || cells.is_empty() => {
                 PyList::new(py, f)?
             }
