@@ -21,7 +21,8 @@
 //! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
 //! alone, and with the Hessians, at one point of that chain; `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables.
+//! variables; `… -- accuracy n k samples`: the quadrature's, second order's and first order's
+//! mean and σ against a Monte Carlo of that many samples (inside its 99 % intervals).
 use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
@@ -220,8 +221,94 @@ fn family(what: &str, models: Vec<String>, speeds: Vec<f64>, args: &[String]) {
     }
 }
 
+/// `accuracy n k samples`: the n-segment chain with 2k toleranced variables, 13 speeds, by the
+/// quadrature, second order, first order and a Monte Carlo of `samples` random samples (seed
+/// 1): per method, the share of rows whose mean and σ lie inside the Monte Carlo's 99 %
+/// intervals (its 95 % ones widened by 2.576/1.960) and the largest relative deviation of σ;
+/// for the quadrature also the share of rows whose error estimate covers its distance from the
+/// Monte Carlo beyond that interval.
+fn accuracy(args: &[String]) {
+    let n: usize = args[0].parse().unwrap();
+    let k: usize = args[1].parse().unwrap();
+    let samples: usize = args[2].parse().unwrap();
+    let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+    let options = AnalyzeOptions {
+        speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
+        cases: model.model().tolerance_cases(&[]).unwrap(),
+        monte_carlo: Some(McOptions {
+            samples,
+            seed: 1,
+            sampling: Sampling::Random,
+        }),
+        threads: Some(2),
+        ..AnalyzeOptions::default()
+    };
+    let a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
+    let widen = 2.5758 / 1.95996;
+    println!(
+        "{n}-segment chain, {} variables, Monte Carlo {samples} samples ({:.0} s), quadrature \
+         {:.1} s: method | rows | mean inside 99 % | σ inside 99 % | largest |σ/σ_MC − 1| \
+         | error estimate covers",
+        2 * k,
+        a.monte_carlo_seconds.unwrap_or(f64::NAN),
+        a.quadrature_seconds.unwrap_or(f64::NAN)
+    );
+    for method in [Method::Quadrature, Method::SecondOrder, Method::FirstOrder] {
+        let (mut rows, mut mean_in, mut std_in, mut covered, mut worst) = (0, 0, 0, 0, 0.0f64);
+        for r in a
+            .rows
+            .iter()
+            .filter(|r| r.method == method && r.std.is_finite())
+        {
+            let Some(mc) = a
+                .rows
+                .iter()
+                .find(|m| {
+                    m.method == Method::MonteCarlo
+                        && m.speed.to_bits() == r.speed.to_bits()
+                        && m.quantity == r.quantity
+                        && m.mode == r.mode
+                })
+                .and_then(|m| m.mc)
+            else {
+                continue;
+            };
+            if mc.std.is_nan() || mc.std <= 0.0 {
+                continue;
+            }
+            rows += 1;
+            let half = |(lo, hi): (f64, f64)| 0.5 * (hi - lo) * widen;
+            let (dm, ds) = ((r.mean - mc.mean).abs(), (r.std - mc.std).abs());
+            let (hm, hs) = (half(mc.mean_ci), half(mc.std_ci));
+            mean_in += usize::from(dm <= hm);
+            std_in += usize::from(ds <= hs);
+            worst = worst.max((r.std / mc.std - 1.0).abs());
+            if let Some((em, es)) = r.errors {
+                covered += usize::from(dm <= hm + em && ds <= hs + es);
+            }
+        }
+        let pct = |x: usize| 100.0 * x as f64 / rows.max(1) as f64;
+        println!(
+            "{} | {rows} | {:.1} % | {:.1} % | {:.2} % | {}",
+            method.as_str(),
+            pct(mean_in),
+            pct(std_in),
+            100.0 * worst,
+            if method == Method::Quadrature {
+                format!("{:.1} %", pct(covered))
+            } else {
+                "–".into()
+            }
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("accuracy") {
+        accuracy(&args[1..]);
+        return;
+    }
     if args.first().map(String::as_str) == Some("governor") {
         governor(&args[1..]);
         return;
