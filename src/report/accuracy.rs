@@ -39,16 +39,21 @@ pub fn outside_request(a: &Analysis) -> Vec<Outside> {
 }
 
 /// The output's name in words (`damped_frequency of mode 2`).
-pub fn output_name(quantity: Quantity, mode: Option<usize>) -> String {
+pub(super) fn output_name(quantity: Quantity, mode: Option<usize>) -> String {
     mode.map_or(quantity.as_str().to_string(), |m| {
         format!("{} of mode {}", quantity.as_str(), m + 1)
     })
 }
 
-/// Speeds as a range in words.
-pub fn speed_range(speeds: &[f64]) -> String {
+/// The lowest and highest of `speeds`.
+pub(super) fn bounds(speeds: &[f64]) -> (f64, f64) {
     let lo = speeds.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
+}
+
+/// Speeds from `lo` to `hi` in words.
+pub(super) fn speed_range((lo, hi): (f64, f64)) -> String {
     if lo.to_bits() == hi.to_bits() {
         format!("at {lo} rad/s")
     } else {
@@ -74,7 +79,7 @@ pub fn outside_request_lines(a: &Analysis) -> Vec<String> {
                     format!(
                         "{} {}",
                         output_name(o.quantity, o.mode),
-                        speed_range(&o.speeds)
+                        speed_range(bounds(&o.speeds))
                     )
                 })
                 .collect();

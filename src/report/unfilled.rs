@@ -3,6 +3,7 @@
 //! same in a few lines for stderr, and the Monte Carlo samples that were not physically
 //! admissible. Its own file because three outputs (stderr, JSON, HTML) say it.
 
+use super::accuracy::{bounds, output_name, speed_range};
 use crate::analyze::{Analysis, Method};
 use crate::tolerance::Quantity;
 
@@ -56,11 +57,8 @@ pub fn unfilled_lines(a: &Analysis) -> Vec<String> {
     // Per (method, reason): rows, outputs, speed range, cases.
     let mut merged: Vec<(Method, String, usize, Vec<String>, f64, f64)> = Vec::new();
     for u in &groups {
-        let output = u.mode.map_or(u.quantity.as_str().to_string(), |m| {
-            format!("{} of mode {}", u.quantity.as_str(), m + 1)
-        });
-        let lo = u.speeds.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = u.speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let output = output_name(u.quantity, u.mode);
+        let (lo, hi) = bounds(&u.speeds);
         match merged
             .iter_mut()
             .find(|x| x.0 == u.method && x.1 == u.reason)
@@ -87,11 +85,7 @@ pub fn unfilled_lines(a: &Analysis) -> Vec<String> {
         .iter()
         .take(UNFILLED_LINES)
         .map(|(method, reason, rows, outputs, lo, hi)| {
-            let speeds = if lo.to_bits() == hi.to_bits() {
-                format!("at {lo} rad/s")
-            } else {
-                format!("between {lo} and {hi} rad/s")
-            };
+            let speeds = speed_range((*lo, *hi));
             format!(
                 "{}: {rows} row(s) without a value ({}; {speeds}): {reason}",
                 method.as_str(),
