@@ -28,7 +28,8 @@ use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
-use modaltol::montecarlo::McOptions;
+use modaltol::montecarlo::{McOptions, McStat};
+use modaltol::output::Quantity;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
 use modaltol::quadrature::QuadOptions;
@@ -231,11 +232,15 @@ fn accuracy(args: &[String]) {
     let n: usize = args[0].parse().unwrap();
     let k: usize = args[1].parse().unwrap();
     let samples: usize = args[2].parse().unwrap();
+    let reference = args
+        .iter()
+        .position(|a| a == "--reference")
+        .map(|i| reference_rows(&args[i + 1]));
     let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
     let options = AnalyzeOptions {
         speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
         cases: model.model().tolerance_cases(&[]).unwrap(),
-        monte_carlo: Some(McOptions {
+        monte_carlo: reference.is_none().then_some(McOptions {
             samples,
             seed: 1,
             sampling: Sampling::Random,
@@ -243,7 +248,10 @@ fn accuracy(args: &[String]) {
         threads: Some(2),
         ..AnalyzeOptions::default()
     };
-    let a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
+    let mut a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
+    if let Some(rows) = reference {
+        a.rows.extend(rows);
+    }
     let widen = 2.5758 / 1.95996;
     println!(
         "{n}-segment chain, {} variables, Monte Carlo {samples} samples ({:.0} s), quadrature \
@@ -303,8 +311,73 @@ fn accuracy(args: &[String]) {
     }
 }
 
+/// The Monte Carlo rows of a `tolerance.csv` written by `modaltol analyze` (a reference run
+/// once, for `accuracy … --reference FILE`).
+fn reference_rows(path: &str) -> Vec<Row> {
+    let mut reader = csv::Reader::from_path(path).unwrap();
+    let head = reader.headers().unwrap().clone();
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let num = |r: &csv::StringRecord, name: &str| r[col(name)].parse::<f64>().unwrap_or(f64::NAN);
+    reader
+        .records()
+        .map(Result::unwrap)
+        .filter(|r| &r[col("method")] == "monte_carlo" && !r[col("std")].is_empty())
+        .map(|r| {
+            let quantity = [
+                Quantity::DampedFrequency,
+                Quantity::DampingRatio,
+                Quantity::TransferMagnitude,
+            ]
+            .into_iter()
+            .find(|q| q.as_str() == &r[col("quantity")])
+            .unwrap();
+            let (mean, std) = (num(&r, "mean"), num(&r, "std"));
+            Row {
+                speed: num(&r, "speed"),
+                quantity,
+                mode: r[col("mode")].parse::<usize>().ok().map(|m| m - 1),
+                case: 0,
+                method: Method::MonteCarlo,
+                mean,
+                std,
+                mc: Some(McStat {
+                    n: num(&r, "samples") as usize,
+                    mean,
+                    std,
+                    mean_ci: (num(&r, "mean_ci_low"), num(&r, "mean_ci_high")),
+                    std_ci: (num(&r, "std_ci_low"), num(&r, "std_ci_high")),
+                    failed: 0,
+                    class_changed: 0,
+                    overdamped: 0,
+                    unstable: 0,
+                    other_branch: 0,
+                    quantiles: None,
+                }),
+                shares: None,
+                basis: None,
+                quantiles: None,
+                errors: None,
+                within_request: None,
+                missing: None,
+            }
+        })
+        .collect()
+}
+
+/// `model n k`: the n-segment chain with 2k toleranced variables, as a model file.
+fn print_model(args: &[String]) {
+    print!(
+        "{}",
+        chain_toleranced(args[0].parse().unwrap(), args[1].parse().unwrap())
+    );
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("model") {
+        print_model(&args[1..]);
+        return;
+    }
     if args.first().map(String::as_str) == Some("accuracy") {
         accuracy(&args[1..]);
         return;

@@ -5,6 +5,18 @@ use crate::model::Distribution;
 use crate::tolerance::{LocalModel, Spread};
 use nalgebra::{DMatrix, DVector};
 
+/// `∂b/∂z` at `z = 0` of the design map ([`crate::sampling::DesignMap::parameters`]) of the
+/// spread `s` (of the active variables) with the correlation factor `chol`.
+pub(super) fn design_jacobian(s: &Spread, chol: &DMatrix<f64>) -> DMatrix<f64> {
+    let d = s.sigma.len();
+    let phi0 = 1.0 / (2.0 * std::f64::consts::PI).sqrt();
+    DMatrix::from_fn(d, d, |i, k| match s.distribution[i] {
+        Distribution::Normal => s.sigma[i] * chol[(i, k)],
+        Distribution::Uniform if i == k => s.sigma[i] * 3f64.sqrt() * 2.0 * phi0,
+        Distribution::Uniform => 0.0,
+    })
+}
+
 /// The line direction first, then an orthonormal basis of its complement (columns, in `z`).
 pub(super) fn directions(
     locals: &[Option<LocalModel>],
@@ -16,13 +28,7 @@ pub(super) fn directions(
     if d == 1 {
         return DMatrix::identity(1, 1);
     }
-    // ∂b/∂z at z = 0.
-    let phi0 = 1.0 / (2.0 * std::f64::consts::PI).sqrt();
-    let jac = DMatrix::from_fn(d, d, |i, k| match s.distribution[i] {
-        Distribution::Normal => s.sigma[i] * chol[(i, k)],
-        Distribution::Uniform if i == k => s.sigma[i] * 3f64.sqrt() * 2.0 * phi0,
-        Distribution::Uniform => 0.0,
-    });
+    let jac = design_jacobian(s, chol);
     let mut c = DMatrix::<f64>::zeros(d, d);
     for lm in locals.iter().flatten() {
         let grads = lm

@@ -3,6 +3,7 @@
 //! Gauss–Legendre against the normal density.
 
 use super::NodeData;
+use super::control::OnLine;
 use super::roots::{root_in, roots_in};
 use super::rules::grid;
 use super::sums::Sums;
@@ -71,8 +72,17 @@ impl Stencil<'_> {
 
 impl Context<'_> {
     /// Integrates one line with the nodes at `stride`; with `atoms`, also collects the
-    /// weighted output values for the quantiles.
-    pub fn line(&self, li: usize, stride: usize, mut atoms: Option<Atoms>) -> Sums {
+    /// weighted output values for the quantiles. Where an output has an expansion along the
+    /// line (`control`), its sums are those of the control-variate estimator
+    /// ([`super::control`]): `E[q − f₀] + ∫ 1_D (f − q) − 1_{D^c} (q − f₀)` and the same of the
+    /// squares, with `D` where the output has a value.
+    pub fn line(
+        &self,
+        li: usize,
+        stride: usize,
+        control: &[Option<OnLine>],
+        mut atoms: Option<Atoms>,
+    ) -> Sums {
         let data = &self.store.data[li];
         let finest = data.len();
         let w = self.store.width;
@@ -107,24 +117,24 @@ impl Context<'_> {
         for k in 0..idx.len() - 1 {
             let (a, b) = (t[k], t[k + 1]);
             match (sig[k], sig[k + 1]) {
-                (None, None) => sums.mass += normal_mass(a, b),
+                (None, None) => undefined(a, b, &mut sums, control),
                 (x, y) if x == y => {
                     let st = around(k, run_of[k]);
-                    self.piece(&st, a, b, &mut sums, &mut atoms);
+                    self.piece(&st, a, b, &mut sums, &mut atoms, control);
                 }
                 (Some(_), None) => {
                     let m = 0.5 * (a + b);
                     let (r0, _) = run_of[k];
                     let st = stencil(k.saturating_sub(3).max(r0), k);
-                    self.piece(&st, a, m, &mut sums, &mut atoms);
-                    sums.mass += normal_mass(m, b);
+                    self.piece(&st, a, m, &mut sums, &mut atoms, control);
+                    undefined(m, b, &mut sums, control);
                 }
                 (None, Some(_)) => {
                     let m = 0.5 * (a + b);
                     let (_, r1) = run_of[k + 1];
                     let st = stencil(k + 1, (k + 4).min(r1));
-                    sums.mass += normal_mass(a, m);
-                    self.piece(&st, m, b, &mut sums, &mut atoms);
+                    undefined(a, m, &mut sums, control);
+                    self.piece(&st, m, b, &mut sums, &mut atoms, control);
                 }
                 (Some(_), Some(_)) => {
                     let (r0, _) = run_of[k];
@@ -132,8 +142,8 @@ impl Context<'_> {
                     let left = stencil(k.saturating_sub(3).max(r0), k);
                     let right = stencil(k + 1, (k + 4).min(r1));
                     let m = self.switch_point(&left, &right, a, b);
-                    self.piece(&left, a, m, &mut sums, &mut atoms);
-                    self.piece(&right, m, b, &mut sums, &mut atoms);
+                    self.piece(&left, a, m, &mut sums, &mut atoms, control);
+                    self.piece(&right, m, b, &mut sums, &mut atoms, control);
                 }
             }
         }
@@ -143,16 +153,23 @@ impl Context<'_> {
         match sig[0] {
             Some(_) => {
                 let st = stencil(0, run_of[0].1.min(3));
-                self.piece(&st, -TAIL_END, t[0], &mut sums, &mut atoms);
+                self.piece(&st, -TAIL_END, t[0], &mut sums, &mut atoms, control);
             }
-            None => sums.mass += normal_mass(-TAIL_END, t[0]),
+            None => undefined(-TAIL_END, t[0], &mut sums, control),
         }
         match sig[last] {
             Some(_) => {
                 let st = stencil(run_of[last].0.max(last.saturating_sub(3)), last);
-                self.piece(&st, t[last], TAIL_END, &mut sums, &mut atoms);
+                self.piece(&st, t[last], TAIL_END, &mut sums, &mut atoms, control);
             }
-            None => sums.mass += normal_mass(t[last], TAIL_END),
+            None => undefined(t[last], TAIL_END, &mut sums, control),
+        }
+        // The expansions' exact moments (the lines' weights add up to one).
+        for (o, c) in control.iter().enumerate() {
+            if let Some(c) = c {
+                sums.s1[o] += c.moments.0;
+                sums.s2[o] += c.moments.1;
+            }
         }
         sums
     }
@@ -188,8 +205,17 @@ impl Context<'_> {
         }
     }
 
-    /// Integrates the interpolant `st` over `[a, b]`, split where a mode changes character.
-    fn piece(&self, st: &Stencil, a: f64, b: f64, sums: &mut Sums, atoms: &mut Option<Atoms>) {
+    /// Integrates the interpolant `st` over `[a, b]`, split where a mode changes character
+    /// (each output less its expansion along the line, where `control` has one).
+    fn piece(
+        &self,
+        st: &Stencil,
+        a: f64,
+        b: f64,
+        sums: &mut Sums,
+        atoms: &mut Option<Atoms>,
+        control: &[Option<OnLine>],
+    ) {
         if b <= a {
             return;
         }
@@ -276,13 +302,16 @@ impl Context<'_> {
                 st.eval(t, &mut c);
                 for (o, out) in self.outs.iter().enumerate() {
                     let v = carrier_value(out, &c, modes);
+                    let q = control[o].map_or(0.0, |e| e.at(t));
                     if !v.is_finite() {
+                        sums.s1[o] -= wt * q;
+                        sums.s2[o] -= wt * q * q;
                         continue;
                     }
                     let dv = v - self.shift[o];
                     sums.defined[o] += wt;
-                    sums.s1[o] += wt * dv;
-                    sums.s2[o] += wt * dv * dv;
+                    sums.s1[o] += wt * (dv - q);
+                    sums.s2[o] += wt * (dv * dv - q * q);
                     if let Some((atoms, lw)) = atoms.as_mut() {
                         atoms[o].push((v, wt * *lw));
                     }
@@ -322,4 +351,17 @@ pub(super) fn density(t: f64) -> f64 {
 fn normal_mass(a: f64, b: f64) -> f64 {
     let n = Normal::standard();
     n.cdf(b) - n.cdf(a)
+}
+
+/// A stretch `[a, b]` of the line where no output has a value: its normal mass, and the
+/// expansions integrated over it (the `1_{D^c} (q − f₀)` terms of the estimator).
+fn undefined(a: f64, b: f64, sums: &mut Sums, control: &[Option<OnLine>]) {
+    sums.mass += normal_mass(a, b);
+    for (o, c) in control.iter().enumerate() {
+        if let Some(c) = c {
+            let (i1, i2) = c.integrals(a, b);
+            sums.s1[o] -= i1;
+            sums.s2[o] -= i2;
+        }
+    }
 }

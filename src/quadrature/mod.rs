@@ -21,11 +21,17 @@
 //!    outputs change, and so change character. `z = α t + V y` with `V` its orthogonal
 //!    complement.
 //! 3. Transverse points `y` carry weights: one line for one variable; the tensor 3-point
-//!    Gauss–Hermite rule for two to four variables, checked against the 2-point rule; for
+//!    Gauss–Hermite rule for two to four variables, checked against the 2-point rule (then the
+//!    5- and 7-point rules where the transverse error is what misses the request); for
 //!    five or more, randomised quasi-Monte Carlo (eight independently Owen-scrambled Sobol
-//!    sets, Owen 1997; the error from their spread).
-//! 4. Along each line, nodes `t` on a uniform grid over `[−6, 6]`, refined by halving until
-//!    the estimated error meets the requested accuracy. **Every node is a sample**: its design
+//!    sets, Owen 1997; the error from their spread), two lines each at first, doubled where the
+//!    transverse error is what misses the request, within a budget of a tenth of the default
+//!    Monte Carlo (`rules.rs`). With that many variables most of an output's variance lies
+//!    across the lines, so there the rule integrates only what the output's exact
+//!    second-order expansion leaves (the expansion as a **control variate**, its moments
+//!    exact: `control.rs`).
+//! 4. Along each line, nodes `t` on a uniform grid over `[−6, 6]`, refined by halving where
+//!    the along-line error is what misses the requested accuracy. **Every node is a sample**: its design
 //!    is swept from the lowest speed with the Monte Carlo's own continuation
 //!    ([`crate::sampling::sample_sweep`]), so it sits on the branch a sweep follows.
 //! 5. At each speed, per line: the nodes are grouped into runs on the same branch; between
@@ -43,14 +49,19 @@
 //! **Error estimates**: the along-line error is the difference between the result on the
 //! node grid and on every other node of it (the coarser rule is worse, so the difference
 //! bounds the finer rule's error for any convergent sequence); the transverse error is the
-//! difference between the 3- and the 2-point Gauss–Hermite tensor rules (both degree ≥ 3)
-//! or the Student-t 95 % half-width of the scrambled replicates. They add.
+//! difference between the Gauss–Hermite tensor rule in use and the one of the order below
+//! or the Student-t 95 % half-width of the scrambled replicates (of the control-variate
+//! estimator where it is used). They add; where one of them alone takes more than half the
+//! request of a row that misses it, that one is refined (the larger first), until every row
+//! meets the request or the rule's largest stage or budget is reached (the rows then say so:
+//! [`QuadStat::within_request`]).
 //!
 //! What it does not handle: two modes crossing between nodes (their carriers are matched by
 //! shape and may swap; the error estimate then grows, as the refinement does not converge
 //! there), and boundaries not crossed by the line direction in the transverse directions
 //! (they are integrated by the transverse rule and show in its error estimate).
 
+mod control;
 mod directions;
 mod line;
 mod roots;
@@ -62,12 +73,13 @@ use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::sweep::Point;
 use crate::tolerance::{Output, Quantity, Spread, value};
-use directions::directions;
+use control::Control;
+use directions::{design_jacobian, directions};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use rules::{Levels, Line, Rule, design, grid};
+use rules::{Levels, Line, Rule, Stage, Transverse, design, grid};
 use statrs::distribution::{ContinuousCDF, Normal};
-use sums::{converged, evaluate, within};
+use sums::{evaluate, next_stage, within};
 
 /// Settings of the quadrature.
 #[derive(Debug, Clone, Copy)]
@@ -252,18 +264,20 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         swept: 0,
         budget: rule.budget(),
     };
-    let mut level = rule.levels.first;
+    let mut stage = rule.first();
     let mut result;
     loop {
-        nodes.sweep_level(level, &mut store, run, &mut count);
-        result = run.pool.install(|| evaluate(&store, rule, level, &nominal));
-        if level == rule.levels.last || converged(&result, tolerance) {
-            break;
+        nodes.sweep_stage(stage, &mut store, run, &mut count);
+        result = run
+            .pool
+            .install(|| evaluate(&store, rule, stage, &nominal, nodes.control.as_ref()));
+        match next_stage(&result, rule, stage, tolerance) {
+            Some(next) => stage = next,
+            None => break,
         }
-        level += 1;
     }
-    let met = within(&result.0, tolerance);
-    for (row, within) in result.0.iter_mut().zip(met) {
+    let met = within(&result.stats, tolerance);
+    for (row, within) in result.stats.iter_mut().zip(met) {
         for (stat, ok) in row.iter_mut().zip(within) {
             if let (Some(stat), Some(ok)) = (stat, ok) {
                 stat.within_request = ok;
@@ -271,10 +285,10 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         }
     }
     QuadResult {
-        stats: result.0,
-        probabilities: result.1,
+        stats: result.stats,
+        probabilities: result.probabilities,
         nodes: count.swept,
-        rule: rule.describe(active.len(), count.swept),
+        rule: rule.describe(active.len(), stage, count.swept),
     }
 }
 
@@ -286,12 +300,13 @@ struct Count {
 
 /// Where the nodes of one case lie and how each is swept: the active variables' design map,
 /// the line direction and its complement (in independent standard normals `z = α t + V y`),
-/// and the rule.
+/// the rule, and (for the many-variable rule) the outputs' expansions as control variates.
 struct Nodes<'a> {
     study: &'a Study<'a>,
     map: DesignMap,
     basis: DMatrix<f64>,
     rule: Rule,
+    control: Option<Control>,
     /// Carriers per speed: `s, p` of every mode, then |H|.
     width: usize,
     modes: usize,
@@ -312,11 +327,19 @@ impl<'a> Nodes<'a> {
         };
         let map = DesignMap::new(study.model.model().nominal(), sub_vars, sub_spread.clone());
         let basis = directions(&study.locals, active, &sub_spread, map.factor());
+        let rule = design(d);
+        let control = matches!(rule.transverse, Transverse::Scrambled { .. }).then(|| {
+            let jac = design_jacobian(&sub_spread, map.factor());
+            let offsets: Vec<DVector<f64>> = rule.lines.iter().map(|l| offset(&basis, l)).collect();
+            let alpha = basis.column(0).into_owned();
+            Control::new(&study.locals, active, &jac, &alpha, &offsets)
+        });
         Nodes {
             study,
             map,
             basis,
-            rule: design(d),
+            rule,
+            control,
             width: 2 * modes + 1,
             modes,
         }
@@ -325,11 +348,7 @@ impl<'a> Nodes<'a> {
     /// The design at position `t` along `line`.
     fn parameters(&self, line: &Line, t: f64) -> Vec<f64> {
         let normal = Normal::standard();
-        let mut z = DVector::<f64>::zeros(self.basis.nrows());
-        z += self.basis.column(0) * t;
-        for (k, &y) in line.y.iter().enumerate() {
-            z += self.basis.column(k + 1) * y;
-        }
+        let z = offset(&self.basis, line) + self.basis.column(0) * t;
         let u: Vec<f64> = z.iter().map(|&x| normal.cdf(x)).collect();
         self.map.parameters(z.as_slice(), &u)
     }
@@ -374,17 +393,25 @@ impl<'a> Nodes<'a> {
         Sweep { branch, carriers }
     }
 
-    /// Sweeps the nodes refinement `level` adds (the check lines only at the first level), in
+    /// Sweeps the nodes refinement `stage` adds (the check lines only at the first level), in
     /// parallel.
-    fn sweep_level(&self, level: usize, store: &mut NodeData, run: &Run, count: &mut Count) {
+    fn sweep_stage(&self, stage: Stage, store: &mut NodeData, run: &Run, count: &mut Count) {
         let (lines, levels) = (&self.rule.lines, self.rule.levels);
         let finest = Levels::nodes(levels.last);
-        let stride = 1 << (levels.last - level);
         let todo: Vec<(usize, usize)> = lines
             .iter()
             .enumerate()
-            .filter(|(_, l)| !l.check || level == levels.first)
-            .flat_map(|(li, _)| (0..finest).step_by(stride).map(move |j| (li, j)))
+            .filter(|(_, l)| self.rule.uses(l, stage))
+            .flat_map(|(li, l)| {
+                let level = if self.rule.checks(l, stage) {
+                    levels.first
+                } else {
+                    stage.level
+                };
+                (0..finest)
+                    .step_by(1 << (levels.last - level))
+                    .map(move |j| (li, j))
+            })
             .filter(|&(li, j)| store.data[li][j].is_none())
             .collect();
         let tier = Tier::for_points(todo.len() * self.study.speeds.len());
@@ -405,6 +432,16 @@ impl<'a> Nodes<'a> {
             store.data[li][j] = Some(s);
         }
     }
+}
+
+/// The transverse point `V y` of `line` (in `z`; the line direction is the basis's first
+/// column).
+fn offset(basis: &DMatrix<f64>, line: &Line) -> DVector<f64> {
+    let mut z = DVector::<f64>::zeros(basis.nrows());
+    for (k, &y) in line.y.iter().enumerate() {
+        z += basis.column(k + 1) * y;
+    }
+    z
 }
 
 /// What the statistics are measured against at each speed: the nominal values (the shift of

@@ -1,8 +1,9 @@
 //! Moments, event masses and quantiles from the line integrals, with the along-line and
 //! transverse error estimates: the statistics of one refinement level.
 
+use super::control::Control;
 use super::line::Context;
-use super::rules::{Rule, Transverse};
+use super::rules::{Rule, Stage, Transverse};
 use super::{Event, NodeData, Probability, QuadStat, Reference};
 use crate::tolerance::sigma_of;
 use rayon::prelude::*;
@@ -68,17 +69,37 @@ impl Sums {
     }
 }
 
-/// Statistics at every speed from the nodes of refinement `level` (the answer) and of the
-/// level below (its along-line error estimate), against the `nominal` reference.
+/// What one refinement stage gives: per speed and output the statistics and their error
+/// estimates' two parts (along the lines, across them: [`ErrorParts`]), and per speed the
+/// probabilities.
+pub(super) struct Evaluation {
+    pub stats: Vec<Vec<Option<QuadStat>>>,
+    pub parts: Vec<Vec<Option<ErrorParts>>>,
+    pub probabilities: Vec<Vec<Probability>>,
+    pub probability_parts: Vec<Vec<ErrorParts>>,
+}
+
+/// The larger of a statistic's mean and σ error estimates, split into the part along the lines
+/// (the grid's) and the part across them (the transverse rule's): which refinement pays.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct ErrorParts {
+    pub along: f64,
+    pub across: f64,
+}
+
+/// Statistics at every speed from the nodes of refinement `stage` (the answer) and of the
+/// level below (its along-line error estimate), against the `nominal` reference, with the
+/// `control` variates where the rule has them.
 pub(super) fn evaluate(
     store: &NodeData,
     rule: &Rule,
-    level: usize,
+    stage: Stage,
     nominal: &Reference,
-) -> (Vec<Vec<Option<QuadStat>>>, Vec<Vec<Probability>>) {
+    control: Option<&Control>,
+) -> Evaluation {
     let (lines, transverse) = (&rule.lines, rule.transverse);
     let (first_level, last_level) = (rule.levels.first, rule.levels.last);
-    let stride = 1 << (last_level - level);
+    let stride = 1 << (last_level - stage.level);
     let coarse = stride << 1;
     let (nominal_values, branches, outs, modes) = (
         nominal.values,
@@ -87,7 +108,7 @@ pub(super) fn evaluate(
         nominal.modes,
     );
     let check_stride = 1 << (last_level - first_level);
-    let per_speed: Vec<(Vec<Option<QuadStat>>, Vec<Probability>)> = (0..store.speeds)
+    let per_speed: Vec<_> = (0..store.speeds)
         .into_par_iter()
         .map(|i| {
             let shift: Vec<f64> = nominal_values[i]
@@ -112,18 +133,25 @@ pub(super) fn evaluate(
             };
             let mut reps = vec![Sums::new(outs.len(), modes); replicates];
             let mut atoms: Vec<Vec<(f64, f64)>> = vec![Vec::new(); outs.len()];
+            let none = vec![None; outs.len()];
             for (li, line) in lines.iter().enumerate() {
-                if line.check {
-                    let s = ctx.line(li, check_stride, None);
-                    check.add_scaled(&s, line.weight);
+                if !rule.uses(line, stage) {
                     continue;
                 }
-                let s = ctx.line(li, stride, Some((&mut atoms, line.weight)));
-                fine.add_scaled(&s, line.weight);
-                reps[line.replicate].add_scaled(&s, line.weight * replicates as f64);
-                rough.add_scaled(&ctx.line(li, coarse, None), line.weight);
+                let on_line = control.map(|c| c.on_line(i, li, outs.len()));
+                let cv = on_line.as_deref().unwrap_or(&none);
+                let weight = rule.weight(line, stage);
+                if rule.checks(line, stage) {
+                    let s = ctx.line(li, check_stride, cv, None);
+                    check.add_scaled(&s, weight);
+                    continue;
+                }
+                let s = ctx.line(li, stride, cv, Some((&mut atoms, weight)));
+                fine.add_scaled(&s, weight);
+                reps[line.replicate].add_scaled(&s, weight * replicates as f64);
+                rough.add_scaled(&ctx.line(li, coarse, cv, None), weight);
                 if transverse == Transverse::Tensor {
-                    main_at_check.add_scaled(&ctx.line(li, check_stride, None), line.weight);
+                    main_at_check.add_scaled(&ctx.line(li, check_stride, cv, None), weight);
                 }
             }
             // Transverse error of a statistic computed from sums.
@@ -151,43 +179,56 @@ pub(super) fn evaluate(
                     }
                 }
             };
-            let stats = (0..outs.len())
+            let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
+            let (stats, parts): (Vec<_>, Vec<_>) = (0..outs.len())
                 .map(|o| {
-                    let (mean, std) = fine.moments(o, shift[o])?;
+                    let Some((mean, std)) = fine.moments(o, shift[o]) else {
+                        return (None, None);
+                    };
                     let (rm, rs) = rough.moments(o, shift[o]).unwrap_or((f64::NAN, f64::NAN));
                     let floor = EVAL_PRECISION * (mean.abs() + std);
-                    let mean_error = 2.0 * (mean - rm).abs()
-                        + floor
-                        + transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.0));
-                    let std_error = 2.0 * (std - rs).abs()
-                        + floor
-                        + transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.1));
-                    Some(QuadStat {
+                    let along = (
+                        finite(2.0 * (mean - rm).abs() + floor),
+                        finite(2.0 * (std - rs).abs() + floor),
+                    );
+                    let across = (
+                        finite(transverse_error(&|s: &Sums| {
+                            s.moments(o, shift[o]).map(|m| m.0)
+                        })),
+                        finite(transverse_error(&|s: &Sums| {
+                            s.moments(o, shift[o]).map(|m| m.1)
+                        })),
+                    );
+                    let mut q = quantiles(&mut atoms[o]);
+                    if control.is_some() {
+                        q = rescaled(q, &atoms[o], mean, std);
+                    }
+                    let stat = QuadStat {
                         mean,
                         std,
-                        quantiles: quantiles(&mut atoms[o]),
-                        mean_error: if mean_error.is_finite() {
-                            mean_error
-                        } else {
-                            f64::INFINITY
-                        },
-                        std_error: if std_error.is_finite() {
-                            std_error
-                        } else {
-                            f64::INFINITY
-                        },
+                        quantiles: q,
+                        mean_error: along.0 + across.0,
+                        std_error: along.1 + across.1,
                         // Decided once the refinement stops ([`within`]).
                         within_request: false,
-                    })
+                    };
+                    let parts = ErrorParts {
+                        along: along.0.max(along.1),
+                        across: across.0.max(across.1),
+                    };
+                    (Some(stat), Some(parts))
                 })
-                .collect();
-            let probabilities = if fine.mass > 0.0 {
+                .unzip();
+            let (probabilities, probability_parts) = if fine.mass > 0.0 {
                 (0..modes + 2)
                     .map(|e| {
                         let p = fine.probability(e);
-                        let err = 2.0 * (p - rough.probability(e)).abs()
-                            + transverse_error(&|s: &Sums| Some(s.probability(e)));
-                        Probability {
+                        let part = ErrorParts {
+                            along: 2.0 * (p - rough.probability(e)).abs(),
+                            across: transverse_error(&|s: &Sums| Some(s.probability(e))),
+                        };
+                        let err = part.along + part.across;
+                        let probability = Probability {
                             event: match e {
                                 e if e < modes => Event::Overdamped,
                                 e if e == modes => Event::Unstable,
@@ -196,16 +237,47 @@ pub(super) fn evaluate(
                             mode: (e < modes).then_some(e),
                             probability: p,
                             error: if err.is_finite() { err } else { 1.0 },
-                        }
+                        };
+                        let part = ErrorParts {
+                            along: finite(part.along),
+                            across: finite(part.across),
+                        };
+                        (probability, part)
                     })
-                    .collect()
+                    .unzip()
             } else {
-                Vec::new()
+                (Vec::new(), Vec::new())
             };
-            (stats, probabilities)
+            (stats, parts, probabilities, probability_parts)
         })
         .collect();
-    per_speed.into_iter().unzip()
+    let mut out = Evaluation {
+        stats: Vec::new(),
+        parts: Vec::new(),
+        probabilities: Vec::new(),
+        probability_parts: Vec::new(),
+    };
+    for (stats, parts, probabilities, probability_parts) in per_speed {
+        out.stats.push(stats);
+        out.parts.push(parts);
+        out.probabilities.push(probabilities);
+        out.probability_parts.push(probability_parts);
+    }
+    out
+}
+
+/// Quantiles `q` of the weighted `atoms` moved to the control-variate estimator's `mean` and
+/// `std`: the atoms' shape, standardised by their own mean and σ. The atoms of few lines place
+/// the distribution's location and width with the plain estimator's transverse error; the
+/// shape they give is much less sensitive to it.
+fn rescaled(q: [f64; 3], atoms: &[(f64, f64)], mean: f64, std: f64) -> [f64; 3] {
+    let total: f64 = atoms.iter().map(|a| a.1).sum();
+    let m = atoms.iter().map(|a| a.0 * a.1).sum::<f64>() / total;
+    let s = (atoms.iter().map(|a| (a.0 - m).powi(2) * a.1).sum::<f64>() / total).sqrt();
+    if s.is_nan() || s <= 0.0 || !std.is_finite() {
+        return q;
+    }
+    q.map(|v| mean + (v - m) * std / s)
 }
 
 /// The 5, 50 and 95 % quantiles of weighted atoms (value, weight).
@@ -233,22 +305,56 @@ pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
     })
 }
 
-/// Was the along-line error met everywhere?
-pub(super) fn converged(
-    result: &(Vec<Vec<Option<QuadStat>>>, Vec<Vec<Probability>>),
-    tol: f64,
-) -> bool {
-    within(&result.0, tol)
-        .iter()
-        .flatten()
-        .all(|&ok| ok != Some(false))
-        && result.1.iter().flatten().all(|p| p.error <= 5.0 * tol)
+/// The next stage of the refinement, `None` where every error estimate meets the requested
+/// accuracy `tol` (probabilities: `5 tol`) or no refinement can help within the rule's budget.
+/// A part of the error (along the lines: the grid; across them: the transverse rule) is
+/// refined only where it alone takes more than half the target of a row that misses it; of
+/// two such parts, the one with the larger worst share first.
+pub(super) fn next_stage(eval: &Evaluation, rule: &Rule, stage: Stage, tol: f64) -> Option<Stage> {
+    let targets = targets(&eval.stats, tol);
+    let (mut along, mut across) = (0.0f64, 0.0f64);
+    let mut note = |part: &ErrorParts, target: f64| {
+        along = along.max(part.along / target);
+        across = across.max(part.across / target);
+    };
+    for ((stats, parts), targets) in eval.stats.iter().zip(&eval.parts).zip(&targets) {
+        for ((stat, part), target) in stats.iter().zip(parts).zip(targets) {
+            if let (Some(stat), Some(part), Some(target)) = (stat, part, target)
+                && (stat.mean_error > *target || stat.std_error > *target)
+            {
+                note(part, *target);
+            }
+        }
+    }
+    for (probabilities, parts) in eval.probabilities.iter().zip(&eval.probability_parts) {
+        for (p, part) in probabilities.iter().zip(parts) {
+            if p.error > 5.0 * tol {
+                note(part, 5.0 * tol);
+            }
+        }
+    }
+    let affordable = |next: Stage| rule.nodes(next) <= rule.budget();
+    let finer = Some(Stage {
+        level: stage.level + 1,
+        ..stage
+    })
+    .filter(|s| along > 0.5 && s.level <= rule.levels.last && affordable(*s));
+    let wider = Some(Stage {
+        per: 2 * stage.per,
+        ..stage
+    })
+    .filter(|s| across > 0.5 && s.per <= rule.per.1 && affordable(*s));
+    if along >= across {
+        finer.or(wider)
+    } else {
+        wider.or(finer)
+    }
 }
 
-/// Per speed and output (`stats[speed][output]`), whether both error estimates meet the
-/// requested accuracy `tol`, relative to the larger of the row's σ and 2 % of the output's
-/// largest σ over the speeds; `None` where there is no statistic.
-pub(super) fn within(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<bool>>> {
+/// Per speed and output (`stats[speed][output]`), the error the request `tol` allows: `tol`
+/// times the larger of the row's σ and 2 % of the output's largest σ over the speeds; `None`
+/// where there is no statistic.
+fn targets(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<f64>>> {
     let outs = stats.first().map_or(0, |r| r.len());
     let largest: Vec<f64> = (0..outs)
         .map(|o| {
@@ -263,12 +369,22 @@ pub(super) fn within(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Optio
         .map(|row| {
             row.iter()
                 .zip(&largest)
-                .map(|(s, &largest)| {
-                    s.map(|s| {
-                        let target = tol * s.std.max(0.02 * largest);
-                        s.mean_error <= target && s.std_error <= target
-                    })
-                })
+                .map(|(s, &largest)| s.map(|s| tol * s.std.max(0.02 * largest)))
+                .collect()
+        })
+        .collect()
+}
+
+/// Per speed and output (`stats[speed][output]`), whether both error estimates meet the
+/// requested accuracy `tol` ([`targets`]); `None` where there is no statistic.
+pub(super) fn within(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<bool>>> {
+    stats
+        .iter()
+        .zip(targets(stats, tol))
+        .map(|(row, targets)| {
+            row.iter()
+                .zip(targets)
+                .map(|(s, t)| Some(s.as_ref()?.mean_error <= t? && s.as_ref()?.std_error <= t?))
                 .collect()
         })
         .collect()
