@@ -26,9 +26,11 @@ use nalgebra::{DMatrix, DVector};
 
 /// One output's expansion at one speed, in the variables `b` (the active ones): gradient,
 /// Hessian, and the exact moments of `q − f₀` under `z`.
-struct Expansion {
+struct Expansion<'a> {
     g: DVector<f64>,
-    h: DMatrix<f64>,
+    /// The local model's Hessian (over all the study's variables: the active ones are picked
+    /// by [`Control::active`]); `None` for a linear expansion.
+    h: Option<&'a DMatrix<f64>>,
     /// `E[q − f₀]` and `E[(q − f₀)²]`.
     moments: (f64, f64),
     /// Along the lines' direction `d = Jα`: `gᵀd`, `Hd` and `½ dᵀHd`.
@@ -86,25 +88,28 @@ fn truncated_moments(lo: f64, hi: f64) -> [f64; 5] {
 
 /// The expansions of every output at every speed, and the lines they are taken along (in the
 /// variables: `u = J z`).
-pub(super) struct Control {
+pub(super) struct Control<'a> {
     /// `[speed][output]`; `None` where an output has no gradient there (it is then integrated
     /// as it is).
-    expansions: Vec<Vec<Option<Expansion>>>,
+    expansions: Vec<Vec<Option<Expansion<'a>>>>,
+    /// The active variables (indices into the local models' gradients), `None` where they are
+    /// all of them in order.
+    active: Option<Vec<usize>>,
     /// `J z₀` of every line.
     offsets: Vec<DVector<f64>>,
 }
 
-impl Control {
+impl<'a> Control<'a> {
     /// The expansions of the local models `locals` (one per speed) in the variables `active`
     /// (indices into their gradients), mapped by `jac = ∂b/∂z` at 0, along the lines
-    /// `z = α t + z₀` (`alpha`, `offsets`).
+    /// `z = α t + z₀` (`alpha`, `offsets`). The Hessians stay where they are.
     pub fn new(
-        locals: &[Option<LocalModel>],
+        locals: &'a [Option<LocalModel>],
         active: &[usize],
         jac: &DMatrix<f64>,
         alpha: &DVector<f64>,
         offsets: &[DVector<f64>],
-    ) -> Control {
+    ) -> Control<'a> {
         let a = jac * jac.transpose();
         let direction = jac * alpha;
         let diagonal = a
@@ -126,14 +131,16 @@ impl Control {
                             return None;
                         }
                         // Without a Hessian (or a finite one), the linear expansion.
-                        let h = h
-                            .as_ref()
-                            .ok()
-                            .map(|h| DMatrix::from_fn(d, d, |i, j| h[(active[i], active[j])]))
-                            .filter(|h| h.iter().all(|v| v.is_finite()))
-                            .unwrap_or_else(|| DMatrix::zeros(d, d));
-                        let moments = quadratic_moments(&g, &h, &a, diagonal);
-                        let hd = &h * &direction;
+                        let h = h.as_ref().ok().filter(|h| {
+                            active
+                                .iter()
+                                .all(|&i| active.iter().all(|&j| h[(i, j)].is_finite()))
+                        });
+                        let sub =
+                            h.map(|h| DMatrix::from_fn(d, d, |i, j| h[(active[i], active[j])]));
+                        let sub = sub.unwrap_or_else(|| DMatrix::zeros(d, d));
+                        let moments = quadratic_moments(&g, &sub, &a, diagonal);
+                        let hd = &sub * &direction;
                         Some(Expansion {
                             slope: g.dot(&direction),
                             c: 0.5 * direction.dot(&hd),
@@ -146,8 +153,12 @@ impl Control {
                     .collect()
             })
             .collect();
+        let all = locals.iter().flatten().next().is_none_or(|lm| {
+            active.len() == lm.vars.len() && active.iter().enumerate().all(|(i, &k)| i == k)
+        });
         Control {
             expansions,
+            active: (!all).then(|| active.to_vec()),
             offsets: offsets.iter().map(|z0| jac * z0).collect(),
         }
     }
@@ -163,14 +174,31 @@ impl Control {
         row.iter()
             .map(|e| {
                 let e = e.as_ref()?;
+                let curvature = e.h.map_or(0.0, |h| u0.dot(&self.product(h, u0)));
                 Some(OnLine {
-                    a: e.g.dot(u0) + 0.5 * u0.dot(&(&e.h * u0)),
+                    a: e.g.dot(u0) + 0.5 * curvature,
                     b: e.slope + e.hd.dot(u0),
                     c: e.c,
                     moments: e.moments,
                 })
             })
             .collect()
+    }
+}
+
+impl Control<'_> {
+    /// `H u` over the active variables.
+    fn product(&self, h: &DMatrix<f64>, u: &DVector<f64>) -> DVector<f64> {
+        match &self.active {
+            None => h * u,
+            Some(active) => DVector::from_fn(active.len(), |i, _| {
+                active
+                    .iter()
+                    .zip(u.iter())
+                    .map(|(&j, &uj)| h[(active[i], j)] * uj)
+                    .sum()
+            }),
+        }
     }
 }
 
@@ -233,6 +261,45 @@ mod tests {
                 fine[k]
             );
         }
+    }
+
+    #[test]
+    fn a_lines_quadratic_is_the_expansion_over_the_active_variables() {
+        // Three variables, two of them active (0 and 2): along z = α t + z₀ the coefficients
+        // equal the expansion in u = J z evaluated at three points, over the active block of
+        // g and H only.
+        use crate::output::{Output, Quantity};
+        let h = DMatrix::from_row_slice(3, 3, &[2.0, 9.0, -0.3, 9.0, 7.0, 9.0, -0.3, 9.0, 0.7]);
+        let lm = LocalModel {
+            vars: vec![4, 5, 6],
+            outputs: vec![Output {
+                quantity: Quantity::DampedFrequency,
+                mode: Some(0),
+            }],
+            value: vec![1.0],
+            grad: vec![Ok(vec![0.4, 100.0, 0.3])],
+            hess: vec![Ok(h.clone())],
+            disc: Vec::new(),
+        };
+        let locals = [Some(lm)];
+        let jac = DMatrix::from_row_slice(2, 2, &[0.5, 0.0, 0.2, 0.3]);
+        let alpha = DVector::from_vec(vec![0.6, 0.8]);
+        let z0 = DVector::from_vec(vec![-0.7, 1.3]);
+        let control = Control::new(&locals, &[0, 2], &jac, &alpha, std::slice::from_ref(&z0));
+        let line = control.on_line(0, 0, 1)[0].unwrap();
+        let g = DVector::from_vec(vec![0.4, 0.3]);
+        let hs = DMatrix::from_row_slice(2, 2, &[2.0, -0.3, -0.3, 0.7]);
+        for t in [-2.0, 0.5, 3.0] {
+            let u = &jac * (&alpha * t + &z0);
+            let q = g.dot(&u) + 0.5 * u.dot(&(&hs * &u));
+            assert!(
+                (line.at(t) - q).abs() < 1e-14,
+                "t = {t}: {} {q}",
+                line.at(t)
+            );
+        }
+        let a = &jac * jac.transpose();
+        assert_eq!(line.moments, quadratic_moments(&g, &hs, &a, false));
     }
 
     #[test]

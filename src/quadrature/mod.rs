@@ -306,7 +306,7 @@ struct Nodes<'a> {
     map: DesignMap,
     basis: DMatrix<f64>,
     rule: Rule,
-    control: Option<Control>,
+    control: Option<Control<'a>>,
     /// Carriers per speed: `s, p` of every mode, then |H|.
     width: usize,
     modes: usize,
