@@ -21,8 +21,10 @@
 //! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
 //! alone, and with the Hessians, at one point of that chain; `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables; `… -- accuracy n k samples`: the quadrature's, second order's and first order's
-//! mean and σ against a Monte Carlo of that many samples (inside its 99 % intervals).
+//! variables; `… -- accuracy n k samples [--reference FILE]`: the quadrature's, second order's
+//! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
+//! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
+//! `modaltol analyze` (`… -- model n k` prints the model file).
 use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
