@@ -309,13 +309,20 @@ pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
 /// accuracy `tol` (probabilities: `5 tol`) or no refinement can help within the rule's budget.
 /// A part of the error (along the lines: the grid; across them: the transverse rule) is
 /// refined only where it alone takes more than half the target of a row that misses it; of
-/// two such parts, the one with the larger worst share first.
+/// two such parts, first the one predicted to leave fewer rows missing.
 pub(super) fn next_stage(eval: &Evaluation, rule: &Rule, stage: Stage, tol: f64) -> Option<Stage> {
     let targets = targets(&eval.stats, tol);
+    // The worst share of each part, and how many of the rows that miss would still miss
+    // after each refinement as predicted: the grid's error falls 16-fold per halving (the
+    // cubic interpolants), the transverse rule's √2-fold per doubling (the Monte Carlo rate,
+    // the slowest the randomised rule has).
     let (mut along, mut across) = (0.0f64, 0.0f64);
+    let (mut after_finer, mut after_wider) = (0usize, 0usize);
     let mut note = |part: &ErrorParts, target: f64| {
         along = along.max(part.along / target);
         across = across.max(part.across / target);
+        after_finer += usize::from(part.along / 16.0 + part.across > target);
+        after_wider += usize::from(part.along + part.across / 2f64.sqrt() > target);
     };
     for ((stats, parts), targets) in eval.stats.iter().zip(&eval.parts).zip(&targets) {
         for ((stat, part), target) in stats.iter().zip(parts).zip(targets) {
@@ -344,7 +351,7 @@ pub(super) fn next_stage(eval: &Evaluation, rule: &Rule, stage: Stage, tol: f64)
         ..stage
     })
     .filter(|s| across > 0.5 && s.per <= rule.per.1 && affordable(*s));
-    if along >= across {
+    if after_finer <= after_wider {
         finer.or(wider)
     } else {
         wider.or(finer)
