@@ -516,7 +516,7 @@ fn many_variables_agree_with_large_monte_carlo_at_a_tenth_of_its_cost() {
     // distance beyond those intervals everywhere. The highest modes, whose neighbours veer
     // within the spread, are the hard rows.
     let z99 = 2.575_829_303_548_901;
-    for k in [10, 20] {
+    for k in [10, 20, 40] {
         let model = Compiled::from_str(&chain::chain_toleranced(40, k), "chain.toml").unwrap();
         let cases = model.model().tolerance_cases(&[]).unwrap();
         assert_eq!(cases[0].tolerances.len(), 2 * k);
