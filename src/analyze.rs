@@ -20,6 +20,7 @@ use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
 use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
+use crate::yields::{self, YieldRow};
 use std::time::Instant;
 
 /// Propagation methods, as named in the outputs.
@@ -151,6 +152,9 @@ pub struct Analysis {
     pub rows: Vec<Row>,
     /// Probabilities of character per speed, case and method.
     pub probabilities: Vec<ProbabilityRow>,
+    /// The yield of the model's requirements per case and method (empty without
+    /// requirements).
+    pub yields: Vec<YieldRow>,
     /// The Taylor methods (nominal sweep, derivatives, first/second order, invariant).
     pub analytic_seconds: f64,
     /// Of which the first-order stage (the nominal sweep and the exact gradients at every
@@ -253,7 +257,17 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     let t2 = Instant::now();
     let mut rows = Vec::new();
     let mut probabilities = Vec::new();
+    let mut yield_rows = Vec::new();
+    let has_requirements = !model.model().requirements.is_empty();
     for (ci, s) in spreads.iter().enumerate() {
+        if has_requirements {
+            yield_rows.extend(yields::first_order_rows(&study, ci, s));
+            if let Some(q) = &quad[ci]
+                && let Some(y) = &q.yields
+            {
+                yield_rows.extend(yields::quadrature_rows(ci, y, &study.speeds, q.nodes));
+            }
+        }
         let taylor = Taylor.propagate(&study, s, &run);
         ended(taylor.termination);
         let taylor = taylor.value;
@@ -278,6 +292,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     ended(mc.termination);
     rows.extend(mc.rows);
     probabilities.extend(mc.probabilities);
+    yield_rows.extend(mc.yields);
     let Study {
         vars,
         failures,
@@ -290,6 +305,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         cases: opt.cases.clone(),
         rows,
         probabilities,
+        yields: yield_rows,
         analytic_seconds,
         first_order_seconds,
         second_order_seconds,
@@ -335,6 +351,7 @@ struct MonteCarloPart {
     termination: Termination,
     rows: Vec<Row>,
     probabilities: Vec<ProbabilityRow>,
+    yields: Vec<YieldRow>,
     samples_done: Vec<usize>,
     inadmissible: Vec<Vec<(String, usize, f64)>>,
     shard_states: Vec<Vec<Block>>,
@@ -359,13 +376,14 @@ where
     for (ci, s) in spreads.iter().enumerate() {
         let progress = stage(&format!("monte carlo {}", opt.cases[ci].name));
         let run = run.with_progress(&progress);
-        let (stats, done) = match &opt.split {
+        let (stats, done, counts) = match &opt.split {
             Split::Merged(blocks) => {
                 let mut fold = TreeFold::default();
                 for b in &blocks[ci] {
                     fold.push(b.clone());
                 }
-                montecarlo::statistics(&fold, speeds, outs, mc.samples)
+                let (stats, done) = montecarlo::statistics(&fold, speeds, outs, mc.samples);
+                (stats, done, fold.total_yields())
             }
             Split::Shard(k, n) => {
                 let method = MonteCarlo::shard(mc, *k, *n);
@@ -382,10 +400,16 @@ where
                 }
                 let r = MonteCarlo::whole(mc).propagate(study, s, &run);
                 part.termination = part.termination.and(r.termination);
-                (r.value.stats, r.value.samples)
+                let counts = r.value.fold.total_yields();
+                (r.value.stats, r.value.samples, counts)
             }
         };
         part.samples_done.push(done);
+        if let Some(y) = &counts {
+            let reqs = &study.model.model().requirements;
+            part.yields
+                .extend(yields::monte_carlo_rows(ci, y, reqs, &study.speeds, done));
+        }
         part.inadmissible
             .push(MonteCarlo::whole(mc).inadmissible(study, s, done, &run));
         for (si, row) in stats.iter().enumerate() {

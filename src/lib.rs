@@ -25,15 +25,17 @@
 //!     a point is the unit everything above consumes.
 //! 12. [`sensitivity`], [`hessian`], [`study`]: exact first and second derivatives through the
 //!     move of the equilibrium.
-//! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case.
+//! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
+//!     [`requirement`]: a requirement's margin at a point (what a design must meet).
 //! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
 //! 15. [`propagate`]: the propagation layer: [`propagate::Study`], [`propagate::Run`] and the
 //!     [`propagate::Propagation`] trait.
 //! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
 //!     [`montecarlo`].
-//! 17. [`analyze`], [`request`], [`shard`]: the main job and its rows, the analysis request
+//! 17. [`yields`]: the yield of a case's requirements by each method, as rows.
+//! 18. [`analyze`], [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
-//! 18. [`plots`], [`report`], [`results`]: what is written; the command line (`src/main.rs`
+//! 19. [`plots`], [`report`], [`results`]: what is written; the command line (`src/main.rs`
 //!     and `src/cli/`, a crate of its own over this one: its arguments, the inputs they name,
 //!     where the results go, signals, one file per subcommand) parses and writes, the Python
 //!     package binds the same library.
@@ -73,6 +75,7 @@ pub mod quadrature;
 pub mod real;
 pub mod report;
 pub mod request;
+pub mod requirement;
 pub mod results;
 pub mod rigid;
 pub mod sampling;
@@ -86,3 +89,4 @@ pub mod tape;
 pub mod taylor;
 pub mod threads;
 pub mod tolerance;
+pub mod yields;

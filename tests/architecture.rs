@@ -27,10 +27,11 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["pair", "modal", "output", "frf"], true),
     (&["sweep"], false),
     (&["sensitivity", "hessian", "study"], true),
-    (&["tolerance"], false),
+    (&["tolerance", "requirement"], false),
     (&["sampling"], false),
     (&["propagate"], false),
     (&["taylor", "quadrature", "montecarlo"], false),
+    (&["yields"], false),
     (&["analyze", "request", "shard"], true),
     (&["plots", "report", "results"], true),
 ];

@@ -108,6 +108,9 @@ pub struct FileSchema {
     #[serde(default)]
     pub ports: Vec<Spanned<PortSchema>>,
     pub analysis: Option<Spanned<AnalysisSchema>>,
+    #[serde(default)]
+    pub requirements: Vec<Spanned<RequirementSchema>>,
+    pub allocation: Option<Spanned<AllocationSchema>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -213,4 +216,46 @@ pub struct AnalysisSchema {
     pub sampling: Option<Spanned<String>>,
     #[serde(default)]
     pub cases: Vec<Spanned<CaseSchema>>,
+}
+
+/// One `[[requirements]]` entry: what a design must meet over an operating range.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RequirementSchema {
+    pub name: Option<Spanned<String>>,
+    pub kind: Spanned<String>,
+    /// Operating range `[from, to]`, rad/s.
+    pub speeds: Option<Spanned<Vec<f64>>>,
+    /// 1-based mode.
+    pub mode: Option<Spanned<i64>>,
+    /// Engine orders (separation).
+    pub orders: Option<Spanned<Vec<f64>>>,
+    /// `"P%"` or `"api684"` (separation).
+    pub margin: Option<Spanned<String>>,
+    /// Frequency band `[low, high]`, rad/s (avoid).
+    pub band: Option<Spanned<Vec<f64>>>,
+    pub min: Option<Spanned<f64>>,
+    pub max: Option<Spanned<f64>>,
+}
+
+/// The `[allocation]` table: the yield target and the cost model of tolerance allocation.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AllocationSchema {
+    pub target_yield: Option<Spanned<f64>>,
+    /// The tolerance case whose variables are allocated (default: the parameters' own).
+    pub case: Option<Spanned<String>>,
+    #[serde(default)]
+    pub cost: BTreeMap<Spanned<String>, Spanned<CostSchema>>,
+}
+
+/// A cost–tolerance model `a + b / T^k` (Chase & Greenwood 1988).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CostSchema {
+    pub a: Option<f64>,
+    pub b: Option<f64>,
+    pub k: Option<f64>,
+    /// Largest tolerance allowed, in the parameter's unit or `"P%"`.
+    pub max: Option<Spanned<toml::Value>>,
 }

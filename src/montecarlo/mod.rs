@@ -21,13 +21,14 @@
 mod moments;
 mod sampler;
 
-pub use moments::{Block, ChunkState, Events, Moments, TreeFold, block_layout};
+pub use moments::{Block, ChunkState, Events, Moments, TreeFold, YieldCounts, block_layout};
 pub use sampler::{Sampler, permute};
 
 use crate::modal::ModeClass;
 use crate::model::Sampling;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
+use crate::requirement;
 use crate::sampling::sample_sweep;
 use crate::tolerance::{Spread, value};
 use rayon::prelude::*;
@@ -81,13 +82,16 @@ pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
 
 /// One sample's outputs, `[speed][output]` flattened (one allocation per sample, freed by
 /// the thread that folds it): the value (NaN where the output or the whole point failed) and
-/// what happened to the sample there.
-type SampleResult = Vec<(f64, Events)>;
+/// what happened to the sample there; and the requirements' margins `[speed][requirement]`
+/// (see [`YieldCounts::add`]).
+type SampleResult = (Vec<(f64, Events)>, Vec<f64>);
 
 /// Sweeps the design `p` across the study's speeds and reads every output there, with what
-/// happened to the sample.
+/// happened to the sample, and every requirement's margin.
 fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResult {
     let outs = &study.outputs;
+    let reqs = &study.model.model().requirements;
+    let mut margins = vec![f64::INFINITY; study.speeds.len() * reqs.len()];
     let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
     sample_sweep(
         study.model,
@@ -96,14 +100,34 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
         &study.nominal,
         run,
         |i, pts| {
+            let speed = study.speeds[i];
             let Some((nom, pt, switches)) = pts else {
                 out.extend(std::iter::repeat_n(
                     (f64::NAN, Events::default()),
                     outs.len(),
                 ));
+                for (r, req) in reqs.iter().enumerate() {
+                    if requirement::covers(req, speed) {
+                        margins[i * reqs.len() + r] = f64::NEG_INFINITY;
+                    }
+                }
                 return;
             };
             let tf = study.transfer_at(i);
+            if !reqs.is_empty() {
+                let c = requirement::carriers(pt, tf);
+                let state = requirement::State {
+                    speed,
+                    carriers: &c,
+                    modes: pt.modes.len(),
+                    same_branch: switches == study.branches[i],
+                };
+                for (r, req) in reqs.iter().enumerate() {
+                    if requirement::covers(req, speed) {
+                        margins[i * reqs.len() + r] = requirement::margin(req, &state);
+                    }
+                }
+            }
             let unstable = !pt.stable();
             let other_branch = switches != study.branches[i];
             out.extend(outs.iter().map(|o| {
@@ -120,7 +144,7 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
             }));
         },
     );
-    out
+    (out, margins)
 }
 
 /// Samples per chunk: the unit of parallel work, of interruption and of sharding.
@@ -216,7 +240,13 @@ impl MonteCarlo {
                     .collect()
             });
             let mut acc = vec![vec![Moments::default(); outs]; speeds];
-            for r in results {
+            let reqs = &study.model.model().requirements;
+            let has_margin: Vec<bool> = reqs.iter().map(requirement::has_margin).collect();
+            let mut yields = (!reqs.is_empty()).then(|| YieldCounts::new(reqs.len(), speeds));
+            for (r, margins) in results {
+                if let Some(y) = yields.as_mut() {
+                    y.add(&margins, &has_margin);
+                }
                 for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
                     if v.is_finite() {
                         m.add(v);
@@ -233,6 +263,7 @@ impl MonteCarlo {
                 level: 0,
                 index: chunk,
                 moments: acc,
+                yields,
             });
             done += end - start;
             (run.progress)(done, opt.samples);

@@ -33,6 +33,82 @@ pub struct Block {
     pub level: u32,
     pub index: usize,
     pub moments: ChunkState,
+    /// The requirements' tallies (models with requirements only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub yields: Option<YieldCounts>,
+}
+
+/// How many samples of a block met the model's requirements: every one at every speed of its
+/// range, each one, each one per speed (`[speed · requirements + requirement]`), and the
+/// moments of each one's worst margin over its range (designs with a finite margin).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct YieldCounts {
+    pub all: usize,
+    pub each: Vec<usize>,
+    pub curves: Vec<usize>,
+    pub margins: Vec<Moments>,
+}
+
+impl YieldCounts {
+    /// Nothing counted, for `reqs` requirements at `speeds` speeds.
+    pub fn new(reqs: usize, speeds: usize) -> YieldCounts {
+        YieldCounts {
+            all: 0,
+            each: vec![0; reqs],
+            curves: vec![0; reqs * speeds],
+            margins: vec![Moments::default(); reqs],
+        }
+    }
+
+    /// Adds a later block's counts.
+    pub fn combine(&mut self, b: &YieldCounts) {
+        self.all += b.all;
+        for (x, y) in self.each.iter_mut().zip(&b.each) {
+            *x += y;
+        }
+        for (x, y) in self.curves.iter_mut().zip(&b.curves) {
+            *x += y;
+        }
+        for (x, y) in self.margins.iter_mut().zip(&b.margins) {
+            x.combine(y);
+        }
+    }
+
+    /// Counts one sample from its margins `[speed · requirements + requirement]` (`+∞`
+    /// outside a requirement's range, `−∞` where the design has no point) and which
+    /// requirements have a margin distribution.
+    pub fn add(&mut self, margins: &[f64], has_margin: &[bool]) {
+        let reqs = self.each.len();
+        let mut all = true;
+        for (r, &with_margin) in has_margin.iter().enumerate().take(reqs) {
+            let mut worst = f64::INFINITY;
+            for (i, m) in margins.iter().skip(r).step_by(reqs).enumerate() {
+                worst = worst.min(*m);
+                if *m >= 0.0 {
+                    self.curves[i * reqs + r] += 1;
+                }
+            }
+            let met = worst >= 0.0;
+            all &= met;
+            self.each[r] += usize::from(met);
+            if with_margin {
+                if worst.is_finite() {
+                    self.margins[r].add(worst);
+                } else {
+                    self.margins[r].failed += 1;
+                }
+            }
+        }
+        self.all += usize::from(all);
+    }
+}
+
+fn combine_yields(a: &mut Option<YieldCounts>, b: &Option<YieldCounts>) {
+    match (a.as_mut(), b) {
+        (Some(x), Some(y)) => x.combine(y),
+        (None, Some(y)) => *a = Some(y.clone()),
+        _ => {}
+    }
 }
 
 impl Block {
@@ -86,6 +162,7 @@ impl TreeFold {
                         x.combine(y);
                     }
                 }
+                combine_yields(&mut left.yields, &b.yields);
                 left.level += 1;
                 left.index /= 2;
                 b = left;
@@ -113,6 +190,15 @@ impl TreeFold {
             }
         }
         Some(acc)
+    }
+
+    /// The requirements' tallies of all blocks combined from left to right.
+    pub fn total_yields(&self) -> Option<YieldCounts> {
+        let mut acc = None;
+        for b in &self.stack {
+            combine_yields(&mut acc, &b.yields);
+        }
+        acc
     }
 }
 
@@ -212,6 +298,12 @@ impl Moments {
     /// Values folded in.
     pub fn n(&self) -> usize {
         self.n
+    }
+
+    /// Mean and sample σ of the values folded in (NaN where there are too few).
+    pub fn mean_std(&self) -> (f64, f64) {
+        let s = self.stat();
+        (s.mean, s.std)
     }
 
     /// Samples without a value.

@@ -15,14 +15,14 @@ use statrs::distribution::{ContinuousCDF, Normal};
 const TAIL_END: f64 = 9.0;
 
 /// Gauss–Legendre, 5 points on [−1, 1].
-const GL_X: [f64; 5] = [
+pub(super) const GL_X: [f64; 5] = [
     -0.906_179_845_938_664,
     -0.538_469_310_105_683_1,
     0.0,
     0.538_469_310_105_683_1,
     0.906_179_845_938_664,
 ];
-const GL_W: [f64; 5] = [
+pub(super) const GL_W: [f64; 5] = [
     0.236_926_885_056_189_1,
     0.478_628_670_499_366_5,
     0.568_888_888_888_888_9,
@@ -45,15 +45,17 @@ pub(super) struct Context<'a> {
     pub branch: u32,
 }
 
-/// An interpolant: Lagrange through nodes (positions and carrier rows).
-struct Stencil<'a> {
+/// An interpolant: Lagrange through nodes (positions and carrier rows), on the branch of
+/// those nodes.
+pub(super) struct Stencil<'a> {
     t: Vec<f64>,
     rows: Vec<&'a [f64]>,
-    branch: u32,
+    pub branch: u32,
 }
 
 impl Stencil<'_> {
-    fn eval(&self, t: f64, out: &mut [f64]) {
+    /// The carriers at `t`.
+    pub fn eval(&self, t: f64, out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         for (i, (&ti, row)) in self.t.iter().zip(&self.rows).enumerate() {
             let l: f64 = self
@@ -83,6 +85,30 @@ impl Context<'_> {
         control: &[Option<OnLine>],
         mut atoms: Option<Atoms>,
     ) -> Sums {
+        let mut sums = Sums::new(self.outs.len(), self.modes);
+        for (a, b, st) in self.pieces(li, stride) {
+            match st {
+                Some(st) => self.piece(&st, a, b, &mut sums, &mut atoms, control),
+                None => undefined(a, b, &mut sums, control),
+            }
+        }
+        // The expansions' exact moments (the lines' weights add up to one).
+        for (o, c) in control.iter().enumerate() {
+            if let Some(c) = c {
+                sums.s1[o] += c.moments.0;
+                sums.s2[o] += c.moments.1;
+            }
+        }
+        sums
+    }
+
+    /// The line `li` with the nodes at `stride` as pieces `[a, b]` over `[−9, 9]`, each with its
+    /// interpolant (`None` where the nodes have no value): within a run of nodes on one branch,
+    /// the run's interpolant; where the branch changes between two nodes, each side's up to
+    /// the switch point; where a node failed, the other side's up to the middle. The interior
+    /// pieces come in order, then the two tails (the end runs' interpolants extrapolated from
+    /// ±6 to ±9: the normal mass beyond ±6 is 2·10⁻⁹, but 4·10⁻⁸ of a variance).
+    pub fn pieces(&self, li: usize, stride: usize) -> Vec<(f64, f64, Option<Stencil<'_>>)> {
         let data = &self.store.data[li];
         let finest = data.len();
         let w = self.store.width;
@@ -113,28 +139,23 @@ impl Context<'_> {
             let from = k.saturating_sub(1).clamp(r0, r1 + 1 - len);
             stencil(from, from + len - 1)
         };
-        let mut sums = Sums::new(self.outs.len(), self.modes);
+        let mut out = Vec::with_capacity(2 * idx.len() + 2);
         for k in 0..idx.len() - 1 {
             let (a, b) = (t[k], t[k + 1]);
             match (sig[k], sig[k + 1]) {
-                (None, None) => undefined(a, b, &mut sums, control),
-                (x, y) if x == y => {
-                    let st = around(k, run_of[k]);
-                    self.piece(&st, a, b, &mut sums, &mut atoms, control);
-                }
+                (None, None) => out.push((a, b, None)),
+                (x, y) if x == y => out.push((a, b, Some(around(k, run_of[k])))),
                 (Some(_), None) => {
                     let m = 0.5 * (a + b);
                     let (r0, _) = run_of[k];
-                    let st = stencil(k.saturating_sub(3).max(r0), k);
-                    self.piece(&st, a, m, &mut sums, &mut atoms, control);
-                    undefined(m, b, &mut sums, control);
+                    out.push((a, m, Some(stencil(k.saturating_sub(3).max(r0), k))));
+                    out.push((m, b, None));
                 }
                 (None, Some(_)) => {
                     let m = 0.5 * (a + b);
                     let (_, r1) = run_of[k + 1];
-                    let st = stencil(k + 1, (k + 4).min(r1));
-                    undefined(a, m, &mut sums, control);
-                    self.piece(&st, m, b, &mut sums, &mut atoms, control);
+                    out.push((a, m, None));
+                    out.push((m, b, Some(stencil(k + 1, (k + 4).min(r1)))));
                 }
                 (Some(_), Some(_)) => {
                     let (r0, _) = run_of[k];
@@ -142,36 +163,25 @@ impl Context<'_> {
                     let left = stencil(k.saturating_sub(3).max(r0), k);
                     let right = stencil(k + 1, (k + 4).min(r1));
                     let m = self.switch_point(&left, &right, a, b);
-                    self.piece(&left, a, m, &mut sums, &mut atoms, control);
-                    self.piece(&right, m, b, &mut sums, &mut atoms, control);
+                    out.push((a, m, Some(left)));
+                    out.push((m, b, Some(right)));
                 }
             }
         }
-        // The tails beyond ±6 (normal mass 2·10⁻⁹, but 4·10⁻⁸ of a variance): the end runs'
-        // interpolants extrapolated to ±9 (mass beyond: 2·10⁻¹⁹).
         let last = idx.len() - 1;
-        match sig[0] {
-            Some(_) => {
-                let st = stencil(0, run_of[0].1.min(3));
-                self.piece(&st, -TAIL_END, t[0], &mut sums, &mut atoms, control);
-            }
-            None => undefined(-TAIL_END, t[0], &mut sums, control),
-        }
-        match sig[last] {
-            Some(_) => {
-                let st = stencil(run_of[last].0.max(last.saturating_sub(3)), last);
-                self.piece(&st, t[last], TAIL_END, &mut sums, &mut atoms, control);
-            }
-            None => undefined(t[last], TAIL_END, &mut sums, control),
-        }
-        // The expansions' exact moments (the lines' weights add up to one).
-        for (o, c) in control.iter().enumerate() {
-            if let Some(c) = c {
-                sums.s1[o] += c.moments.0;
-                sums.s2[o] += c.moments.1;
-            }
-        }
-        sums
+        out.push(match sig[0] {
+            Some(_) => (-TAIL_END, t[0], Some(stencil(0, run_of[0].1.min(3)))),
+            None => (-TAIL_END, t[0], None),
+        });
+        out.push(match sig[last] {
+            Some(_) => (
+                t[last],
+                TAIL_END,
+                Some(stencil(run_of[last].0.max(last.saturating_sub(3)), last)),
+            ),
+            None => (t[last], TAIL_END, None),
+        });
+        out
     }
 
     /// Where the branch changes in `[a, b]`: the zero of the extrapolated `Π p` (det K̂/det M̂,
@@ -348,7 +358,7 @@ pub(super) fn density(t: f64) -> f64 {
 }
 
 /// Normal mass of `[a, b]`.
-fn normal_mass(a: f64, b: f64) -> f64 {
+pub(super) fn normal_mass(a: f64, b: f64) -> f64 {
     let n = Normal::standard();
     n.cdf(b) - n.cdf(a)
 }

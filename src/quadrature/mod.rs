@@ -67,6 +67,7 @@ mod line;
 mod roots;
 mod rules;
 mod sums;
+mod yields;
 
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
@@ -80,6 +81,8 @@ use rayon::prelude::*;
 use rules::{Levels, Line, Rule, Stage, Transverse, design, grid};
 use statrs::distribution::{ContinuousCDF, Normal};
 use sums::{evaluate, next_stage, within};
+pub use yields::{MarginStat, QuadYield};
+use yields::{Requirements, evaluate_yield};
 
 /// Settings of the quadrature.
 #[derive(Debug, Clone, Copy)]
@@ -154,6 +157,8 @@ pub struct QuadResult {
     pub nodes: usize,
     /// The rule, in words.
     pub rule: String,
+    /// The yield of the model's requirements (`None` without requirements).
+    pub yields: Option<QuadYield>,
 }
 
 /// What the nodes' sweeps gave, per line and node of the finest grid.
@@ -264,14 +269,34 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         swept: 0,
         budget: rule.budget(),
     };
+    let requirements = &study.model.model().requirements;
+    let reqs = (!requirements.is_empty()).then(|| Requirements {
+        list: requirements,
+        speeds: &study.speeds,
+        shift: nominal_margins(study, requirements),
+    });
     let mut stage = rule.first();
     let mut result;
+    let mut yields;
     loop {
         nodes.sweep_stage(stage, &mut store, run, &mut count);
         result = run
             .pool
             .install(|| evaluate(&store, rule, stage, &nominal, nodes.control.as_ref()));
-        match next_stage(&result, rule, stage, tolerance) {
+        yields = reqs.as_ref().map(|reqs| {
+            run.pool
+                .install(|| evaluate_yield(&store, rule, stage, &nominal, reqs))
+        });
+        let yield_error = yields.as_ref().map(|(y, parts)| {
+            let worst = y
+                .each
+                .iter()
+                .chain([&y.all])
+                .map(|e| e.1)
+                .fold(0.0, f64::max);
+            (*parts, worst)
+        });
+        match next_stage(&result, yield_error, rule, stage, tolerance) {
             Some(next) => stage = next,
             None => break,
         }
@@ -289,7 +314,40 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         probabilities: result.probabilities,
         nodes: count.swept,
         rule: rule.describe(active.len(), stage, count.swept),
+        yields: yields.map(|y| y.0),
     }
+}
+
+/// Each requirement's worst margin over its range at the nominal design (the shift of the
+/// margins' sums; 0 where it has none).
+fn nominal_margins(study: &Study, requirements: &[crate::model::Requirement]) -> Vec<f64> {
+    requirements
+        .iter()
+        .map(|r| {
+            let worst = study
+                .nominal
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| crate::requirement::covers(r, study.speeds[*i]))
+                .map(|(i, pt)| match pt {
+                    Some(pt) => {
+                        let c = crate::requirement::carriers(pt, study.transfer_at(i));
+                        crate::requirement::margin(
+                            r,
+                            &crate::requirement::State {
+                                speed: study.speeds[i],
+                                carriers: &c,
+                                modes: pt.modes.len(),
+                                same_branch: true,
+                            },
+                        )
+                    }
+                    None => f64::NEG_INFINITY,
+                })
+                .fold(f64::INFINITY, f64::min);
+            if worst.is_finite() { worst } else { 0.0 }
+        })
+        .collect()
 }
 
 /// Nodes swept so far, and at most.
@@ -490,6 +548,7 @@ fn deterministic(values: &[Vec<f64>], nominal: &[Option<Point>], modes: usize) -
         probabilities,
         nodes: 0,
         rule: "no variable varies".into(),
+        yields: None,
     }
 }
 

@@ -309,8 +309,16 @@ pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
 /// accuracy `tol` (probabilities: `5 tol`) or no refinement can help within the rule's budget.
 /// A part of the error (along the lines: the grid; across them: the transverse rule) is
 /// refined only where it alone takes more than half the target of a row that misses it; of
-/// two such parts, first the one predicted to leave fewer rows missing.
-pub(super) fn next_stage(eval: &Evaluation, rule: &Rule, stage: Stage, tol: f64) -> Option<Stage> {
+/// two such parts, first the one predicted to leave fewer rows missing. The yield's error
+/// (`yields`: its parts and its largest error, [`super::yields`]) counts as a row whose target
+/// is `tol` (absolute).
+pub(super) fn next_stage(
+    eval: &Evaluation,
+    yields: Option<(ErrorParts, f64)>,
+    rule: &Rule,
+    stage: Stage,
+    tol: f64,
+) -> Option<Stage> {
     let targets = targets(&eval.stats, tol);
     // The worst share of each part, and how many of the rows that miss would still miss
     // after each refinement as predicted: the grid's error falls 16-fold per halving (the
@@ -339,6 +347,11 @@ pub(super) fn next_stage(eval: &Evaluation, rule: &Rule, stage: Stage, tol: f64)
                 note(part, 5.0 * tol);
             }
         }
+    }
+    if let Some((part, error)) = yields
+        && error > tol
+    {
+        note(&part, tol);
     }
     let affordable = |next: Stage| rule.nodes(next) <= rule.budget();
     let finer = Some(Stage {

@@ -9,7 +9,7 @@
 //!
 //! [`validate`] runs the stages in the order of the file's dependencies, each a submodule named
 //! for what it validates: [`syntax`], [`parameters`], [`header`], [`bodies`], [`joints`],
-//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`analysis`]. The first error
+//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`analysis`], [`requirements`]. The first error
 //! stops validation, so this order is also the order in which errors are reported. Two stages
 //! keep a part with checks of its own apart: [`inertia`] (of [`bodies`]) and [`cases`] (of
 //! [`analysis`]). The checks several stages share are [`names`], [`geometry`],
@@ -30,6 +30,7 @@ mod names;
 mod parameters;
 mod per_coordinate;
 mod ports;
+mod requirements;
 mod syntax;
 mod tree;
 
@@ -71,6 +72,12 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         &ports,
         &parameters,
     )?;
+    let equations: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let free = tree.coordinates.iter().filter(|c| !c.driven).count();
+    let modes = free.saturating_sub(equations);
+    let requirements = requirements::requirements(&ctx, &raw.requirements, modes)?;
+    let allocation =
+        requirements::allocation(&ctx, raw.allocation.as_ref(), &parameters, &analysis.cases)?;
     Ok(Model {
         name: header.name,
         file: file.to_string(),
@@ -85,6 +92,8 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         ports,
         independent,
         analysis,
+        requirements,
+        allocation,
     })
 }
 

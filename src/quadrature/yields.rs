@@ -1,0 +1,488 @@
+//! The yield by the quadrature: the probability that a design meets every requirement at every
+//! speed of its range, each requirement's own, the per-speed probabilities and the worst
+//! margins' moments, integrated along the lines of the case's rule.
+//!
+//! Every node is a whole sweep, so a requirement over a speed range is a property of the node
+//! and of the points between nodes: at each speed the carriers are interpolated between nodes
+//! exactly as for the moments ([`super::line::Context::pieces`]), and each requirement's margin
+//! at each speed is a function of `t` along the line. The line is cut at every boundary of a
+//! speed's pieces and into sub-intervals no longer than [`STEP`]; where a margin changes sign
+//! across a sub-interval its zero is found by bisection; between those zeros which
+//! requirements are met is constant, and the normal mass of each piece is exact. The yield is
+//! then a line integral of an indicator with located jumps (the preintegration of Griewank,
+//! Kuo, Leövey & Sloan 2018), its error estimated as the moments' are: the node grid against
+//! every other node, and the transverse rule against its check.
+
+use super::line::{Context, GL_W, GL_X, Stencil, density, normal_mass};
+use super::rules::{Rule, Stage, Transverse};
+use super::sums::ErrorParts;
+use super::{NodeData, Reference};
+use crate::model::Requirement;
+use crate::requirement::{State, covers, has_margin, margin};
+use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Longest sub-interval of a line (in standard deviations) across which a margin's sign is
+/// taken from its ends: a quarter of the finest node spacing.
+const STEP: f64 = 0.1875;
+
+/// The yield of one case by the quadrature, with error estimates (absolute).
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuadYield {
+    /// Every requirement met at every speed of its range.
+    pub all: (f64, f64),
+    /// Per requirement: probability and error.
+    pub each: Vec<(f64, f64)>,
+    /// Per requirement: the worst margin over its range, mean and σ with their errors, `None`
+    /// for a pass-or-fail requirement or where no design has one.
+    pub margins: Vec<Option<MarginStat>>,
+    /// `[speed][requirement]`: probability of meeting it at that speed and its error; NaN
+    /// outside its range.
+    pub curves: Vec<Vec<(f64, f64)>>,
+}
+
+/// Mean and σ of a requirement's worst margin over its range, with error estimates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarginStat {
+    pub mean: f64,
+    pub std: f64,
+    pub mean_error: f64,
+    pub std_error: f64,
+}
+
+/// The additive sums of one line (or a rule): the mass, the mass meeting everything, per
+/// requirement the mass meeting it and the worst margin's defined mass and first two moments
+/// about `shift`, and per speed and requirement the mass meeting it there.
+#[derive(Debug, Clone)]
+struct Tally {
+    v: Vec<f64>,
+}
+
+/// Where each part of a [`Tally`] sits.
+#[derive(Clone, Copy)]
+struct Layout {
+    reqs: usize,
+    speeds: usize,
+}
+
+impl Layout {
+    fn len(&self) -> usize {
+        2 + 4 * self.reqs + self.speeds * self.reqs
+    }
+    fn mass(&self) -> usize {
+        0
+    }
+    fn all(&self) -> usize {
+        1
+    }
+    fn each(&self, r: usize) -> usize {
+        2 + r
+    }
+    /// Defined mass, first and second moment of requirement `r`'s worst margin.
+    fn margin(&self, r: usize, k: usize) -> usize {
+        2 + self.reqs + 3 * r + k
+    }
+    fn curve(&self, i: usize, r: usize) -> usize {
+        2 + 4 * self.reqs + i * self.reqs + r
+    }
+}
+
+impl Tally {
+    fn new(l: Layout) -> Tally {
+        Tally {
+            v: vec![0.0; l.len()],
+        }
+    }
+    fn add_scaled(&mut self, b: &Tally, w: f64) {
+        for (x, y) in self.v.iter_mut().zip(&b.v) {
+            *x += w * y;
+        }
+    }
+    fn ratio(&self, l: Layout, k: usize) -> f64 {
+        self.v[k] / self.v[l.mass()]
+    }
+    fn moments(&self, l: Layout, r: usize, shift: f64) -> Option<(f64, f64)> {
+        let w = self.v[l.margin(r, 0)];
+        (w > 0.0).then(|| {
+            let m1 = self.v[l.margin(r, 1)] / w;
+            let var = self.v[l.margin(r, 2)] / w - m1 * m1;
+            (m1 + shift, var.max(0.0).sqrt())
+        })
+    }
+}
+
+/// What the yield integration needs besides the nodes: the requirements and their nominal
+/// worst margins (the shift of the moments).
+pub(super) struct Requirements<'a> {
+    pub list: &'a [Requirement],
+    pub speeds: &'a [f64],
+    pub shift: Vec<f64>,
+}
+
+/// The yield at `stage` with its error estimates' parts.
+pub(super) fn evaluate_yield(
+    store: &NodeData,
+    rule: &Rule,
+    stage: Stage,
+    nominal: &Reference,
+    reqs: &Requirements,
+) -> (QuadYield, ErrorParts) {
+    let l = Layout {
+        reqs: reqs.list.len(),
+        speeds: store.speeds,
+    };
+    let (first_level, last_level) = (rule.levels.first, rule.levels.last);
+    let stride = 1 << (last_level - stage.level);
+    let coarse = stride << 1;
+    let check_stride = 1 << (last_level - first_level);
+    let transverse = rule.transverse;
+    let replicates = match transverse {
+        Transverse::Scrambled { replicates } => replicates,
+        _ => 1,
+    };
+    let contexts: Vec<Context> = (0..store.speeds)
+        .map(|i| Context {
+            store,
+            speed: i,
+            outs: nominal.outs,
+            modes: nominal.modes,
+            shift: &[],
+            branch: nominal.branches[i] as u32,
+        })
+        .collect();
+    // Per line in use: (line, weight, is check, tallies at stride / coarse / check stride).
+    let used: Vec<usize> = (0..rule.lines.len())
+        .filter(|&li| rule.uses(&rule.lines[li], stage))
+        .collect();
+    let per_line: Vec<(usize, Vec<Tally>)> = used
+        .par_iter()
+        .map(|&li| {
+            let line = &rule.lines[li];
+            let strides: Vec<usize> = if rule.checks(line, stage) {
+                vec![check_stride]
+            } else if transverse == Transverse::Tensor {
+                vec![stride, coarse, check_stride]
+            } else {
+                vec![stride, coarse]
+            };
+            let t = strides
+                .iter()
+                .map(|&s| line_tally(&contexts, li, s, reqs, l))
+                .collect();
+            (li, t)
+        })
+        .collect();
+    let mut fine = Tally::new(l);
+    let mut rough = Tally::new(l);
+    let mut check = Tally::new(l);
+    let mut main_at_check = Tally::new(l);
+    let mut reps = vec![Tally::new(l); replicates];
+    for (li, t) in &per_line {
+        let line = &rule.lines[*li];
+        let w = rule.weight(line, stage);
+        if rule.checks(line, stage) {
+            check.add_scaled(&t[0], w);
+            continue;
+        }
+        fine.add_scaled(&t[0], w);
+        rough.add_scaled(&t[1], w);
+        reps[line.replicate].add_scaled(&t[0], w * replicates as f64);
+        if transverse == Transverse::Tensor {
+            main_at_check.add_scaled(&t[2], w);
+        }
+    }
+    let t975 = if replicates > 1 {
+        StudentsT::new(0.0, 1.0, (replicates - 1) as f64).map_or(2.0, |t| t.inverse_cdf(0.975))
+    } else {
+        0.0
+    };
+    let across = |f: &dyn Fn(&Tally) -> Option<f64>| -> f64 {
+        match transverse {
+            Transverse::Single => 0.0,
+            Transverse::Tensor => match (f(&main_at_check), f(&check)) {
+                (Some(a), Some(b)) => (a - b).abs(),
+                _ => f64::INFINITY,
+            },
+            Transverse::Scrambled { .. } => {
+                let v: Option<Vec<f64>> = reps.iter().map(f).collect();
+                v.map_or(f64::INFINITY, |v| {
+                    let r = v.len() as f64;
+                    let m = v.iter().sum::<f64>() / r;
+                    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
+                    t975 * (var / r).sqrt()
+                })
+            }
+        }
+    };
+    let mut parts = ErrorParts::default();
+    let mut prob = |k: usize| -> (f64, f64) {
+        let p = fine.ratio(l, k);
+        let along = 2.0 * (p - rough.ratio(l, k)).abs();
+        let cross = across(&|t: &Tally| Some(t.ratio(l, k)));
+        parts.along = parts.along.max(along);
+        parts.across = parts.across.max(cross);
+        let err = along + cross;
+        (p, if err.is_finite() { err } else { 1.0 })
+    };
+    let all = prob(l.all());
+    let each: Vec<(f64, f64)> = (0..l.reqs).map(|r| prob(l.each(r))).collect();
+    let curves: Vec<Vec<(f64, f64)>> = (0..l.speeds)
+        .map(|i| {
+            (0..l.reqs)
+                .map(|r| {
+                    if covers(&reqs.list[r], reqs.speeds[i]) {
+                        prob(l.curve(i, r))
+                    } else {
+                        (f64::NAN, f64::NAN)
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let margins = (0..l.reqs)
+        .map(|r| {
+            let shift = reqs.shift[r];
+            let (mean, std) = fine.moments(l, r, shift)?;
+            let (rm, rs) = rough.moments(l, r, shift).unwrap_or((f64::NAN, f64::NAN));
+            let cm = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.0));
+            let cs = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.1));
+            let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
+            Some(MarginStat {
+                mean,
+                std,
+                mean_error: finite(2.0 * (mean - rm).abs() + cm),
+                std_error: finite(2.0 * (std - rs).abs() + cs),
+            })
+        })
+        .collect();
+    (
+        QuadYield {
+            all,
+            each,
+            margins,
+            curves,
+        },
+        parts,
+    )
+}
+
+/// The pieces of one line at every speed, and the requirements' margins at a point of it.
+struct LineView<'a> {
+    pieces: Vec<Vec<(f64, f64, Option<Stencil<'a>>)>>,
+    contexts: &'a [Context<'a>],
+    reqs: &'a Requirements<'a>,
+    /// Per speed: the requirements covering it.
+    active: Vec<Vec<usize>>,
+}
+
+impl LineView<'_> {
+    /// The margin of requirement `r` at speed `i` at `t` on piece `at` of that speed.
+    fn margin(&self, t: f64, at: usize, i: usize, r: usize, c: &mut Vec<f64>) -> f64 {
+        let ctx = &self.contexts[i];
+        match &self.pieces[i][at].2 {
+            None => f64::NEG_INFINITY,
+            Some(st) => {
+                c.resize(ctx.store.width, 0.0);
+                st.eval(t, c);
+                let state = State {
+                    speed: self.reqs.speeds[i],
+                    carriers: c,
+                    modes: ctx.modes,
+                    same_branch: st.branch == ctx.branch,
+                };
+                margin(&self.reqs.list[r], &state)
+            }
+        }
+    }
+
+    /// The margin of every (speed, requirement) at `t`, `[speed][requirement]` flattened
+    /// (+∞ where the speed is outside the requirement's range; −∞ where the design has no
+    /// point there), the pieces `at[i]` in use at each speed.
+    fn margins(&self, t: f64, at: &[usize], out: &mut [f64], c: &mut Vec<f64>) {
+        let r = self.reqs.list.len();
+        out.iter_mut().for_each(|x| *x = f64::INFINITY);
+        for (i, active) in self.active.iter().enumerate() {
+            if active.is_empty() {
+                continue;
+            }
+            let ctx = &self.contexts[i];
+            match &self.pieces[i][at[i]].2 {
+                None => active
+                    .iter()
+                    .for_each(|&k| out[i * r + k] = f64::NEG_INFINITY),
+                Some(st) => {
+                    c.resize(ctx.store.width, 0.0);
+                    st.eval(t, c);
+                    let state = State {
+                        speed: self.reqs.speeds[i],
+                        carriers: c,
+                        modes: ctx.modes,
+                        same_branch: st.branch == ctx.branch,
+                    };
+                    for &k in active {
+                        out[i * r + k] = margin(&self.reqs.list[k], &state);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The tally of line `li` with the nodes at `stride`.
+fn line_tally(
+    contexts: &[Context],
+    li: usize,
+    stride: usize,
+    reqs: &Requirements,
+    l: Layout,
+) -> Tally {
+    let nr = reqs.list.len();
+    let view = LineView {
+        pieces: contexts.iter().map(|c| c.pieces(li, stride)).collect(),
+        contexts,
+        reqs,
+        active: (0..l.speeds)
+            .map(|i| {
+                (0..nr)
+                    .filter(|&k| covers(&reqs.list[k], reqs.speeds[i]))
+                    .collect()
+            })
+            .collect(),
+    };
+    // Every boundary of every speed's pieces, in order.
+    let mut cuts: Vec<f64> = view
+        .pieces
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| [x.0, x.1]))
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let mut tally = Tally::new(l);
+    let n = l.speeds * nr;
+    let (mut m0, mut m1, mut mm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut c = Vec::new();
+    let mut at = vec![0usize; l.speeds];
+    for seg in cuts.windows(2) {
+        let (a, b) = (seg[0], seg[1]);
+        if b <= a {
+            continue;
+        }
+        // The piece of each speed holding this segment.
+        let mid = 0.5 * (a + b);
+        for (i, p) in view.pieces.iter().enumerate() {
+            at[i] = p.iter().position(|x| x.0 <= mid && mid <= x.1).unwrap_or(0);
+        }
+        let subs = ((b - a) / STEP).ceil().max(1.0) as usize;
+        let h = (b - a) / subs as f64;
+        view.margins(a, &at, &mut m0, &mut c);
+        for j in 0..subs {
+            let (x0, x1) = (
+                a + h * j as f64,
+                if j + 1 == subs {
+                    b
+                } else {
+                    a + h * (j + 1) as f64
+                },
+            );
+            view.margins(x1, &at, &mut m1, &mut c);
+            // The zeros of the margins that change sign across [x0, x1].
+            let mut zeros = vec![x0, x1];
+            for k in 0..n {
+                if (m0[k] >= 0.0) != (m1[k] >= 0.0) {
+                    let (i, r) = (k / nr, k % nr);
+                    let met = |t: f64, c: &mut Vec<f64>| view.margin(t, at[i], i, r, c) >= 0.0;
+                    zeros.push(boundary(met, x0, x1, m0[k] >= 0.0, &mut c));
+                }
+            }
+            zeros.sort_by(f64::total_cmp);
+            for w in zeros.windows(2) {
+                let (y0, y1) = (w[0], w[1]);
+                if y1 <= y0 {
+                    continue;
+                }
+                add_piece(&view, &at, y0, y1, &mut tally, l, &mut mm, &mut c);
+            }
+            std::mem::swap(&mut m0, &mut m1);
+        }
+    }
+    tally
+}
+
+/// Where `met` changes from `met0` (at `a`) in `[a, b]`, by bisection to rounding.
+fn boundary(
+    met: impl Fn(f64, &mut Vec<f64>) -> bool,
+    mut a: f64,
+    mut b: f64,
+    met0: bool,
+    c: &mut Vec<f64>,
+) -> f64 {
+    for _ in 0..64 {
+        let m = 0.5 * (a + b);
+        if m <= a || m >= b {
+            break;
+        }
+        if met(m, c) == met0 {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// Adds `[y0, y1]` (where which requirements are met does not change) to `tally`: its mass to
+/// what is met at its middle, and the worst margins' moments by 5-point Gauss–Legendre.
+#[allow(clippy::too_many_arguments)]
+fn add_piece(
+    view: &LineView,
+    at: &[usize],
+    y0: f64,
+    y1: f64,
+    tally: &mut Tally,
+    l: Layout,
+    mm: &mut [f64],
+    c: &mut Vec<f64>,
+) {
+    let nr = l.reqs;
+    let mass = normal_mass(y0, y1);
+    view.margins(0.5 * (y0 + y1), at, mm, c);
+    tally.v[l.mass()] += mass;
+    let mut all = true;
+    for r in 0..nr {
+        let mut met = true;
+        for i in 0..l.speeds {
+            if mm[i * nr + r] >= 0.0 {
+                tally.v[l.curve(i, r)] += mass;
+            } else {
+                met = false;
+            }
+        }
+        all &= met;
+        if met {
+            tally.v[l.each(r)] += mass;
+        }
+    }
+    if all {
+        tally.v[l.all()] += mass;
+    }
+    // The worst margin over each requirement's range.
+    for (&x, &wx) in GL_X.iter().zip(&GL_W) {
+        let t = y0 + (y1 - y0) * 0.5 * (1.0 + x);
+        let wt = 0.5 * wx * (y1 - y0) * density(t);
+        view.margins(t, at, mm, c);
+        for r in 0..nr {
+            if !has_margin(&view.reqs.list[r]) {
+                continue;
+            }
+            let worst = (0..l.speeds)
+                .map(|i| mm[i * nr + r])
+                .fold(f64::INFINITY, f64::min);
+            if worst.is_finite() {
+                let d = worst - view.reqs.shift[r];
+                tally.v[l.margin(r, 0)] += wt;
+                tally.v[l.margin(r, 1)] += wt * d;
+                tally.v[l.margin(r, 2)] += wt * d * d;
+            }
+        }
+    }
+}

@@ -1,0 +1,127 @@
+//! The yield of requirements against exact probabilities: on the rotating pendulum the set of
+//! rod lengths L that meet "ω_d ≥ a over a speed range" or "not overdamped over a range" is a
+//! half-line whose end is a root of the closed form (`tests/common/pendulum.rs`), so the yield
+//! is the normal CDF there. The quadrature must give it to 10⁻⁴ and the Monte Carlo must hold it
+//! in its 95 % Wilson interval.
+
+mod common;
+
+use common::example_text;
+use common::pendulum::pendulum;
+use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
+use modaltol::compiled::Compiled;
+use modaltol::montecarlo::McOptions;
+use modaltol::quadrature::QuadOptions;
+use modaltol::yields::{Method, YieldRow};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// σ of L: the example's 3 % case (±3σ).
+const SIGMA: f64 = 0.01;
+
+/// The pendulum with `requirements` (TOML) appended.
+fn model(requirements: &str) -> Compiled {
+    let text = format!("{}\n{requirements}", example_text("rotating_pendulum.toml"));
+    Compiled::from_str(&text, "pendulum.toml").unwrap()
+}
+
+/// The speeds 4.0, 4.1, …, 6.0 (rad/s): the rod swings out at every one for every L within ±6σ.
+fn speeds() -> Vec<f64> {
+    (0..=20).map(|i| 4.0 + 0.1 * i as f64).collect()
+}
+
+fn run(model: &Compiled, samples: Option<usize>) -> Analysis {
+    let cases = vec![model.model().analysis.cases[0].clone()];
+    assert_eq!(cases[0].name, "L3");
+    let opt = AnalyzeOptions {
+        speeds: speeds(),
+        cases,
+        quadrature: Some(QuadOptions { tolerance: 1e-5 }),
+        monte_carlo: samples.map(|samples| McOptions {
+            samples,
+            seed: 7,
+            sampling: modaltol::model::Sampling::Random,
+        }),
+        ..Default::default()
+    };
+    analyze(model, &opt, &|_, _, _| {})
+}
+
+/// The smallest L meeting `f(L, Ω) ≥ 0` at every speed in `[from, to]` of the grid, `f`
+/// increasing in L near 1: the largest of the roots in L at each speed, by bisection.
+fn boundary(f: impl Fn(f64, f64) -> f64, from: f64, to: f64) -> f64 {
+    speeds()
+        .into_iter()
+        .filter(|w| (from..=to).contains(w))
+        .map(|w| {
+            let (mut a, mut b) = (0.9, 1.1);
+            assert!(f(b, w) > 0.0, "not met at Ω = {w} by the longest rod");
+            if f(a, w) >= 0.0 {
+                // Met here by every rod within ±10σ.
+                return a;
+            }
+            for _ in 0..200 {
+                let m = 0.5 * (a + b);
+                if f(m, w) < 0.0 { a = m } else { b = m }
+            }
+            0.5 * (a + b)
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// P(L ≥ l*) for L ~ N(1, σ²).
+fn above(l: f64) -> f64 {
+    1.0 - Normal::standard().cdf((l - 1.0) / SIGMA)
+}
+
+fn row(a: &Analysis, method: Method, requirement: Option<usize>) -> &YieldRow {
+    a.yields
+        .iter()
+        .find(|r| r.method == method && r.requirement == requirement && r.speed.is_none())
+        .unwrap_or_else(|| panic!("no {method:?} row for {requirement:?}"))
+}
+
+#[test]
+fn pendulum_yield_equals_the_normal_cdf_at_the_closed_form_boundary() {
+    let a_min = 2.65;
+    let m = model(
+        r#"
+[[requirements]]
+name = "clear_above"
+kind = "frequency"
+mode = 1
+min = 2.65
+speeds = [4.5, 6.0]
+
+[[requirements]]
+name = "underdamped"
+kind = "underdamped"
+mode = 1
+speeds = [4.0, 4.5]
+"#,
+    );
+    // The closed forms: ω_d ≥ a, and 4Ik − c² > 0.
+    let l_freq = boundary(|l, w| pendulum(l, w).damped_frequency - a_min, 4.5, 6.0);
+    let l_under = boundary(|l, w| pendulum(l, w).discriminant, 4.0, 4.5);
+    let exact = [above(l_freq), above(l_under), above(l_freq.max(l_under))];
+    // Nontrivial probabilities, not 0 or 1.
+    for p in exact {
+        assert!(p > 0.05 && p < 0.95, "{exact:?}");
+    }
+    let a = run(&m, Some(4000));
+    for (requirement, p) in [(Some(0), exact[0]), (Some(1), exact[1]), (None, exact[2])] {
+        let q = row(&a, Method::Quadrature, requirement);
+        assert!(
+            (q.probability - p).abs() < 1e-4,
+            "quadrature {requirement:?}: {} vs exact {p}",
+            q.probability
+        );
+        // Its error estimate covers the distance.
+        assert!((q.probability - p).abs() <= (q.ci.1 - q.ci.0) / 2.0 + 1e-12);
+        let mc = row(&a, Method::MonteCarlo, requirement);
+        assert!(
+            mc.ci.0 <= p && p <= mc.ci.1,
+            "Monte Carlo {requirement:?}: {:?} does not hold {p}",
+            mc.ci
+        );
+    }
+}
