@@ -1,4 +1,5 @@
-//! The result directory of an analysis: `tolerance.csv`, `probabilities.csv`, the plots (SVG
+//! The result directory of an analysis: `tolerance.csv`, `probabilities.csv`, `yield.csv`
+//! (models with requirements), the plots (SVG
 //! and PNG), `report.html` and `summary.json`, staged and put in place together by
 //! [`ResultDir`]. Shared by the command line and the Python package so that both write the
 //! same files.
@@ -16,7 +17,12 @@ use rayon::prelude::*;
 pub fn is_result_file(name: &str) -> bool {
     matches!(
         name,
-        "tolerance.csv" | "probabilities.csv" | "report.html" | "summary.json" | "manifest.json"
+        "tolerance.csv"
+            | "probabilities.csv"
+            | "yield.csv"
+            | "report.html"
+            | "summary.json"
+            | "manifest.json"
     ) || name.ends_with(".svg")
         || name.ends_with(".png")
 }
@@ -63,6 +69,12 @@ pub fn write(
         "probabilities.csv",
         &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
     )?;
+    if !m.model().requirements.is_empty() {
+        dir.write(
+            "yield.csv",
+            &csv_bytes(&report::YIELD_HEADER, &report::yield_rows(m.model(), a)),
+        )?;
+    }
     let (plots, critical) = plots::plots(m.model(), a, display);
     let fonts = plots::fonts();
     // Rendered on the run's threads (a big model's hundreds of plots took longer to render than

@@ -21,6 +21,7 @@ mod summary;
 mod sweep;
 mod tolerance;
 mod unfilled;
+mod yields;
 
 pub use accuracy::{Outside, outside_request, outside_request_lines};
 pub use check::check_summary;
@@ -37,6 +38,7 @@ pub use summary::{paper_timings, summary_json};
 pub use sweep::{SweepColumns, sweep_header, sweep_rows};
 pub use tolerance::{PROBABILITY_HEADER, probability_rows, tolerance_header, tolerance_rows};
 pub use unfilled::{Unfilled, inadmissible_warnings, unfilled, unfilled_lines};
+pub use yields::{YIELD_HEADER, describe, kind_name, verdict, yield_rows, yield_summary};
 
 use crate::modal::Mode;
 use crate::model::Model;

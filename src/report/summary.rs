@@ -94,6 +94,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
             "cases": a.cases.iter().zip(&a.quadrature_rules).map(|(c, (rule, nodes))|
                 json!({"case": c.name, "rule": rule, "nodes_swept": nodes})).collect::<Vec<_>>()})),
         "probabilities": probability_summary(a),
+        "yield": (!model.requirements.is_empty()).then(|| super::yield_summary(model, a)),
         "monte_carlo": mc.map(|m| json!({"samples": m.samples, "seed": m.seed, "sampling": m.sampling, "threads": threads,
                                           "seconds": a.monte_carlo_seconds, "failed_sample_points": mc_failed,
                                           "samples_done": a.samples_done, "partial": a.interrupted(m.samples),

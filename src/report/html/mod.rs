@@ -37,6 +37,7 @@ pub fn report_html(
         d.speed.symbol(),
         d.frequency.symbol()
     );
+    specification(&mut h, model, a);
     let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
     cases_table(&mut h, model, a);
     timing_table(&mut h, model, a, mc);
@@ -51,6 +52,82 @@ pub fn report_html(
     figures(&mut h, plots);
     let _ = writeln!(h, "</body></html>");
     h
+}
+
+/// The specification first: per requirement (and all together), per case and method, the
+/// probability of meeting it over its range beside the target yield, its verdict, and the worst
+/// margin's mean, σ and Cpk.
+fn specification(h: &mut String, model: &Model, a: &Analysis) {
+    if model.requirements.is_empty() {
+        return;
+    }
+    let target = model.allocation.target_yield;
+    let _ = writeln!(
+        h,
+        "<h2 id=\"specification\">Specification: yield against the target {}</h2>\
+<p>The probability that a design meets each requirement at every analysed speed of its range, and all of them together (<code>yield.csv</code>, with the per-speed curves). Quadrature: ± its error estimate; Monte Carlo: 95 % Wilson interval; first order: at the worst speed, an upper bound. <b>meets</b> is <i>yes</i> where the whole interval is at or above the target, <i>no</i> where below, <i>undecided</i> where it holds the target.</p>\
+<table><tr><th>requirement</th><th>case</th><th>method</th><th>yield</th><th>interval</th><th>meets</th><th>worst margin, mean ± σ</th><th>C<sub>pk</sub></th></tr>",
+        sig(target)
+    );
+    let tu = model
+        .analysis
+        .transfer
+        .as_ref()
+        .map_or(String::new(), |t| model.transfer_unit(t));
+    let mut rows: Vec<&crate::yields::YieldRow> =
+        a.yields.iter().filter(|y| y.speed.is_none()).collect();
+    rows.sort_by_key(|y| (y.requirement.map_or(0, |r| r + 1), y.case));
+    for y in rows {
+        let (name, what, unit) = match y.requirement {
+            Some(r) => {
+                let r = &model.requirements[r];
+                (
+                    r.name.clone(),
+                    crate::report::describe(r),
+                    crate::requirement::unit(r, &tu),
+                )
+            }
+            None => (
+                "all".to_string(),
+                "every requirement".to_string(),
+                String::new(),
+            ),
+        };
+        let verdict = if y.method == crate::yields::Method::FirstOrder {
+            if y.probability < target {
+                "no"
+            } else {
+                "undecided"
+            }
+        } else {
+            crate::report::verdict(y.ci, target)
+        };
+        let colour = match verdict {
+            "yes" => "#1a7f37",
+            "no" => "#cf222e",
+            _ => "#9a6700",
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td title=\"{}\"><b>{}</b><br><small>{}</small></td><td>{}</td><td>{}</td><td>{}</td><td>[{}, {}]</td><td style=\"color:{colour}\"><b>{verdict}</b></td><td>{}</td><td>{}</td></tr>",
+            esc(&what),
+            esc(&name),
+            esc(&what),
+            esc(&a.cases[y.case].name),
+            y.method.as_str(),
+            sig(y.probability),
+            sig(y.ci.0),
+            sig(y.ci.1),
+            y.margin.map_or("–".into(), |(m, s)| format!(
+                "{} ± {} {}",
+                sig(m),
+                sig(s),
+                esc(&unit)
+            )),
+            y.cpk.map_or("–".into(), sig),
+        );
+    }
+    let _ = writeln!(h, "</table>");
 }
 
 /// The page up to its heading: the document head with its style sheet, and the title.

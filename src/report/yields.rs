@@ -1,0 +1,180 @@
+//! The yield of the model's requirements: `yield.csv`, its part of `summary.json` and the
+//! report's first section (each requirement's probability by each method beside the target,
+//! pass or fail, its worst margin and capability index).
+
+use crate::analyze::Analysis;
+use crate::model::{Model, Requirement, RequirementKind, SeparationMargin};
+use crate::requirement::unit;
+use crate::yields::{Method, YieldRow};
+use serde_json::{Value, json};
+
+/// Header of `yield.csv`.
+pub const YIELD_HEADER: [&str; 18] = [
+    "case",
+    "method",
+    "requirement",
+    "kind",
+    "mode",
+    "speed_from",
+    "speed_to",
+    "speed",
+    "probability",
+    "ci_low",
+    "ci_high",
+    "target",
+    "meets_target",
+    "margin_unit",
+    "margin_mean",
+    "margin_std",
+    "cpk",
+    "evaluations",
+];
+
+/// The requirement's kind as written in the model file.
+pub fn kind_name(r: &Requirement) -> &'static str {
+    match r.kind {
+        RequirementKind::Separation { .. } => "separation",
+        RequirementKind::Frequency { .. } => "frequency",
+        RequirementKind::Avoid { .. } => "avoid",
+        RequirementKind::Damping { .. } => "damping",
+        RequirementKind::Underdamped => "underdamped",
+        RequirementKind::Stable => "stable",
+        RequirementKind::SameBranch => "branch",
+        RequirementKind::Transfer { .. } => "transfer",
+    }
+}
+
+/// The requirement in words (for the report).
+pub fn describe(r: &Requirement) -> String {
+    let mode = r
+        .mode
+        .map_or("every mode".to_string(), |m| format!("mode {}", m + 1));
+    let what = match &r.kind {
+        RequirementKind::Separation { orders, margin } => format!(
+            "{mode}: ω_d clear of {} × Ω by {}",
+            orders
+                .iter()
+                .map(|o| o.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            match margin {
+                SeparationMargin::Fraction(f) => format!("{} %", f * 100.0),
+                SeparationMargin::Api684 => "API 684's margin".into(),
+            }
+        ),
+        RequirementKind::Frequency { min, max } => match (min, max) {
+            (Some(a), Some(b)) => format!("{mode}: {a} ≤ ω_d ≤ {b} rad/s"),
+            (Some(a), None) => format!("{mode}: ω_d ≥ {a} rad/s"),
+            (None, Some(b)) => format!("{mode}: ω_d ≤ {b} rad/s"),
+            (None, None) => mode,
+        },
+        RequirementKind::Avoid { low, high } => {
+            format!("{mode}: ω_d outside [{low}, {high}] rad/s")
+        }
+        RequirementKind::Damping { min } => format!("{mode}: ζ ≥ {min}"),
+        RequirementKind::Underdamped => format!("{mode}: not overdamped"),
+        RequirementKind::Stable => "no unstable root".into(),
+        RequirementKind::SameBranch => "on the nominal equilibrium branch".into(),
+        RequirementKind::Transfer { max } => format!("|H| ≤ {max}"),
+    };
+    match r.speeds {
+        Some((a, b)) => format!("{what}, for {a} ≤ Ω ≤ {b} rad/s"),
+        None => format!("{what}, at every speed"),
+    }
+}
+
+/// Does a probability with interval `ci` meet `target`: `yes` where the interval is above
+/// it, `no` where below, `undecided` where it holds it.
+pub fn verdict(ci: (f64, f64), target: f64) -> &'static str {
+    if ci.0 >= target {
+        "yes"
+    } else if ci.1 < target {
+        "no"
+    } else {
+        "undecided"
+    }
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.filter(|x| x.is_finite())
+        .map_or(String::new(), |x| x.to_string())
+}
+
+/// The transfer function's unit, for the margins of `transfer` requirements.
+fn transfer_unit(model: &Model) -> String {
+    model
+        .analysis
+        .transfer
+        .as_ref()
+        .map_or(String::new(), |t| model.transfer_unit(t))
+}
+
+/// Rows of `yield.csv`: per case and method, all requirements together
+/// (`requirement = all`), then each over its range, then each per speed.
+pub fn yield_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
+    let target = model.allocation.target_yield;
+    let tu = transfer_unit(model);
+    a.yields
+        .iter()
+        .map(|y| {
+            let r = y.requirement.map(|r| &model.requirements[r]);
+            let range = |end: fn((f64, f64)) -> f64| {
+                r.and_then(|r| r.speeds)
+                    .map_or(String::new(), |s| end(s).to_string())
+            };
+            vec![
+                a.cases[y.case].name.clone(),
+                y.method.as_str().to_string(),
+                r.map_or("all".to_string(), |r| r.name.clone()),
+                r.map_or(String::new(), |r| kind_name(r).to_string()),
+                r.and_then(|r| r.mode)
+                    .map_or(String::new(), |m| (m + 1).to_string()),
+                range(|s| s.0),
+                range(|s| s.1),
+                y.speed.map_or(String::new(), |w| w.to_string()),
+                y.probability.to_string(),
+                y.ci.0.to_string(),
+                y.ci.1.to_string(),
+                target.to_string(),
+                if y.speed.is_none() && y.method != Method::FirstOrder {
+                    verdict(y.ci, target).to_string()
+                } else if y.speed.is_none() {
+                    // First order over a range is an upper bound: it can only say no.
+                    if y.probability < target {
+                        "no"
+                    } else {
+                        "undecided"
+                    }
+                    .to_string()
+                } else {
+                    String::new()
+                },
+                r.filter(|_| y.margin.is_some())
+                    .map_or(String::new(), |r| unit(r, &tu)),
+                opt(y.margin.map(|m| m.0)),
+                opt(y.margin.map(|m| m.1)),
+                opt(y.cpk),
+                y.evaluations.to_string(),
+            ]
+        })
+        .collect()
+}
+
+/// The yield part of `summary.json`: the target and, per case, method and requirement (or all),
+/// the probability over the range with its interval and verdict.
+pub fn yield_summary(model: &Model, a: &Analysis) -> Value {
+    let target = model.allocation.target_yield;
+    json!({
+        "target_yield": target,
+        "requirements": model.requirements.iter().map(|r| json!({
+            "name": r.name, "kind": kind_name(r), "mode": r.mode.map(|m| m + 1),
+            "speeds": r.speeds.map(|s| [s.0, s.1]), "description": describe(r)})).collect::<Vec<_>>(),
+        "results": a.yields.iter().filter(|y| y.speed.is_none()).map(|y: &YieldRow| json!({
+            "case": a.cases[y.case].name, "method": y.method.as_str(),
+            "requirement": y.requirement.map_or("all".to_string(), |r| model.requirements[r].name.clone()),
+            "probability": y.probability, "ci": [y.ci.0, y.ci.1],
+            "meets_target": verdict(y.ci, target),
+            "margin_mean": y.margin.map(|m| m.0), "margin_std": y.margin.map(|m| m.1),
+            "cpk": y.cpk})).collect::<Vec<_>>(),
+    })
+}
