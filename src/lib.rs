@@ -33,7 +33,7 @@
 //! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
 //!     [`montecarlo`].
 //! 17. [`yields`]: the yield of a case's requirements by each method, as rows.
-//! 18. [`analyze`], [`request`], [`shard`]: the main job and its rows, the analysis request
+//! 18. [`analyze`], [`allocate`] (tolerance allocation to a yield target), [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
 //! 19. [`plots`], [`report`], [`results`]: what is written; the command line (`src/main.rs`
 //!     and `src/cli/`, a crate of its own over this one: its arguments, the inputs they name,
@@ -46,6 +46,7 @@
 //! recorded program instead of nested dual numbers.
 #![deny(clippy::float_cmp)]
 
+pub mod allocate;
 pub mod analyze;
 pub mod cancel;
 pub mod compiled;

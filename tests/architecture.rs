@@ -32,7 +32,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["propagate"], false),
     (&["taylor", "quadrature", "montecarlo"], false),
     (&["yields"], false),
-    (&["analyze", "request", "shard"], true),
+    (&["analyze", "allocate", "request", "shard"], true),
     (&["plots", "report", "results"], true),
 ];
 

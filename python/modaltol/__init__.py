@@ -95,11 +95,14 @@ class ModalPoint:
 
 @dataclass(frozen=True)
 class Analysis:
-    """A tolerance analysis: ``tolerance`` and ``probabilities`` have the columns of the CLI's
-    ``tolerance.csv`` and ``probabilities.csv``; ``summary`` is its ``summary.json``."""
+    """A tolerance analysis: ``tolerance``, ``probabilities`` and ``yield_`` have the columns of
+    the CLI's ``tolerance.csv``, ``probabilities.csv`` and ``yield.csv`` (the probability of
+    meeting the model's ``[[requirements]]``; empty without requirements); ``summary`` is its
+    ``summary.json``."""
 
     tolerance: pd.DataFrame
     probabilities: pd.DataFrame
+    yield_: pd.DataFrame
     summary: dict[str, Any]
 
     def answer(self) -> pd.DataFrame:
@@ -288,6 +291,7 @@ class Model:
         return Analysis(
             tolerance=_frame(d["tolerance"]),
             probabilities=_frame(d["probabilities"]),
+            yield_=_frame(d["yield"]),
             summary=json.loads(d["summary"]),
         )
 

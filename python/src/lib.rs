@@ -723,6 +723,10 @@ impl NativeModel {
             )?,
         )?;
         d.set_item(
+            "yield",
+            table(py, &report::YIELD_HEADER, &report::yield_rows(m, &a))?,
+        )?;
+        d.set_item(
             "summary",
             serde_json::to_string(&report::summary_json(m, &a, mc.as_ref(), used))
                 .expect("a JSON value"),

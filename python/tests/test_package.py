@@ -174,6 +174,21 @@ def test_analyze_is_the_cli_analysis(cli: Path, tmp_path: Path, pendulum: modalt
     assert set(answer["case"]) == {"L3", "L6"}
 
 
+def test_yield_is_the_cli_yield(cli: Path, tmp_path: Path) -> None:
+    spec = EXAMPLES / "governor_specification.toml"
+    gov = modaltol.load(spec)
+    res = gov.analyze(speeds="1.4:2.1:0.1", samples=200, seed=3, cases=["k6"])
+    run(cli, "analyze", spec, "-o", tmp_path / "cli", "--speed", "1.4:2.1:0.1",
+        "--samples", "200", "--seed", "3", "--case", "k6")
+    assert_same_table(res.yield_, read_csv(tmp_path / "cli" / "yield.csv"))
+    every = res.yield_[(res.yield_["requirement"] == "all") & (res.yield_["speed"] == "")]
+    assert set(every["method"]) == {"quadrature", "monte_carlo"}
+    assert res.summary["yield"]["target_yield"] == 0.9973
+    # Without requirements, an empty table.
+    assert len(modaltol.load(EXAMPLES / "governor.toml").analyze(
+        speeds="1:2:0.5", monte_carlo=False, cases=["k3"]).yield_) == 0
+
+
 def test_a_bad_model_raises_with_its_location(tmp_path: Path) -> None:
     text = PENDULUM.read_text()
     bad = text.replace('type = "revolute"', 'type = "revolutte"', 1)

@@ -1,13 +1,18 @@
-//! The yield of requirements against exact probabilities: on the rotating pendulum the set of
-//! rod lengths L that meet "ω_d ≥ a over a speed range" or "not overdamped over a range" is a
-//! half-line whose end is a root of the closed form (`tests/common/pendulum.rs`), so the yield
-//! is the normal CDF there. The quadrature must give it to 10⁻⁴ and the Monte Carlo must hold it
-//! in its 95 % Wilson interval.
+//! Design to a specification against exact answers.
+//!
+//! - Yield: on the rotating pendulum the set of rod lengths L that meet "ω_d ≥ a over a speed
+//!   range" or "not overdamped over a range" is a half-line whose end is a root of the closed
+//!   form (`tests/common/pendulum.rs`), so the yield is the normal CDF there. The quadrature
+//!   must give it to 10⁻⁴ and the Monte Carlo must hold it in its 95 % Wilson interval.
+//! - Allocation: with one requirement at one speed the margin is one linear constraint to
+//!   first order, and the optimum of the reciprocal cost is the Lagrange closed form
+//!   `T_k ∝ (e b_k / S_k²)^{1/(e+2)}` with the sensitivities `S_k` of the closed form.
 
 mod common;
 
 use common::example_text;
 use common::pendulum::pendulum;
+use modaltol::allocate::{AllocateOptions, allocate};
 use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::montecarlo::McOptions;
@@ -124,4 +129,85 @@ speeds = [4.0, 4.5]
             mc.ci
         );
     }
+}
+
+/// ω_d of the swung-out pendulum with mass `m`, length `l`, hinge damping `c` at speed `w`:
+/// `ω_d² = Ω²(1 − cos²θ*) − (3c/(2mL²))²`, `cos θ* = 3g/(2LΩ²)`.
+fn swung_out_wd(m: f64, l: f64, c: f64, w: f64) -> f64 {
+    let cos = 3.0 * common::pendulum::G / (2.0 * l * w * w);
+    let decay = 3.0 * c / (2.0 * m * l * l);
+    (w * w * (1.0 - cos * cos) - decay * decay).sqrt()
+}
+
+#[test]
+fn allocation_equals_the_lagrange_closed_form_and_its_yield_is_verified() {
+    let w = 5.0;
+    let (m0, l0, c0) = (3.0, 1.0, 3.0);
+    let wd = swung_out_wd(m0, l0, c0, w);
+    let a_min = wd - 0.1;
+    let costs = [0.5, 2.0, 1.0];
+    let model = model(&format!(
+        r#"
+[[requirements]]
+name = "clear"
+kind = "frequency"
+mode = 1
+min = {a_min}
+speeds = [{w}, {w}]
+
+[allocation]
+target_yield = 0.9973
+cost = {{ m = {{ b = {} }}, L = {{ b = {} }}, c = {{ b = {} }} }}
+
+[[analysis.cases]]
+name = "mLc"
+tolerances = {{ m = "2%", L = "1%", c = "5%" }}
+"#,
+        costs[0], costs[1], costs[2]
+    ));
+    let case = model
+        .model()
+        .analysis
+        .cases
+        .iter()
+        .find(|c| c.name == "mLc")
+        .unwrap()
+        .clone();
+    let opt = AllocateOptions {
+        speeds: vec![4.9, 5.0, 5.1],
+        case,
+        target: model.model().allocation.target_yield,
+        quadrature: QuadOptions::default(),
+        threads: None,
+        cancel: Default::default(),
+    };
+    let a = allocate(&model, &opt, &|_| {}).unwrap();
+    // The closed form, with the sensitivities of the closed form (central differences).
+    let h = 1e-6;
+    let s = [
+        (swung_out_wd(m0 + h, l0, c0, w) - swung_out_wd(m0 - h, l0, c0, w)) / (2.0 * h),
+        (swung_out_wd(m0, l0 + h, c0, w) - swung_out_wd(m0, l0 - h, c0, w)) / (2.0 * h),
+        (swung_out_wd(m0, l0, c0 + h, w) - swung_out_wd(m0, l0, c0 - h, w)) / (2.0 * h),
+    ];
+    let beta = a.rounds.last().unwrap().beta;
+    // T = 3σ: Σ (S_k T_k / 3)² = (margin / β)², T_k = κ (b_k / S_k²)^{1/3} (e = 1).
+    let shape: Vec<f64> = (0..3)
+        .map(|k| (costs[k] / (s[k] * s[k])).powf(1.0 / 3.0))
+        .collect();
+    let sum: f64 = (0..3).map(|k| (s[k] * shape[k] / 3.0).powi(2)).sum();
+    let kappa = ((wd - a_min) / beta) / sum.sqrt();
+    for (k, v) in a.variables.iter().enumerate() {
+        let exact = kappa * shape[k];
+        assert!(
+            (v.after / exact - 1.0).abs() < 1e-6,
+            "variable {k}: allocated {} vs closed form {exact}",
+            v.after
+        );
+        assert!(!v.at_bound);
+    }
+    // The verified yield meets the target, within its error estimate.
+    let last = a.rounds.last().unwrap();
+    assert!(a.met, "{:?}", a.rounds);
+    assert!(last.verified.0 - last.verified.1 >= 0.9973, "{last:?}");
+    assert!(a.cost_after.is_finite() && a.cost_after > 0.0);
 }
