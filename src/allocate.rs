@@ -192,6 +192,8 @@ pub struct AllocateOptions {
     /// The case whose variables are allocated, and its tolerances to start from.
     pub case: Case,
     pub target: f64,
+    /// Cost models replacing the model's `[allocation]` ones (parameter index, cost).
+    pub costs: Vec<(usize, Cost)>,
     /// Requested accuracy of the verifying quadrature.
     pub quadrature: QuadOptions,
     pub threads: Option<usize>,
@@ -266,9 +268,9 @@ pub fn allocate(
     let costs: Vec<Cost> = vars
         .iter()
         .map(|v| {
-            m.allocation
-                .costs
+            opt.costs
                 .iter()
+                .chain(&m.allocation.costs)
                 .find(|(p, _)| p == v)
                 .map_or(Cost::default(), |c| c.1)
         })
@@ -349,7 +351,7 @@ pub fn allocate(
         }
         // Raise β by the shortfall in reliability index.
         let got = normal.inverse_cdf(verified.0.clamp(1e-300, 1.0 - 1e-16));
-        let shortfall = (target_beta - got).max(0.05 * target_beta.abs().max(1.0));
+        let shortfall = (target_beta - got).max(0.01 * target_beta.abs().max(1.0));
         beta += shortfall;
     }
     let (t, case, met) = result.expect("one round at least");

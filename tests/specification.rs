@@ -177,6 +177,7 @@ tolerances = {{ m = "2%", L = "1%", c = "5%" }}
         speeds: vec![4.9, 5.0, 5.1],
         case,
         target: model.model().allocation.target_yield,
+        costs: Vec::new(),
         quadrature: QuadOptions::default(),
         threads: None,
         cancel: Default::default(),

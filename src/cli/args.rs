@@ -208,6 +208,21 @@ pub(crate) enum Command {
     /// else is refused, naming the file and what differs. The quadrature runs with the
     /// options the shards' run was given.
     Merge(MergeArgs),
+    /// Tolerance allocation: the tolerances of a case's variables that minimise the
+    /// manufacturing cost (per variable a + b/T^k, T the ± tolerance in the parameter's unit;
+    /// the model's [allocation] table, default 1/T) while every requirement of the model's
+    /// [[requirements]] is met at the target yield.
+    ///
+    /// The search uses the requirements' exact first-order margins at every speed of their
+    /// ranges (each must keep a reliability index β = Φ⁻¹(target)); the result is then verified
+    /// by the quadrature through the whole nonlinear analysis, and β raised by the shortfall
+    /// until the verified yield meets the target (at most 6 rounds). Prints the table; writes
+    /// DIR/allocation.csv (parameter, nominal, distribution, tolerance_before,
+    /// tolerance_after, relative_before, relative_after, max, at_max, cost_before, cost_after)
+    /// and DIR/allocation.json (the target, whether the verified yield meets it, every round's
+    /// β, predicted and verified yield with its error, the costs), then the whole analysis of
+    /// the allocated tolerances (case "allocated": tolerance.csv, yield.csv, report.html, …).
+    Allocate(AllocateArgs),
     /// Frequency response at one speed: H(jω) from a generalised force on a joint coordinate,
     /// or a force or torque at a [[ports]] entry, to the response of another coordinate or
     /// port, over a range of excitation frequencies.
@@ -353,6 +368,36 @@ pub(crate) struct AnalyzeArgs {
     pub(crate) cases: Vec<String>,
     #[command(flatten)]
     pub(crate) display: DisplayArgs,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct AllocateArgs {
+    /// Model file (TOML) with [[requirements]].
+    pub(crate) model: PathBuf,
+    /// Output directory (created if missing).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// The probability of meeting every requirement to reach; default: the model's
+    /// [allocation] target_yield (0.9973 unless it says otherwise).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) target_yield: Option<f64>,
+    /// The tolerance case whose variables are allocated, from their tolerances there;
+    /// default: the model's [allocation] case, else the parameters' own tolerances.
+    #[arg(long = "case", value_name = "NAME")]
+    pub(crate) case: Option<String>,
+    /// A variable's cost model, replacing the model's: NAME=B (cost B/T) or NAME=B,K (cost
+    /// B/T^K), T in the parameter's unit (repeatable).
+    #[arg(long = "cost", value_name = "NAME=B[,K]")]
+    pub(crate) costs: Vec<String>,
+    /// Speeds FROM:TO:STEP in rad/s; default: the model's [analysis] speed.
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: Option<String>,
+    /// Requested accuracy of the verifying quadrature (as analyze's).
+    #[arg(long, default_value_t = 1e-3, value_name = "REL")]
+    pub(crate) quadrature_tolerance: f64,
+    /// Worker threads: 1 to 1024; default: all cores.
+    #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
+    pub(crate) threads: Option<usize>,
 }
 
 #[derive(clap::Args)]

@@ -47,5 +47,6 @@ pub(crate) fn run(cli: Cli, cancel: &Cancel) -> Result<()> {
         Command::Analyze(args) => analyze_command(args, set, cancel),
         Command::Merge(args) => merge_command(args, set, cancel),
         Command::Frf(args) => frf_command(args, set, cancel),
+        Command::Allocate(args) => allocate_command(args, set, cancel),
     }
 }

@@ -12,6 +12,7 @@
 //! name them `report::…`.
 
 mod accuracy;
+mod allocation;
 mod check;
 mod frf;
 mod html;
@@ -24,6 +25,7 @@ mod unfilled;
 mod yields;
 
 pub use accuracy::{Outside, outside_request, outside_request_lines};
+pub use allocation::{ALLOCATION_HEADER, allocation_json, allocation_rows, allocation_table};
 pub use check::check_summary;
 pub use frf::{frf_header, frf_rows};
 pub use html::report_html;

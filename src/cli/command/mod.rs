@@ -1,6 +1,7 @@
 //! One file per subcommand: each reads its inputs, calls the library and writes what it
 //! returns.
 
+mod allocate;
 mod analyze;
 mod check;
 mod frf;
@@ -9,6 +10,7 @@ mod modal;
 mod sensitivity;
 mod sweep;
 
+pub(crate) use allocate::allocate_command;
 pub(crate) use analyze::analyze_command;
 pub(crate) use check::check_command;
 pub(crate) use frf::frf_command;

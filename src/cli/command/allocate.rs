@@ -1,0 +1,170 @@
+//! `modaltol allocate`.
+
+use crate::cli::*;
+use anyhow::Result;
+use modaltol::allocate::{AllocateOptions, allocate};
+use modaltol::analyze::{AnalyzeOptions, analyze};
+use modaltol::cancel::Cancel;
+use modaltol::files::{Inputs, ResultDir};
+use modaltol::model::{Case, Cost, Model, SpeedRange};
+use modaltol::quadrature::QuadOptions;
+use modaltol::{report, settings};
+use std::io::Write;
+
+/// `modaltol allocate` (see its `--help`).
+pub(crate) fn allocate_command(
+    args: AllocateArgs,
+    set: &[(String, f64)],
+    cancel: &Cancel,
+) -> Result<()> {
+    let AllocateArgs {
+        model,
+        output,
+        target_yield,
+        case,
+        costs,
+        speed,
+        quadrature_tolerance,
+        threads,
+    } = args;
+    settings::quadrature_tolerance(quadrature_tolerance)
+        .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
+    settings::threads(threads).map_err(|e| InputError(format!("--threads {e}")))?;
+    if let Some(y) = target_yield
+        && !(y > 0.0 && y < 1.0)
+    {
+        return Err(InputError(format!(
+            "--target-yield must be a probability strictly between 0 and 1 (got {y})"
+        ))
+        .into());
+    }
+    let m = load(&model, set)?;
+    let md = m.model();
+    let range = match &speed {
+        Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+        None => md.analysis.speed.ok_or_else(|| {
+            InputError("no speeds: give --speed FROM:TO:STEP or [analysis] speed".into())
+        })?,
+    };
+    settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
+    let start = start_case(md, case.as_deref())?;
+    let costs = costs
+        .iter()
+        .map(|c| cost(md, c))
+        .collect::<Result<Vec<_>>>()?;
+    let inputs = Inputs::new(&[&model]);
+    refuse_input(&inputs, &output)?;
+    let mut dir = protect(ResultDir::create(&output)?, inputs)?;
+    let opt = AllocateOptions {
+        speeds: range.speeds().collect(),
+        case: start,
+        target: target_yield.unwrap_or(md.allocation.target_yield),
+        costs,
+        quadrature: QuadOptions {
+            tolerance: quadrature_tolerance,
+        },
+        threads,
+        cancel: cancel.clone(),
+    };
+    let a = allocate(&m, &opt, &|r| {
+        note!(
+            "modaltol: β = {:.4}: predicted {:.6}, verified yield {:.6} ± {:.1e} ({} nodes)",
+            r.beta,
+            r.predicted,
+            r.verified.0,
+            r.verified.1,
+            r.nodes
+        )
+    })
+    .map_err(|e| Failed(e.to_string()))?;
+    if cancel.is_cancelled() {
+        return Err(Interrupted("nothing written (a result is complete or absent)".into()).into());
+    }
+    print!("{}", report::allocation_table(md, &a));
+    dir.write(
+        "allocation.csv",
+        &modaltol::results::csv_bytes(&report::ALLOCATION_HEADER, &report::allocation_rows(md, &a)),
+    )?;
+    dir.write(
+        "allocation.json",
+        serde_json::to_string_pretty(&report::allocation_json(md, &a))?.as_bytes(),
+    )?;
+    // The allocated design's whole analysis (its yield by the quadrature, the report).
+    let analysis = analyze(
+        &m,
+        &AnalyzeOptions {
+            speeds: opt.speeds.clone(),
+            cases: vec![a.case.clone()],
+            quadrature: Some(opt.quadrature),
+            monte_carlo: None,
+            threads,
+            cancel: cancel.clone(),
+            ..Default::default()
+        },
+        &progress_printer(),
+    );
+    write_outputs(
+        &m,
+        &analysis,
+        None,
+        threads,
+        Default::default(),
+        dir,
+        &output,
+    )?;
+    if !a.met {
+        return Err(Failed(format!(
+            "the verified yield does not reach the target {} after {} rounds (see allocation.json)",
+            a.target,
+            a.rounds.len()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// The case to start from: `--case`, else the model's `[allocation] case`, else the
+/// parameters' own tolerances.
+fn start_case(md: &Model, name: Option<&str>) -> Result<Case> {
+    match name.or(md.allocation.case.as_deref()) {
+        Some(n) => md
+            .analysis
+            .cases
+            .iter()
+            .find(|c| c.name == n)
+            .cloned()
+            .ok_or_else(|| {
+                InputError(format!("--case: no tolerance case '{n}' in the model")).into()
+            }),
+        None => Ok(Case::from_parameters(md)),
+    }
+}
+
+/// `NAME=B` or `NAME=B,K`.
+fn cost(md: &Model, spec: &str) -> Result<(usize, Cost)> {
+    let bad = || {
+        InputError(format!(
+            "--cost {spec}: expected NAME=B or NAME=B,K with B, K > 0"
+        ))
+    };
+    let (name, rest) = spec.split_once('=').ok_or_else(bad)?;
+    let p = md
+        .parameter(name.trim())
+        .ok_or_else(|| InputError(format!("--cost {spec}: no parameter '{}'", name.trim())))?;
+    let mut parts = rest.split(',').map(|x| x.trim().parse::<f64>());
+    let b = parts.next().and_then(|x| x.ok()).ok_or_else(bad)?;
+    let k = match parts.next() {
+        Some(x) => x.map_err(|_| bad())?,
+        None => 1.0,
+    };
+    if parts.next().is_some() || !(b.is_finite() && b > 0.0 && k.is_finite() && k > 0.0) {
+        return Err(bad().into());
+    }
+    let base = md
+        .allocation
+        .costs
+        .iter()
+        .find(|c| c.0 == p)
+        .map_or(Cost::default(), |c| c.1);
+    Ok((p, Cost { b, k, ..base }))
+}
