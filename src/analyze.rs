@@ -17,6 +17,7 @@ use crate::montecarlo::{self, Block, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
 use crate::propagate::{Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
+use crate::sobol::{SobolIndex, SobolOptions, sobol};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
 use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
@@ -122,6 +123,8 @@ pub struct AnalyzeOptions {
     /// Worker threads of every stage (`None`: rayon's default); results do not depend on
     /// their number.
     pub threads: Option<usize>,
+    /// Sobol indices (none by default).
+    pub sobol: Option<SobolOptions>,
     /// Cancelling it stops the run at its next check: the sweep before its next speed (the
     /// speeds left are failures, "interrupted"), the quadrature before its next case, the Monte
     /// Carlo after its current chunk. The result then covers what was done
@@ -139,6 +142,7 @@ impl Default for AnalyzeOptions {
             split: Split::default(),
             threads: None,
             cancel: Cancel::new(),
+            sobol: None,
         }
     }
 }
@@ -155,6 +159,13 @@ pub struct Analysis {
     /// The yield of the model's requirements per case and method (empty without
     /// requirements).
     pub yields: Vec<YieldRow>,
+    /// Sobol indices per case (with [`AnalyzeOptions::sobol`]), and per case the reason where
+    /// none could be computed.
+    pub sobol: Vec<(usize, SobolIndex)>,
+    pub sobol_refused: Vec<(usize, String)>,
+    /// The speeds analysed and the outputs at each (what the Sobol indices' targets index).
+    pub speeds: Vec<f64>,
+    pub outputs: Vec<Output>,
     /// The Taylor methods (nominal sweep, derivatives, first/second order, invariant).
     pub analytic_seconds: f64,
     /// Of which the first-order stage (the nominal sweep and the exact gradients at every
@@ -283,6 +294,20 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         }
     }
     let analytic_seconds = taylor_seconds + t2.elapsed().as_secs_f64();
+    let (mut sobol_rows, mut sobol_refused) = (Vec::new(), Vec::new());
+    if let Some(so) = opt.sobol {
+        for (ci, s) in spreads.iter().enumerate() {
+            if opt.cancel.is_cancelled() {
+                ended(Termination::Cancelled);
+                break;
+            }
+            let progress = stage(&format!("sobol {}", opt.cases[ci].name));
+            match sobol(&study, s, so, &run.with_progress(&progress)) {
+                Ok(rows) => sobol_rows.extend(rows.into_iter().map(|r| (ci, r))),
+                Err(e) => sobol_refused.push((ci, e.to_string())),
+            }
+        }
+    }
     let t1 = Instant::now();
     let mc = opt
         .monte_carlo
@@ -295,6 +320,8 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     yield_rows.extend(mc.yields);
     let Study {
         vars,
+        speeds,
+        outputs,
         failures,
         nominal,
         seconds: (first_order_seconds, second_order_seconds),
@@ -306,6 +333,10 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         rows,
         probabilities,
         yields: yield_rows,
+        sobol: sobol_rows,
+        sobol_refused,
+        speeds,
+        outputs,
         analytic_seconds,
         first_order_seconds,
         second_order_seconds,

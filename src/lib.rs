@@ -31,7 +31,7 @@
 //! 15. [`propagate`]: the propagation layer: [`propagate::Study`], [`propagate::Run`] and the
 //!     [`propagate::Propagation`] trait.
 //! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
-//!     [`montecarlo`].
+//!     [`montecarlo`], and [`sobol`] (global sensitivity indices).
 //! 17. [`yields`]: the yield of a case's requirements by each method, as rows.
 //! 18. [`analyze`], [`allocate`] (tolerance allocation to a yield target), [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
@@ -84,6 +84,7 @@ pub mod schur;
 pub mod sensitivity;
 pub mod settings;
 pub mod shard;
+pub mod sobol;
 pub mod study;
 pub mod sweep;
 pub mod tape;

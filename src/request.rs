@@ -50,6 +50,8 @@ pub struct Request {
     pub threads: Option<usize>,
     /// This run as shard `k` (from 0) of `n` of the Monte Carlo.
     pub shard: Option<(usize, usize)>,
+    /// Base samples of the Sobol indices (`None`: none computed).
+    pub sobol: Option<usize>,
 }
 
 impl Default for Request {
@@ -67,6 +69,7 @@ impl Default for Request {
             quadrature_tolerance: QuadOptions::default().tolerance,
             threads: None,
             shard: None,
+            sobol: None,
         }
     }
 }
@@ -80,6 +83,7 @@ pub enum Setting {
     QuadratureTolerance,
     Threads,
     Shard,
+    Sobol,
 }
 
 /// Why a request is refused. Each message leaves the setting unnamed ([`RequestError::setting`]
@@ -102,6 +106,9 @@ pub enum RequestError {
     Cases(String),
     #[error("{0}")]
     Samples(String),
+    /// The Sobol indices' base samples are refused.
+    #[error("{0}")]
+    Sobol(String),
     #[error("splits the Monte Carlo; it cannot go without the Monte Carlo")]
     ShardWithoutMonteCarlo,
     #[error(
@@ -122,6 +129,7 @@ impl RequestError {
             }
             RequestError::Cases(_) => Setting::Cases,
             RequestError::Samples(_) => Setting::Samples,
+            RequestError::Sobol(_) => Setting::Sobol,
             RequestError::ShardWithoutMonteCarlo | RequestError::TooManyShards { .. } => {
                 Setting::Shard
             }
@@ -149,6 +157,9 @@ impl Request {
         settings::quadrature_tolerance(self.quadrature_tolerance)
             .map_err(RequestError::QuadratureTolerance)?;
         settings::threads(self.threads).map_err(RequestError::Threads)?;
+        if let Some(n) = self.sobol {
+            settings::samples(n).map_err(RequestError::Sobol)?;
+        }
         Ok(Checked(self))
     }
 }
@@ -210,6 +221,13 @@ impl Checked {
                 split,
                 threads: request.threads,
                 cancel,
+                sobol: request
+                    .sobol
+                    .filter(|_| request.shard.is_none())
+                    .map(|samples| crate::sobol::SobolOptions {
+                        samples,
+                        seed: request.seed.unwrap_or(model.analysis.seed),
+                    }),
             },
             range,
         })

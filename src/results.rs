@@ -20,6 +20,7 @@ pub fn is_result_file(name: &str) -> bool {
         "tolerance.csv"
             | "probabilities.csv"
             | "yield.csv"
+            | "sobol.csv"
             | "report.html"
             | "summary.json"
             | "manifest.json"
@@ -73,6 +74,12 @@ pub fn write(
         dir.write(
             "yield.csv",
             &csv_bytes(&report::YIELD_HEADER, &report::yield_rows(m.model(), a)),
+        )?;
+    }
+    if !a.sobol.is_empty() {
+        dir.write(
+            "sobol.csv",
+            &csv_bytes(&report::SOBOL_HEADER, &report::sobol_rows(m.model(), a)),
         )?;
     }
     let (plots, critical) = plots::plots(m.model(), a, display);

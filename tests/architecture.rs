@@ -30,7 +30,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["tolerance", "requirement"], false),
     (&["sampling"], false),
     (&["propagate"], false),
-    (&["taylor", "quadrature", "montecarlo"], false),
+    (&["taylor", "quadrature", "montecarlo", "sobol"], false),
     (&["yields"], false),
     (&["analyze", "allocate", "request", "shard"], true),
     (&["plots", "report", "results"], true),

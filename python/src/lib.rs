@@ -75,6 +75,7 @@ fn refused(e: RequestError) -> PyErr {
                 Setting::Speeds => "speeds:",
                 Setting::Cases => "cases:",
                 Setting::Samples => "samples",
+                Setting::Sobol => "sobol",
                 Setting::QuadratureTolerance => "quadrature_tolerance",
                 Setting::Threads => "threads",
                 Setting::Shard => "shard",

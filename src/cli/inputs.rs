@@ -99,6 +99,7 @@ pub(crate) fn refused(
                 Setting::QuadratureTolerance => "--quadrature-tolerance",
                 Setting::Threads => "--threads",
                 Setting::Samples => "--samples",
+                Setting::Sobol => "--sobol",
                 _ => unreachable!("named above"),
             };
             InputError(format!("{flag} {e}")).into()

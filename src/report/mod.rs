@@ -40,7 +40,9 @@ pub use summary::{paper_timings, summary_json};
 pub use sweep::{SweepColumns, sweep_header, sweep_rows};
 pub use tolerance::{PROBABILITY_HEADER, probability_rows, tolerance_header, tolerance_rows};
 pub use unfilled::{Unfilled, inadmissible_warnings, unfilled, unfilled_lines};
-pub use yields::{YIELD_HEADER, describe, kind_name, verdict, yield_rows, yield_summary};
+pub use yields::{
+    SOBOL_HEADER, YIELD_HEADER, describe, kind_name, sobol_rows, verdict, yield_rows, yield_summary,
+};
 
 use crate::modal::Mode;
 use crate::model::Model;

@@ -178,3 +178,65 @@ pub fn yield_summary(model: &Model, a: &Analysis) -> Value {
             "cpk": y.cpk})).collect::<Vec<_>>(),
     })
 }
+
+/// Header of `sobol.csv`.
+pub const SOBOL_HEADER: [&str; 14] = [
+    "case",
+    "target",
+    "speed",
+    "quantity",
+    "mode",
+    "variable",
+    "first",
+    "first_ci_low",
+    "first_ci_high",
+    "total",
+    "total_ci_low",
+    "total_ci_high",
+    "derivative_bound",
+    "rows",
+];
+
+/// Rows of `sobol.csv`: per case, target (an output at a speed, or a requirement's worst
+/// margin: `margin:<name>`) and variable.
+pub fn sobol_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
+    use crate::sobol::Target;
+    a.sobol
+        .iter()
+        .map(|(case, s)| {
+            let (target, speed, quantity, mode) = match s.target {
+                Target::Output(i, o) => {
+                    let out = a.outputs[o];
+                    (
+                        "output".to_string(),
+                        a.speeds[i].to_string(),
+                        out.quantity.as_str().to_string(),
+                        out.mode.map_or(String::new(), |m| (m + 1).to_string()),
+                    )
+                }
+                Target::Margin(r) => (
+                    format!("margin:{}", model.requirements[r].name),
+                    String::new(),
+                    String::new(),
+                    String::new(),
+                ),
+            };
+            vec![
+                a.cases[*case].name.clone(),
+                target,
+                speed,
+                quantity,
+                mode,
+                model.parameters[a.vars[s.variable]].name.clone(),
+                s.first.to_string(),
+                s.first_ci.0.to_string(),
+                s.first_ci.1.to_string(),
+                s.total.to_string(),
+                s.total_ci.0.to_string(),
+                s.total_ci.1.to_string(),
+                opt(s.bound),
+                s.rows.to_string(),
+            ]
+        })
+        .collect()
+}

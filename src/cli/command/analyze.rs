@@ -31,6 +31,7 @@ pub(crate) fn analyze_command(
         sampling,
         shard,
         cases: only,
+        sobol,
         display,
     } = args;
     let request = Request {
@@ -56,6 +57,7 @@ pub(crate) fn analyze_command(
             .as_deref()
             .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
             .transpose()?,
+        sobol,
     };
     // The settings that need no model first: a bad flag is reported before a slow load.
     let chosen = !request.cases.is_empty();

@@ -40,6 +40,7 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         split: Split::Merged(states),
         threads: None,
         cancel: cancel.clone(),
+        sobol: None,
     };
     let mut inputs: Vec<&PathBuf> = model.iter().collect();
     inputs.extend(&shards);
