@@ -40,6 +40,35 @@ pub fn amax(a: &DMatrix<f64>) -> f64 {
         .fold(first, |m, v| if m > v.abs() { m } else { v.abs() })
 }
 
+/// The `n`-point Gauss–Hermite rule for the standard normal density (nodes, weights adding up
+/// to one): the 2- and 3-point rules in closed form, the others by Golub & Welsch (1969), the
+/// eigenvalues of the Jacobi matrix of the probabilists' Hermite polynomials (off-diagonal
+/// `√k`) and the squared first components of its eigenvectors.
+pub fn gauss_hermite(n: usize) -> (Vec<f64>, Vec<f64>) {
+    match n {
+        2 => (vec![-1.0, 1.0], vec![0.5, 0.5]),
+        3 => (
+            vec![-3f64.sqrt(), 0.0, 3f64.sqrt()],
+            vec![1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
+        ),
+        _ => {
+            let jacobi = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+                if i.abs_diff(j) == 1 {
+                    (i.max(j) as f64).sqrt()
+                } else {
+                    0.0
+                }
+            });
+            let eig = jacobi.symmetric_eigen();
+            let mut pairs: Vec<(f64, f64)> = (0..n)
+                .map(|k| (eig.eigenvalues[k], eig.eigenvectors[(0, k)].powi(2)))
+                .collect();
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pairs.into_iter().unzip()
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

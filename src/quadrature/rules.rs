@@ -1,6 +1,7 @@
 //! The rules a case is integrated by: the transverse points of the lines (one line, the
 //! Gauss–Hermite tensor rule, scrambled Sobol replicates) and the nested node grids along them.
 
+use crate::linalg::gauss_hermite;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Half-width of the node grid along a line in standard deviations (normal mass outside:
@@ -288,35 +289,6 @@ fn tensor(dims: usize, nodes: &[f64], weights: &[f64], order: usize) -> Vec<Line
             .collect();
     }
     lines
-}
-
-/// The `n`-point Gauss–Hermite rule for the standard normal density (nodes, weights adding up
-/// to one): the 2- and 3-point rules in closed form, the others by Golub & Welsch (1969), the
-/// eigenvalues of the Jacobi matrix of the probabilists' Hermite polynomials (off-diagonal
-/// `√k`) and the squared first components of its eigenvectors.
-fn gauss_hermite(n: usize) -> (Vec<f64>, Vec<f64>) {
-    match n {
-        2 => (vec![-1.0, 1.0], vec![0.5, 0.5]),
-        3 => (
-            vec![-3f64.sqrt(), 0.0, 3f64.sqrt()],
-            vec![1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
-        ),
-        _ => {
-            let jacobi = nalgebra::DMatrix::from_fn(n, n, |i, j| {
-                if i.abs_diff(j) == 1 {
-                    (i.max(j) as f64).sqrt()
-                } else {
-                    0.0
-                }
-            });
-            let eig = jacobi.symmetric_eigen();
-            let mut pairs: Vec<(f64, f64)> = (0..n)
-                .map(|k| (eig.eigenvalues[k], eig.eigenvectors[(0, k)].powi(2)))
-                .collect();
-            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            pairs.into_iter().unzip()
-        }
-    }
 }
 
 #[cfg(test)]
