@@ -98,11 +98,13 @@ class Analysis:
     """A tolerance analysis: ``tolerance``, ``probabilities`` and ``yield_`` have the columns of
     the CLI's ``tolerance.csv``, ``probabilities.csv`` and ``yield.csv`` (the probability of
     meeting the model's ``[[requirements]]``; empty without requirements); ``summary`` is its
-    ``summary.json``."""
+    ``summary.json``; ``sobol`` has the columns of ``sobol.csv`` (with ``analyze(sobol=N)``;
+    empty otherwise)."""
 
     tolerance: pd.DataFrame
     probabilities: pd.DataFrame
     yield_: pd.DataFrame
+    sobol: pd.DataFrame
     summary: dict[str, Any]
 
     def answer(self) -> pd.DataFrame:
@@ -248,6 +250,25 @@ class Model:
             self._native.frf(float(speed), _speeds(freq), transfer, _names(wrt))
         )
 
+    def allocate(
+        self,
+        speeds: str | None = None,
+        *,
+        target_yield: float | None = None,
+        case: str | None = None,
+        quadrature_tolerance: float = 1e-3,
+        threads: int | None = None,
+    ) -> tuple[pd.DataFrame, dict[str, Any]]:
+        """Tolerance allocation (the CLI's ``allocate``): the tolerances of ``case``'s variables
+        (default the model's ``[allocation] case``, else the parameters' own) that minimise the
+        cost of the ``[allocation]`` table while every requirement is met at ``target_yield``
+        (default the model's), verified by the quadrature. Returns the table of
+        ``allocation.csv`` and the document of ``allocation.json`` (its ``met`` says whether the
+        verified yield reaches the target)."""
+        return _allocation(
+            self._native.allocate(speeds, target_yield, case, quadrature_tolerance, threads)
+        )
+
     def analyze(
         self,
         speeds: Speeds | None = None,
@@ -263,6 +284,7 @@ class Model:
         output: str | PathLike[str] | None = None,
         speed_unit: str = "rad/s",
         frequency_unit: str = "rad/s",
+        sobol: int | None = None,
     ) -> Analysis:
         """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
         per tolerance case, by first and second order, the quadrature (``analytic``: the
@@ -271,7 +293,9 @@ class Model:
         result directory (CSV, plots, report.html, summary.json), its plots and report with
         speeds in ``speed_unit`` and frequencies in ``frequency_unit`` (``"rad/s"``, ``"hz"``,
         ``"rpm"``; the tables stay in rad/s). At most 10⁵ speeds; ``threads`` from 1 to 1024
-        (``None``: one per core), the command line's rules. Ctrl-C stops it."""
+        (``None``: one per core), the command line's rules. Ctrl-C stops it. The yield of the
+        model's ``[[requirements]]`` is in ``yield_``; ``sobol=N`` adds the Sobol indices
+        (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``."""
         d = self._native.analyze(
             _speeds(speeds),
             {
@@ -286,14 +310,20 @@ class Model:
                 "output": None if output is None else str(output),
                 "speed_unit": speed_unit,
                 "frequency_unit": frequency_unit,
+                "sobol": sobol,
             },
         )
         return Analysis(
             tolerance=_frame(d["tolerance"]),
             probabilities=_frame(d["probabilities"]),
             yield_=_frame(d["yield"]),
+            sobol=_frame(d["sobol"]),
             summary=json.loads(d["summary"]),
         )
+
+
+def _allocation(d: dict[str, Any]) -> tuple[pd.DataFrame, dict[str, Any]]:
+    return _frame(d["allocation"]), json.loads(d["summary"])
 
 
 def load(

@@ -34,6 +34,7 @@ class AnalyzeOptions(TypedDict):
     output: str | None
     speed_unit: str
     frequency_unit: str
+    sobol: int | None
 
 class NativeModel:
     @property
@@ -66,6 +67,14 @@ class NativeModel:
     ) -> Columns: ...
     def analyze(
         self, speeds: str | list[float] | None, options: AnalyzeOptions
+    ) -> dict[str, Any]: ...
+    def allocate(
+        self,
+        speeds: str | None,
+        target_yield: float | None,
+        case: str | None,
+        quadrature_tolerance: float,
+        threads: int | None,
     ) -> dict[str, Any]: ...
 
 def load(path: str, parameters: dict[str, float] | None = None) -> NativeModel: ...

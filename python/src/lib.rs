@@ -337,10 +337,84 @@ struct AnalyzeKeywords {
     output: Option<PathBuf>,
     speed_unit: String,
     frequency_unit: String,
+    sobol: Option<i64>,
 }
 
 #[pymethods]
 impl NativeModel {
+    /// Tolerance allocation (see `modaltol::allocate`): `allocation.csv`'s table and
+    /// `allocation.json`'s text.
+    #[pyo3(signature = (speeds, target_yield, case, quadrature_tolerance, threads))]
+    fn allocate<'py>(
+        &self,
+        py: Python<'py>,
+        speeds: Option<String>,
+        target_yield: Option<f64>,
+        case: Option<String>,
+        quadrature_tolerance: f64,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let m = self.m();
+        settings::quadrature_tolerance(quadrature_tolerance)
+            .map_err(|e| bad(format!("quadrature_tolerance {e}")))?;
+        let threads = threads.map(|n| usize::try_from(n).unwrap_or(0));
+        settings::threads(threads).map_err(|e| bad(format!("threads {e}")))?;
+        let range = match speeds {
+            Some(s) => SpeedRange::parse(&s).map_err(|e| bad(format!("speeds: {e}")))?,
+            None => m
+                .analysis
+                .speed
+                .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?,
+        };
+        settings::analysis_speeds(range.len()).map_err(|e| bad(format!("speeds: {e}")))?;
+        let target = target_yield.unwrap_or(m.allocation.target_yield);
+        if !(target > 0.0 && target < 1.0) {
+            return Err(bad(format!(
+                "target_yield must be strictly between 0 and 1, got {target}"
+            )));
+        }
+        let start = match case.as_deref().or(m.allocation.case.as_deref()) {
+            Some(n) => m
+                .analysis
+                .cases
+                .iter()
+                .find(|c| c.name == n)
+                .cloned()
+                .ok_or_else(|| bad(format!("case: no tolerance case '{n}' in the model")))?,
+            None => modaltol::model::Case::from_parameters(m),
+        };
+        let opt = modaltol::allocate::AllocateOptions {
+            speeds: range.speeds().collect(),
+            case: start,
+            target,
+            costs: Vec::new(),
+            quadrature: modaltol::quadrature::QuadOptions {
+                tolerance: quadrature_tolerance,
+            },
+            threads,
+            cancel: Cancel::new(),
+        };
+        let model = &*self.model;
+        let a = interruptible(py, &opt.cancel, || {
+            modaltol::allocate::allocate(model, &opt, &|_| {})
+        })?
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let d = PyDict::new(py);
+        d.set_item(
+            "allocation",
+            table(
+                py,
+                &report::ALLOCATION_HEADER,
+                &report::allocation_rows(m, &a),
+            )?,
+        )?;
+        d.set_item(
+            "summary",
+            serde_json::to_string(&report::allocation_json(m, &a)).expect("a JSON value"),
+        )?;
+        Ok(d)
+    }
+
     /// The model's name.
     #[getter]
     fn name(&self) -> String {
@@ -631,6 +705,7 @@ impl NativeModel {
             output,
             speed_unit,
             frequency_unit,
+            sobol,
         } = options;
         let (sampling, speed_unit, frequency_unit) =
             (sampling.as_deref(), &*speed_unit, &*frequency_unit);
@@ -676,6 +751,8 @@ impl NativeModel {
             // A negative count is refused as zero is (the command line's parser refuses it too).
             threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
             shard: None,
+            // A negative count is refused as zero is.
+            sobol: sobol.map(|n| usize::try_from(n).unwrap_or(0)),
         };
         let Resolved { options: opt, .. } = request
             .check()
@@ -726,6 +803,10 @@ impl NativeModel {
         d.set_item(
             "yield",
             table(py, &report::YIELD_HEADER, &report::yield_rows(m, &a))?,
+        )?;
+        d.set_item(
+            "sobol",
+            table(py, &report::SOBOL_HEADER, &report::sobol_rows(m, &a))?,
         )?;
         d.set_item(
             "summary",

@@ -189,6 +189,22 @@ def test_yield_is_the_cli_yield(cli: Path, tmp_path: Path) -> None:
         speeds="1:2:0.5", monte_carlo=False, cases=["k3"]).yield_) == 0
 
 
+def test_allocation_and_sobol_are_the_cli_ones(cli: Path, tmp_path: Path) -> None:
+    spec = EXAMPLES / "governor_specification.toml"
+    gov = modaltol.load(spec)
+    table, summary = gov.allocate("1.4:2.1:0.1")
+    run(cli, "allocate", spec, "-o", tmp_path / "alloc", "--speed", "1.4:2.1:0.1")
+    assert_same_table(table, read_csv(tmp_path / "alloc" / "allocation.csv"))
+    assert summary["met"] is True
+    assert summary["rounds"][-1]["verified_yield"] - summary["rounds"][-1]["verified_error"] >= 0.9973
+    res = gov.analyze(speeds="1.5:2.0:0.5", monte_carlo=False, quadrature=False, cases=["all3"],
+                      sobol=64, seed=5)
+    run(cli, "analyze", spec, "-o", tmp_path / "sobol", "--speed", "1.5:2.0:0.5", "--no-monte-carlo",
+        "--no-quadrature", "--case", "all3", "--sobol", "64", "--seed", "5")
+    assert_same_table(res.sobol, read_csv(tmp_path / "sobol" / "sobol.csv"))
+    assert set(res.sobol["variable"]) == {"ball_mass", "spring_k", "attach"}
+
+
 def test_a_bad_model_raises_with_its_location(tmp_path: Path) -> None:
     text = PENDULUM.read_text()
     bad = text.replace('type = "revolute"', 'type = "revolutte"', 1)

@@ -24,6 +24,7 @@ mod png;
 mod probability;
 mod shares;
 mod sigma;
+mod yields;
 
 pub use bands::first_order_off;
 pub use campbell::CriticalSpeed;
@@ -38,6 +39,7 @@ use campbell::campbell;
 use draw::COLORS;
 use plotters::prelude::RGBColor;
 use probability::probabilities;
+use yields::yield_curves;
 use shares::shares;
 use sigma::sigma;
 
@@ -151,6 +153,9 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
             out.extend(sigma(&o, &xlabel));
         }
         if let Some(p) = probabilities(model, a, ci, modes, d) {
+            out.push(p);
+        }
+        if let Some(p) = yield_curves(model, a, ci, d) {
             out.push(p);
         }
         // Shares of the first-order variance (cases with several variables).

@@ -38,6 +38,7 @@ pub fn report_html(
         d.frequency.symbol()
     );
     specification(&mut h, model, a);
+    sobol_table(&mut h, model, a);
     let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
     cases_table(&mut h, model, a);
     timing_table(&mut h, model, a, mc);
@@ -128,6 +129,114 @@ fn specification(h: &mut String, model: &Model, a: &Analysis) {
         );
     }
     let _ = writeln!(h, "</table>");
+}
+
+/// Which tolerance matters: per case, the Sobol indices of each requirement's worst margin
+/// and of every output at the speed where its σ by the analytic method is largest, largest
+/// total index first.
+fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
+    use crate::sobol::Target;
+    for (case, why) in &a.sobol_refused {
+        let _ = writeln!(
+            h,
+            "<p><b>Note:</b> no Sobol indices for case {}: {}</p>",
+            esc(&a.cases[*case].name),
+            esc(why)
+        );
+    }
+    if a.sobol.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        h,
+        "<h2 id=\"sobol\">Which tolerance matters: Sobol indices</h2>\
+<p>First-order index S (the share of the variance a variable causes alone) and total index S<sub>T</sub> (with its interactions), 95 % bootstrap intervals, pick-freeze Monte Carlo (Saltelli 2010); the derivative bound on S<sub>T</sub> from the exact gradients (Sobol &amp; Kucherenko 2009); the first-order variance share of the Taylor method beside it where the target is an output. Every speed and output in <code>sobol.csv</code>; here each requirement's worst margin and each output at the speed of its largest σ.</p>\
+<table><tr><th>case</th><th>target</th><th>variable</th><th>S</th><th>S<sub>T</sub></th><th>bound on S<sub>T</sub></th><th>first-order share</th></tr>"
+    );
+    // Per case and output: the speed index with the largest analytic σ.
+    let worst = |case: usize, o: usize| -> Option<usize> {
+        let out = a.outputs[o];
+        let mut best: Option<(usize, f64)> = None;
+        for r in &a.rows {
+            if r.case == case
+                && r.method == crate::analyze::Method::Analytic
+                && r.quantity == out.quantity
+                && r.mode == out.mode
+                && r.std.is_finite()
+                && best.is_none_or(|b| r.std > b.1)
+            {
+                let i = a.speeds.iter().position(|&w| w == r.speed)?;
+                best = Some((i, r.std));
+            }
+        }
+        best.map(|b| b.0)
+    };
+    let mut shown: Vec<&(usize, crate::sobol::SobolIndex)> = a
+        .sobol
+        .iter()
+        .filter(|(case, s)| match s.target {
+            Target::Margin(_) => true,
+            Target::Output(i, o) => worst(*case, o) == Some(i),
+        })
+        .collect();
+    shown.sort_by(|x, y| {
+        (x.0, target_key(&x.1.target))
+            .cmp(&(y.0, target_key(&y.1.target)))
+            .then(y.1.total.total_cmp(&x.1.total))
+    });
+    for (case, s) in shown {
+        let target = match s.target {
+            Target::Margin(r) => format!("margin of {}", model.requirements[r].name),
+            Target::Output(i, o) => {
+                let out = a.outputs[o];
+                format!(
+                    "{}{} at {} rad/s",
+                    out.quantity.as_str(),
+                    out.mode.map_or(String::new(), |m| format!(" mode {}", m + 1)),
+                    sig(a.speeds[i])
+                )
+            }
+        };
+        let share = match s.target {
+            Target::Output(i, o) => a
+                .rows
+                .iter()
+                .find(|r| {
+                    r.case == *case
+                        && r.method == crate::analyze::Method::FirstOrder
+                        && r.speed == a.speeds[i]
+                        && r.quantity == a.outputs[o].quantity
+                        && r.mode == a.outputs[o].mode
+                })
+                .and_then(|r| r.shares.as_ref())
+                .map(|sh| sig(sh[s.variable])),
+            Target::Margin(_) => None,
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{} [{}, {}]</td><td>{}</td><td>{}</td></tr>",
+            esc(&a.cases[*case].name),
+            esc(&target),
+            esc(&model.parameters[a.vars[s.variable]].name),
+            sig(s.first),
+            sig(s.first_ci.0),
+            sig(s.first_ci.1),
+            sig(s.total),
+            sig(s.total_ci.0),
+            sig(s.total_ci.1),
+            s.bound.map_or("–".into(), sig),
+            share.unwrap_or_else(|| "–".into()),
+        );
+    }
+    let _ = writeln!(h, "</table>");
+}
+
+/// Sort key of a Sobol target: margins first, then outputs in order.
+fn target_key(t: &crate::sobol::Target) -> (usize, usize) {
+    match *t {
+        crate::sobol::Target::Margin(r) => (0, r),
+        crate::sobol::Target::Output(_, o) => (1, o),
+    }
 }
 
 /// The page up to its heading: the document head with its style sheet, and the title.
