@@ -189,7 +189,15 @@ pub(crate) enum Command {
     /// (why a row has no mean and σ), share:<parameter>; SI units, rad/s for speeds and
     /// frequencies), DIR/probabilities.csv
     /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
-    /// ci_low, ci_high), DIR/summary.json (cases, wall times of the Taylor methods, the
+    /// ci_low, ci_high); for a model with [[requirements]], DIR/yield.csv (case, method =
+    /// quadrature|monte_carlo|first_order, requirement (all: every one together), kind, mode,
+    /// speed_from, speed_to, speed (empty: over the range, every speed at once), probability,
+    /// ci_low, ci_high, target, meets_target = yes|no|undecided, margin_unit, margin_mean,
+    /// margin_std (the worst margin over the range), cpk, evaluations) and a specification
+    /// section at the top of the report; with --sobol, DIR/sobol.csv (case, target, speed,
+    /// quantity, mode, variable, first, first_ci_low, first_ci_high, total, total_ci_low,
+    /// total_ci_high, derivative_bound, rows); DIR/summary.json (cases, wall times of the
+    /// Taylor methods, the
     /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
     /// rows without a value grouped with their reasons under "unfilled"),
     /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,

@@ -39,9 +39,9 @@ use campbell::campbell;
 use draw::COLORS;
 use plotters::prelude::RGBColor;
 use probability::probabilities;
-use yields::yield_curves;
 use shares::shares;
 use sigma::sigma;
+use yields::yield_curves;
 
 /// A finished plot: a file stem and its SVG text.
 pub struct Plot {

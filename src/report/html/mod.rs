@@ -192,7 +192,8 @@ fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
                 format!(
                     "{}{} at {} rad/s",
                     out.quantity.as_str(),
-                    out.mode.map_or(String::new(), |m| format!(" mode {}", m + 1)),
+                    out.mode
+                        .map_or(String::new(), |m| format!(" mode {}", m + 1)),
                     sig(a.speeds[i])
                 )
             }
