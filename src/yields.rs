@@ -72,12 +72,17 @@ pub fn wilson(k: usize, n: usize) -> (f64, f64) {
         return (0.0, 1.0);
     }
     let z = 1.959_963_984_540_054;
+    let (none, all) = (k == 0, k == n);
     let (k, n) = (k as f64, n as f64);
     let p = k / n;
     let d = 1.0 + z * z / n;
     let c = (p + z * z / (2.0 * n)) / d;
     let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
-    ((c - h).max(0.0), (c + h).min(1.0))
+    // At k = 0 and k = n the ends are 0 and 1 exactly (rounding would leave 10⁻¹⁹).
+    (
+        if none { 0.0 } else { (c - h).max(0.0) },
+        if all { 1.0 } else { (c + h).min(1.0) },
+    )
 }
 
 fn cpk(mean: f64, std: f64) -> Option<f64> {
@@ -354,9 +359,10 @@ mod tests {
             (lo - 0.722_2).abs() < 1e-4 && (hi - 0.874_9).abs() < 1e-4,
             "{lo} {hi}"
         );
-        // All pass: the upper end is 1, the lower end n/(n + z²).
+        // All pass: the upper end is 1, the lower end n/(n + z²); none pass: the lower end 0.
         let (lo, hi) = wilson(50, 50);
-        assert!((hi - 1.0).abs() < 1e-15);
+        assert!(hi.to_bits() == 1f64.to_bits());
+        assert!(wilson(0, 50).0.to_bits() == 0f64.to_bits());
         assert!((lo - 50.0 / (50.0 + 1.959_963_984_540_054f64.powi(2))).abs() < 1e-12);
     }
 }

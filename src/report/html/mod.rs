@@ -165,7 +165,10 @@ fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
                 && r.std.is_finite()
                 && best.is_none_or(|b| r.std > b.1)
             {
-                let i = a.speeds.iter().position(|&w| w == r.speed)?;
+                let i = a
+                    .speeds
+                    .iter()
+                    .position(|w| w.to_bits() == r.speed.to_bits())?;
                 best = Some((i, r.std));
             }
         }
@@ -205,7 +208,7 @@ fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
                 .find(|r| {
                     r.case == *case
                         && r.method == crate::analyze::Method::FirstOrder
-                        && r.speed == a.speeds[i]
+                        && r.speed.to_bits() == a.speeds[i].to_bits()
                         && r.quantity == a.outputs[o].quantity
                         && r.mode == a.outputs[o].mode
                 })
