@@ -181,7 +181,7 @@ def test_yield_is_the_cli_yield(cli: Path, tmp_path: Path) -> None:
     run(cli, "analyze", spec, "-o", tmp_path / "cli", "--speed", "1.4:2.1:0.1",
         "--samples", "200", "--seed", "3", "--case", "k6")
     assert_same_table(res.yield_, read_csv(tmp_path / "cli" / "yield.csv"))
-    every = res.yield_[(res.yield_["requirement"] == "all") & (res.yield_["speed"] == "")]
+    every = res.yield_[(res.yield_["requirement"] == "all") & res.yield_["speed"].isna()]
     assert set(every["method"]) == {"quadrature", "monte_carlo"}
     assert res.summary["yield"]["target_yield"] == 0.9973
     # Without requirements, an empty table.
