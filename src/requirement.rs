@@ -62,6 +62,35 @@ pub fn carriers(pt: &Point, tf: Option<TransferAt>) -> Vec<f64> {
     c
 }
 
+/// Every requirement's margin at one speed of one design, given to `put(requirement, margin)`
+/// for the requirements whose range covers `speed`: from the design's point there and whether
+/// it is on the nominal branch, or `−∞` where the point failed (`None`).
+pub fn margins_at(
+    reqs: &[Requirement],
+    speed: f64,
+    at: Option<(&Point, bool)>,
+    tf: Option<TransferAt>,
+    mut put: impl FnMut(usize, f64),
+) {
+    let covering = || reqs.iter().enumerate().filter(|(_, r)| covers(r, speed));
+    match at {
+        None => covering().for_each(|(k, _)| put(k, f64::NEG_INFINITY)),
+        Some((pt, same_branch)) => {
+            if covering().next().is_none() {
+                return;
+            }
+            let c = carriers(pt, tf);
+            let state = State {
+                speed,
+                carriers: &c,
+                modes: pt.modes.len(),
+                same_branch,
+            };
+            covering().for_each(|(k, r)| put(k, margin(r, &state)));
+        }
+    }
+}
+
 /// Is `speed` in the requirement's operating range?
 pub fn covers(req: &Requirement, speed: f64) -> bool {
     req.speeds.is_none_or(|(a, b)| a <= speed && speed <= b)

@@ -29,7 +29,7 @@
 use crate::model::Distribution;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Run, Study};
-use crate::requirement::{self, State, covers};
+use crate::requirement;
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::tolerance::{Spread, local_model, value};
 use rand::{RngExt, SeedableRng};
@@ -205,31 +205,14 @@ fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -
         &study.nominal,
         run,
         |i, pts| {
-            let speed = study.speeds[i];
-            let Some((_, pt, switches)) = pts else {
-                for (r, req) in reqs.iter().enumerate() {
-                    if covers(req, speed) {
-                        v[base + r] = f64::NEG_INFINITY;
-                    }
-                }
-                return;
-            };
             let tf = study.transfer_at(i);
-            for (o, out) in outs.iter().enumerate() {
-                v[i * outs.len() + o] = value(pt, out, tf).unwrap_or(f64::NAN);
-            }
-            if !reqs.is_empty() {
-                let c = requirement::carriers(pt, tf);
-                let state = State {
-                    speed,
-                    carriers: &c,
-                    modes: pt.modes.len(),
-                    same_branch: switches == study.branches[i],
-                };
-                for (r, req) in reqs.iter().enumerate() {
-                    if covers(req, speed) {
-                        v[base + r] = v[base + r].min(requirement::margin(req, &state));
-                    }
+            let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
+            requirement::margins_at(reqs, study.speeds[i], at, tf, |r, m| {
+                v[base + r] = v[base + r].min(m);
+            });
+            if let Some((_, pt, _)) = pts {
+                for (o, out) in outs.iter().enumerate() {
+                    v[i * outs.len() + o] = value(pt, out, tf).unwrap_or(f64::NAN);
                 }
             }
         },

@@ -100,34 +100,18 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
         &study.nominal,
         run,
         |i, pts| {
-            let speed = study.speeds[i];
+            let tf = study.transfer_at(i);
+            let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
+            requirement::margins_at(reqs, study.speeds[i], at, tf, |r, m| {
+                margins[i * reqs.len() + r] = m;
+            });
             let Some((nom, pt, switches)) = pts else {
                 out.extend(std::iter::repeat_n(
                     (f64::NAN, Events::default()),
                     outs.len(),
                 ));
-                for (r, req) in reqs.iter().enumerate() {
-                    if requirement::covers(req, speed) {
-                        margins[i * reqs.len() + r] = f64::NEG_INFINITY;
-                    }
-                }
                 return;
             };
-            let tf = study.transfer_at(i);
-            if !reqs.is_empty() {
-                let c = requirement::carriers(pt, tf);
-                let state = requirement::State {
-                    speed,
-                    carriers: &c,
-                    modes: pt.modes.len(),
-                    same_branch: switches == study.branches[i],
-                };
-                for (r, req) in reqs.iter().enumerate() {
-                    if requirement::covers(req, speed) {
-                        margins[i * reqs.len() + r] = requirement::margin(req, &state);
-                    }
-                }
-            }
             let unstable = !pt.stable();
             let other_branch = switches != study.branches[i];
             out.extend(outs.iter().map(|o| {

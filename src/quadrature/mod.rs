@@ -321,32 +321,22 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
 /// Each requirement's worst margin over its range at the nominal design (the shift of the
 /// margins' sums; 0 where it has none).
 fn nominal_margins(study: &Study, requirements: &[crate::model::Requirement]) -> Vec<f64> {
-    requirements
-        .iter()
-        .map(|r| {
-            let worst = study
-                .nominal
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| crate::requirement::covers(r, study.speeds[*i]))
-                .map(|(i, pt)| match pt {
-                    Some(pt) => {
-                        let c = crate::requirement::carriers(pt, study.transfer_at(i));
-                        crate::requirement::margin(
-                            r,
-                            &crate::requirement::State {
-                                speed: study.speeds[i],
-                                carriers: &c,
-                                modes: pt.modes.len(),
-                                same_branch: true,
-                            },
-                        )
-                    }
-                    None => f64::NEG_INFINITY,
-                })
-                .fold(f64::INFINITY, f64::min);
-            if worst.is_finite() { worst } else { 0.0 }
-        })
+    let mut worst = vec![f64::INFINITY; requirements.len()];
+    for (i, pt) in study.nominal.iter().enumerate() {
+        let at = pt.as_ref().map(|pt| (pt, true));
+        crate::requirement::margins_at(
+            requirements,
+            study.speeds[i],
+            at,
+            study.transfer_at(i),
+            |r, m| {
+                worst[r] = worst[r].min(m);
+            },
+        );
+    }
+    worst
+        .into_iter()
+        .map(|w| if w.is_finite() { w } else { 0.0 })
         .collect()
 }
 

@@ -155,29 +155,8 @@ pub(super) fn evaluate(
                 }
             }
             // Transverse error of a statistic computed from sums.
-            let t975 = if replicates > 1 {
-                StudentsT::new(0.0, 1.0, (replicates - 1) as f64)
-                    .map_or(2.0, |t| t.inverse_cdf(0.975))
-            } else {
-                0.0
-            };
             let transverse_error = |f: &dyn Fn(&Sums) -> Option<f64>| -> f64 {
-                match transverse {
-                    Transverse::Single => 0.0,
-                    Transverse::Tensor => match (f(&main_at_check), f(&check)) {
-                        (Some(a), Some(b)) => (a - b).abs(),
-                        _ => f64::NAN,
-                    },
-                    Transverse::Scrambled { .. } => {
-                        let v: Option<Vec<f64>> = reps.iter().map(f).collect();
-                        v.map_or(f64::NAN, |v| {
-                            let r = v.len() as f64;
-                            let m = v.iter().sum::<f64>() / r;
-                            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
-                            t975 * (var / r).sqrt()
-                        })
-                    }
-                }
+                across(transverse, (&main_at_check, &check), &reps, f)
             };
             let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
             let (stats, parts): (Vec<_>, Vec<_>) = (0..outs.len())
@@ -264,6 +243,40 @@ pub(super) fn evaluate(
         out.probability_parts.push(probability_parts);
     }
     out
+}
+
+/// The transverse part of the error estimate of a statistic `f` of a rule's sums: none for one
+/// line; for the tensor rule, the difference between the rule in use on the check's nodes and
+/// the rule of the order below (`tensor`); for the scrambled rule, the Student-t 95 %
+/// half-width of the replicates `reps`. NaN where `f` has no value on one of them.
+pub(super) fn across<T>(
+    transverse: Transverse,
+    tensor: (&T, &T),
+    reps: &[T],
+    f: &dyn Fn(&T) -> Option<f64>,
+) -> f64 {
+    match transverse {
+        Transverse::Single => 0.0,
+        Transverse::Tensor => match (f(tensor.0), f(tensor.1)) {
+            (Some(a), Some(b)) => (a - b).abs(),
+            _ => f64::NAN,
+        },
+        Transverse::Scrambled { .. } => {
+            let t975 = if reps.len() > 1 {
+                StudentsT::new(0.0, 1.0, (reps.len() - 1) as f64)
+                    .map_or(2.0, |t| t.inverse_cdf(0.975))
+            } else {
+                0.0
+            };
+            let v: Option<Vec<f64>> = reps.iter().map(f).collect();
+            v.map_or(f64::NAN, |v| {
+                let r = v.len() as f64;
+                let m = v.iter().sum::<f64>() / r;
+                let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
+                t975 * (var / r).sqrt()
+            })
+        }
+    }
 }
 
 /// Quantiles `q` of the weighted `atoms` moved to the control-variate estimator's `mean` and

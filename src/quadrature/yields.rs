@@ -15,12 +15,11 @@
 
 use super::line::{Context, GL_W, GL_X, Stencil, density, normal_mass};
 use super::rules::{Rule, Stage, Transverse};
-use super::sums::ErrorParts;
+use super::sums::{ErrorParts, across};
 use super::{NodeData, Reference};
 use crate::model::Requirement;
 use crate::requirement::{State, covers, has_margin, margin};
 use rayon::prelude::*;
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Longest sub-interval of a line (in standard deviations) across which a margin's sign is
 /// taken from its ends: a quarter of the finest node spacing.
@@ -191,28 +190,9 @@ pub(super) fn evaluate_yield(
             main_at_check.add_scaled(&t[2], w);
         }
     }
-    let t975 = if replicates > 1 {
-        StudentsT::new(0.0, 1.0, (replicates - 1) as f64).map_or(2.0, |t| t.inverse_cdf(0.975))
-    } else {
-        0.0
-    };
     let across = |f: &dyn Fn(&Tally) -> Option<f64>| -> f64 {
-        match transverse {
-            Transverse::Single => 0.0,
-            Transverse::Tensor => match (f(&main_at_check), f(&check)) {
-                (Some(a), Some(b)) => (a - b).abs(),
-                _ => f64::INFINITY,
-            },
-            Transverse::Scrambled { .. } => {
-                let v: Option<Vec<f64>> = reps.iter().map(f).collect();
-                v.map_or(f64::INFINITY, |v| {
-                    let r = v.len() as f64;
-                    let m = v.iter().sum::<f64>() / r;
-                    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
-                    t975 * (var / r).sqrt()
-                })
-            }
-        }
+        let e = across(transverse, (&main_at_check, &check), &reps, f);
+        if e.is_nan() { f64::INFINITY } else { e }
     };
     let mut parts = ErrorParts::default();
     let mut prob = |k: usize| -> (f64, f64) {
@@ -276,23 +256,25 @@ struct LineView<'a> {
 }
 
 impl LineView<'_> {
+    /// What the requirements read at speed `i` at `t` on piece `at` of that speed (the
+    /// carriers interpolated into `c`), `None` where the design has no point there.
+    fn state<'c>(&self, t: f64, at: usize, i: usize, c: &'c mut Vec<f64>) -> Option<State<'c>> {
+        let ctx = &self.contexts[i];
+        let st = self.pieces[i][at].2.as_ref()?;
+        c.resize(ctx.store.width, 0.0);
+        st.eval(t, c);
+        Some(State {
+            speed: self.reqs.speeds[i],
+            carriers: c,
+            modes: ctx.modes,
+            same_branch: st.branch == ctx.branch,
+        })
+    }
+
     /// The margin of requirement `r` at speed `i` at `t` on piece `at` of that speed.
     fn margin(&self, t: f64, at: usize, i: usize, r: usize, c: &mut Vec<f64>) -> f64 {
-        let ctx = &self.contexts[i];
-        match &self.pieces[i][at].2 {
-            None => f64::NEG_INFINITY,
-            Some(st) => {
-                c.resize(ctx.store.width, 0.0);
-                st.eval(t, c);
-                let state = State {
-                    speed: self.reqs.speeds[i],
-                    carriers: c,
-                    modes: ctx.modes,
-                    same_branch: st.branch == ctx.branch,
-                };
-                margin(&self.reqs.list[r], &state)
-            }
-        }
+        self.state(t, at, i, c)
+            .map_or(f64::NEG_INFINITY, |s| margin(&self.reqs.list[r], &s))
     }
 
     /// The margin of every (speed, requirement) at `t`, `[speed][requirement]` flattened
@@ -305,24 +287,11 @@ impl LineView<'_> {
             if active.is_empty() {
                 continue;
             }
-            let ctx = &self.contexts[i];
-            match &self.pieces[i][at[i]].2 {
-                None => active
-                    .iter()
-                    .for_each(|&k| out[i * r + k] = f64::NEG_INFINITY),
-                Some(st) => {
-                    c.resize(ctx.store.width, 0.0);
-                    st.eval(t, c);
-                    let state = State {
-                        speed: self.reqs.speeds[i],
-                        carriers: c,
-                        modes: ctx.modes,
-                        same_branch: st.branch == ctx.branch,
-                    };
-                    for &k in active {
-                        out[i * r + k] = margin(&self.reqs.list[k], &state);
-                    }
-                }
+            let state = self.state(t, at[i], i, c);
+            for &k in active {
+                out[i * r + k] = state
+                    .as_ref()
+                    .map_or(f64::NEG_INFINITY, |s| margin(&self.reqs.list[k], s));
             }
         }
     }
