@@ -25,8 +25,13 @@ const SIGMA: f64 = 0.01;
 
 /// The pendulum with `requirements` (TOML) appended.
 fn model(requirements: &str) -> Compiled {
-    let text = format!("{}\n{requirements}", example_text("rotating_pendulum.toml"));
-    Compiled::from_str(&text, "pendulum.toml").unwrap()
+    example_with("rotating_pendulum.toml", requirements)
+}
+
+/// The shipped example `name` with `extra` (TOML) appended.
+fn example_with(name: &str, extra: &str) -> Compiled {
+    let text = format!("{}\n{extra}", example_text(name));
+    Compiled::from_str(&text, name).unwrap()
 }
 
 /// The speeds 4.0, 4.1, …, 6.0 (rad/s): the rod swings out at every one for every L within ±6σ.
@@ -408,9 +413,8 @@ fn every_mode_of_the_rotor_clear_of_1x_agrees_with_monte_carlo() {
     // Six modes (whirl pairs split by the gyroscopic coupling), every one clear of the 1×
     // excitation by 8 % between 112 and 146 rad/s (between modes 2 and 3: a few per cent of the
     // designs fail), and stable everywhere.
-    let text = format!(
-        "{}\n{}",
-        example_text("rotor_on_rubber_mounts.toml"),
+    let m = example_with(
+        "rotor_on_rubber_mounts.toml",
         r#"
 [[requirements]]
 name = "clear_1x"
@@ -422,9 +426,8 @@ speeds = [112, 146]
 [[requirements]]
 name = "stable"
 kind = "stable"
-"#
+"#,
     );
-    let m = Compiled::from_str(&text, "rotor.toml").unwrap();
     let opt = AnalyzeOptions {
         speeds: (0..=30).map(|i| 100.0 + 2.0 * i as f64).collect(),
         cases: vec![m.model().analysis.cases[0].clone()],
@@ -445,9 +448,8 @@ kind = "stable"
 fn thirteen_variables_agree_with_monte_carlo() {
     // The 12-arm governor with 13 toleranced variables (the scrambled rule with its control
     // variates for the moments; the yield's error estimate from the replicates' spread).
-    let text = format!(
-        "{}\n{}",
-        example_text("multi_arm_governor_13_variables.toml"),
+    let m = example_with(
+        "multi_arm_governor_13_variables.toml",
         r#"
 [[requirements]]
 name = "clear_of_1x_2x"
@@ -463,9 +465,8 @@ kind = "damping"
 mode = 1
 min = 0.52
 speeds = [1.5, 2.0]
-"#
+"#,
     );
-    let m = Compiled::from_str(&text, "governor13.toml").unwrap();
     let opt = AnalyzeOptions {
         speeds: (0..=14).map(|i| 1.4 + 0.05 * i as f64).collect(),
         cases: m.model().analysis.cases.clone(),
