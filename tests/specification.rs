@@ -483,3 +483,40 @@ speeds = [1.5, 2.0]
     assert!(all > 0.5 && all < 0.99, "a nontrivial yield: {all}");
     agrees_with_monte_carlo(&a, 2);
 }
+
+#[test]
+fn bad_requirements_are_refused_with_their_place() {
+    let bad = |name: &str, extra: &str, says: &str| {
+        let text = format!("{}\n{extra}", example_text(name));
+        let e = Compiled::from_str(&text, name)
+            .expect_err("refused")
+            .to_string();
+        assert!(e.contains(says) && e.contains(name), "{e}");
+    };
+    // |H| bounded where the model has no transfer function.
+    bad(
+        "rotating_blade.toml",
+        "[[requirements]]\nkind = \"transfer\"\nmax = 1.0\n",
+        "needs [analysis] transfer",
+    );
+    bad(
+        "rotating_pendulum.toml",
+        "[[requirements]]\nkind = \"damping\"\nmode = 2\nmin = 0.1\n",
+        "mode 2 does not exist",
+    );
+    bad(
+        "rotating_pendulum.toml",
+        "[[requirements]]\nkind = \"stable\"\nmin = 0.1\n",
+        "has no field 'min'",
+    );
+    bad(
+        "rotating_pendulum.toml",
+        "[[requirements]]\nkind = \"separation\"\norders = [1]\nmargin = \"x\"\n",
+        "margin must be",
+    );
+    bad(
+        "rotating_pendulum.toml",
+        "[[requirements]]\nkind = \"wobble\"\n",
+        "unknown kind",
+    );
+}

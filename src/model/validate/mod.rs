@@ -75,7 +75,8 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     let equations: usize = constraints.iter().map(|c| c.kind.equations()).sum();
     let free = tree.coordinates.iter().filter(|c| !c.driven).count();
     let modes = free.saturating_sub(equations);
-    let requirements = requirements::requirements(&ctx, &raw.requirements, modes)?;
+    let requirements =
+        requirements::requirements(&ctx, &raw.requirements, modes, analysis.transfer.is_some())?;
     let allocation =
         requirements::allocation(&ctx, raw.allocation.as_ref(), &parameters, &analysis.cases)?;
     Ok(Model {

@@ -15,11 +15,13 @@ use toml::Spanned;
 const KINDS: &str =
     "separation, frequency, avoid, damping, underdamped, stable, branch or transfer";
 
-/// The requirements in file order; `modes` is the number of modes of the mechanism.
+/// The requirements in file order; `modes` is the number of modes of the mechanism, and a
+/// `transfer` requirement needs the `[analysis] transfer` (`transfer`) it reads.
 pub(super) fn requirements(
     ctx: &Ctx,
     raw: &[Spanned<RequirementSchema>],
     modes: usize,
+    transfer: bool,
 ) -> R<Vec<Requirement>> {
     let mut out: Vec<Requirement> = Vec::new();
     for (i, r) in raw.iter().enumerate() {
@@ -38,6 +40,14 @@ pub(super) fn requirements(
         }
         let what = format!("requirement '{name}'");
         let kind = kind(ctx, r, &what)?;
+        if matches!(kind, RequirementKind::Transfer { .. }) && !transfer {
+            return Err(ctx.err(
+                r.kind.span(),
+                format!(
+                    "{what}: a 'transfer' requirement needs [analysis] transfer (the |H| it bounds)"
+                ),
+            ));
+        }
         let speeds = match &r.speeds {
             None => None,
             Some(s) => match s.get_ref().as_slice() {
