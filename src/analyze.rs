@@ -17,7 +17,7 @@ use crate::montecarlo::{self, Block, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
 use crate::propagate::{Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
-use crate::sobol::{SobolIndex, SobolOptions, sobol};
+use crate::sobol::{SobolIndex, SobolOptions, Target, sobol};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
 use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
@@ -194,6 +194,52 @@ pub struct Analysis {
 }
 
 impl Analysis {
+    /// The Sobol indices worth showing: every requirement's worst margin, and each output at
+    /// the speed where its analytic σ is largest; per case, margins first then outputs in
+    /// order, each target's variables by decreasing total index.
+    pub fn sobol_shown(&self) -> Vec<&(usize, SobolIndex)> {
+        // Per case and output: the speed index with the largest analytic σ.
+        let worst = |case: usize, o: usize| -> Option<usize> {
+            let out = self.outputs[o];
+            let mut best: Option<(usize, f64)> = None;
+            for r in &self.rows {
+                if r.case == case
+                    && r.method == Method::Analytic
+                    && r.quantity == out.quantity
+                    && r.mode == out.mode
+                    && r.std.is_finite()
+                    && best.is_none_or(|b| r.std > b.1)
+                {
+                    let i = self
+                        .speeds
+                        .iter()
+                        .position(|w| w.to_bits() == r.speed.to_bits())?;
+                    best = Some((i, r.std));
+                }
+            }
+            best.map(|b| b.0)
+        };
+        // Margins first, then outputs in order.
+        let key = |t: &Target| match *t {
+            Target::Margin(r) => (0, r),
+            Target::Output(_, o) => (1, o),
+        };
+        let mut shown: Vec<&(usize, SobolIndex)> = self
+            .sobol
+            .iter()
+            .filter(|(case, s)| match s.target {
+                Target::Margin(_) => true,
+                Target::Output(i, o) => worst(*case, o) == Some(i),
+            })
+            .collect();
+        shown.sort_by(|x, y| {
+            (x.0, key(&x.1.target))
+                .cmp(&(y.0, key(&y.1.target)))
+                .then(y.1.total.total_cmp(&x.1.total))
+        });
+        shown
+    }
+
     /// Did a stage stop early (a speed of the sweep, a case of the quadrature, Monte Carlo
     /// samples left out)?
     pub fn cancelled(&self) -> bool {
@@ -276,7 +322,15 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
             if let Some(q) = &quad[ci]
                 && let Some(y) = &q.yields
             {
-                yield_rows.extend(yields::quadrature_rows(ci, y, &study.speeds, q.nodes));
+                let m = model.model();
+                yield_rows.extend(yields::quadrature_rows(
+                    ci,
+                    y,
+                    &m.requirements,
+                    &study.speeds,
+                    q.nodes,
+                    m.allocation.target_yield,
+                ));
             }
         }
         let taylor = Taylor.propagate(&study, s, &run);
@@ -407,14 +461,14 @@ where
     for (ci, s) in spreads.iter().enumerate() {
         let progress = stage(&format!("monte carlo {}", opt.cases[ci].name));
         let run = run.with_progress(&progress);
-        let (stats, done, counts) = match &opt.split {
+        let (stats, done, counts, worst) = match &opt.split {
             Split::Merged(blocks) => {
                 let mut fold = TreeFold::default();
                 for b in &blocks[ci] {
                     fold.push(b.clone());
                 }
                 let (stats, done) = montecarlo::statistics(&fold, speeds, outs, mc.samples);
-                (stats, done, fold.total_yields())
+                (stats, done, fold.total_yields(), None)
             }
             Split::Shard(k, n) => {
                 let method = MonteCarlo::shard(mc, *k, *n);
@@ -432,14 +486,26 @@ where
                 let r = MonteCarlo::whole(mc).propagate(study, s, &run);
                 part.termination = part.termination.and(r.termination);
                 let counts = r.value.fold.total_yields();
-                (r.value.stats, r.value.samples, counts)
+                (
+                    r.value.stats,
+                    r.value.samples,
+                    counts,
+                    r.value.worst_margins,
+                )
             }
         };
         part.samples_done.push(done);
         if let Some(y) = &counts {
-            let reqs = &study.model.model().requirements;
-            part.yields
-                .extend(yields::monte_carlo_rows(ci, y, reqs, &study.speeds, done));
+            let m = study.model.model();
+            part.yields.extend(yields::monte_carlo_rows(
+                ci,
+                y,
+                worst.as_deref(),
+                &m.requirements,
+                &study.speeds,
+                done,
+                m.allocation.target_yield,
+            ));
         }
         part.inadmissible
             .push(MonteCarlo::whole(mc).inadmissible(study, s, done, &run));

@@ -63,16 +63,18 @@ pub fn carriers(pt: &Point, tf: Option<TransferAt>) -> Vec<f64> {
 }
 
 /// Every requirement's margin at one speed of one design, given to `put(requirement, margin)`
-/// for the requirements whose range covers `speed`: from the design's point there and whether
-/// it is on the nominal branch, or `−∞` where the point failed (`None`).
+/// for the requirements `within(requirement, speed)` ([`covers`], or [`reaches`] where the
+/// speeds beyond the range matter too): from the design's point there and whether it is on the
+/// nominal branch, or `−∞` where the point failed (`None`).
 pub fn margins_at(
     reqs: &[Requirement],
     speed: f64,
     at: Option<(&Point, bool)>,
     tf: Option<TransferAt>,
+    within: fn(&Requirement, f64) -> bool,
     mut put: impl FnMut(usize, f64),
 ) {
-    let covering = || reqs.iter().enumerate().filter(|(_, r)| covers(r, speed));
+    let covering = || reqs.iter().enumerate().filter(|(_, r)| within(r, speed));
     match at {
         None => covering().for_each(|(k, _)| put(k, f64::NEG_INFINITY)),
         Some((pt, same_branch)) => {
@@ -94,6 +96,12 @@ pub fn margins_at(
 /// Is `speed` in the requirement's operating range?
 pub fn covers(req: &Requirement, speed: f64) -> bool {
     req.speeds.is_none_or(|(a, b)| a <= speed && speed <= b)
+}
+
+/// Is `speed` at or above the start of the requirement's operating range? The speeds where the
+/// largest operating range it meets is sought (from the range's start up, beyond its end).
+pub fn reaches(req: &Requirement, speed: f64) -> bool {
+    req.speeds.is_none_or(|(a, _)| a <= speed)
 }
 
 /// Does the requirement have a margin with a distribution (every kind but the branch, which is

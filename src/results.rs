@@ -1,9 +1,10 @@
-//! The result directory of an analysis: `tolerance.csv`, `probabilities.csv`, `yield.csv`
-//! (models with requirements), the plots (SVG
+//! The result directory of an analysis: `tolerance.csv`, `probabilities.csv`, `yield.csv` and
+//! `limits.csv` (models with requirements), `sobol.csv`, the plots (SVG
 //! and PNG), `report.html` and `summary.json`, staged and put in place together by
 //! [`ResultDir`]. Shared by the command line and the Python package so that both write the
 //! same files.
 
+use crate::allocate::Allocation;
 use crate::analyze::Analysis;
 use crate::compiled::Compiled;
 use crate::files::{FileError, ResultDir};
@@ -20,6 +21,7 @@ pub fn is_result_file(name: &str) -> bool {
         "tolerance.csv"
             | "probabilities.csv"
             | "yield.csv"
+            | "limits.csv"
             | "sobol.csv"
             | "report.html"
             | "summary.json"
@@ -48,16 +50,32 @@ pub fn csv_bytes(header: &[impl AsRef<[u8]>], rows: &[Vec<String>]) -> Vec<u8> {
     csv.into_inner().expect("in memory")
 }
 
-/// Writes every file of the analysis `a` of `m` (run with the Monte Carlo `mc` and `threads`
-/// worker threads) into `dir`, plots and report in the units `display`, and commits it.
+/// What the files say besides the analysis, and how they are made.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WriteOptions<'a> {
+    /// The Monte Carlo the analysis ran (its samples, seed and sampling, in the report).
+    pub mc: Option<&'a McOptions>,
+    /// Worker threads for the plots (and in the summary).
+    pub threads: usize,
+    /// The units of the plots and the report.
+    pub display: Display,
+    /// The tolerance allocation that made the design, opening the report.
+    pub allocation: Option<&'a Allocation>,
+}
+
+/// Writes every file of the analysis `a` of `m` into `dir` as `o` says, and commits it.
 pub fn write(
     m: &Compiled,
     a: &Analysis,
-    mc: Option<&McOptions>,
-    threads: usize,
-    display: Display,
+    o: WriteOptions,
     mut dir: ResultDir,
 ) -> Result<Written, FileError> {
+    let WriteOptions {
+        mc,
+        threads,
+        display,
+        allocation,
+    } = o;
     let partial = a.cancelled() || mc.is_some_and(|mc| a.interrupted(mc.samples));
     dir.write(
         "tolerance.csv",
@@ -74,6 +92,10 @@ pub fn write(
         dir.write(
             "yield.csv",
             &csv_bytes(&report::YIELD_HEADER, &report::yield_rows(m.model(), a)),
+        )?;
+        dir.write(
+            "limits.csv",
+            &csv_bytes(&report::LIMITS_HEADER, &report::limit_rows(m.model(), a)),
         )?;
     }
     if !a.sobol.is_empty() {
@@ -114,6 +136,7 @@ pub fn write(
             &critical,
             mc,
             display,
+            allocation,
         )
         .as_bytes(),
     )?;

@@ -35,7 +35,7 @@ pub fn output_count(m: &Model) -> usize {
 
 /// Format tag of shard files (2: aligned blocks, digest; 3: the fingerprint by section, the
 /// quadrature's options).
-pub const FORMAT: &str = "modaltol-shard-3";
+pub const FORMAT: &str = "modaltol-shard-4";
 
 /// What `analyze --shard K/N` writes.
 #[derive(Debug, Clone, Serialize, Deserialize)]

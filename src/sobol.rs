@@ -207,9 +207,16 @@ fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -
         |i, pts| {
             let tf = study.transfer_at(i);
             let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            requirement::margins_at(reqs, study.speeds[i], at, tf, |r, m| {
-                v[base + r] = v[base + r].min(m);
-            });
+            requirement::margins_at(
+                reqs,
+                study.speeds[i],
+                at,
+                tf,
+                requirement::covers,
+                |r, m| {
+                    v[base + r] = v[base + r].min(m);
+                },
+            );
             if let Some((_, pt, _)) = pts {
                 for (o, out) in outs.iter().enumerate() {
                     v[i * outs.len() + o] = value(pt, out, tf).unwrap_or(f64::NAN);

@@ -21,7 +21,9 @@ use crate::montecarlo::YieldCounts;
 use crate::output::{Output, Quantity};
 use crate::propagate::Study;
 use crate::quadrature::QuadYield;
-use crate::requirement::{carriers, covers, has_margin, mode_margin, mode_margin_gradient};
+use crate::requirement::{
+    carriers, covers, has_margin, mode_margin, mode_margin_gradient, reaches,
+};
 use crate::tolerance::Spread;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -64,6 +66,64 @@ pub struct YieldRow {
     pub cpk: Option<f64>,
     /// Samples (Monte Carlo) or nodes (quadrature) behind the row.
     pub evaluations: usize,
+    /// What the design meets at the target yield (range rows of a requirement).
+    pub limit: Option<Limit>,
+}
+
+/// What a design with its tolerances as they are meets at the target yield: the inverse
+/// questions of a specification. Each as `[estimate, low, high]`: from the probability itself
+/// and from the low and high ends of its interval (first order: three times its value).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limit {
+    /// The highest analysed speed up to which, from the start of the requirement's range on
+    /// (beyond its end too), the probability of meeting it at every speed is at least the
+    /// target: the largest operating range met. `None`: not even at the range's first speed.
+    pub reach: [Option<f64>; 3],
+    /// The worst margin over the range met at the target yield: its `1 − target` quantile
+    /// (`−∞` where more than `1 − target` of the designs fail without a margin; first order:
+    /// the worst speed's `m₀ − z σ`, `Φ(z)` = target); `None` for a pass-or-fail requirement.
+    pub margin: Option<[f64; 3]>,
+}
+
+/// The last speed of the initial run of `prefix` (speed, probability) at or above `target`.
+fn reach_of(prefix: impl IntoIterator<Item = (f64, f64)>, target: f64) -> Option<f64> {
+    prefix
+        .into_iter()
+        .take_while(|&(_, p)| p >= target)
+        .last()
+        .map(|(w, _)| w)
+}
+
+/// The reach `[estimate, low, high]` from the per-speed `(speed, probability, (low, high))`.
+fn reach(prefix: &[(f64, f64, (f64, f64))], target: f64) -> [Option<f64>; 3] {
+    [
+        reach_of(prefix.iter().map(|x| (x.0, x.1)), target),
+        reach_of(prefix.iter().map(|x| (x.0, x.2.0)), target),
+        reach_of(prefix.iter().map(|x| (x.0, x.2.1)), target),
+    ]
+}
+
+/// The `q` quantile of `sorted` samples with its 95 % distribution-free interval, the order
+/// statistics whose ranks the binomial distribution of the count below the quantile gives
+/// (e.g. Hahn & Meeker, *Statistical Intervals*, 1991, §5.2): `[estimate, low, high]`, `−∞` /
+/// `+∞` where too few samples lie beyond the quantile for an end.
+pub fn quantile_interval(sorted: &[f64], q: f64) -> [f64; 3] {
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    let n = sorted.len();
+    let est = crate::montecarlo::sorted_quantile(sorted, q);
+    let Ok(b) = Binomial::new(q.clamp(0.0, 1.0), n as u64) else {
+        return [est, f64::NEG_INFINITY, f64::INFINITY];
+    };
+    // P(X(l) ≤ ξ) = P(B ≥ l): the largest l with P(B ≤ l − 1) ≤ 2.5 %.
+    let lower = (1..=n)
+        .take_while(|&l| b.cdf(l as u64 - 1) <= 0.025)
+        .last()
+        .map_or(f64::NEG_INFINITY, |l| sorted[l - 1]);
+    // P(X(u) ≥ ξ) = P(B ≤ u − 1): the smallest u with P(B ≤ u − 1) ≥ 97.5 %.
+    let upper = (1..=n)
+        .find(|&u| b.cdf(u as u64 - 1) >= 0.975)
+        .map_or(f64::INFINITY, |u| sorted[u - 1]);
+    [est, lower, upper]
 }
 
 /// The 95 % Wilson score interval of `k` successes in `n` trials.
@@ -89,8 +149,16 @@ fn cpk(mean: f64, std: f64) -> Option<f64> {
     (std > 0.0 && mean.is_finite()).then(|| mean / (3.0 * std))
 }
 
-/// The quadrature's rows of case `case` (`nodes` swept).
-pub fn quadrature_rows(case: usize, y: &QuadYield, speeds: &[f64], nodes: usize) -> Vec<YieldRow> {
+/// The quadrature's rows of case `case` (`nodes` swept), with what the design meets at
+/// `target`.
+pub fn quadrature_rows(
+    case: usize,
+    y: &QuadYield,
+    reqs: &[Requirement],
+    speeds: &[f64],
+    nodes: usize,
+    target: f64,
+) -> Vec<YieldRow> {
     let ci = |(p, e): (f64, f64)| ((p - e).max(0.0), (p + e).min(1.0));
     let mut out = vec![YieldRow {
         case,
@@ -102,9 +170,16 @@ pub fn quadrature_rows(case: usize, y: &QuadYield, speeds: &[f64], nodes: usize)
         margin: None,
         cpk: None,
         evaluations: nodes,
+        limit: None,
     }];
     for (r, &each) in y.each.iter().enumerate() {
         let margin = y.margins[r].map(|m| (m.mean, m.std));
+        let prefix: Vec<(f64, f64, (f64, f64))> = speeds
+            .iter()
+            .zip(&y.prefix)
+            .filter(|(w, _)| reaches(&reqs[r], **w))
+            .map(|(&w, p)| (w, p[r].0, ci(p[r])))
+            .collect();
         out.push(YieldRow {
             case,
             method: Method::Quadrature,
@@ -115,6 +190,13 @@ pub fn quadrature_rows(case: usize, y: &QuadYield, speeds: &[f64], nodes: usize)
             margin,
             cpk: margin.and_then(|(m, s)| cpk(m, s)),
             evaluations: nodes,
+            limit: Some(Limit {
+                reach: reach(&prefix, target),
+                margin: y.margins[r].map(|m| {
+                    let e = m.at_target_error;
+                    [m.at_target, m.at_target - e, m.at_target + e]
+                }),
+            }),
         });
     }
     for (i, row) in y.curves.iter().enumerate() {
@@ -132,19 +214,24 @@ pub fn quadrature_rows(case: usize, y: &QuadYield, speeds: &[f64], nodes: usize)
                 margin: None,
                 cpk: None,
                 evaluations: nodes,
+                limit: None,
             });
         }
     }
     out
 }
 
-/// The Monte Carlo's rows of case `case` from the counts of `n` samples.
+/// The Monte Carlo's rows of case `case` from the counts of `n` samples and, where the run
+/// kept them, every sample's worst margins (sorted, per requirement), with what the design
+/// meets at `target`.
 pub fn monte_carlo_rows(
     case: usize,
     y: &YieldCounts,
+    worst: Option<&[Vec<f64>]>,
     reqs: &[Requirement],
     speeds: &[f64],
     n: usize,
+    target: f64,
 ) -> Vec<YieldRow> {
     let p = |k: usize| if n > 0 { k as f64 / n as f64 } else { f64::NAN };
     let mut out = vec![YieldRow {
@@ -157,11 +244,28 @@ pub fn monte_carlo_rows(
         margin: None,
         cpk: None,
         evaluations: n,
+        limit: None,
     }];
     for (r, &k) in y.each.iter().enumerate() {
         let margin = has_margin(&reqs[r])
             .then(|| y.margins[r].mean_std())
             .filter(|m| m.0.is_finite());
+        let prefix: Vec<(f64, f64, (f64, f64))> = speeds
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| reaches(&reqs[r], **w))
+            .map(|(i, &w)| {
+                let k = y.prefix[i * reqs.len() + r];
+                (w, p(k), wilson(k, n))
+            })
+            .collect();
+        let at_target = worst
+            .and_then(|w| w.get(r))
+            .filter(|w| has_margin(&reqs[r]) && !w.is_empty())
+            .map(|w| {
+                let [e, lo, hi] = quantile_interval(w, 1.0 - target);
+                [e, lo, hi]
+            });
         out.push(YieldRow {
             case,
             method: Method::MonteCarlo,
@@ -172,6 +276,10 @@ pub fn monte_carlo_rows(
             margin,
             cpk: margin.and_then(|(m, s)| cpk(m, s)),
             evaluations: n,
+            limit: Some(Limit {
+                reach: reach(&prefix, target),
+                margin: at_target,
+            }),
         });
     }
     for (i, &w) in speeds.iter().enumerate() {
@@ -190,6 +298,7 @@ pub fn monte_carlo_rows(
                 margin: None,
                 cpk: None,
                 evaluations: n,
+                limit: None,
             });
         }
     }
@@ -275,24 +384,40 @@ fn first_order_probability(m0: f64, sigma: f64) -> f64 {
     }
 }
 
-/// The first-order rows of case `case`: per speed, and over the range at the worst speed.
+/// The first-order rows of case `case`: per speed, and over the range at the worst speed, with
+/// what the design meets at the model's target yield (the reach from the running minimum of the
+/// per-speed probabilities, an upper bound like the range's probability).
 pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<YieldRow> {
-    let reqs = &study.model.model().requirements;
+    let model = study.model.model();
+    let (reqs, target) = (&model.requirements, model.allocation.target_yield);
+    let z = Normal::standard().inverse_cdf(target);
     let mut out = Vec::new();
     let mut worst_all: Option<f64> = Some(1.0);
     for (r, req) in reqs.iter().enumerate() {
         let mut worst: Option<(f64, f64, f64)> = None;
+        let mut at_target = f64::INFINITY;
         let mut complete = true;
+        // (speed, probability of every speed from the range's start up to it), while known.
+        let mut prefix: Vec<(f64, f64, (f64, f64))> = Vec::new();
+        let mut running = Some(1.0f64);
         for (i, &w) in study.speeds.iter().enumerate() {
-            if !covers(req, w) {
+            if !reaches(req, w) {
                 continue;
             }
             let Some((m0, g)) = linear_margin(study, req, i) else {
-                complete = false;
+                running = None;
+                complete &= !covers(req, w);
                 continue;
             };
             let s = margin_sigma(&g, spread);
             let p = first_order_probability(m0, s);
+            if let Some(x) = running.as_mut() {
+                *x = x.min(p);
+                prefix.push((w, *x, (*x, *x)));
+            }
+            if !covers(req, w) {
+                continue;
+            }
             out.push(YieldRow {
                 case,
                 method: Method::FirstOrder,
@@ -303,7 +428,9 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                 margin: None,
                 cpk: None,
                 evaluations: 0,
+                limit: None,
             });
+            at_target = at_target.min(m0 - z * s);
             if worst.is_none_or(|x| p < x.0) {
                 worst = Some((p, m0, s));
             }
@@ -320,6 +447,10 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                     margin: Some((m0, s)),
                     cpk: cpk(m0, s),
                     evaluations: 0,
+                    limit: Some(Limit {
+                        reach: reach(&prefix, target),
+                        margin: Some([at_target; 3]),
+                    }),
                 });
                 worst_all = worst_all.map(|x| x.min(p));
             }
@@ -341,6 +472,7 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                 margin: None,
                 cpk: None,
                 evaluations: 0,
+                limit: None,
             },
         );
     }
@@ -350,6 +482,44 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quantile_interval_takes_the_binomial_order_statistics() {
+        // The median of 100: the textbook ranks 40 and 61 (e.g. Conover, Practical
+        // Nonparametric Statistics, Table A3).
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        let [est, lo, hi] = quantile_interval(&v, 0.5);
+        assert!((est - 50.5).abs() < 1e-12);
+        assert!(lo.to_bits() == 40f64.to_bits() && hi.to_bits() == 61f64.to_bits());
+        // The 0.27 % quantile of 1000 samples: 2.7 expected below, too few for a lower end.
+        let v: Vec<f64> = (1..=1000).map(f64::from).collect();
+        let [_, lo, hi] = quantile_interval(&v, 0.0027);
+        assert!(
+            lo == f64::NEG_INFINITY && hi.is_finite() && hi > 2.0,
+            "{lo} {hi}"
+        );
+    }
+
+    #[test]
+    fn the_reach_ends_at_the_first_speed_below_the_target() {
+        let p = [
+            (1.0, 0.99),
+            (2.0, 0.95),
+            (3.0, 0.91),
+            (4.0, 0.85),
+            (5.0, 0.95),
+        ];
+        let rows: Vec<(f64, f64, (f64, f64))> = p
+            .iter()
+            .map(|&(w, p)| (w, p, (p - 0.02, p + 0.02)))
+            .collect();
+        let [est, lo, hi] = reach(&rows, 0.9);
+        let bits = |x: Option<f64>| x.map(f64::to_bits);
+        assert_eq!(bits(est), Some(3f64.to_bits()));
+        assert_eq!(bits(lo), Some(2f64.to_bits()));
+        assert_eq!(bits(hi), Some(3f64.to_bits()));
+        assert_eq!(reach(&rows, 0.999)[0], None);
+    }
 
     #[test]
     fn wilson_interval_matches_its_closed_form() {

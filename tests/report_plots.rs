@@ -276,7 +276,15 @@ fn pendulum_plots_are_readable_and_complete() {
         .unwrap();
     assert!(h.svg.contains("|H| (rad/(N·m))"), "no unit on |H|");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(m.model(), &a, &refs, &critical, None, Display::default());
+    let html = report::report_html(
+        m.model(),
+        &a,
+        &refs,
+        &critical,
+        None,
+        Display::default(),
+        None,
+    );
     assert!(html.contains("paper, pendulum"));
     assert!(html.contains("Summary: σ where it matters"));
     assert!(html.contains("largest σ"));
@@ -324,7 +332,7 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     }
     assert!(c.svg.contains("critical speeds"), "crossings not marked");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(m.model(), &a, &refs, &critical, None, d);
+    let html = report::report_html(m.model(), &a, &refs, &critical, None, d, None);
     assert!(
         !html.contains("paper,"),
         "paper rows in another model's report"

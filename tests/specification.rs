@@ -136,6 +136,73 @@ speeds = [4.0, 4.5]
     }
 }
 
+/// The smallest rod length with `ω_d(L, Ω) ≥ b` (ω_d grows with L here), by bisection.
+fn length_at(b: f64, w: f64) -> f64 {
+    let (mut lo, mut hi) = (0.8, 1.2);
+    assert!(pendulum(lo, w).damped_frequency < b && pendulum(hi, w).damped_frequency > b);
+    for _ in 0..200 {
+        let m = 0.5 * (lo + hi);
+        if pendulum(m, w).damped_frequency < b {
+            lo = m
+        } else {
+            hi = m
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[test]
+fn what_the_design_meets_at_the_target_yield_equals_the_closed_form() {
+    // "ω_d ≤ b over 4.5–5.0 rad/s" at target 0.9. ω_d grows with L and Ω, so the designs
+    // meeting it at every speed from 4.5 up to Ω_j are L ≤ L_b(Ω_j): the probability of the
+    // operating range [4.5, Ω_j] is Φ((L_b(Ω_j) − 1)/σ), and b is chosen so that it is 0.95
+    // at 5.3 rad/s: the largest range met at 0.9 ends there (beyond the requirement's own).
+    // The worst margin over the range is b − ω_d(L, 5.0), decreasing in L: its 10 % quantile
+    // is b − ω_d(1 + σ z₀.₉, 5.0).
+    let target = 0.9;
+    let nd = Normal::standard();
+    let b = pendulum(1.0 + SIGMA * nd.inverse_cdf(0.95), 5.3).damped_frequency;
+    let m = model(&format!(
+        r#"
+[[requirements]]
+name = "below"
+kind = "frequency"
+mode = 1
+max = {b}
+speeds = [4.5, 5.0]
+
+[allocation]
+target_yield = {target}
+"#
+    ));
+    let prefix = |w: f64| nd.cdf((length_at(b, w) - 1.0) / SIGMA);
+    // The grid's neighbours of the reach are far from the target on both sides.
+    assert!(prefix(5.3) > 0.94 && prefix(5.4) < 0.5);
+    let exact_margin = b - pendulum(1.0 + SIGMA * nd.inverse_cdf(target), 5.0).damped_frequency;
+    let a = run(&m, Some(4000));
+    let reach_of = |method| {
+        let l = row(&a, method, Some(0)).limit.expect("a limit");
+        (l.reach, l.margin.expect("a margin"))
+    };
+    let (reach, margin) = reach_of(Method::Quadrature);
+    // The grid's speed 5.3 (as 4.0 + 13·0.1 is), in tenths.
+    let at = |w: Option<f64>| w.map(|w| (w * 10.0).round() as i64);
+    assert_eq!(reach.map(at), [Some(53); 3], "quadrature {reach:?}");
+    // To 10⁻⁴ rad/s (0.3 % of the margin's σ, 0.035 rad/s): the quantile of the Gauss–Legendre
+    // atoms along the line; its error estimate covers the distance.
+    assert!(
+        (margin[0] - exact_margin).abs() < 1e-4,
+        "quadrature margin at the target {margin:?} vs exact {exact_margin}"
+    );
+    assert!(margin[1] - 1e-9 <= exact_margin && exact_margin <= margin[2] + 1e-9);
+    let (reach, margin) = reach_of(Method::MonteCarlo);
+    assert_eq!(at(reach[0]), Some(53), "Monte Carlo {reach:?}");
+    assert!(
+        margin[1] <= exact_margin && exact_margin <= margin[2],
+        "Monte Carlo margin interval {margin:?} does not hold {exact_margin}"
+    );
+}
+
 /// ω_d of the swung-out pendulum with mass `m`, length `l`, hinge damping `c` at speed `w`:
 /// `ω_d² = Ω²(1 − cos²θ*) − (3c/(2mL²))²`, `cos θ* = 3g/(2LΩ²)`.
 fn swung_out_wd(m: f64, l: f64, c: f64, w: f64) -> f64 {

@@ -97,13 +97,16 @@ class ModalPoint:
 class Analysis:
     """A tolerance analysis: ``tolerance``, ``probabilities`` and ``yield_`` have the columns of
     the CLI's ``tolerance.csv``, ``probabilities.csv`` and ``yield.csv`` (the probability of
-    meeting the model's ``[[requirements]]``; empty without requirements); ``summary`` is its
-    ``summary.json``; ``sobol`` has the columns of ``sobol.csv`` (with ``analyze(sobol=N)``;
-    empty otherwise)."""
+    meeting the model's ``[[requirements]]``; empty without requirements); ``limits`` has the
+    columns of ``limits.csv`` (what the design meets at the target yield: the highest speed up
+    to which each requirement holds, ``reach``, and the worst margin met, ``margin_at_target``);
+    ``summary`` is its ``summary.json``; ``sobol`` has the columns of ``sobol.csv`` (with
+    ``analyze(sobol=N)``; empty otherwise)."""
 
     tolerance: pd.DataFrame
     probabilities: pd.DataFrame
     yield_: pd.DataFrame
+    limits: pd.DataFrame
     sobol: pd.DataFrame
     summary: dict[str, Any]
 
@@ -317,6 +320,7 @@ class Model:
             tolerance=_frame(d["tolerance"]),
             probabilities=_frame(d["probabilities"]),
             yield_=_frame(d["yield"]),
+            limits=_frame(d["limits"]),
             sobol=_frame(d["sobol"]),
             summary=json.loads(d["summary"]),
         )

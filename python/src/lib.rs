@@ -780,8 +780,16 @@ impl NativeModel {
         let used =
             threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         if let Some(dir) = dir {
-            py.detach(|| modaltol::results::write(model, &a, mc.as_ref(), used, display, dir))
-                .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
+            py.detach(|| {
+                let o = modaltol::results::WriteOptions {
+                    mc: mc.as_ref(),
+                    threads: used,
+                    display,
+                    allocation: None,
+                };
+                modaltol::results::write(model, &a, o, dir)
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
         }
         let d = PyDict::new(py);
         d.set_item(
@@ -803,6 +811,10 @@ impl NativeModel {
         d.set_item(
             "yield",
             table(py, &report::YIELD_HEADER, &report::yield_rows(m, &a))?,
+        )?;
+        d.set_item(
+            "limits",
+            table(py, &report::LIMITS_HEADER, &report::limit_rows(m, &a))?,
         )?;
         d.set_item(
             "sobol",

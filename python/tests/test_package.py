@@ -184,6 +184,13 @@ def test_yield_is_the_cli_yield(cli: Path, tmp_path: Path) -> None:
     every = res.yield_[(res.yield_["requirement"] == "all") & res.yield_["speed"].isna()]
     assert set(every["method"]) == {"quadrature", "monte_carlo"}
     assert res.summary["yield"]["target_yield"] == 0.9973
+    # What the design meets at the target yield: the CLI's limits.csv, one row per method and
+    # requirement, the reach a speed of the grid or empty.
+    assert_same_table(res.limits, read_csv(tmp_path / "cli" / "limits.csv"))
+    assert len(res.limits) == len(res.yield_[(res.yield_["requirement"] != "all")
+                                             & res.yield_["speed"].isna()])
+    grid = {round(1.4 + 0.1 * i, 9) for i in range(8)}
+    assert all(pd.isna(w) or round(w, 9) in grid for w in res.limits["reach"])
     # Without requirements, an empty table.
     assert len(modaltol.load(EXAMPLES / "governor.toml").analyze(
         speeds="1:2:0.5", monte_carlo=False, cases=["k3"]).yield_) == 0

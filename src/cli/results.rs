@@ -4,22 +4,19 @@ use crate::cli::*;
 use anyhow::Result;
 use modaltol::compiled::Compiled;
 use modaltol::files::ResultDir;
-use modaltol::montecarlo::McOptions;
 use modaltol::report;
+use modaltol::results::WriteOptions;
 use std::io::Write;
 
 /// Writes tolerance.csv, the plots, report.html and summary.json of an analysis.
 pub(crate) fn write_outputs(
     m: &Compiled,
     a: &modaltol::analyze::Analysis,
-    mc: Option<&McOptions>,
-    threads: Option<usize>,
-    display: modaltol::plots::Display,
+    o: WriteOptions,
     dir: ResultDir,
     output: &std::path::Path,
 ) -> Result<()> {
-    let used = threads.unwrap_or_else(rayon::current_num_threads);
-    let written = modaltol::results::write(m, a, mc, used, display, dir)?;
+    let written = modaltol::results::write(m, a, o, dir)?;
     for (stem, e) in &written.missing_png {
         note!("modaltol: no PNG for {stem}: {e}");
     }

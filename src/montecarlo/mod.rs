@@ -67,7 +67,7 @@ pub struct McStat {
 }
 
 /// Sample quantile of sorted values (linear interpolation between order statistics,
-/// Hyndman & Fan's type 7).
+/// Hyndman & Fan's type 7; the lower of two neighbours where one is infinite).
 pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
     match sorted.len() {
         0 => f64::NAN,
@@ -75,6 +75,10 @@ pub fn sorted_quantile(sorted: &[f64], q: f64) -> f64 {
             let h = (n - 1) as f64 * q;
             let (lo, frac) = (h.floor() as usize, h - h.floor());
             let hi = (lo + 1).min(n - 1);
+            if !(sorted[lo].is_finite() && sorted[hi].is_finite()) {
+                // An infinite neighbour (a design without a value): no interpolation.
+                return sorted[lo];
+            }
             sorted[lo] + frac * (sorted[hi] - sorted[lo])
         }
     }
@@ -102,9 +106,16 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
         |i, pts| {
             let tf = study.transfer_at(i);
             let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            requirement::margins_at(reqs, study.speeds[i], at, tf, |r, m| {
-                margins[i * reqs.len() + r] = m;
-            });
+            requirement::margins_at(
+                reqs,
+                study.speeds[i],
+                at,
+                tf,
+                requirement::reaches,
+                |r, m| {
+                    margins[i * reqs.len() + r] = m;
+                },
+            );
             let Some((nom, pt, switches)) = pts else {
                 out.extend(std::iter::repeat_n(
                     (f64::NAN, Events::default()),
@@ -168,6 +179,17 @@ pub struct McResult {
     pub stats: Vec<Vec<McStat>>,
     /// Samples evaluated (fewer than asked where the run was cancelled).
     pub samples: usize,
+    /// Per requirement: every sample's worst margin over its range (`−∞` where it failed),
+    /// sorted; where the run kept the values (see [`MonteCarlo::quantiles`]).
+    pub worst_margins: Option<Vec<Vec<f64>>>,
+}
+
+/// What a whole run keeps besides the moments: every finite output value per
+/// `[speed · outputs + output]` and every requirement's worst margin, in sample order.
+#[derive(Default)]
+struct Kept {
+    values: Vec<Vec<f32>>,
+    worst: Vec<Vec<f64>>,
 }
 
 impl MonteCarlo {
@@ -191,14 +213,14 @@ impl MonteCarlo {
 
     /// Evaluates the chunks and folds each chunk's moments `[speed][output]` in chunk order
     /// ([`TreeFold`]); stops early (fewer chunks, [`Termination::Cancelled`]) when the run is
-    /// cancelled. Progress counts the samples done in this call. With `values`, also keeps
-    /// every finite value per `[speed · outputs + output]`, in sample order (for quantiles).
+    /// cancelled. Progress counts the samples done in this call. With `kept`, also keeps the
+    /// values for quantiles ([`Kept`]).
     fn run_chunks(
         &self,
         study: &Study,
         spread: &Spread,
         run: &Run,
-        mut values: Option<&mut Vec<Vec<f32>>>,
+        mut kept: Option<&mut Kept>,
     ) -> (TreeFold, Termination) {
         let opt = self.options;
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
@@ -207,8 +229,17 @@ impl MonteCarlo {
         let tier = Tier::for_points(here * speeds);
         let mut out = TreeFold::default();
         let mut done = 0;
-        if let Some(v) = values.as_deref_mut() {
-            v.resize(speeds * outs, Vec::new());
+        let reqs = &study.model.model().requirements;
+        let has_margin: Vec<bool> = reqs.iter().map(requirement::has_margin).collect();
+        let covered: Vec<bool> = study
+            .speeds
+            .iter()
+            .flat_map(|&w| reqs.iter().map(move |r| requirement::covers(r, w)))
+            .collect();
+        let mut worst = vec![f64::INFINITY; reqs.len()];
+        if let Some(k) = kept.as_deref_mut() {
+            k.values.resize(speeds * outs, Vec::new());
+            k.worst.resize(reqs.len(), Vec::new());
         }
         for chunk in self.chunks.clone() {
             if run.cancel.is_cancelled() {
@@ -224,18 +255,21 @@ impl MonteCarlo {
                     .collect()
             });
             let mut acc = vec![vec![Moments::default(); outs]; speeds];
-            let reqs = &study.model.model().requirements;
-            let has_margin: Vec<bool> = reqs.iter().map(requirement::has_margin).collect();
             let mut yields = (!reqs.is_empty()).then(|| YieldCounts::new(reqs.len(), speeds));
             for (r, margins) in results {
                 if let Some(y) = yields.as_mut() {
-                    y.add(&margins, &has_margin);
+                    y.add(&margins, &covered, &has_margin, &mut worst);
+                    if let Some(kept) = kept.as_deref_mut() {
+                        for (w, &x) in kept.worst.iter_mut().zip(&worst) {
+                            w.push(x);
+                        }
+                    }
                 }
                 for (k, (m, &(v, events))) in acc.iter_mut().flatten().zip(&r).enumerate() {
                     if v.is_finite() {
                         m.add(v);
-                        if let Some(vals) = values.as_deref_mut() {
-                            vals[k].push(v as f32);
+                        if let Some(kept) = kept.as_deref_mut() {
+                            kept.values[k].push(v as f32);
                         }
                     } else {
                         m.failed += 1;
@@ -302,11 +336,20 @@ impl Propagation for MonteCarlo {
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
         let samples = self.options.samples;
         let keep = self.quantiles && samples.saturating_mul(speeds * outs) <= MAX_KEPT_VALUES;
-        let mut values = Vec::new();
-        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut values));
+        let mut kept = Kept::default();
+        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut kept));
         let (mut stats, done) = statistics(&fold, speeds, outs, samples);
+        let worst_margins = keep.then(|| {
+            kept.worst
+                .into_iter()
+                .map(|mut v| {
+                    v.sort_by(f64::total_cmp);
+                    v
+                })
+                .collect()
+        });
         if keep {
-            for (st, vals) in stats.iter_mut().flatten().zip(values) {
+            for (st, vals) in stats.iter_mut().flatten().zip(kept.values) {
                 let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
                 v.sort_by(f64::total_cmp);
                 if !v.is_empty() {
@@ -319,6 +362,7 @@ impl Propagation for MonteCarlo {
                 fold,
                 stats,
                 samples: done,
+                worst_margins,
             },
             termination,
         }

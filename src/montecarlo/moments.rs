@@ -39,13 +39,16 @@ pub struct Block {
 }
 
 /// How many samples of a block met the model's requirements: every one at every speed of its
-/// range, each one, each one per speed (`[speed · requirements + requirement]`), and the
-/// moments of each one's worst margin over its range (designs with a finite margin).
+/// range, each one, each one per speed (`[speed · requirements + requirement]`), each one at
+/// every speed from its range's start up to each speed (`prefix`, same layout, beyond the
+/// range's end too: the operating range it holds over), and the moments of each one's worst
+/// margin over its range (designs with a finite margin).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct YieldCounts {
     pub all: usize,
     pub each: Vec<usize>,
     pub curves: Vec<usize>,
+    pub prefix: Vec<usize>,
     pub margins: Vec<Moments>,
 }
 
@@ -56,6 +59,7 @@ impl YieldCounts {
             all: 0,
             each: vec![0; reqs],
             curves: vec![0; reqs * speeds],
+            prefix: vec![0; reqs * speeds],
             margins: vec![Moments::default(); reqs],
         }
     }
@@ -69,31 +73,50 @@ impl YieldCounts {
         for (x, y) in self.curves.iter_mut().zip(&b.curves) {
             *x += y;
         }
+        for (x, y) in self.prefix.iter_mut().zip(&b.prefix) {
+            *x += y;
+        }
         for (x, y) in self.margins.iter_mut().zip(&b.margins) {
             x.combine(y);
         }
     }
 
-    /// Counts one sample from its margins `[speed · requirements + requirement]` (`+∞`
-    /// outside a requirement's range, `−∞` where the design has no point) and which
-    /// requirements have a margin distribution.
-    pub fn add(&mut self, margins: &[f64], has_margin: &[bool]) {
+    /// Counts one sample from its margins `[speed · requirements + requirement]` (`+∞` before
+    /// a requirement's range, `−∞` where the design has no point), which of them lie in the
+    /// requirement's range (`covered`, same layout) and which requirements have a margin
+    /// distribution; writes each requirement's worst margin over its range to `worst`.
+    pub fn add(
+        &mut self,
+        margins: &[f64],
+        covered: &[bool],
+        has_margin: &[bool],
+        worst: &mut [f64],
+    ) {
         let reqs = self.each.len();
         let mut all = true;
         for (r, &with_margin) in has_margin.iter().enumerate().take(reqs) {
-            let mut worst = f64::INFINITY;
-            for (i, m) in margins.iter().skip(r).step_by(reqs).enumerate() {
-                worst = worst.min(*m);
+            let mut low = f64::INFINITY;
+            let mut holds = true;
+            for (i, m) in margins.iter().enumerate().skip(r).step_by(reqs) {
+                holds &= *m >= 0.0;
+                if holds {
+                    self.prefix[i] += 1;
+                }
+                if !covered[i] {
+                    continue;
+                }
+                low = low.min(*m);
                 if *m >= 0.0 {
-                    self.curves[i * reqs + r] += 1;
+                    self.curves[i] += 1;
                 }
             }
-            let met = worst >= 0.0;
+            worst[r] = low;
+            let met = low >= 0.0;
             all &= met;
             self.each[r] += usize::from(met);
             if with_margin {
-                if worst.is_finite() {
-                    self.margins[r].add(worst);
+                if low.is_finite() {
+                    self.margins[r].add(low);
                 } else {
                     self.margins[r].failed += 1;
                 }

@@ -283,7 +283,7 @@ fn draw_legend(
 }
 
 /// A legend name cut to what the panel holds.
-fn short(name: &str) -> String {
+pub(super) fn short(name: &str) -> String {
     const MAX: usize = 32;
     if name.chars().count() <= MAX {
         name.to_string()

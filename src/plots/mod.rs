@@ -13,7 +13,8 @@
 //! frequencies are shown in the units asked for ([`Display`]).
 //!
 //! Submodules: `draw` (the axes, lines, bands and legend panel every plot is drawn with),
-//! `bands`, `sigma`, `shares`, `probability` and `campbell` (one per kind of plot), and `png`
+//! `bands`, `sigma`, `shares`, `probability`, `yields`, `sobol` (bars) and `campbell` (one per
+//! kind of plot), and `png`
 //! (rasterising). This module holds what the kinds share (the display units, an output's rows
 //! and points, the methods' colours) and [`plots`], which makes them all.
 
@@ -24,6 +25,7 @@ mod png;
 mod probability;
 mod shares;
 mod sigma;
+mod sobol;
 mod yields;
 
 pub use bands::first_order_off;
@@ -41,6 +43,7 @@ use plotters::prelude::RGBColor;
 use probability::probabilities;
 use shares::shares;
 use sigma::sigma;
+use sobol::sobol_bars;
 use yields::yield_curves;
 
 /// A finished plot: a file stem and its SVG text.
@@ -156,6 +159,9 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
             out.push(p);
         }
         if let Some(p) = yield_curves(model, a, ci, d) {
+            out.push(p);
+        }
+        if let Some(p) = sobol_bars(model, a, ci) {
             out.push(p);
         }
         // Shares of the first-order variance (cases with several variables).

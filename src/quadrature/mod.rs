@@ -274,6 +274,7 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         list: requirements,
         speeds: &study.speeds,
         shift: nominal_margins(study, requirements),
+        target: study.model.model().allocation.target_yield,
     });
     let mut stage = rule.first();
     let mut result;
@@ -329,6 +330,7 @@ fn nominal_margins(study: &Study, requirements: &[crate::model::Requirement]) ->
             study.speeds[i],
             at,
             study.transfer_at(i),
+            crate::requirement::covers,
             |r, m| {
                 worst[r] = worst[r].min(m);
             },

@@ -296,26 +296,32 @@ fn rescaled(q: [f64; 3], atoms: &[(f64, f64)], mean: f64, std: f64) -> [f64; 3] 
 /// The 5, 50 and 95 % quantiles of weighted atoms (value, weight).
 pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
     atoms.sort_by(|a, b| a.0.total_cmp(&b.0));
+    [0.05, 0.5, 0.95].map(|q| sorted_quantile(atoms, q))
+}
+
+/// The `q` quantile of weighted atoms sorted by value: each atom's weight centred on it,
+/// linear between neighbouring centres (the lower atom where one of the two is infinite).
+pub(super) fn sorted_quantile(atoms: &[(f64, f64)], q: f64) -> f64 {
     let total: f64 = atoms.iter().map(|a| a.1).sum();
-    [0.05, 0.5, 0.95].map(|q| {
-        let target = q * total;
-        let mut acc = 0.0;
-        for (k, &(v, w)) in atoms.iter().enumerate() {
-            // Each atom's weight centred on it: interpolate between neighbours' centres.
-            let centre = acc + 0.5 * w;
-            if centre >= target {
-                if k == 0 {
-                    return v;
-                }
-                let (pv, pw) = atoms[k - 1];
-                let pc = acc - 0.5 * pw;
-                let f = ((target - pc) / (centre - pc)).clamp(0.0, 1.0);
-                return pv + f * (v - pv);
+    let target = q * total;
+    let mut acc = 0.0;
+    for (k, &(v, w)) in atoms.iter().enumerate() {
+        let centre = acc + 0.5 * w;
+        if centre >= target {
+            if k == 0 {
+                return v;
             }
-            acc += w;
+            let (pv, pw) = atoms[k - 1];
+            let pc = acc - 0.5 * pw;
+            let f = ((target - pc) / (centre - pc)).clamp(0.0, 1.0);
+            if !(pv.is_finite() && v.is_finite()) {
+                return if f >= 1.0 { v } else { pv };
+            }
+            return pv + f * (v - pv);
         }
-        atoms.last().map_or(f64::NAN, |a| a.0)
-    })
+        acc += w;
+    }
+    atoms.last().map_or(f64::NAN, |a| a.0)
 }
 
 /// The next stage of the refinement, `None` where every error estimate meets the requested

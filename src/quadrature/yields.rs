@@ -15,10 +15,10 @@
 
 use super::line::{Context, GL_W, GL_X, Stencil, density, normal_mass};
 use super::rules::{Rule, Stage, Transverse};
-use super::sums::{ErrorParts, across};
+use super::sums::{ErrorParts, across, sorted_quantile};
 use super::{NodeData, Reference};
 use crate::model::Requirement;
-use crate::requirement::{State, covers, has_margin, margin};
+use crate::requirement::{State, covers, has_margin, margin, reaches};
 use rayon::prelude::*;
 
 /// Longest sub-interval of a line (in standard deviations) across which a margin's sign is
@@ -38,6 +38,10 @@ pub struct QuadYield {
     /// `[speed][requirement]`: probability of meeting it at that speed and its error; NaN
     /// outside its range.
     pub curves: Vec<Vec<(f64, f64)>>,
+    /// `[speed][requirement]`: probability of meeting it at every speed from its range's
+    /// start up to that one (beyond the range's end too: the operating range it holds over),
+    /// and its error; NaN below the range.
+    pub prefix: Vec<Vec<(f64, f64)>>,
 }
 
 /// Mean and σ of a requirement's worst margin over its range, with error estimates.
@@ -47,14 +51,20 @@ pub struct MarginStat {
     pub std: f64,
     pub mean_error: f64,
     pub std_error: f64,
+    /// The margin met at the target yield (its `1 − target` quantile, `−∞` where more than
+    /// `1 − target` of the designs fail without a margin) and its error estimate.
+    pub at_target: f64,
+    pub at_target_error: f64,
 }
 
 /// The additive sums of one line (or a rule): the mass, the mass meeting everything, per
 /// requirement the mass meeting it and the worst margin's defined mass and first two moments
-/// about `shift`, and per speed and requirement the mass meeting it there.
+/// about `shift`, per speed and requirement the mass meeting it there and from its range's
+/// start up to there; and per requirement the worst margin's weighted atoms (its quantiles).
 #[derive(Debug, Clone)]
 struct Tally {
     v: Vec<f64>,
+    atoms: Vec<Vec<(f64, f64)>>,
 }
 
 /// Where each part of a [`Tally`] sits.
@@ -66,7 +76,7 @@ struct Layout {
 
 impl Layout {
     fn len(&self) -> usize {
-        2 + 4 * self.reqs + self.speeds * self.reqs
+        2 + 4 * self.reqs + 2 * self.speeds * self.reqs
     }
     fn mass(&self) -> usize {
         0
@@ -84,18 +94,34 @@ impl Layout {
     fn curve(&self, i: usize, r: usize) -> usize {
         2 + 4 * self.reqs + i * self.reqs + r
     }
+    fn prefix(&self, i: usize, r: usize) -> usize {
+        2 + 4 * self.reqs + (self.speeds + i) * self.reqs + r
+    }
 }
 
 impl Tally {
     fn new(l: Layout) -> Tally {
         Tally {
             v: vec![0.0; l.len()],
+            atoms: vec![Vec::new(); l.reqs],
         }
     }
     fn add_scaled(&mut self, b: &Tally, w: f64) {
         for (x, y) in self.v.iter_mut().zip(&b.v) {
             *x += w * y;
         }
+        for (x, y) in self.atoms.iter_mut().zip(&b.atoms) {
+            x.extend(y.iter().map(|&(v, wv)| (v, w * wv)));
+        }
+    }
+    /// Requirement `r`'s worst margin at quantile `q` (`None` without atoms).
+    fn quantile(&self, r: usize, q: f64) -> Option<f64> {
+        let mut a = self.atoms[r].clone();
+        if a.is_empty() {
+            return None;
+        }
+        a.sort_by(|x, y| x.0.total_cmp(&y.0));
+        Some(sorted_quantile(&a, q))
     }
     fn ratio(&self, l: Layout, k: usize) -> f64 {
         self.v[k] / self.v[l.mass()]
@@ -110,12 +136,13 @@ impl Tally {
     }
 }
 
-/// What the yield integration needs besides the nodes: the requirements and their nominal
-/// worst margins (the shift of the moments).
+/// What the yield integration needs besides the nodes: the requirements, their nominal
+/// worst margins (the shift of the moments) and the target yield (the margin met at it).
 pub(super) struct Requirements<'a> {
     pub list: &'a [Requirement],
     pub speeds: &'a [f64],
     pub shift: Vec<f64>,
+    pub target: f64,
 }
 
 /// The yield at `stage` with its error estimates' parts.
@@ -206,19 +233,25 @@ pub(super) fn evaluate_yield(
     };
     let all = prob(l.all());
     let each: Vec<(f64, f64)> = (0..l.reqs).map(|r| prob(l.each(r))).collect();
-    let curves: Vec<Vec<(f64, f64)>> = (0..l.speeds)
-        .map(|i| {
-            (0..l.reqs)
-                .map(|r| {
-                    if covers(&reqs.list[r], reqs.speeds[i]) {
-                        prob(l.curve(i, r))
-                    } else {
-                        (f64::NAN, f64::NAN)
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let mut per_speed = |within: fn(&Requirement, f64) -> bool,
+                         at: fn(&Layout, usize, usize) -> usize|
+     -> Vec<Vec<(f64, f64)>> {
+        (0..l.speeds)
+            .map(|i| {
+                (0..l.reqs)
+                    .map(|r| {
+                        if within(&reqs.list[r], reqs.speeds[i]) {
+                            prob(at(&l, i, r))
+                        } else {
+                            (f64::NAN, f64::NAN)
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let curves = per_speed(covers, Layout::curve);
+    let prefix = per_speed(reaches, Layout::prefix);
     let margins = (0..l.reqs)
         .map(|r| {
             let shift = reqs.shift[r];
@@ -227,11 +260,21 @@ pub(super) fn evaluate_yield(
             let cm = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.0));
             let cs = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.1));
             let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
+            let q = 1.0 - reqs.target;
+            let at_target = fine.quantile(r, q).unwrap_or(f64::NAN);
+            let rq = rough.quantile(r, q).unwrap_or(f64::NAN);
+            let cq = across(&|t: &Tally| t.quantile(r, q));
             Some(MarginStat {
                 mean,
                 std,
                 mean_error: finite(2.0 * (mean - rm).abs() + cm),
                 std_error: finite(2.0 * (std - rs).abs() + cs),
+                at_target,
+                at_target_error: if at_target.is_finite() {
+                    finite(2.0 * (at_target - rq).abs() + cq)
+                } else {
+                    0.0
+                },
             })
         })
         .collect();
@@ -241,6 +284,7 @@ pub(super) fn evaluate_yield(
             each,
             margins,
             curves,
+            prefix,
         },
         parts,
     )
@@ -251,8 +295,10 @@ struct LineView<'a> {
     pieces: Vec<Vec<(f64, f64, Option<Stencil<'a>>)>>,
     contexts: &'a [Context<'a>],
     reqs: &'a Requirements<'a>,
-    /// Per speed: the requirements covering it.
+    /// Per speed: the requirements it is at or above the range's start of ([`reaches`]).
     active: Vec<Vec<usize>>,
+    /// `[speed · requirements + requirement]`: is the speed in the requirement's range?
+    covered: Vec<bool>,
 }
 
 impl LineView<'_> {
@@ -278,7 +324,7 @@ impl LineView<'_> {
     }
 
     /// The margin of every (speed, requirement) at `t`, `[speed][requirement]` flattened
-    /// (+∞ where the speed is outside the requirement's range; −∞ where the design has no
+    /// (+∞ where the speed is below the requirement's range; −∞ where the design has no
     /// point there), the pieces `at[i]` in use at each speed.
     fn margins(&self, t: f64, at: &[usize], out: &mut [f64], c: &mut Vec<f64>) {
         let r = self.reqs.list.len();
@@ -313,9 +359,14 @@ fn line_tally(
         active: (0..l.speeds)
             .map(|i| {
                 (0..nr)
-                    .filter(|&k| covers(&reqs.list[k], reqs.speeds[i]))
+                    .filter(|&k| reaches(&reqs.list[k], reqs.speeds[i]))
                     .collect()
             })
+            .collect(),
+        covered: reqs
+            .speeds
+            .iter()
+            .flat_map(|&w| reqs.list.iter().map(move |r| covers(r, w)))
             .collect(),
     };
     // Every boundary of every speed's pieces, in order.
@@ -418,9 +469,17 @@ fn add_piece(
     tally.v[l.mass()] += mass;
     let mut all = true;
     for r in 0..nr {
-        let mut met = true;
+        let (mut met, mut holds) = (true, true);
         for i in 0..l.speeds {
-            if mm[i * nr + r] >= 0.0 {
+            let ok = mm[i * nr + r] >= 0.0;
+            holds &= ok;
+            if holds {
+                tally.v[l.prefix(i, r)] += mass;
+            }
+            if !view.covered[i * nr + r] {
+                continue;
+            }
+            if ok {
                 tally.v[l.curve(i, r)] += mass;
             } else {
                 met = false;
@@ -444,8 +503,10 @@ fn add_piece(
                 continue;
             }
             let worst = (0..l.speeds)
+                .filter(|&i| view.covered[i * nr + r])
                 .map(|i| mm[i * nr + r])
                 .fold(f64::INFINITY, f64::min);
+            tally.atoms[r].push((worst, wt));
             if worst.is_finite() {
                 let d = worst - view.reqs.shift[r];
                 tally.v[l.margin(r, 0)] += wt;

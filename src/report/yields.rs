@@ -95,6 +95,11 @@ pub fn verdict(ci: (f64, f64), target: f64) -> &'static str {
     }
 }
 
+/// A number for JSON: `null` where it is not finite (JSON has no infinities).
+fn finite_or_null(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
 fn opt(v: Option<f64>) -> String {
     v.filter(|x| x.is_finite())
         .map_or(String::new(), |x| x.to_string())
@@ -175,8 +180,102 @@ pub fn yield_summary(model: &Model, a: &Analysis) -> Value {
             "probability": y.probability, "ci": [y.ci.0, y.ci.1],
             "meets_target": verdict(y.ci, target),
             "margin_mean": y.margin.map(|m| m.0), "margin_std": y.margin.map(|m| m.1),
-            "cpk": y.cpk})).collect::<Vec<_>>(),
+            "cpk": y.cpk,
+            "at_target": y.limit.map(|l| json!({
+                "reach": l.reach, "margin": l.margin.map(|m| m.map(finite_or_null)),
+            }))})).collect::<Vec<_>>(),
     })
+}
+
+/// Header of `limits.csv`.
+pub const LIMITS_HEADER: [&str; 15] = [
+    "case",
+    "method",
+    "requirement",
+    "kind",
+    "target",
+    "speed_from",
+    "speed_to",
+    "reach",
+    "reach_low",
+    "reach_high",
+    "margin_unit",
+    "margin_at_target",
+    "margin_low",
+    "margin_high",
+    "tightest",
+];
+
+/// The tightest requirement of `r`'s kind that designs meet at the target yield, in words,
+/// from the worst margin met at it (`q`, in the margin's unit): each kind's bound moved by `q`.
+pub fn tightest(r: &Requirement, q: f64, transfer_unit: &str) -> String {
+    if q.is_nan() {
+        return String::new();
+    }
+    if q == f64::NEG_INFINITY {
+        return "none: more than 1 − target of the designs fail without a margin".into();
+    }
+    let mode = r
+        .mode
+        .map_or("every mode".to_string(), |m| format!("mode {}", m + 1));
+    let g = |x: f64| format!("{:.6}", x);
+    match &r.kind {
+        RequirementKind::Separation { .. } => format!(
+            "{mode}: ω_d clear of the required separation by {} rad/s",
+            g(q)
+        ),
+        RequirementKind::Frequency { min, max } => match (min, max) {
+            (Some(a), Some(b)) => format!("{mode}: {} ≤ ω_d ≤ {} rad/s", g(a + q), g(b - q)),
+            (Some(a), None) => format!("{mode}: ω_d ≥ {} rad/s", g(a + q)),
+            (None, Some(b)) => format!("{mode}: ω_d ≤ {} rad/s", g(b - q)),
+            (None, None) => String::new(),
+        },
+        RequirementKind::Avoid { low, high } => {
+            format!(
+                "{mode}: ω_d outside [{}, {}] rad/s",
+                g(low - q),
+                g(high + q)
+            )
+        }
+        RequirementKind::Damping { min } => format!("{mode}: ζ ≥ {}", g(min + q)),
+        RequirementKind::Underdamped => format!("{mode}: ζ ≤ {}", g(1.0 - q)),
+        RequirementKind::Stable => format!("every root's real part ≤ {} 1/s", g(-q)),
+        RequirementKind::SameBranch => String::new(),
+        RequirementKind::Transfer { max } => format!("|H| ≤ {} {transfer_unit}", g(max - q)),
+    }
+}
+
+/// Rows of `limits.csv`: per case, method and requirement, what the design with the case's
+/// tolerances meets at the target yield: the highest speed up to which (from its range's
+/// start) it holds, and the worst margin met, with the tightest requirement of its kind.
+pub fn limit_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
+    let target = model.allocation.target_yield;
+    let tu = transfer_unit(model);
+    let speed = |w: Option<f64>| w.map_or(String::new(), |w| w.to_string());
+    a.yields
+        .iter()
+        .filter_map(|y| Some((y, y.limit?, &model.requirements[y.requirement?])))
+        .map(|(y, l, r)| {
+            let m = |k: usize| l.margin.map_or(String::new(), |m| m[k].to_string());
+            vec![
+                a.cases[y.case].name.clone(),
+                y.method.as_str().to_string(),
+                r.name.clone(),
+                kind_name(r).to_string(),
+                target.to_string(),
+                speed(r.speeds.map(|s| s.0)),
+                speed(r.speeds.map(|s| s.1)),
+                speed(l.reach[0]),
+                speed(l.reach[1]),
+                speed(l.reach[2]),
+                l.margin.map_or(String::new(), |_| unit(r, &tu)),
+                m(0),
+                m(1),
+                m(2),
+                l.margin.map_or(String::new(), |m| tightest(r, m[0], &tu)),
+            ]
+        })
+        .collect()
 }
 
 /// Header of `sobol.csv`.

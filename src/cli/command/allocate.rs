@@ -8,6 +8,7 @@ use modaltol::cancel::Cancel;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Case, Cost, Model, SpeedRange};
 use modaltol::quadrature::QuadOptions;
+use modaltol::results::WriteOptions;
 use modaltol::{report, settings};
 use std::io::Write;
 
@@ -103,15 +104,12 @@ pub(crate) fn allocate_command(
         },
         &progress_printer(),
     );
-    write_outputs(
-        &m,
-        &analysis,
-        None,
-        threads,
-        Default::default(),
-        dir,
-        &output,
-    )?;
+    let o = WriteOptions {
+        threads: threads.unwrap_or_else(rayon::current_num_threads),
+        allocation: Some(&a),
+        ..Default::default()
+    };
+    write_outputs(&m, &analysis, o, dir, &output)?;
     if !a.met {
         return Err(Failed(format!(
             "the verified yield does not reach the target {} after {} rounds (see allocation.json)",

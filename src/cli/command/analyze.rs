@@ -8,6 +8,7 @@ use modaltol::files::{AtomicFile, Inputs, ResultDir};
 use modaltol::model::Sampling;
 use modaltol::model::SpeedRange;
 use modaltol::request::{Request, Resolved, Speeds};
+use modaltol::results::WriteOptions;
 use modaltol::settings;
 use modaltol::shard::{RunSettings, ShardFile};
 use std::io::Write;
@@ -112,15 +113,13 @@ pub(crate) fn analyze_command(
     let Destination::Directory(dir) = destination else {
         unreachable!("a whole run's destination is a directory")
     };
-    write_outputs(
-        &m,
-        &a,
-        mc.as_ref(),
-        opt.threads,
-        display.into(),
-        dir,
-        &output,
-    )?;
+    let o = WriteOptions {
+        mc: mc.as_ref(),
+        threads: opt.threads.unwrap_or_else(rayon::current_num_threads),
+        display: display.into(),
+        allocation: None,
+    };
+    write_outputs(&m, &a, o, dir, &output)?;
 
     Ok(())
 }

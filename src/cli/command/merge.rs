@@ -8,6 +8,7 @@ use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::SpeedRange;
 use modaltol::montecarlo::McOptions;
 use modaltol::quadrature::QuadOptions;
+use modaltol::results::WriteOptions;
 use modaltol::settings;
 use std::path::PathBuf;
 
@@ -48,7 +49,13 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
     refuse_input(&inputs, &output)?;
     let dir = protect(ResultDir::create(&output)?, inputs)?;
     let a = analyze(&m, &opt, &progress_printer());
-    write_outputs(&m, &a, Some(&mc), None, display.into(), dir, &output)?;
+    let o = WriteOptions {
+        mc: Some(&mc),
+        threads: rayon::current_num_threads(),
+        display: display.into(),
+        allocation: None,
+    };
+    write_outputs(&m, &a, o, dir, &output)?;
 
     Ok(())
 }

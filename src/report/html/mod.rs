@@ -1,21 +1,28 @@
-//! `report.html`: one page per analysis, built from named sections (the numeric summary, the
-//! tolerance cases, the timings, where first order is off, the critical speeds, the failures,
-//! the rows without a value, a reading guide and the plots). Sections big enough to be read on
-//! their own are submodules.
+//! `report.html`: one page per analysis, built from named sections (the tolerance allocation
+//! that made the design where there is one, the specification: yield, what the design meets
+//! at the target and the Sobol indices; the numeric summary, the tolerance cases, the timings,
+//! where first order is off, the critical speeds, the failures, the rows without a value, a
+//! reading guide and the plots). Sections big enough to be read on their own are submodules.
 
+mod allocation;
 mod first_order;
 mod sigma;
+mod specification;
 
 use super::{inadmissible_warnings, outside_request_lines, paper_timings, unfilled};
+use crate::allocate::Allocation;
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::plots::{CriticalSpeed, Display, Plot};
+use allocation::allocation_section;
 use first_order::first_order_table;
 use sigma::summary_table;
+use specification::{limits_table, sobol_table, specification};
 use std::fmt::Write;
 
-/// `report.html`: the numeric summary per case, the timing table (beside the paper's Tables 1–2
+/// `report.html`: the allocation that made the design (`allocation`, where there is one), the
+/// specification sections, the numeric summary per case, the timing table (beside the paper's Tables 1–2
 /// for its two examples), the critical speeds, a short reading guide and the plots (each an
 /// `<stem>.svg` in the same directory), in the display units `d`.
 pub fn report_html(
@@ -25,6 +32,7 @@ pub fn report_html(
     critical: &[CriticalSpeed],
     mc: Option<&McOptions>,
     d: Display,
+    allocation: Option<&Allocation>,
 ) -> String {
     let mut h = String::new();
     page_head(&mut h, model);
@@ -37,7 +45,11 @@ pub fn report_html(
         d.speed.symbol(),
         d.frequency.symbol()
     );
+    if let Some(al) = allocation {
+        allocation_section(&mut h, model, al);
+    }
     specification(&mut h, model, a);
+    limits_table(&mut h, model, a);
     sobol_table(&mut h, model, a);
     let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
     cases_table(&mut h, model, a);
@@ -53,194 +65,6 @@ pub fn report_html(
     figures(&mut h, plots);
     let _ = writeln!(h, "</body></html>");
     h
-}
-
-/// The specification first: per requirement (and all together), per case and method, the
-/// probability of meeting it over its range beside the target yield, its verdict, and the worst
-/// margin's mean, σ and Cpk.
-fn specification(h: &mut String, model: &Model, a: &Analysis) {
-    if model.requirements.is_empty() {
-        return;
-    }
-    let target = model.allocation.target_yield;
-    let _ = writeln!(
-        h,
-        "<h2 id=\"specification\">Specification: yield against the target {}</h2>\
-<p>The probability that a design meets each requirement at every analysed speed of its range, and all of them together (<code>yield.csv</code>, with the per-speed curves). Quadrature: ± its error estimate; Monte Carlo: 95 % Wilson interval; first order: at the worst speed, an upper bound. <b>meets</b> is <i>yes</i> where the whole interval is at or above the target, <i>no</i> where below, <i>undecided</i> where it holds the target.</p>\
-<table><tr><th>requirement</th><th>case</th><th>method</th><th>yield</th><th>interval</th><th>meets</th><th>worst margin, mean ± σ</th><th>C<sub>pk</sub></th></tr>",
-        sig(target)
-    );
-    let tu = model
-        .analysis
-        .transfer
-        .as_ref()
-        .map_or(String::new(), |t| model.transfer_unit(t));
-    let mut rows: Vec<&crate::yields::YieldRow> =
-        a.yields.iter().filter(|y| y.speed.is_none()).collect();
-    rows.sort_by_key(|y| (y.requirement.map_or(0, |r| r + 1), y.case));
-    for y in rows {
-        let (name, what, unit) = match y.requirement {
-            Some(r) => {
-                let r = &model.requirements[r];
-                (
-                    r.name.clone(),
-                    crate::report::describe(r),
-                    crate::requirement::unit(r, &tu),
-                )
-            }
-            None => (
-                "all".to_string(),
-                "every requirement".to_string(),
-                String::new(),
-            ),
-        };
-        let verdict = if y.method == crate::yields::Method::FirstOrder {
-            if y.probability < target {
-                "no"
-            } else {
-                "undecided"
-            }
-        } else {
-            crate::report::verdict(y.ci, target)
-        };
-        let colour = match verdict {
-            "yes" => "#1a7f37",
-            "no" => "#cf222e",
-            _ => "#9a6700",
-        };
-        let _ = writeln!(
-            h,
-            "<tr><td title=\"{}\"><b>{}</b><br><small>{}</small></td><td>{}</td><td>{}</td><td>{}</td><td>[{}, {}]</td><td style=\"color:{colour}\"><b>{verdict}</b></td><td>{}</td><td>{}</td></tr>",
-            esc(&what),
-            esc(&name),
-            esc(&what),
-            esc(&a.cases[y.case].name),
-            y.method.as_str(),
-            sig(y.probability),
-            sig(y.ci.0),
-            sig(y.ci.1),
-            y.margin.map_or("–".into(), |(m, s)| format!(
-                "{} ± {} {}",
-                sig(m),
-                sig(s),
-                esc(&unit)
-            )),
-            y.cpk.map_or("–".into(), sig),
-        );
-    }
-    let _ = writeln!(h, "</table>");
-}
-
-/// Which tolerance matters: per case, the Sobol indices of each requirement's worst margin
-/// and of every output at the speed where its σ by the analytic method is largest, largest
-/// total index first.
-fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
-    use crate::sobol::Target;
-    for (case, why) in &a.sobol_refused {
-        let _ = writeln!(
-            h,
-            "<p><b>Note:</b> no Sobol indices for case {}: {}</p>",
-            esc(&a.cases[*case].name),
-            esc(why)
-        );
-    }
-    if a.sobol.is_empty() {
-        return;
-    }
-    let _ = writeln!(
-        h,
-        "<h2 id=\"sobol\">Which tolerance matters: Sobol indices</h2>\
-<p>First-order index S (the share of the variance a variable causes alone) and total index S<sub>T</sub> (with its interactions), 95 % bootstrap intervals, pick-freeze Monte Carlo (Saltelli 2010); the derivative bound on S<sub>T</sub> from the exact gradients (Sobol &amp; Kucherenko 2009); the first-order variance share of the Taylor method beside it where the target is an output. Every speed and output in <code>sobol.csv</code>; here each requirement's worst margin and each output at the speed of its largest σ.</p>\
-<table><tr><th>case</th><th>target</th><th>variable</th><th>S</th><th>S<sub>T</sub></th><th>bound on S<sub>T</sub></th><th>first-order share</th></tr>"
-    );
-    // Per case and output: the speed index with the largest analytic σ.
-    let worst = |case: usize, o: usize| -> Option<usize> {
-        let out = a.outputs[o];
-        let mut best: Option<(usize, f64)> = None;
-        for r in &a.rows {
-            if r.case == case
-                && r.method == crate::analyze::Method::Analytic
-                && r.quantity == out.quantity
-                && r.mode == out.mode
-                && r.std.is_finite()
-                && best.is_none_or(|b| r.std > b.1)
-            {
-                let i = a
-                    .speeds
-                    .iter()
-                    .position(|w| w.to_bits() == r.speed.to_bits())?;
-                best = Some((i, r.std));
-            }
-        }
-        best.map(|b| b.0)
-    };
-    let mut shown: Vec<&(usize, crate::sobol::SobolIndex)> = a
-        .sobol
-        .iter()
-        .filter(|(case, s)| match s.target {
-            Target::Margin(_) => true,
-            Target::Output(i, o) => worst(*case, o) == Some(i),
-        })
-        .collect();
-    shown.sort_by(|x, y| {
-        (x.0, target_key(&x.1.target))
-            .cmp(&(y.0, target_key(&y.1.target)))
-            .then(y.1.total.total_cmp(&x.1.total))
-    });
-    for (case, s) in shown {
-        let target = match s.target {
-            Target::Margin(r) => format!("margin of {}", model.requirements[r].name),
-            Target::Output(i, o) => {
-                let out = a.outputs[o];
-                format!(
-                    "{}{} at {} rad/s",
-                    out.quantity.as_str(),
-                    out.mode
-                        .map_or(String::new(), |m| format!(" mode {}", m + 1)),
-                    sig(a.speeds[i])
-                )
-            }
-        };
-        let share = match s.target {
-            Target::Output(i, o) => a
-                .rows
-                .iter()
-                .find(|r| {
-                    r.case == *case
-                        && r.method == crate::analyze::Method::FirstOrder
-                        && r.speed.to_bits() == a.speeds[i].to_bits()
-                        && r.quantity == a.outputs[o].quantity
-                        && r.mode == a.outputs[o].mode
-                })
-                .and_then(|r| r.shares.as_ref())
-                .map(|sh| sig(sh[s.variable])),
-            Target::Margin(_) => None,
-        };
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{} [{}, {}]</td><td>{}</td><td>{}</td></tr>",
-            esc(&a.cases[*case].name),
-            esc(&target),
-            esc(&model.parameters[a.vars[s.variable]].name),
-            sig(s.first),
-            sig(s.first_ci.0),
-            sig(s.first_ci.1),
-            sig(s.total),
-            sig(s.total_ci.0),
-            sig(s.total_ci.1),
-            s.bound.map_or("–".into(), sig),
-            share.unwrap_or_else(|| "–".into()),
-        );
-    }
-    let _ = writeln!(h, "</table>");
-}
-
-/// Sort key of a Sobol target: margins first, then outputs in order.
-fn target_key(t: &crate::sobol::Target) -> (usize, usize) {
-    match *t {
-        crate::sobol::Target::Margin(r) => (0, r),
-        crate::sobol::Target::Output(_, o) => (1, o),
-    }
 }
 
 /// The page up to its heading: the document head with its style sheet, and the title.
