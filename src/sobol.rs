@@ -58,6 +58,32 @@ pub enum Target {
     Margin(usize),
 }
 
+impl Target {
+    /// The target in words: `margin of NAME`, or `QUANTITY[ mode K] at SPEED rad/s` with the
+    /// speed as `speed` writes it.
+    pub fn describe(
+        &self,
+        requirements: &[crate::model::Requirement],
+        speeds: &[f64],
+        outputs: &[crate::output::Output],
+        speed: impl Fn(f64) -> String,
+    ) -> String {
+        match *self {
+            Target::Margin(r) => format!("margin of {}", requirements[r].name),
+            Target::Output(i, o) => {
+                let out = outputs[o];
+                format!(
+                    "{}{} at {} rad/s",
+                    out.quantity.as_str(),
+                    out.mode
+                        .map_or(String::new(), |m| format!(" mode {}", m + 1)),
+                    speed(speeds[i])
+                )
+            }
+        }
+    }
+}
+
 /// The indices of one target and one variable.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SobolIndex {

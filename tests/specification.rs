@@ -472,6 +472,25 @@ fn agrees_with_monte_carlo(a: &Analysis, requirements: usize) {
                 "{r:?}: margin {qm:?} vs {mm:?}"
             );
         }
+        // What the design meets at the target yield: the quadrature's largest operating range
+        // inside Monte Carlo's (from its interval's ends), its worst margin met inside Monte
+        // Carlo's order-statistic interval (widened by the quadrature's error).
+        if let (Some(ql), Some(ml)) = (q.limit, mc.limit) {
+            let le = |x: Option<f64>, y: Option<f64>| x.partial_cmp(&y).is_some_and(|o| o.is_le());
+            assert!(
+                le(ml.reach[1], ql.reach[0]) && le(ql.reach[0], ml.reach[2]),
+                "{r:?}: reach {:?} vs Monte Carlo {:?}",
+                ql.reach,
+                ml.reach
+            );
+            if let (Some(qm), Some(mm)) = (ql.margin, ml.margin) {
+                let e = qm[2] - qm[0];
+                assert!(
+                    mm[1] - e <= qm[0] && qm[0] <= mm[2] + e,
+                    "{r:?}: margin at the target {qm:?} vs Monte Carlo {mm:?}"
+                );
+            }
+        }
     }
 }
 

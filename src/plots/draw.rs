@@ -125,16 +125,8 @@ pub(super) fn draw(
     };
     let entries = lines.iter().filter(|l| !l.name.is_empty()).count() + bands.len();
     let height = 540.max(90 + 22 * entries as u32);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (AXES_WIDTH + LEGEND_WIDTH, height))
-            .into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root
-            .titled(title, ("sans-serif", 20))
-            .map_err(|e| e.to_string())?;
-        let (axes, legend) = root.split_horizontally(AXES_WIDTH);
-        let mut chart = ChartBuilder::on(&axes)
+    panels(title, height, |axes, legend| {
+        let mut chart = ChartBuilder::on(axes)
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(96)
@@ -151,7 +143,29 @@ pub(super) fn draw(
             .map_err(|e| e.to_string())?;
         draw_bands(&mut chart, bands)?;
         draw_lines(&mut chart, lines)?;
-        draw_legend(&legend, lines, bands)?;
+        draw_legend(legend, lines, bands)
+    })
+}
+
+/// Part of a plot's SVG.
+pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// An SVG `height` px high under `title`, its axes' part and its legend panel drawn by `body`.
+pub(super) fn panels(
+    title: &str,
+    height: u32,
+    body: impl for<'b> FnOnce(&Area<'b>, &Area<'b>) -> Result<(), String>,
+) -> Result<String, String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (AXES_WIDTH + LEGEND_WIDTH, height))
+            .into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let (axes, legend) = root.split_horizontally(AXES_WIDTH);
+        body(&axes, &legend)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)

@@ -4,7 +4,7 @@
 //! bootstrap intervals as whiskers and the derivative-based bound on S_T as a dash.
 
 use super::Plot;
-use super::draw::{AXES_WIDTH, LEGEND_WIDTH, palette, short};
+use super::draw::{Area, palette, panels, short};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::sobol::{SobolIndex, Target};
@@ -34,18 +34,10 @@ pub(super) fn sobol_bars(model: &Model, a: &Analysis, case: usize) -> Option<Plo
     if targets.is_empty() || variables.is_empty() {
         return None;
     }
-    let name = |t: &Target| match *t {
-        Target::Margin(r) => format!("margin of {}", model.requirements[r].name),
-        Target::Output(i, o) => {
-            let out = a.outputs[o];
-            format!(
-                "{}{} at {} rad/s",
-                out.quantity.as_str(),
-                out.mode
-                    .map_or(String::new(), |m| format!(" mode {}", m + 1)),
-                (a.speeds[i] * 1e4).round() / 1e4
-            )
-        }
+    let name = |t: &Target| {
+        t.describe(&model.requirements, &a.speeds, &a.outputs, |w| {
+            ((w * 1e4).round() / 1e4).to_string()
+        })
     };
     let groups: Vec<String> = variables
         .iter()
@@ -109,17 +101,9 @@ fn draw_bars(
     // Room under 0 for the variables' names.
     let bottom = -0.1 * top;
     let height = 540.max(130 + 22 * series.len() as u32);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (AXES_WIDTH + LEGEND_WIDTH, height))
-            .into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root
-            .titled(title, ("sans-serif", 20))
-            .map_err(|e| e.to_string())?;
-        let (axes, legend) = root.split_horizontally(AXES_WIDTH);
+    panels(title, height, |axes, legend| {
         let n = groups.len() as f64;
-        let mut chart = ChartBuilder::on(&axes)
+        let mut chart = ChartBuilder::on(axes)
             .margin(14)
             .x_label_area_size(30)
             .y_label_area_size(70)
@@ -192,17 +176,12 @@ fn draw_bars(
                 }
             }
         }
-        draw_legend(&legend, series)?;
-        root.present().map_err(|e| e.to_string())?;
-    }
-    Ok(svg)
+        draw_legend(legend, series)
+    })
 }
 
 /// The legend: a swatch per target, then how to read the bars.
-fn draw_legend(
-    legend: &DrawingArea<SVGBackend, plotters::coord::Shift>,
-    series: &[String],
-) -> Result<(), String> {
+fn draw_legend(legend: &Area, series: &[String]) -> Result<(), String> {
     let font = ("sans-serif", 14).into_font();
     let mut y = 40;
     let mut entry = |swatch: &dyn Fn(i32) -> Result<(), String>, text: &str| {

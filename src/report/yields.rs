@@ -106,7 +106,7 @@ fn opt(v: Option<f64>) -> String {
 }
 
 /// The transfer function's unit, for the margins of `transfer` requirements.
-fn transfer_unit(model: &Model) -> String {
+pub(in crate::report) fn transfer_unit(model: &Model) -> String {
     model
         .analysis
         .transfer

@@ -5,6 +5,7 @@
 use super::{esc, sig};
 use crate::analyze::Analysis;
 use crate::model::Model;
+use crate::report::yields::transfer_unit;
 use std::fmt::Write;
 
 /// The specification first: per requirement (and all together), per case and method, the
@@ -22,11 +23,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
 <table><tr><th>requirement</th><th>case</th><th>method</th><th>yield</th><th>interval</th><th>meets</th><th>worst margin, mean ± σ</th><th>C<sub>pk</sub></th></tr>",
         sig(target)
     );
-    let tu = model
-        .analysis
-        .transfer
-        .as_ref()
-        .map_or(String::new(), |t| model.transfer_unit(t));
+    let tu = transfer_unit(model);
     let mut rows: Vec<&crate::yields::YieldRow> =
         a.yields.iter().filter(|y| y.speed.is_none()).collect();
     rows.sort_by_key(|y| (y.requirement.map_or(0, |r| r + 1), y.case));
@@ -107,19 +104,9 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
     );
     let shown = a.sobol_shown();
     for (case, s) in shown {
-        let target = match s.target {
-            Target::Margin(r) => format!("margin of {}", model.requirements[r].name),
-            Target::Output(i, o) => {
-                let out = a.outputs[o];
-                format!(
-                    "{}{} at {} rad/s",
-                    out.quantity.as_str(),
-                    out.mode
-                        .map_or(String::new(), |m| format!(" mode {}", m + 1)),
-                    sig(a.speeds[i])
-                )
-            }
-        };
+        let target = s
+            .target
+            .describe(&model.requirements, &a.speeds, &a.outputs, sig);
         let share = match s.target {
             Target::Output(i, o) => a
                 .rows
@@ -172,11 +159,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
 <table><tr><th>requirement</th><th>case</th><th>method</th><th>range met up to (rad/s)</th><th>worst margin met</th><th>tightest met</th></tr>",
         sig(target)
     );
-    let tu = model
-        .analysis
-        .transfer
-        .as_ref()
-        .map_or(String::new(), |t| model.transfer_unit(t));
+    let tu = transfer_unit(model);
     let speed = |w: Option<f64>| w.map_or("none".to_string(), sig);
     for y in rows {
         let (Some(l), Some(r)) = (y.limit, y.requirement) else {
