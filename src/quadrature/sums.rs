@@ -296,13 +296,14 @@ fn rescaled(q: [f64; 3], atoms: &[(f64, f64)], mean: f64, std: f64) -> [f64; 3] 
 /// The 5, 50 and 95 % quantiles of weighted atoms (value, weight).
 pub(super) fn quantiles(atoms: &mut [(f64, f64)]) -> [f64; 3] {
     atoms.sort_by(|a, b| a.0.total_cmp(&b.0));
-    [0.05, 0.5, 0.95].map(|q| sorted_quantile(atoms, q))
+    let total: f64 = atoms.iter().map(|a| a.1).sum();
+    [0.05, 0.5, 0.95].map(|q| sorted_quantile(atoms, total, q))
 }
 
-/// The `q` quantile of weighted atoms sorted by value: each atom's weight centred on it,
-/// linear between neighbouring centres (the lower atom where one of the two is infinite).
-pub(super) fn sorted_quantile(atoms: &[(f64, f64)], q: f64) -> f64 {
-    let total: f64 = atoms.iter().map(|a| a.1).sum();
+/// The `q` quantile of weighted atoms sorted by value, of weight `total`: each atom's weight
+/// centred on it, linear between neighbouring centres (the lower atom where one of the two is
+/// infinite).
+pub(super) fn sorted_quantile(atoms: &[(f64, f64)], total: f64, q: f64) -> f64 {
     let target = q * total;
     let mut acc = 0.0;
     for (k, &(v, w)) in atoms.iter().enumerate() {

@@ -121,7 +121,8 @@ impl Tally {
             return None;
         }
         a.sort_by(|x, y| x.0.total_cmp(&y.0));
-        Some(sorted_quantile(&a, q))
+        let total = a.iter().map(|x| x.1).sum();
+        Some(sorted_quantile(&a, total, q))
     }
     fn ratio(&self, l: Layout, k: usize) -> f64 {
         self.v[k] / self.v[l.mass()]
