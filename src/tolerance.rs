@@ -341,7 +341,8 @@ pub fn first_order(value: f64, grad: &[f64], s: &Spread) -> (Stat, Vec<f64>) {
     let shares = (0..n)
         .map(|i| {
             if var > 0.0 {
-                grad[i] * sg[i] / var
+                // `+ 0.0`: a variable without influence has share 0, not −0.
+                grad[i] * sg[i] / var + 0.0
             } else {
                 0.0
             }
@@ -565,5 +566,19 @@ mod tests {
         let st = second_order(1.0, &[2.0], &DMatrix::from_element(1, 1, 5.0), &s);
         assert!((st.mean - (1.0 + 0.5 * 5.0 * 0.09)).abs() < 1e-15);
         assert!((st.std - (4.0 * 0.09 + 0.5 * 25.0 * 0.0081f64).sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_variable_outside_the_case_has_share_zero_not_minus_zero() {
+        // The second variable is not toleranced in this case (σ = 0) and lowers the output.
+        let s = Spread {
+            sigma: vec![0.3, 0.0],
+            distribution: vec![Distribution::Normal; 2],
+            correlation: DMatrix::identity(2, 2),
+            covariance: DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![0.09, 0.0])),
+        };
+        let (_, shares) = first_order(1.0, &[2.0, -3.0], &s);
+        assert!(shares[0].to_bits() == 1f64.to_bits());
+        assert_eq!(shares[1].to_string(), "0");
     }
 }

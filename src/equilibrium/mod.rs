@@ -59,7 +59,7 @@ pub enum EquilibriumError {
         equations: usize,
     },
     #[error(
-        "no steady state: the equilibrium equations depend on the value of the driven coordinate '{coordinate}' (residual change {sensitivity:.3e}); is gravity along the drive axis?"
+        "no steady state: the equilibrium equations depend on the value of the driven coordinate '{coordinate}' (residual change {sensitivity:.3e}); is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
     )]
     NoSteadyState {
         coordinate: String,

@@ -15,8 +15,8 @@
 //! the bodies below the joint, accumulated from the leaves (O(n) for all rows).
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
-use super::System;
 use super::kinematics::{Pose, poses};
+use super::{LoadData, System};
 use crate::real::{
     D1, D2, M3, Real, V3, axial, axial_tn, cst, lift1, lift2, mul3, mul3_t, mulv, mulv_t,
 };
@@ -621,6 +621,47 @@ pub fn evaluate_with<T: Real>(
             v: force,
         });
     }
+    // The applied loads, against the inertia as the weight is: a force `f` at the point `x`
+    // is the wrench `(x × f, f)` about the origin; a follower's components turn with its body.
+    for load in &sys.loads {
+        let (body, moment, force) = match load {
+            LoadData::Force {
+                body,
+                point,
+                force,
+                follower,
+            } => {
+                let pose = &j.pose[*body];
+                let x = pose.apply(point);
+                let f = if *follower {
+                    mulv(&pose.rot, force)
+                } else {
+                    *force
+                };
+                (*body, x.cross(&f), f)
+            }
+            LoadData::Torque {
+                body,
+                torque,
+                follower,
+            } => {
+                let t = if *follower {
+                    mulv(&j.pose[*body].rot, torque)
+                } else {
+                    *torque
+                };
+                (*body, t, V3::from_element(cst::<T>(0.0)))
+            }
+            LoadData::Coordinate { .. } => continue,
+        };
+        wrench[body].add_scaled(
+            &Screw {
+                w: moment,
+                v: force,
+            },
+            cst(-1.0),
+        );
+    }
     // Each element's components over the poses with their rates (the values and their rates),
     // applied to its end bodies as the wrenches whose power on a twist is the element's.
     let mut element_force = Vec::new();
@@ -669,6 +710,11 @@ pub fn evaluate_with<T: Real>(
     }
     for e in &sys.joint_elements {
         r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
+    }
+    for load in &sys.loads {
+        if let LoadData::Coordinate { coordinate, value } = load {
+            r[*coordinate] -= *value;
+        }
     }
     Dynamics {
         r,

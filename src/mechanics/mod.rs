@@ -9,7 +9,7 @@ pub mod dynamics;
 pub mod kinematics;
 pub mod ports;
 
-use crate::model::{Field, FieldError, Model};
+use crate::model::{Field, FieldError, LoadKind, Model};
 use crate::real::{M3, Real, V3, cst, mul3, mul3_t};
 use crate::rigid::{Pose, perpendicular};
 use crate::{cuts, forces, joints};
@@ -72,6 +72,59 @@ pub struct PortData<T> {
     pub rotation: bool,
 }
 
+/// An applied load (see [`crate::model::Load`]) with its vectors evaluated: a force at a body's
+/// point (reference configuration), a torque on a body, each in ground axes or turning with
+/// the body (`follower`), or a generalised force on a coordinate.
+#[derive(Debug, Clone)]
+pub enum LoadData<T> {
+    Force {
+        body: usize,
+        point: V3<T>,
+        force: V3<T>,
+        follower: bool,
+    },
+    Torque {
+        body: usize,
+        torque: V3<T>,
+        follower: bool,
+    },
+    Coordinate {
+        coordinate: usize,
+        value: T,
+    },
+}
+
+impl<T: Real> LoadData<T> {
+    fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> LoadData<U> {
+        match self {
+            LoadData::Force {
+                body,
+                point,
+                force,
+                follower,
+            } => LoadData::Force {
+                body: *body,
+                point: point.map(f),
+                force: force.map(f),
+                follower: *follower,
+            },
+            LoadData::Torque {
+                body,
+                torque,
+                follower,
+            } => LoadData::Torque {
+                body: *body,
+                torque: torque.map(f),
+                follower: *follower,
+            },
+            LoadData::Coordinate { coordinate, value } => LoadData::Coordinate {
+                coordinate: *coordinate,
+                value: f(*value),
+            },
+        }
+    }
+}
+
 /// A model instantiated at one set of parameter values and one speed, over scalar `T`.
 #[derive(Debug, Clone)]
 pub struct System<T> {
@@ -83,6 +136,7 @@ pub struct System<T> {
     pub forces: Vec<ForceData<T>>,
     pub constraints: Vec<ConstraintData<T>>,
     pub ports: Vec<PortData<T>>,
+    pub loads: Vec<LoadData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
     /// For each coordinate, its joint (index into `joints`).
@@ -226,6 +280,35 @@ impl<T: Real> System<T> {
                 rotation: port.rotation,
             });
         }
+        let mut loads = Vec::with_capacity(model.loads.len());
+        for load in &model.loads {
+            loads.push(match &load.kind {
+                LoadKind::Force {
+                    body,
+                    point,
+                    force,
+                    follower,
+                } => LoadData::Force {
+                    body: *body,
+                    point: v3(point, p, w)?,
+                    force: v3(force, p, w)?,
+                    follower: *follower,
+                },
+                LoadKind::Torque {
+                    body,
+                    torque,
+                    follower,
+                } => LoadData::Torque {
+                    body: *body,
+                    torque: v3(torque, p, w)?,
+                    follower: *follower,
+                },
+                LoadKind::Coordinate { coordinate, value } => LoadData::Coordinate {
+                    coordinate: *coordinate,
+                    value: value.eval(p, w)?,
+                },
+            });
+        }
         let span = spans(&joints, model.bodies.len());
         let mut coord_joint = vec![0; model.coordinates.len()];
         for (ji, j) in joints.iter().enumerate() {
@@ -239,6 +322,7 @@ impl<T: Real> System<T> {
             forces,
             constraints,
             ports,
+            loads,
             drive,
             coord_joint,
             span,
@@ -338,6 +422,7 @@ impl<T: Real> System<T> {
                     rotation: port.rotation,
                 })
                 .collect(),
+            loads: self.loads.iter().map(|l| l.map(f)).collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),
             coord_joint: self.coord_joint.clone(),
             span: self.span.clone(),

@@ -119,6 +119,15 @@ pub enum EvalError {
 impl Expr {
     /// Parses `src`; `lookup` maps a name to a parameter index.
     pub fn parse(src: &str, lookup: &dyn Fn(&str) -> Option<usize>) -> Result<Expr, ParseError> {
+        Expr::parse_with(src, &|name| lookup(name).map(Expr::Param))
+    }
+
+    /// Parses `src`; `lookup` maps a name to the expression it stands for (a parameter, or the
+    /// expression of a derived parameter, put in its place as if written there in brackets).
+    pub fn parse_with(
+        src: &str,
+        lookup: &dyn Fn(&str) -> Option<Expr>,
+    ) -> Result<Expr, ParseError> {
         if src.len() > MAX_LEN {
             return Err(ParseError {
                 offset: 0,
@@ -140,6 +149,16 @@ impl Expr {
             return Err(p.err_here("unexpected text after the end of the expression"));
         }
         Ok(e)
+    }
+
+    /// The number of nodes of the tree (what a chain of derived parameters could multiply).
+    pub fn size(&self) -> usize {
+        1 + match self {
+            Expr::Num(_) | Expr::Param(_) | Expr::Speed => 0,
+            Expr::Neg(a) => a.size(),
+            Expr::Bin(_, a, b) => a.size() + b.size(),
+            Expr::Call(_, args) => args.iter().map(Expr::size).sum(),
+        }
     }
 
     /// Does the expression mention the operating speed?
@@ -331,7 +350,7 @@ struct Parser<'a> {
     toks: Vec<(Tok, usize)>,
     pos: usize,
     depth: usize,
-    lookup: &'a dyn Fn(&str) -> Option<usize>,
+    lookup: &'a dyn Fn(&str) -> Option<Expr>,
 }
 
 impl Parser<'_> {
@@ -452,7 +471,7 @@ impl Parser<'_> {
                     "pi" => Ok(Expr::Num(std::f64::consts::PI)),
                     "speed" => Ok(Expr::Speed),
                     _ => match (self.lookup)(&name) {
-                        Some(i) => Ok(Expr::Param(i)),
+                        Some(e) => Ok(e),
                         None => Err(ParseError {
                             offset: off,
                             message: format!("unknown parameter '{name}'"),

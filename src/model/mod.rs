@@ -138,6 +138,19 @@ pub struct Parameter {
     pub site: Site,
 }
 
+/// A parameter defined by an expression of other parameters (`[parameters] h = "L/10"`).
+#[derive(Debug, Clone)]
+pub struct Derived {
+    pub name: String,
+    /// The expression as written.
+    pub text: String,
+    /// The expression over the (base) parameters, derived ones put in place.
+    pub expr: Expr,
+    /// Its value at the nominal parameters.
+    pub value: f64,
+    pub site: Site,
+}
+
 /// A rigid body. Inertia is about the centre of mass, in global axes of the reference
 /// configuration; `cm` is the centre of mass there.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -260,9 +273,35 @@ impl SpeedRange {
         false
     }
 
-    /// The `i`-th speed (computed as `from + i·step`, no accumulated rounding).
+    /// The `i`-th speed, `from + i·step`, as the grid point it is: where `from` and `step`
+    /// are decimals of at most 15 places (`0:5:0.05`), the double nearest to the decimal
+    /// `from + i·step` (so that `1.9` prints as `1.9`, not `1.9000000000000001`), computed
+    /// exactly in integers and rounded once; else `from + i·step` (no accumulated rounding).
     pub fn at(&self, i: usize) -> f64 {
-        self.from + i as f64 * self.step
+        match self.decimal() {
+            Some((f, s, scale)) => {
+                let n = f + i as f64 * s;
+                if n.abs() < 2f64.powi(53) {
+                    n / scale
+                } else {
+                    self.from + i as f64 * self.step
+                }
+            }
+            None => self.from + i as f64 * self.step,
+        }
+    }
+
+    /// `(from·10^k, step·10^k, 10^k)` with integers for the smallest `k ≤ 15` at which
+    /// `from` and `step` are decimals of `k` places, `None` where they are not.
+    fn decimal(&self) -> Option<(f64, f64, f64)> {
+        (0..=15).find_map(|k| {
+            let scale = 10f64.powi(k);
+            let exact = |x: f64| {
+                let n = (x * scale).round();
+                (n.abs() < 2f64.powi(53) && (n / scale).to_bits() == x.to_bits()).then_some(n)
+            };
+            Some((exact(self.from)?, exact(self.step)?, scale))
+        })
     }
 
     /// All speeds.
@@ -310,6 +349,37 @@ pub struct Port {
     pub point: [Field; 3],
     pub direction: [Field; 3],
     pub rotation: bool,
+}
+
+/// An applied load (`[[loads]]`): a constant force or torque on a body, or a generalised force
+/// on a joint coordinate, each component an expression of the parameters (so it can carry a
+/// tolerance).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Load {
+    pub name: String,
+    pub kind: LoadKind,
+}
+
+/// What a load applies, and where.
+#[derive(Debug, Clone, serde::Serialize)]
+pub enum LoadKind {
+    /// A force (N) at `point` of `body` (given in the reference configuration): its components
+    /// in ground axes (a dead load, `follower = false`) or in the body's axes as drawn, turning
+    /// with it (a follower load).
+    Force {
+        body: usize,
+        point: Box<[Field; 3]>,
+        force: Box<[Field; 3]>,
+        follower: bool,
+    },
+    /// A torque (N·m) on `body`, in ground axes or turning with the body.
+    Torque {
+        body: usize,
+        torque: Box<[Field; 3]>,
+        follower: bool,
+    },
+    /// A generalised force on a free joint coordinate (N·m on an angle, N on a length).
+    Coordinate { coordinate: usize, value: Field },
 }
 
 /// A correlation matrix between parameters (rows and columns in the order of `params`).
@@ -366,6 +436,11 @@ pub struct Model {
     #[serde(skip)]
     pub file: String,
     pub parameters: Vec<Parameter>,
+    /// Parameters defined by expressions of others (`h = "L/10"`), in file order: put in place
+    /// of their names wherever they are used, so they are not design variables of their own
+    /// (and what uses them is hashed through its fields).
+    #[serde(skip)]
+    pub derived: Vec<Derived>,
     pub gravity: [Field; 3],
     pub bodies: Vec<Body>,
     pub joints: Vec<Joint>,
@@ -376,6 +451,8 @@ pub struct Model {
     pub constraints: Vec<Constraint>,
     /// Named ports for transfer functions between physical points.
     pub ports: Vec<Port>,
+    /// Applied loads (`[[loads]]`), in file order.
+    pub loads: Vec<Load>,
     /// User's choice of independent coordinates (coordinate indices), if any.
     pub independent: Option<Vec<usize>>,
     pub analysis: Analysis,
@@ -749,5 +826,38 @@ impl Model {
     /// Degrees of freedom: free coordinates minus constraint equations.
     pub fn dof(&self) -> usize {
         self.free().len().saturating_sub(self.n_constraints())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SpeedRange;
+
+    #[test]
+    fn speeds_are_the_decimal_grid_points() {
+        let r = SpeedRange::parse("0:10:0.05").unwrap();
+        assert_eq!(r.len(), 201);
+        for (i, w) in r.speeds().enumerate() {
+            // The double nearest to the decimal i·0.05, so it prints with at most 2 places.
+            let decimal: f64 = format!("{}.{:02}", i / 20, (i % 20) * 5).parse().unwrap();
+            assert!(w.to_bits() == decimal.to_bits(), "{i}: {w} vs {decimal}");
+            assert!(w.to_string().split('.').nth(1).is_none_or(|d| d.len() <= 2));
+        }
+        let r = SpeedRange::parse("9.5:10:0.05").unwrap();
+        assert_eq!(r.at(7).to_string(), "9.85");
+        assert_eq!(
+            SpeedRange::parse("0:1:0.1").unwrap().at(3).to_string(),
+            "0.3"
+        );
+        let r = SpeedRange::parse("-1.25:1:0.25").unwrap();
+        assert_eq!(r.at(5).to_string(), "0");
+        // Not a short decimal: `from + i·step` as before.
+        let third = 1.0 / 3.0;
+        let r = SpeedRange {
+            from: 0.0,
+            to: 1.0,
+            step: third,
+        };
+        assert!(r.at(2).to_bits() == (2.0 * third).to_bits());
     }
 }

@@ -107,6 +107,8 @@ pub struct FileSchema {
     pub constraints: Vec<Spanned<ConstraintSchema>>,
     #[serde(default)]
     pub ports: Vec<Spanned<PortSchema>>,
+    #[serde(default)]
+    pub loads: Vec<Spanned<LoadSchema>>,
     pub analysis: Option<Spanned<AnalysisSchema>>,
     #[serde(default)]
     pub requirements: Vec<Spanned<RequirementSchema>>,
@@ -195,6 +197,21 @@ pub struct PortSchema {
     pub body: Spanned<String>,
     pub point: Option<SVec>,
     pub direction: SVec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSchema {
+    pub name: Spanned<String>,
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    pub body: Option<Spanned<String>>,
+    pub point: Option<SVec>,
+    pub force: Option<SVec>,
+    pub torque: Option<SVec>,
+    pub frame: Option<Spanned<String>>,
+    pub coordinate: Option<Spanned<String>>,
+    pub value: Option<SNum>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -9,8 +9,8 @@
 //! invariant under a rotation of the whole world, and the joint's own coordinate enters no row
 //! of `F` but its own drive row. So `F` cannot depend on the joint's angle when nothing the joint
 //! does not carry sees that part of the world turn: no force element and no cut joint joins a
-//! carried body to one it does not carry (or to the ground), and gravity is along the axis (or
-//! zero). The proof is exact; where it does not apply, the numerical check runs as before.
+//! carried body to one it does not carry (or to the ground), no load fixed in ground axes acts
+//! on a carried body, and gravity is along the axis (or zero). The proof is exact; where it does not apply, the numerical check runs as before.
 
 use super::Model;
 use crate::joints::Kind;
@@ -45,7 +45,15 @@ impl Model {
                 && !self
                     .constraints
                     .iter()
-                    .any(|k| joins(k.geometry.body1, k.geometry.body2));
+                    .any(|k| joins(k.geometry.body1, k.geometry.body2))
+                // A load fixed in ground axes on a carried body sees it turn.
+                && !self.loads.iter().any(|l| match l.kind {
+                    super::LoadKind::Force { body, follower, .. }
+                    | super::LoadKind::Torque { body, follower, .. } => {
+                        !follower && carried[body]
+                    }
+                    super::LoadKind::Coordinate { .. } => false,
+                });
             if alone {
                 out.push((c, coordinate.joint));
             }

@@ -46,6 +46,28 @@ pub fn check_summary(model: &Model) -> String {
         model.free().len()
     );
     let _ = writeln!(s, "  force elements: {}", model.forces.len());
+    if !model.loads.is_empty() {
+        let _ = writeln!(s, "  loads ({}):", model.loads.len());
+        for l in &model.loads {
+            let what = match &l.kind {
+                crate::model::LoadKind::Force { body, follower, .. } => format!(
+                    "force on {}{}",
+                    model.bodies[*body].name,
+                    if *follower { ", turning with it" } else { "" }
+                ),
+                crate::model::LoadKind::Torque { body, follower, .. } => format!(
+                    "torque on {}{}",
+                    model.bodies[*body].name,
+                    if *follower { ", turning with it" } else { "" }
+                ),
+                crate::model::LoadKind::Coordinate { coordinate, .. } => format!(
+                    "generalised force on {}",
+                    model.coordinates[*coordinate].name
+                ),
+            };
+            let _ = writeln!(s, "    {}: {what}", l.name);
+        }
+    }
     let _ = writeln!(
         s,
         "  constraints: {} ({} equations)",
@@ -64,6 +86,17 @@ pub fn check_summary(model: &Model) -> String {
             None => String::new(),
         };
         let _ = writeln!(s, "    {:<pw$} {}{tol}", p.name, p.value);
+    }
+    if !model.derived.is_empty() {
+        let dw = wide(&mut model.derived.iter().map(|d| d.name.as_str()), 14);
+        let _ = writeln!(
+            s,
+            "  derived parameters ({}, not design variables):",
+            model.derived.len()
+        );
+        for d in &model.derived {
+            let _ = writeln!(s, "    {:<dw$} {} = {}", d.name, d.value, d.text);
+        }
     }
     if !model.analysis.cases.is_empty() {
         let names: Vec<&str> = model

@@ -148,7 +148,16 @@ fn cost(md: &Model, spec: &str) -> Result<(usize, Cost)> {
     let (name, rest) = spec.split_once('=').ok_or_else(bad)?;
     let p = md
         .parameter(name.trim())
-        .ok_or_else(|| InputError(format!("--cost {spec}: no parameter '{}'", name.trim())))?;
+        .ok_or_else(|| {
+            let n = name.trim();
+            InputError(match md.derived.iter().find(|d| d.name == n) {
+                Some(d) => format!(
+                    "--cost {spec}: parameter '{n}' is derived (= \"{}\"); give the cost to the parameters it is made of",
+                    d.text
+                ),
+                None => format!("--cost {spec}: no parameter '{n}'"),
+            })
+        })?;
     let mut parts = rest.split(',').map(|x| x.trim().parse::<f64>());
     let b = parts.next().and_then(|x| x.ok()).ok_or_else(bad)?;
     let k = match parts.next() {

@@ -46,11 +46,7 @@ fn tolerances(ctx: &Ctx, c: &CaseSchema, params: &[Parameter]) -> R<Vec<(usize, 
         let Some(pi) = params.iter().position(|p| &p.name == k.get_ref()) else {
             return Err(ctx.err(
                 k.span(),
-                format!(
-                    "case '{}': unknown parameter '{}'",
-                    c.name.get_ref(),
-                    k.get_ref()
-                ),
+                ctx.not_a_variable(k.get_ref(), &format!("case '{}'", c.name.get_ref())),
             ));
         };
         tolerances.push((

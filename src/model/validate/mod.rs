@@ -9,7 +9,8 @@
 //!
 //! [`validate`] runs the stages in the order of the file's dependencies, each a submodule named
 //! for what it validates: [`syntax`], [`parameters`], [`header`], [`bodies`], [`joints`],
-//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`analysis`], [`requirements`]. The first error
+//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`loads`], [`analysis`],
+//! [`requirements`]. The first error
 //! stops validation, so this order is also the order in which errors are reported. Two stages
 //! keep a part with checks of its own apart: [`inertia`] (of [`bodies`]) and [`cases`] (of
 //! [`analysis`]). The checks several stages share are [`names`], [`geometry`],
@@ -24,6 +25,7 @@ mod geometry;
 mod header;
 mod inertia;
 mod joints;
+mod loads;
 mod locate;
 mod mobility;
 mod names;
@@ -47,8 +49,10 @@ use std::ops::Range;
 pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
     let raw = syntax::parse(text, file)?;
     let mut ctx = Ctx::new(text, file);
-    let parameters = parameters::parameters(&ctx, &raw.parameters, overrides)?;
+    let (parameters, derived) = parameters::parameters(&ctx, &raw.parameters, overrides)?;
     ctx.declare(&parameters);
+    let derived = parameters::derived(&ctx, &derived)?;
+    ctx.derive(&derived);
     let header = header::header(&ctx, &raw)?;
     let (body_names, bodies) = bodies::bodies(&ctx, &raw.bodies)?;
     let tree = joints::joints(&ctx, &raw.joints, &body_names, &bodies)?;
@@ -65,6 +69,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     )?;
     let independent = mobility::mobility(&ctx, &raw, &tree.coordinates, &constraints)?;
     let ports = ports::ports(&ctx, &raw.ports, &body_names, &tree.coordinates)?;
+    let loads = loads::loads(&ctx, &raw.loads, &body_names, &tree.coordinates)?;
     let analysis = analysis::analysis(
         &ctx,
         raw.analysis.as_ref(),
@@ -83,6 +88,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         name: header.name,
         file: file.to_string(),
         parameters,
+        derived,
         gravity: header.gravity,
         bodies,
         joints: tree.joints,
@@ -91,6 +97,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         forces,
         constraints,
         ports,
+        loads,
         independent,
         analysis,
         requirements,
@@ -107,6 +114,9 @@ struct Ctx<'a> {
     params: Vec<String>,
     /// Their nominal values, at which every field that does not use the speed is evaluated.
     values: Vec<f64>,
+    /// The derived parameters' names, expressions as written and expressions put in place of
+    /// their names.
+    derived: Vec<(String, String, Expr)>,
     /// Byte offset of each line's start: every field's site is located by bisection (counting
     /// lines from the top for each of a large model's thousands of fields was quadratic).
     line_starts: Vec<usize>,
@@ -122,6 +132,7 @@ impl<'a> Ctx<'a> {
             file,
             params: Vec::new(),
             values: Vec::new(),
+            derived: Vec::new(),
             line_starts: line_starts(text),
         }
     }
@@ -130,6 +141,27 @@ impl<'a> Ctx<'a> {
     fn declare(&mut self, parameters: &[Parameter]) {
         self.params = parameters.iter().map(|p| p.name.clone()).collect();
         self.values = parameters.iter().map(|p| p.value).collect();
+    }
+
+    /// From now on, expressions may also refer to the `derived` parameters (their
+    /// expressions are put in their place).
+    fn derive(&mut self, derived: &[super::Derived]) {
+        self.derived = derived
+            .iter()
+            .map(|d| (d.name.clone(), d.text.clone(), d.expr.clone()))
+            .collect();
+    }
+
+    /// Why `name` is not a design variable: derived (and from what), or unknown (`what` says
+    /// where it was named).
+    fn not_a_variable(&self, name: &str, what: &str) -> String {
+        match self.derived.iter().find(|d| d.0 == name) {
+            Some(d) => format!(
+                "{what}: parameter '{name}' is derived (= \"{}\") and carries no tolerance or cost of its own; give them to the parameters it is made of",
+                d.1
+            ),
+            None => format!("{what}: unknown parameter '{name}'"),
+        }
     }
 
     /// Where errors about the file as a whole point: its first character.
@@ -167,8 +199,15 @@ impl<'a> Ctx<'a> {
                 Expr::Num(*v)
             }
             Num::Expr(s) => {
-                let lookup = |name: &str| self.params.iter().position(|p| p == name);
-                Expr::parse(s, &lookup).map_err(|e| {
+                let lookup = |name: &str| match self.params.iter().position(|p| p == name) {
+                    Some(i) => Some(Expr::Param(i)),
+                    None => self
+                        .derived
+                        .iter()
+                        .find(|d| d.0 == name)
+                        .map(|d| d.2.clone()),
+                };
+                Expr::parse_with(s, &lookup).map_err(|e| {
                     // The string starts one byte after its opening quote.
                     let off = span.start + 1 + e.offset;
                     error_at(

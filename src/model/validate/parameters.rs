@@ -1,23 +1,43 @@
 //! The `[parameters]` table and the tolerances written in it (and in the analysis cases): names,
-//! nominal values, tolerances and distributions, then the overrides of the command line. Its own
-//! stage because every later expression refers to these names and is checked at these values.
+//! nominal values, tolerances and distributions, then the overrides of the command line, then the
+//! derived parameters (`h = "L/10"`: an expression of other parameters, resolved in the order of
+//! their dependencies, a cycle refused). Its own stage because every later expression refers to
+//! these names and is checked at these values.
+//!
+//! A derived parameter is put in place of its name wherever it is used, as if its expression
+//! were written there in brackets: a model written with `h = "L/10"` is the model with `(L/10)`
+//! written in every field, to the bit, and a tolerance on `L` reaches everything made from it.
+//! It is not a design variable of its own: it carries no tolerance, and `--set` and the
+//! tolerance cases refuse it, naming what it is made of.
 
 use super::names::check_name;
 use super::{Ctx, R};
-use crate::model::{Distribution, ModelError, Parameter, Tolerance};
+use crate::model::{Derived, Distribution, Expr, ModelError, Parameter, Tolerance};
 use std::collections::BTreeMap;
 use std::ops::Range;
 use toml::Spanned;
 
-/// The parameters in file order, with the `overrides` applied.
+/// A derived parameter as written: its name, its expression and where that is.
+pub(super) struct RawDerived {
+    name: String,
+    text: String,
+    span: Range<usize>,
+}
+
+/// Derived parameters may expand to at most this many terms (a chain of parameters each using
+/// the previous one twice doubles it at every link).
+const MAX_TERMS: usize = 100_000;
+
+/// The parameters in file order, with the `overrides` applied, and the derived ones as written.
 pub(super) fn parameters(
     ctx: &Ctx,
     raw: &BTreeMap<Spanned<String>, Spanned<toml::Value>>,
     overrides: &[(String, f64)],
-) -> R<Vec<Parameter>> {
+) -> R<(Vec<Parameter>, Vec<RawDerived>)> {
     let mut praw: Vec<_> = raw.iter().collect();
     praw.sort_by_key(|(k, _)| k.span().start);
     let mut parameters = Vec::new();
+    let mut derived = Vec::new();
     for (k, v) in praw {
         check_name(ctx, k, "parameter")?;
         if ["speed", "pi"].contains(&k.get_ref().as_str()) {
@@ -29,10 +49,113 @@ pub(super) fn parameters(
                 ),
             ));
         }
-        parameters.push(parameter(ctx, k, v)?);
+        match v.get_ref() {
+            toml::Value::String(text) => derived.push(RawDerived {
+                name: k.get_ref().clone(),
+                text: text.clone(),
+                span: v.span(),
+            }),
+            _ => parameters.push(parameter(ctx, k, v)?),
+        }
     }
-    override_values(ctx, &mut parameters, overrides)?;
-    Ok(parameters)
+    override_values(ctx, &mut parameters, &derived, overrides)?;
+    Ok((parameters, derived))
+}
+
+/// Resolves the derived parameters over the declared ones, in the order of their
+/// dependencies: each expression with the derived parameters it uses put in place, and its
+/// nominal value. Refuses an unknown name, the speed, a cycle and an expansion beyond
+/// [`MAX_TERMS`], each at its place.
+pub(super) fn derived(ctx: &Ctx, raw: &[RawDerived]) -> R<Vec<Derived>> {
+    let mut done: Vec<Option<Expr>> = vec![None; raw.len()];
+    loop {
+        let mut progress = false;
+        for k in 0..raw.len() {
+            if done[k].is_some() {
+                continue;
+            }
+            let d = &raw[k];
+            let waiting = std::cell::Cell::new(false);
+            let lookup = |name: &str| {
+                if let Some(i) = ctx.params.iter().position(|p| p == name) {
+                    return Some(Expr::Param(i));
+                }
+                let j = raw.iter().position(|r| r.name == name)?;
+                match &done[j] {
+                    Some(e) => Some(e.clone()),
+                    None => {
+                        waiting.set(true);
+                        Some(Expr::Num(0.0))
+                    }
+                }
+            };
+            let what = format!("parameter '{}'", d.name);
+            let e = Expr::parse_with(&d.text, &lookup).map_err(|e| {
+                ctx.err(
+                    d.span.start + 1 + e.offset..d.span.end,
+                    format!("{what}: bad expression \"{}\": {}", d.text, e.message),
+                )
+            })?;
+            if waiting.get() {
+                continue;
+            }
+            if e.uses_speed() {
+                return Err(ctx.err(
+                    d.span.clone(),
+                    format!(
+                        "{what}: a parameter cannot depend on the speed (write `speed` in the fields that do)"
+                    ),
+                ));
+            }
+            if e.size() > MAX_TERMS {
+                return Err(ctx.err(
+                    d.span.clone(),
+                    format!(
+                        "{what}: its expression expands to more than {MAX_TERMS} terms through the derived parameters it uses"
+                    ),
+                ));
+            }
+            done[k] = Some(e);
+            progress = true;
+        }
+        if done.iter().all(Option::is_some) {
+            break;
+        }
+        if !progress {
+            let left: Vec<&RawDerived> = raw
+                .iter()
+                .zip(&done)
+                .filter(|(_, e)| e.is_none())
+                .map(|(r, _)| r)
+                .collect();
+            let names: Vec<&str> = left.iter().map(|r| r.name.as_str()).collect();
+            return Err(ctx.err(
+                left[0].span.clone(),
+                format!(
+                    "parameter '{}': derived parameters defined through each other in a cycle ({})",
+                    left[0].name,
+                    names.join(", ")
+                ),
+            ));
+        }
+    }
+    raw.iter()
+        .zip(done)
+        .map(|(d, e)| {
+            let expr = e.expect("every one resolved");
+            let what = format!("parameter '{}'", d.name);
+            let value = expr
+                .eval(&ctx.values, 0.0)
+                .map_err(|e| ctx.err(d.span.clone(), format!("{what}: {e}")))?;
+            Ok(Derived {
+                name: d.name.clone(),
+                text: d.text.clone(),
+                expr,
+                value,
+                site: ctx.site(&d.span, what),
+            })
+        })
+        .collect()
 }
 
 /// A tolerance: `"3%"` (relative) or a number (absolute), finite and not negative.
@@ -104,6 +227,14 @@ fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<P
             let value = t
                 .get("value")
                 .ok_or_else(|| ctx.err(span.clone(), format!("{what}: missing 'value'")))?;
+            if let toml::Value::String(text) = value {
+                return Err(ctx.err(
+                    span,
+                    format!(
+                        "{what}: a parameter defined by an expression is written {n} = \"{text}\" (no table): it carries no tolerance or distribution of its own; tolerance the parameters it is made of"
+                    ),
+                ));
+            }
             let value = num(value).ok_or_else(|| {
                 ctx.err(span.clone(), format!("{what}: 'value' must be a number"))
             })?;
@@ -149,7 +280,12 @@ fn parameter(ctx: &Ctx, name: &Spanned<String>, v: &Spanned<toml::Value>) -> R<P
 /// Replaces the nominal values of the named parameters, before anything reads them: the
 /// model is then validated exactly as if the file had said so. A name the model does not
 /// declare, or a value that is not finite, is an error naming the override.
-fn override_values(ctx: &Ctx, parameters: &mut [Parameter], overrides: &[(String, f64)]) -> R<()> {
+fn override_values(
+    ctx: &Ctx,
+    parameters: &mut [Parameter],
+    derived: &[RawDerived],
+    overrides: &[(String, f64)],
+) -> R<()> {
     for (name, value) in overrides {
         let err = |message: String| ModelError {
             file: ctx.file.to_string(),
@@ -158,6 +294,12 @@ fn override_values(ctx: &Ctx, parameters: &mut [Parameter], overrides: &[(String
             message,
             snippet: None,
         };
+        if let Some(d) = derived.iter().find(|d| &d.name == name) {
+            return Err(err(format!(
+                "override '{name}': '{name}' is derived (= \"{}\"); set the parameters it is made of",
+                d.text
+            )));
+        }
         let Some(p) = parameters.iter().position(|p| &p.name == name) else {
             let names: Vec<&str> = parameters.iter().map(|p| p.name.as_str()).collect();
             return Err(err(format!(

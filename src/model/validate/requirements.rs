@@ -271,7 +271,7 @@ pub(super) fn allocation(
         let Some(pi) = params.iter().position(|p| &p.name == name.get_ref()) else {
             return Err(ctx.err(
                 name.span(),
-                format!("allocation cost: unknown parameter '{}'", name.get_ref()),
+                ctx.not_a_variable(name.get_ref(), "allocation cost"),
             ));
         };
         let s = c.get_ref();
