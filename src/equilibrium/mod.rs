@@ -59,6 +59,14 @@ pub enum EquilibriumError {
         equations: usize,
     },
     #[error(
+        "the cut joint '{name}' has an equation that is redundant as drawn (and so not imposed) but {violation} at the equilibrium: the loop's constraint rank changes there (a singular configuration, or another assembly); close the loop without the redundancy"
+    )]
+    RankChanged {
+        name: String,
+        /// How the equation fails: `is violated by …`, or has no finite value.
+        violation: String,
+    },
+    #[error(
         "no steady state: the equilibrium equations depend on the value of the driven coordinate '{coordinate}' (residual change {sensitivity:.3e}); is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
     )]
     NoSteadyState {

@@ -75,7 +75,25 @@ pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
     let pose = |b: Option<usize>| b.map_or(&ground, |b| &p[b]);
     for c in &sys.constraints {
         let g = &c.geometry;
-        c.kind.values(g, pose(g.body1), pose(g.body2), &mut out);
+        c.values(g, pose(g.body1), pose(g.body2), &mut out);
+    }
+    out
+}
+
+/// The redundant equations not imposed ([`crate::model::Constraint::dropped`]) at the given
+/// body poses: `(constraint, value)` of each.
+pub fn dropped_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<(usize, U)> {
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(&ground, |b| &p[b]);
+    let mut out = Vec::new();
+    for (k, c) in sys.constraints.iter().enumerate() {
+        if c.dropped.is_empty() {
+            continue;
+        }
+        let g = &c.geometry;
+        let mut all = Vec::new();
+        c.kind.values(g, pose(g.body1), pose(g.body2), &mut all);
+        out.extend(c.dropped.iter().map(|&e| (k, all[e])));
     }
     out
 }
@@ -444,14 +462,14 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
     let mut row = 0;
     for c in &partial.constraints {
         let g = &c.geometry;
-        let rows = c.kind.equations();
+        let rows = c.rows();
         end_partials(
             partial,
             &p0,
             [g.body1, g.body2],
             &twist,
             rows,
-            |x1, x2, out| c.kind.values(g, x1, x2, out),
+            |x1, x2, out| c.values(g, x1, x2, out),
         )
         .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
         row += rows;

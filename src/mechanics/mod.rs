@@ -61,6 +61,37 @@ pub struct ForceData<T> {
 pub struct ConstraintData<T> {
     pub kind: cuts::Kind,
     pub geometry: cuts::Geometry<V3<T>, T>,
+    /// Its redundant equations, not imposed (see [`crate::model::Constraint::dropped`]).
+    pub dropped: Vec<usize>,
+}
+
+impl<T: Real> ConstraintData<T> {
+    /// The equations imposed (the redundant ones left out) at the poses of its two bodies,
+    /// appended to `out`.
+    pub fn values<U: Real>(
+        &self,
+        g: &cuts::Geometry<V3<U>, U>,
+        x1: &Pose<U>,
+        x2: &Pose<U>,
+        out: &mut Vec<U>,
+    ) {
+        let start = out.len();
+        self.kind.values(g, x1, x2, out);
+        if !self.dropped.is_empty() {
+            let all = out.split_off(start);
+            out.extend(
+                all.into_iter()
+                    .enumerate()
+                    .filter(|(k, _)| !self.dropped.contains(k))
+                    .map(|(_, v)| v),
+            );
+        }
+    }
+
+    /// How many equations it imposes.
+    pub fn rows(&self) -> usize {
+        self.kind.equations() - self.dropped.len()
+    }
 }
 
 /// A port (see [`crate::model::Port`]): a body's point and a unit direction, as drawn.
@@ -269,6 +300,7 @@ impl<T: Real> System<T> {
                     axis2: direction(&g.axis2, use_axis2, p, w)?,
                     length: g.length.as_ref().map(|f| f.eval(p, w)).transpose()?,
                 },
+                dropped: c.dropped.clone(),
             });
         }
         let mut ports = Vec::with_capacity(model.ports.len());
@@ -409,6 +441,7 @@ impl<T: Real> System<T> {
                             axis2: v(&g.axis2),
                             length: g.length.map(f),
                         },
+                        dropped: c.dropped.clone(),
                     }
                 })
                 .collect(),

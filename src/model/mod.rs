@@ -218,6 +218,9 @@ pub struct Constraint {
     pub name: String,
     pub kind: crate::cuts::Kind,
     pub geometry: crate::cuts::Geometry<[Field; 3], Field>,
+    /// Its equations (indices within it) that are redundant at the reference configuration
+    /// and not imposed (a planar loop's out-of-plane equations, say).
+    pub dropped: Vec<usize>,
 }
 
 /// Inclusive range of speeds `from:to:step` (rad/s).
@@ -751,9 +754,12 @@ impl Model {
             .collect()
     }
 
-    /// Number of scalar constraint equations.
+    /// Number of scalar constraint equations imposed (the redundant ones dropped).
     pub fn n_constraints(&self) -> usize {
-        self.constraints.iter().map(|c| c.kind.equations()).sum()
+        self.constraints
+            .iter()
+            .map(|c| c.kind.equations() - c.dropped.len())
+            .sum()
     }
 
     /// The design variables named (parameter indices), or, without names, those that carry a

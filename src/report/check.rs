@@ -75,7 +75,22 @@ pub fn check_summary(model: &Model) -> String {
         model.n_constraints()
     );
     for c in &model.constraints {
-        let _ = writeln!(s, "    {}", c.name);
+        if c.dropped.is_empty() {
+            let _ = writeln!(s, "    {}", c.name);
+        } else {
+            let _ = writeln!(
+                s,
+                "    {} ({} of its {} equations redundant as drawn, dropped: {})",
+                c.name,
+                c.dropped.len(),
+                c.kind.equations(),
+                c.dropped
+                    .iter()
+                    .map(|e| format!("#{}", e + 1))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
     }
     let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
     let _ = writeln!(s, "  parameters ({}):", model.parameters.len());

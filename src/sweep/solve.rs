@@ -103,7 +103,9 @@ pub fn point_from(
             .model()
             .constraints
             .iter()
-            .flat_map(|c| std::iter::repeat_n(c.name.as_str(), c.kind.equations()))
+            .flat_map(|c| {
+                std::iter::repeat_n(c.name.as_str(), c.kind.equations() - c.dropped.len())
+            })
             .collect();
         let mut names: Vec<String> = redundant.iter().map(|&k| owners[k].to_string()).collect();
         names.dedup();
@@ -224,6 +226,7 @@ fn analyse(
     }: Solution,
     opt: &Options,
 ) -> Result<Point, PointError> {
+    rank_kept(model, p, eq.speed, &eq.q)?;
     let free = model.free();
     let nf = free.len();
     // Φ_R from the λ columns of Newton's Jacobian, which are [Φ_Rᵀ; 0].
@@ -289,4 +292,45 @@ fn shapes(basis: &DMatrix<f64>, modes: &[Mode]) -> Vec<DVector<C64>> {
             )
         })
         .collect()
+}
+
+/// Checks that the cut joints' equations dropped as redundant as drawn still hold at the
+/// equilibrium `q` (the loop's constraint rank is the same there); only for models with such
+/// equations.
+fn rank_kept(model: &Model, p: &[f64], speed: f64, q: &[f64]) -> Result<(), EquilibriumError> {
+    if model.constraints.iter().all(|c| c.dropped.is_empty()) {
+        return Ok(());
+    }
+    // A field that does not evaluate failed the solve before this.
+    let Ok(sys) = crate::mechanics::System::<f64>::new(model, p, speed) else {
+        return Ok(());
+    };
+    let poses = crate::mechanics::kinematics::poses(&sys, q);
+    // The model's size: the tolerance of a violated equation (lengths, and angles' sines).
+    let size = model_size(&sys).max(1.0);
+    for (k, v) in crate::mechanics::dynamics::dropped_values(&sys, &poses) {
+        if v.is_nan() || v.abs() > 1e-8 * size {
+            return Err(EquilibriumError::RankChanged {
+                name: model.constraints[k].name.clone(),
+                violation: if v.is_finite() {
+                    format!("is violated by {v:.3e}")
+                } else {
+                    "has no finite value".into()
+                },
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The largest distance from the origin of a joint, a cut joint's point or a body's centre of
+/// mass as drawn.
+fn model_size(sys: &crate::mechanics::System<f64>) -> f64 {
+    let joints = sys.joints.iter().map(|j| j.geometry.at.norm());
+    let cuts = sys
+        .constraints
+        .iter()
+        .flat_map(|c| [c.geometry.point1.norm(), c.geometry.point2.norm()]);
+    let bodies = sys.bodies.iter().map(|b| b.cm.norm());
+    joints.chain(cuts).chain(bodies).fold(0.0, f64::max)
 }

@@ -84,6 +84,7 @@ pub(super) fn constraints(
                 axis2,
                 length,
             },
+            dropped: Vec::new(),
         });
     }
     Ok(out)

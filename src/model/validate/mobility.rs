@@ -1,28 +1,64 @@
-//! The mechanism's mobility: fewer constraint equations than free coordinates, at least one
-//! free coordinate, and the `independent` coordinates that span the remaining degrees of
-//! freedom. Its own stage because it weighs the joints against the cut joints, so it comes
-//! after both.
+//! The mechanism's mobility: the cut joints' redundant equations dropped ([`super::redundancy`]),
+//! fewer independent constraint equations than free coordinates, at least one free
+//! coordinate, and the `independent` coordinates that span the remaining degrees of freedom.
+//! Its own stage because it weighs the joints against the cut joints, so it comes after both.
 
 use super::{Ctx, R};
 use crate::model::schema::FileSchema;
-use crate::model::{Constraint, Coordinate};
+use crate::model::{Constraint, Coordinate, Joint};
 use toml::Spanned;
 
-/// Checks that the mechanism can move, and returns the `independent` coordinates (indices
-/// into `coordinates`) if the file lists them.
+/// The tree the cut joints close: joints (parents before children in `order`), the number of
+/// bodies and the coordinates.
+pub(super) struct Mechanism<'a> {
+    pub joints: &'a [Joint],
+    pub order: &'a [usize],
+    pub bodies: usize,
+    pub coordinates: &'a [Coordinate],
+}
+
+/// Drops the cut joints' redundant equations, checks that the mechanism can move, and returns
+/// the `independent` coordinates (indices into `coordinates`) if the file lists them.
 pub(super) fn mobility(
     ctx: &Ctx,
     raw: &FileSchema,
-    coordinates: &[Coordinate],
-    constraints: &[Constraint],
+    mech: Mechanism,
+    constraints: &mut [Constraint],
 ) -> R<Option<Vec<usize>>> {
-    let n_free = coordinates.iter().filter(|c| !c.driven).count();
-    let n_con: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let coordinates = mech.coordinates;
+    let free: Vec<usize> = (0..coordinates.len())
+        .filter(|&i| !coordinates[i].driven)
+        .collect();
+    let coordinate_joint: Vec<usize> = coordinates.iter().map(|c| c.joint).collect();
+    if let Some(dropped) = super::redundancy::redundant(
+        mech.joints,
+        mech.order,
+        mech.bodies,
+        &free,
+        &coordinate_joint,
+        constraints,
+        &ctx.values,
+    ) {
+        for (c, d) in constraints.iter_mut().zip(dropped) {
+            c.dropped = d;
+        }
+    }
+    let n_free = free.len();
+    let written: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let n_con: usize = constraints
+        .iter()
+        .map(|c| c.kind.equations() - c.dropped.len())
+        .sum();
     if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {
         let span = raw.constraints.last().map_or(ctx.whole(), |c| c.span());
+        let independent = if n_con < written {
+            format!(" ({written} written, {} redundant)", written - n_con)
+        } else {
+            String::new()
+        };
         return Err(ctx.err(
             span,
-            format!("{n_con} constraint equation(s) for {n_free} free coordinate(s): the mechanism would have no degree of freedom"),
+            format!("{n_con} independent constraint equation(s){independent} for {n_free} free coordinate(s): the mechanism would have no degree of freedom"),
         ));
     }
     if n_free == 0 {

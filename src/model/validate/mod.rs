@@ -32,6 +32,7 @@ mod names;
 mod parameters;
 mod per_coordinate;
 mod ports;
+mod redundancy;
 mod requirements;
 mod syntax;
 mod tree;
@@ -60,14 +61,24 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     // Force elements and cut joints share one namespace (with the joints).
     let mut elements = HashSet::new();
     let forces = forces::forces(&ctx, &raw.forces, &body_names, &tree.names, &mut elements)?;
-    let constraints = cuts::constraints(
+    let mut constraints = cuts::constraints(
         &ctx,
         &raw.constraints,
         &body_names,
         &tree.names,
         &mut elements,
     )?;
-    let independent = mobility::mobility(&ctx, &raw, &tree.coordinates, &constraints)?;
+    let independent = mobility::mobility(
+        &ctx,
+        &raw,
+        mobility::Mechanism {
+            joints: &tree.joints,
+            order: &order,
+            bodies: bodies.len(),
+            coordinates: &tree.coordinates,
+        },
+        &mut constraints,
+    )?;
     let ports = ports::ports(&ctx, &raw.ports, &body_names, &tree.coordinates)?;
     let loads = loads::loads(&ctx, &raw.loads, &body_names, &tree.coordinates)?;
     let analysis = analysis::analysis(
@@ -77,7 +88,10 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         &ports,
         &parameters,
     )?;
-    let equations: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let equations: usize = constraints
+        .iter()
+        .map(|c| c.kind.equations() - c.dropped.len())
+        .sum();
     let free = tree.coordinates.iter().filter(|c| !c.driven).count();
     let modes = free.saturating_sub(equations);
     let requirements =
