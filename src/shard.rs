@@ -142,6 +142,7 @@ fn section_title(section: &str) -> &'static str {
         "constraints" => "constraints (cut joints)",
         "ports" => "ports",
         "loads" => "loads",
+        "couplers" => "couplers",
         "requirements" => "requirements",
         "allocation" => "[allocation] table",
         "independent" => "independent coordinates",

@@ -68,14 +68,19 @@ impl<T: Real> Dynamics<T> {
     }
 }
 
-/// Constraint values `Φ` at the given body poses.
-pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
+/// Constraint values `Φ` at the given body poses (the cut joints') and coordinates (the
+/// couplers').
+pub fn constraint_values<U: Real>(sys: &System<U>, p: &[Pose<U>], q: &[U]) -> Vec<U> {
     let mut out = Vec::with_capacity(sys.m);
     let ground = Pose::identity();
     let pose = |b: Option<usize>| b.map_or(&ground, |b| &p[b]);
     for c in &sys.constraints {
         let g = &c.geometry;
         c.values(g, pose(g.body1), pose(g.body2), &mut out);
+    }
+    for c in &sys.couplers {
+        let [i, j] = c.coordinates;
+        out.push(c.coefficients[0] * q[i] + c.coefficients[1] * q[j] - c.value);
     }
     out
 }
@@ -113,7 +118,7 @@ pub fn element_deformations<U: Real>(sys: &System<U>, p: &[Pose<U>]) -> Vec<U> {
 
 /// `Φ(q)` alone (positions only).
 pub fn constraints_at<U: Real>(sys: &System<U>, q: &[U]) -> Vec<U> {
-    constraint_values(sys, &poses(sys, q))
+    constraint_values(sys, &poses(sys, q), q)
 }
 
 /// A screw in global axes at the global origin: a twist `(ω, v)` (a rigid velocity, the
@@ -474,6 +479,15 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
         row += rows;
     }
+    // A coupler's row: its coefficients, at the coordinates whose partials are asked.
+    for c in &partial.couplers {
+        for (&i, a) in c.coordinates.iter().zip(&c.coefficients) {
+            if twist[i].is_some() {
+                phi_q[(row, i)] += a.re;
+            }
+        }
+        row += 1;
+    }
     Partials {
         twist,
         de,
@@ -706,7 +720,7 @@ pub fn evaluate_with<T: Real>(
             EndPartials::Coordinates(_) => direct.push((first, partials)),
         }
     }
-    let phi = constraint_values(sys, &j.pose);
+    let phi = constraint_values(sys, &j.pose, q);
     // The wrench on each body and those below it (children before parents).
     for jt in sys.joints.iter().rev() {
         if let Some(p) = jt.parent {

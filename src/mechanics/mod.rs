@@ -103,6 +103,14 @@ pub struct PortData<T> {
     pub rotation: bool,
 }
 
+/// A coupler `a q₁ + b q₂ = c` (see [`crate::model::Coupler`]) with its numbers evaluated.
+#[derive(Debug, Clone)]
+pub struct CouplerData<T> {
+    pub coordinates: [usize; 2],
+    pub coefficients: [T; 2],
+    pub value: T,
+}
+
 /// An applied load (see [`crate::model::Load`]) with its vectors evaluated: a force at a body's
 /// point (reference configuration), a torque on a body, each in ground axes or turning with
 /// the body (`follower`), or a generalised force on a coordinate.
@@ -168,6 +176,7 @@ pub struct System<T> {
     pub constraints: Vec<ConstraintData<T>>,
     pub ports: Vec<PortData<T>>,
     pub loads: Vec<LoadData<T>>,
+    pub couplers: Vec<CouplerData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).
     pub drive: Vec<Option<T>>,
     /// For each coordinate, its joint (index into `joints`).
@@ -341,6 +350,14 @@ impl<T: Real> System<T> {
                 },
             });
         }
+        let mut couplers = Vec::with_capacity(model.couplers.len());
+        for c in &model.couplers {
+            couplers.push(CouplerData {
+                coordinates: c.coordinates,
+                coefficients: [c.coefficients[0].eval(p, w)?, c.coefficients[1].eval(p, w)?],
+                value: c.value.eval(p, w)?,
+            });
+        }
         let span = spans(&joints, model.bodies.len());
         let mut coord_joint = vec![0; model.coordinates.len()];
         for (ji, j) in joints.iter().enumerate() {
@@ -355,6 +372,7 @@ impl<T: Real> System<T> {
             constraints,
             ports,
             loads,
+            couplers,
             drive,
             coord_joint,
             span,
@@ -456,6 +474,15 @@ impl<T: Real> System<T> {
                 })
                 .collect(),
             loads: self.loads.iter().map(|l| l.map(f)).collect(),
+            couplers: self
+                .couplers
+                .iter()
+                .map(|c| CouplerData {
+                    coordinates: c.coordinates,
+                    coefficients: c.coefficients.map(f),
+                    value: f(c.value),
+                })
+                .collect(),
             drive: self.drive.iter().map(|d| d.map(f)).collect(),
             coord_joint: self.coord_joint.clone(),
             span: self.span.clone(),

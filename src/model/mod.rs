@@ -354,6 +354,19 @@ pub struct Port {
     pub rotation: bool,
 }
 
+/// A coupler (`[[couplers]]`): the linear relation `a q₁ + b q₂ = c` between two free joint
+/// coordinates (a gear pair, a rack and pinion, a belt), imposed like a cut joint's equation.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Coupler {
+    pub name: String,
+    /// The two coordinates (indices).
+    pub coordinates: [usize; 2],
+    /// `a`, `b`.
+    pub coefficients: [Field; 2],
+    /// `c`.
+    pub value: Field,
+}
+
 /// An applied load (`[[loads]]`): a constant force or torque on a body, or a generalised force
 /// on a joint coordinate, each component an expression of the parameters (so it can carry a
 /// tolerance).
@@ -456,6 +469,9 @@ pub struct Model {
     pub ports: Vec<Port>,
     /// Applied loads (`[[loads]]`), in file order.
     pub loads: Vec<Load>,
+    /// Couplers between joint coordinates (`[[couplers]]`), in file order: their equations
+    /// follow the cut joints'.
+    pub couplers: Vec<Coupler>,
     /// User's choice of independent coordinates (coordinate indices), if any.
     pub independent: Option<Vec<usize>>,
     pub analysis: Analysis,
@@ -759,7 +775,8 @@ impl Model {
         self.constraints
             .iter()
             .map(|c| c.kind.equations() - c.dropped.len())
-            .sum()
+            .sum::<usize>()
+            + self.couplers.len()
     }
 
     /// The design variables named (parameter indices), or, without names, those that carry a

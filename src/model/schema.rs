@@ -109,6 +109,8 @@ pub struct FileSchema {
     pub ports: Vec<Spanned<PortSchema>>,
     #[serde(default)]
     pub loads: Vec<Spanned<LoadSchema>>,
+    #[serde(default)]
+    pub couplers: Vec<Spanned<CouplerSchema>>,
     pub analysis: Option<Spanned<AnalysisSchema>>,
     #[serde(default)]
     pub requirements: Vec<Spanned<RequirementSchema>>,
@@ -197,6 +199,15 @@ pub struct PortSchema {
     pub body: Spanned<String>,
     pub point: Option<SVec>,
     pub direction: SVec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplerSchema {
+    pub name: Spanned<String>,
+    pub coordinates: Spanned<Vec<Spanned<String>>>,
+    pub coefficients: SVec,
+    pub value: Option<SNum>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -92,6 +92,15 @@ pub fn check_summary(model: &Model) -> String {
             );
         }
     }
+    for c in &model.couplers {
+        let _ = writeln!(
+            s,
+            "    {} (coupler: {}, {})",
+            c.name,
+            model.coordinates[c.coordinates[0]].name,
+            model.coordinates[c.coordinates[1]].name
+        );
+    }
     let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
     let _ = writeln!(s, "  parameters ({}):", model.parameters.len());
     for p in &model.parameters {

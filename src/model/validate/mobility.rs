@@ -5,11 +5,12 @@
 
 use super::{Ctx, R};
 use crate::model::schema::FileSchema;
-use crate::model::{Constraint, Coordinate, Joint};
+use crate::model::{Constraint, Coordinate, Coupler, Joint};
 use toml::Spanned;
 
 /// The tree the cut joints close: joints (parents before children in `order`), the number of
 /// bodies and the coordinates.
+#[derive(Clone, Copy)]
 pub(super) struct Mechanism<'a> {
     pub joints: &'a [Joint],
     pub order: &'a [usize],
@@ -24,32 +25,40 @@ pub(super) fn mobility(
     raw: &FileSchema,
     mech: Mechanism,
     constraints: &mut [Constraint],
+    couplers: &[Coupler],
 ) -> R<Option<Vec<usize>>> {
     let coordinates = mech.coordinates;
     let free: Vec<usize> = (0..coordinates.len())
         .filter(|&i| !coordinates[i].driven)
         .collect();
-    let coordinate_joint: Vec<usize> = coordinates.iter().map(|c| c.joint).collect();
-    if let Some(dropped) = super::redundancy::redundant(
-        mech.joints,
-        mech.order,
-        mech.bodies,
-        &free,
-        &coordinate_joint,
-        constraints,
-        &ctx.values,
-    ) {
-        for (c, d) in constraints.iter_mut().zip(dropped) {
+    if let Some(dropped) = super::redundancy::redundant(&mech, constraints, couplers, &ctx.values) {
+        let (cuts, coupled) = dropped;
+        if let Some(&k) = coupled.first() {
+            let span = raw.couplers.get(k).map_or(ctx.whole(), |c| c.span());
+            return Err(ctx.err(
+                span,
+                format!(
+                    "coupler '{}': its equation is a combination of the cut joints' and the other couplers' (a duplicate); remove it",
+                    couplers[k].name
+                ),
+            ));
+        }
+        for (c, d) in constraints.iter_mut().zip(cuts) {
             c.dropped = d;
         }
     }
     let n_free = free.len();
-    let written: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let written: usize = constraints
+        .iter()
+        .map(|c| c.kind.equations())
+        .sum::<usize>()
+        + couplers.len();
     let n_con: usize = constraints
         .iter()
         .map(|c| c.kind.equations() - c.dropped.len())
-        .sum();
-    if n_con > n_free || (n_con == n_free && !constraints.is_empty()) {
+        .sum::<usize>()
+        + couplers.len();
+    if n_con > n_free || (n_con == n_free && n_con > 0) {
         let span = raw.constraints.last().map_or(ctx.whole(), |c| c.span());
         let independent = if n_con < written {
             format!(" ({written} written, {} redundant)", written - n_con)

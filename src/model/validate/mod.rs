@@ -19,6 +19,7 @@
 mod analysis;
 mod bodies;
 mod cases;
+mod couplers;
 mod cuts;
 mod forces;
 mod geometry;
@@ -68,6 +69,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         &tree.names,
         &mut elements,
     )?;
+    let couplers = couplers::couplers(&ctx, &raw.couplers, &tree.coordinates, &mut elements)?;
     let independent = mobility::mobility(
         &ctx,
         &raw,
@@ -78,6 +80,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
             coordinates: &tree.coordinates,
         },
         &mut constraints,
+        &couplers,
     )?;
     let ports = ports::ports(&ctx, &raw.ports, &body_names, &tree.coordinates)?;
     let loads = loads::loads(&ctx, &raw.loads, &body_names, &tree.coordinates)?;
@@ -91,7 +94,8 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     let equations: usize = constraints
         .iter()
         .map(|c| c.kind.equations() - c.dropped.len())
-        .sum();
+        .sum::<usize>()
+        + couplers.len();
     let free = tree.coordinates.iter().filter(|c| !c.driven).count();
     let modes = free.saturating_sub(equations);
     let requirements =
@@ -112,6 +116,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         constraints,
         ports,
         loads,
+        couplers,
         independent,
         analysis,
         requirements,

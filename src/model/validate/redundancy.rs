@@ -11,28 +11,46 @@
 //! the column `∂Φ/∂q_i` is the dual part of the cut equations with those bodies at
 //! `Rel_i(ε)` (exact, dual numbers). Fields are evaluated at the nominal parameters and speed 0.
 
-use crate::model::{Constraint, Field, Joint};
+use super::mobility::Mechanism;
+use crate::model::{Constraint, Coupler, Field};
 use crate::real::V3;
 use crate::rigid::Pose;
 use nalgebra::DMatrix;
 use num_dual::Dual64;
 
 /// Per constraint, its equations (indices within it) that are redundant at the reference
-/// configuration; `None` where a field does not evaluate there (nothing is dropped then).
+/// configuration, and the couplers (their equations follow) that are; `None` where a field does
+/// not evaluate there (nothing is dropped then).
+#[allow(clippy::type_complexity)]
 pub(super) fn redundant(
-    joints: &[Joint],
-    order: &[usize],
-    bodies: usize,
-    free: &[usize],
-    coordinate_joint: &[usize],
+    mech: &Mechanism,
     constraints: &[Constraint],
+    couplers: &[Coupler],
     p: &[f64],
-) -> Option<Vec<Vec<usize>>> {
-    let m: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+) -> Option<(Vec<Vec<usize>>, Vec<usize>)> {
+    let Mechanism {
+        joints,
+        order,
+        bodies,
+        coordinates,
+    } = *mech;
+    let free: Vec<usize> = (0..coordinates.len())
+        .filter(|&i| !coordinates[i].driven)
+        .collect();
+    let coordinate_joint: Vec<usize> = coordinates.iter().map(|c| c.joint).collect();
+    let cut_rows: usize = constraints.iter().map(|c| c.kind.equations()).sum();
+    let m = cut_rows + couplers.len();
     if m == 0 {
-        return Some(vec![Vec::new(); constraints.len()]);
+        return Some((vec![Vec::new(); constraints.len()], Vec::new()));
     }
     let mut phi = DMatrix::zeros(m, free.len());
+    for (k, c) in couplers.iter().enumerate() {
+        for (&i, f) in c.coordinates.iter().zip(&c.coefficients) {
+            if let Some(col) = free.iter().position(|&x| x == i) {
+                phi[(cut_rows + k, col)] = f.eval(p, 0.0).ok()?;
+            }
+        }
+    }
     for (col, &i) in free.iter().enumerate() {
         let ji = coordinate_joint[i];
         let joint = &joints[ji];
@@ -96,6 +114,11 @@ pub(super) fn redundant(
         return None;
     }
     let dependent = crate::linalg::dependent_rows(&phi);
+    let coupled: Vec<usize> = dependent
+        .iter()
+        .filter(|&&r| r >= cut_rows)
+        .map(|&r| r - cut_rows)
+        .collect();
     let mut out = vec![Vec::new(); constraints.len()];
     let mut start = 0;
     for (k, c) in constraints.iter().enumerate() {
@@ -107,7 +130,7 @@ pub(super) fn redundant(
             .collect();
         start += n;
     }
-    Some(out)
+    Some((out, coupled))
 }
 
 fn vector(f: &[Field; 3], p: &[f64]) -> Option<V3<Dual64>> {
