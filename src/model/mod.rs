@@ -281,7 +281,12 @@ impl SpeedRange {
     /// `from + i·step` (so that `1.9` prints as `1.9`, not `1.9000000000000001`), computed
     /// exactly in integers and rounded once; else `from + i·step` (no accumulated rounding).
     pub fn at(&self, i: usize) -> f64 {
-        match self.decimal() {
+        self.at_on(self.decimal(), i)
+    }
+
+    /// [`SpeedRange::at`] with the grid's decimal form already found.
+    fn at_on(&self, decimal: Option<(f64, f64, f64)>, i: usize) -> f64 {
+        match decimal {
             Some((f, s, scale)) => {
                 let n = f + i as f64 * s;
                 if n.abs() < 2f64.powi(53) {
@@ -309,7 +314,8 @@ impl SpeedRange {
 
     /// All speeds.
     pub fn speeds(&self) -> impl Iterator<Item = f64> + '_ {
-        (0..self.len()).map(|i| self.at(i))
+        let decimal = self.decimal();
+        (0..self.len()).map(move |i| self.at_on(decimal, i))
     }
 }
 
