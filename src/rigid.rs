@@ -122,6 +122,23 @@ pub fn rotation_parameters<T: Real>(p: &V3<T>) -> M3<T> {
     )
 }
 
+/// The scaled modified Rodrigues parameters `p = 4 tan(θ/4) n` of a rotation `R` by `θ < π`,
+/// the inverse of [`rotation_parameters`]: with the quaternion's scalar part
+/// `w = cos(θ/2) = ½ √(1 + tr R)` and `axial(R) = sin θ n`,
+///
+/// ```text
+/// p = 4 n sin(θ/2) / (1 + cos(θ/2)) = 2 axial(R) / (w (1 + w))
+/// ```
+///
+/// (Shuster 1993, §5–6), branch-free and regular for `θ < π` (where `w > 0`), so exact over
+/// dual numbers at the identity too, where the rotation vector `θ n` written as
+/// `θ / sin θ · axial(R)` has no derivative.
+pub fn rotation_parameters_of<T: Real>(r: &M3<T>) -> V3<T> {
+    let one = cst::<T>(1.0);
+    let w = (one + r[(0, 0)] + r[(1, 1)] + r[(2, 2)]).sqrt() * cst::<T>(0.5);
+    crate::real::axial(r) * (cst::<T>(2.0) / (w * (one + w)))
+}
+
 /// A unit vector perpendicular to the unit vector `a`, in the plane of `a` and `hint`
 /// (`hint` not parallel to `a`): `normalize(hint − (hint·a) a)`.
 pub fn perpendicular<T: Real>(a: &V3<T>, hint: &V3<T>) -> V3<T> {
@@ -164,6 +181,39 @@ mod tests {
             e[k] = 1.0;
             let d = (rotation_parameters(&(e * h)) - rotation_parameters(&(e * -h))) / (2.0 * h);
             assert!(close(&d, &e.cross_matrix(), 1e-9));
+        }
+    }
+
+    #[test]
+    fn rotation_parameters_of_a_rotation_invert_the_map() {
+        for (n, theta) in [
+            (V3::new(0.0, 0.0, 1.0), 0.3),
+            (V3::new(1.0, 2.0, -0.5).normalize(), 2.9),
+            (V3::new(-0.2, 0.1, 0.9).normalize(), -3.0),
+            (V3::new(0.6, -0.8, 0.0), 1e-9),
+        ] {
+            let p = n * (4.0 * (theta / 4.0f64).tan());
+            let back = rotation_parameters_of(&rotation(&n, theta));
+            assert!(
+                (back - p).abs().max() <= 1e-14 * (1.0 + p.norm()),
+                "{back} vs {p}"
+            );
+        }
+        // At the identity the derivative along a rotation about e_k is e_k (dual numbers).
+        use num_dual::Dual64;
+        for k in 0..3 {
+            let mut e = V3::<Dual64>::zeros();
+            e[k] = Dual64::new(0.0, 1.0);
+            let r = rotation_parameters(&e);
+            let d = rotation_parameters_of(&r).map(|x| x.eps);
+            let mut unit = V3::zeros();
+            unit[k] = 1.0;
+            assert!((d - unit).abs().max() <= 1e-15, "{d}");
+            assert!(
+                rotation_parameters_of(&r)
+                    .iter()
+                    .all(|x| x.re.abs() < 1e-300)
+            );
         }
     }
 }

@@ -283,7 +283,7 @@ fn force_elements_take_the_fields_their_type_declares() {
         &e,
         line_of(&text, "torsion_bar"),
         None,
-        "unknown type 'torsion_bar' (expected spring_damper, rotational_spring_damper or bushing)",
+        "unknown type 'torsion_bar' (expected spring_damper, rotational_spring_damper, bushing or spherical_spring_damper)",
     );
     let (text, e) = with(
         "type = \"bushing\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\nstiffness = [1, 2, 3, 4, 5]\n",
@@ -310,6 +310,24 @@ fn force_elements_take_the_fields_their_type_declares() {
         line_of(&text, "point1 = [0, 0, 0]\n"),
         None,
         "a rotational_spring_damper has no 'point1'",
+    );
+    let (text, e) = with(
+        "type = \"spherical_spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\naxis = [0.5, 1, 0]\n",
+    );
+    check(
+        &e,
+        line_of(&text, "axis = [0.5, 1, 0]\n"),
+        None,
+        "a spherical_spring_damper has no 'axis'",
+    );
+    let (text, e) = with(
+        "type = \"spherical_spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\ndamping = [1, 2]\n",
+    );
+    check(
+        &e,
+        line_of(&text, "damping = [1, 2]"),
+        None,
+        "expected 3 value(s), one per component, got 2",
     );
     let (text, e) = with(
         "type = \"spring_damper\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\npoint2 = [0, 0, 0]\nstiffness = 3\n",

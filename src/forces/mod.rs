@@ -10,6 +10,8 @@
 //! ```
 //!
 //! so the tangent stiffness is symmetric at rest and exact everywhere, whatever the measure.
+//! A type whose dampers act on the relative angular velocity rather than on `ė` says so
+//! ([`Damps`]); its springs and preloads act as above.
 //! The free value `e0` defaults to the deformation in the reference configuration (the element
 //! is unloaded as drawn). An element joins a point `point1` of `body1` and `point2` of `body2`
 //! (either body may be ground) given in the reference configuration, with an `axis` where its
@@ -20,6 +22,7 @@
 
 pub mod bushing;
 pub mod rotational;
+pub mod spherical;
 pub mod spring_damper;
 
 use crate::joints::{Unit, Use};
@@ -48,6 +51,17 @@ pub struct ComponentSpec {
     pub unit: Unit,
 }
 
+/// What an element's dampers act on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Damps {
+    /// The rate of each deformation component, `c_c ė_c` (dissipation `½ Σ c_c ė_c²`).
+    DeformationRate,
+    /// The angular velocity of body 2 relative to body 1 in body 1's axes,
+    /// `ω = R₁ᵀ(ω₂ − ω₁)`: a torque `c_c ω_c` about body 1's axis `c` on body 1 and its opposite
+    /// on body 2 (dissipation `½ Σ c_c ω_c²`), for a type with three components.
+    RelativeAngularVelocity,
+}
+
 /// A force-element type.
 pub trait ForceType {
     /// Name in the model file's `type` field.
@@ -62,6 +76,8 @@ pub trait ForceType {
     /// Whether the two points must differ in the reference configuration (where the measure
     /// has no derivative at coincident points).
     const DISTINCT_POINTS: bool;
+    /// What the dampers act on.
+    const DAMPS: Damps = Damps::DeformationRate;
     /// Appends the deformation's components with the two bodies at poses `x1` and `x2` (the
     /// identity for ground).
     fn deformation<T: Real>(g: &Geometry<V3<T>>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>);
@@ -113,6 +129,13 @@ macro_rules! force_types {
                 }
             }
 
+            /// See [`ForceType::DAMPS`].
+            pub fn damps(self) -> Damps {
+                match self {
+                    $(Kind::$variant => <$ty as ForceType>::DAMPS),*
+                }
+            }
+
             /// See [`ForceType::deformation`].
             #[inline]
             pub fn deformation<T: Real>(
@@ -134,4 +157,5 @@ force_types! {
     SpringDamper => spring_damper::SpringDamper,
     Rotational => rotational::Rotational,
     Bushing => bushing::Bushing,
+    Spherical => spherical::Spherical,
 }

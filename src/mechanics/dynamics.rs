@@ -16,7 +16,8 @@
 //! The full equations are `r + Φ_qᵀ λ = Q_drive`, `Φ(q) = 0`.
 
 use super::kinematics::{Pose, poses};
-use super::{LoadData, System};
+use super::{ForceData, LoadData, System};
+use crate::forces::Damps;
 use crate::real::{
     D1, D2, M3, Real, V3, axial, axial_tn, cst, lift1, lift2, mul3, mul3_t, mulv, mulv_t,
 };
@@ -610,6 +611,35 @@ fn moving_poses<T: Real>(
         .collect()
 }
 
+/// The torque (ground axes) of an element whose dampers act on the relative angular velocity
+/// ([`Damps::RelativeAngularVelocity`]): `R₁ C ω` with `ω = R₁ᵀR₂ ω₂ − ω₁` from the bodies'
+/// angular velocities in their own axes and `C` diagonal in body 1's axes. It resists on body 2
+/// and drives body 1: the residual `r_i` gains `(R₁ C ω)·(J_ω₂,i − J_ω₁,i) = ∂(½ ωᵀCω)/∂q̇_i`.
+fn relative_damping_torque<T: Real>(
+    el: &ForceData<T>,
+    pose: &[Pose<T>],
+    motion: &[Motion<T>],
+) -> V3<T> {
+    let g = &el.geometry;
+    let w2 = match g.body2 {
+        Some(b) => mulv(&pose[b].rot, &motion[b].w),
+        None => V3::from_element(cst::<T>(0.0)),
+    };
+    let (w, r1) = match g.body1 {
+        Some(b) => (mulv_t(&pose[b].rot, &w2) - motion[b].w, Some(&pose[b].rot)),
+        None => (w2, None),
+    };
+    let cw = V3::new(
+        el.damping[0] * w.x,
+        el.damping[1] * w.y,
+        el.damping[2] * w.z,
+    );
+    match r1 {
+        Some(r1) => mulv(r1, &cw),
+        None => cw,
+    }
+}
+
 /// Evaluates `r(q, q̇, q̈)`, `Φ(q)` and `Φ_q(q)`.
 pub fn evaluate<T: Real>(l: &Lifted<T>, q: &[T], qd: &[T], qdd: &[T]) -> Dynamics<T> {
     evaluate_with(l, &partials(&l.partial, q), q, qd, qdd)
@@ -703,11 +733,24 @@ pub fn evaluate_with<T: Real>(
     let mut direct = Vec::new();
     for (el, partials) in sys.forces.iter().zip(&j.de) {
         let first = element_force.len();
+        let damps = el.kind.damps();
         for c in 0..el.free.len() {
             let d = e.next().expect("one deformation per component");
-            element_force.push(
-                el.stiffness[c] * (d.re - el.free[c]) + el.damping[c] * d.eps + el.preload[c],
-            );
+            let spring = el.stiffness[c] * (d.re - el.free[c]);
+            let f = match damps {
+                Damps::DeformationRate => spring + el.damping[c] * d.eps,
+                Damps::RelativeAngularVelocity => spring,
+            };
+            element_force.push(f + el.preload[c]);
+        }
+        if damps == Damps::RelativeAngularVelocity {
+            let torque = relative_damping_torque(el, &j.pose, &motion);
+            let g = &el.geometry;
+            for (body, sign) in [(g.body2, 1.0), (g.body1, -1.0)] {
+                if let Some(b) = body {
+                    wrench[b].w += torque * cst::<T>(sign);
+                }
+            }
         }
         match partials {
             EndPartials::Bodies(g) => {
