@@ -185,9 +185,17 @@ impl Compiled {
         let qd = steady_speeds(&self.model, p, speed)?;
         let mut problem = Problem::new(self.at(p, speed, q0, run)?, qd, self.model.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
+        if self.model.constraints.iter().any(|c| !c.dropped.is_empty()) {
+            problem.limit_steps(REDUNDANT_LOOP_STEP);
+        }
         Ok(problem)
     }
 }
+
+/// The largest relative change of a free coordinate in one Newton step where a loop has
+/// equations dropped as redundant ([`crate::equilibrium::Problem::limit_steps`]): 0.2 rad on
+/// angles of order one, about Adams's 10°.
+const REDUNDANT_LOOP_STEP: f64 = 0.2;
 
 /// A scalar the equations are evaluated over, and how the recorded program evaluates it: in
 /// `f64` as an [`crate::program::Instance`] (what depends on the parameters and the speed evaluated once),

@@ -163,6 +163,9 @@ pub struct Problem<'a> {
     /// Driven coordinates on which `F` cannot depend, by the model's symmetry
     /// ([`crate::model::Model::steady_by_symmetry`]): the steady-state check skips them.
     pub symmetric: Vec<usize>,
+    /// The largest change of a free coordinate in one step, relative to `1 + max|q_R|`, where
+    /// one is set ([`Problem::limit_steps`]).
+    step_limit: Option<f64>,
 }
 
 impl<'a> Problem<'a> {
@@ -182,7 +185,18 @@ impl<'a> Problem<'a> {
             qd,
             route,
             symmetric: Vec::new(),
+            step_limit: None,
         }
+    }
+
+    /// Limits every step to change no free coordinate by more than `limit` times
+    /// `1 + max|q_R|` (rad or m). For loops with equations dropped as redundant: the kept
+    /// equations hold on the loop near its drawing but also on other sets away from it, which
+    /// a long tangent step can reach (Newton then converges there, or stalls where the kept
+    /// equations turn singular); short steps follow the loop. The limit of Adams's static
+    /// solver (`ALIMIT`, 10° by default) plays the same part.
+    pub fn limit_steps(&mut self, limit: f64) {
+        self.step_limit = Some(limit);
     }
 
     /// The equations being solved.

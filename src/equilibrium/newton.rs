@@ -142,7 +142,15 @@ impl Iterate {
         // forces and lengths, it is invariant under any scaling of the equations, so that
         // a model and its copy with every mass and spring scaled take the same steps.
         let f0 = dir.length(&dir.step);
-        let mut alpha = 1.0;
+        let mut alpha = match problem.step_limit {
+            Some(limit) => {
+                let dq = dir.step[..dir.free.len()]
+                    .iter()
+                    .fold(0.0f64, |s, v| s.max(v.abs()));
+                (limit * dir.q_scale / dq).min(1.0)
+            }
+            None => 1.0,
+        };
         let (mut q_new, mut l_new, mut f_new);
         let mut decreased;
         loop {
