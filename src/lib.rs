@@ -22,7 +22,8 @@
 //! 9. [`compiled`]: a model with its [`compiled::Route`] (recorded or direct) chosen once.
 //! 10. [`pair`], [`modal`], [`output`], [`frf`]: damped modes, the pair maps, the outputs, |H|.
 //! 11. [`sweep`]: a point (equilibrium, linearisation, modes) and the continuation over speeds;
-//!     a point is the unit everything above consumes.
+//!     a point is the unit everything above consumes. [`scene`]: the mechanism placed at a
+//!     configuration, and its modes as motions of the bodies and ports (for drawing).
 //! 12. [`sensitivity`], [`hessian`], [`study`]: exact first and second derivatives through the
 //!     move of the equilibrium.
 //! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
@@ -35,7 +36,8 @@
 //! 17. [`yields`]: the yield of a case's requirements by each method, as rows.
 //! 18. [`analyze`], [`allocate`] (tolerance allocation to a yield target), [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
-//! 19. [`plots`], [`report`], [`results`]: what is written; the command line (`src/main.rs`
+//! 19. [`plots`], [`drawing`] (the mechanism and its modes), [`report`], [`results`]: what is
+//!     written; the command line (`src/main.rs`
 //!     and `src/cli/`, a crate of its own over this one: its arguments, the inputs they name,
 //!     where the results go, signals, one file per subcommand) parses and writes, the Python
 //!     package binds the same library.
@@ -51,6 +53,7 @@ pub mod analyze;
 pub mod cancel;
 pub mod compiled;
 pub mod cuts;
+pub mod drawing;
 pub mod dual4;
 pub mod equations;
 pub mod equilibrium;
@@ -80,6 +83,7 @@ pub mod requirement;
 pub mod results;
 pub mod rigid;
 pub mod sampling;
+pub mod scene;
 pub mod schur;
 pub mod sensitivity;
 pub mod settings;

@@ -26,6 +26,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["compiled"], false),
     (&["pair", "modal", "output", "frf"], true),
     (&["sweep"], false),
+    (&["scene"], false),
     (&["sensitivity", "hessian", "study"], true),
     (&["tolerance", "requirement"], false),
     (&["sampling"], false),
@@ -33,7 +34,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["taylor", "quadrature", "montecarlo", "sobol"], false),
     (&["yields"], false),
     (&["analyze", "allocate", "request", "shard"], true),
-    (&["plots", "report", "results"], true),
+    (&["plots", "drawing", "report", "results"], true),
 ];
 
 fn layer_of(module: &str) -> Option<(usize, bool)> {

@@ -73,6 +73,12 @@ class ModalPoint:
     ``M``, ``C``, ``K`` are M̂, Ĉ, K̂ in the independent coordinates (``independent``);
     ``modes`` has one row per mode (frequencies in rad/s, damping ratio, both roots) and its
     shape in the free coordinates as complex columns ``shape:<joint>`` (largest component 1).
+    ``shapes`` has each mode's shape as motions, one row per mode and component (columns
+    ``mode``, ``kind``, ``name``, ``component``, ``unit``, ``value`` complex): ``kind``
+    ``"coordinate"`` (the free joint coordinates, rad or m), ``"body"`` (the displacement of each
+    body's centre of mass along ground ``x``, ``y``, ``z``, m) and ``"port"`` (each port's
+    displacement along its direction, m, or rotation, rad), all scaled as the ``shape:``
+    columns (largest coordinate component 1).
     ``branch`` is ``"stable"``, ``"switched"`` (the equilibrium reached from the initial guess
     was unstable; a stable one found along its unstable modes is reported) or ``"unstable"``,
     and ``branch_reason`` says why in a sentence. A rigid-body mode (status ``rigid``: a zero
@@ -91,6 +97,7 @@ class ModalPoint:
     branch: str
     branch_reason: str
     modes: pd.DataFrame
+    shapes: pd.DataFrame
 
 
 @dataclass(frozen=True)
@@ -203,9 +210,23 @@ class Model:
         even where it is unstable (default ``"stable"``: a stable one is looked for)."""
         d = self._native.modal(float(speed), _names(independent), branch)
         modes = _frame(d["modes"])
+        rows: list[tuple[int, str, str, str, str, complex]] = []
+        units = dict(zip(self.coordinates["name"], self.coordinates["unit"]))
         for name in d["free"]:
             re, im = f"shape_re:{name}", f"shape_im:{name}"
             modes[f"shape:{name}"] = modes.pop(re) + 1j * modes.pop(im)
+            rows += [(int(k), "coordinate", name, name, units.get(name, ""), v)
+                     for k, v in zip(modes["mode"], modes[f"shape:{name}"])]
+        for column in [c for c in modes.columns if c.startswith("cm_re:")]:
+            target = column[len("cm_re:"):]
+            value = modes.pop(column) + 1j * modes.pop(f"cm_im:{target}")
+            body, axis = target.rsplit(".", 1)
+            rows += [(int(k), "body", body, axis, "m", v) for k, v in zip(modes["mode"], value)]
+        for column in [c for c in modes.columns if c.startswith("port_re:")]:
+            port = column[len("port_re:"):]
+            value = modes.pop(column) + 1j * modes.pop(f"port_im:{port}")
+            rows += [(int(k), "port", port, "along", "m/rad", v) for k, v in zip(modes["mode"], value)]
+        shapes = pd.DataFrame(rows, columns=["mode", "kind", "name", "component", "unit", "value"])
         return ModalPoint(
             speed=float(speed),
             M=np.array(d["M"], dtype=float),
@@ -219,6 +240,7 @@ class Model:
             branch=d["branch"],
             branch_reason=d["branch_reason"],
             modes=modes,
+            shapes=shapes,
         )
 
     def sensitivity(

@@ -598,7 +598,12 @@ impl NativeModel {
         d.set_item("branch_reason", pt.branch.to_string())?;
         d.set_item(
             "modes",
-            table(py, &report::modes_header(m), &report::modes_rows(&pt))?,
+            table(
+                py,
+                &report::modes_header(m),
+                &report::modes_rows(m, &self.model.model().nominal(), &pt)
+                    .map_err(|e| SolveError::new_err(e.to_string()))?,
+            )?,
         )?;
         Ok(d)
     }

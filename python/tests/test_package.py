@@ -101,6 +101,44 @@ def test_modal_matrices_and_modes(cli: Path, governor: modaltol.Model) -> None:
     assert pt.drive == {d["name"]: d["force"] for d in j["equilibrium"]["drive"]}
 
 
+def test_mode_shapes_as_motions_equal_the_clis(cli: Path) -> None:
+    # The rotor: six modes, a floating housing, two ports. point.shapes holds, per mode, the
+    # coordinates' shape, each body's centre-of-mass displacement and each port's, equal to the
+    # CLI's modes table and its JSON.
+    rotor = EXAMPLES / "rotor_on_rubber_mounts.toml"
+    model = modaltol.load(rotor)
+    pt = model.modal(100.0)
+    cli_modes = read_csv(run(cli, "modal", rotor, "--speed", "100", "--format", "csv"))
+    j = json.loads(run(cli, "modal", rotor, "--speed", "100", "--format", "json"))
+    bodies = [b["name"] for b in j["modes"][0]["motion"]["bodies"]]
+    ports = [p["name"] for p in j["modes"][0]["motion"]["ports"]]
+    n = len(pt.modes)
+    shapes = pt.shapes
+    assert set(shapes["kind"]) == {"coordinate", "body", "port"}
+    assert len(shapes[shapes["kind"] == "body"]) == 3 * len(bodies) * n
+    assert len(shapes[shapes["kind"] == "port"]) == len(ports) * n == 2 * n
+    for _, row in shapes[shapes["kind"] == "body"].iterrows():
+        k = row["mode"] - 1
+        z = complex(cli_modes[f"cm_re:{row['name']}.{row['component']}"][k],
+                    cli_modes[f"cm_im:{row['name']}.{row['component']}"][k])
+        assert row["value"] == z
+        mj = j["modes"][k]["motion"]["bodies"][bodies.index(row["name"])]["displacement"]
+        assert complex(**{"real": mj["xyz".index(row["component"])]["re"],
+                          "imag": mj["xyz".index(row["component"])]["im"]}) == z
+    for _, row in shapes[shapes["kind"] == "port"].iterrows():
+        k = row["mode"] - 1
+        mj = j["modes"][k]["motion"]["ports"][ports.index(row["name"])]
+        assert row["value"] == complex(mj["re"], mj["im"])
+    # The coordinates' rows are the modes' shape columns; each mode's largest is 1.
+    for k in range(1, n + 1):
+        c = shapes[(shapes["kind"] == "coordinate") & (shapes["mode"] == k)]
+        assert np.isclose(np.max(np.abs(c["value"])), 1.0)
+    # A mode moves something: some body's centre of mass moves in every mode.
+    for k in range(1, n + 1):
+        b = shapes[(shapes["kind"] == "body") & (shapes["mode"] == k)]
+        assert np.max(np.abs(b["value"])) > 1e-6
+
+
 def test_modal_of_the_pendulum_is_the_closed_form(pendulum: modaltol.Model) -> None:
     # Hanging rod on a spinning shaft, below the critical speed: θ = 0 and
     # (mL²/3) θ'' + c θ' + (mgL/2 − mL²Ω²/3) θ = 0.

@@ -151,6 +151,20 @@ pub(crate) enum Command {
     Check(CheckArgs),
     /// Equilibrium, drive force, M̂, Ĉ, K̂ and damped modes at one speed.
     Modal(ModalArgs),
+    /// Draw the mechanism at its equilibrium, and its modes.
+    ///
+    /// SVG (`-o FILE.svg`): three orthographic views (front: x right, y up; top: x right, −z up;
+    /// side: −z right, y up), one scale, in metres: each body's centre of mass (dot) linked to
+    /// the points it is joined at, joints with their axes (red; a driven joint ringed), cut
+    /// joints (crossed circles), force elements (green, dashed) and ports (orange arrows),
+    /// labelled by name in the front view. With `--mode K`, mode K drawn over the equilibrium
+    /// (grey): its two extremes (φ = 0 blue, φ = π red) and quarter periods (dashed), the
+    /// amplitude a tenth of the mechanism's size.
+    ///
+    /// HTML (`-o FILE.html`): the same views and a 3-D view (drag to turn, wheel to zoom) that
+    /// animates any mode over one period (each body's pose from the mode's amplitude and phase,
+    /// so whirl looks like whirl); it opens offline. `--mode K` chooses the mode shown first.
+    Draw(DrawArgs),
     /// Sweep the operating speed: one CSV row per (speed, mode).
     ///
     /// Columns: speed (rad/s), mode (1-based, tracked across speeds by mode shape), status
@@ -273,6 +287,24 @@ pub(crate) struct ModalArgs {
     /// Write to this file instead of stdout.
     #[arg(short, long)]
     pub(crate) output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct DrawArgs {
+    /// Model file (TOML).
+    pub(crate) model: PathBuf,
+    /// Operating speed, rad/s (default: the first speed of the model's [analysis] speed, or 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) speed: Option<f64>,
+    /// The mode to draw (1-based, as `modal` numbers them).
+    #[arg(long)]
+    pub(crate) mode: Option<usize>,
+    /// Which equilibrium to draw (as for `modal`).
+    #[arg(long, value_enum, default_value = "stable")]
+    pub(crate) branch: BranchArg,
+    /// The drawing: `.svg` (three views) or `.html` (the views and an animated 3-D view).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
 }
 
 #[derive(clap::Args)]

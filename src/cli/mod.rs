@@ -42,6 +42,7 @@ pub(crate) fn run(cli: Cli, cancel: &Cancel) -> Result<()> {
     match cli.command {
         Command::Check(args) => check_command(args, set),
         Command::Modal(args) => modal_command(args, set, cancel),
+        Command::Draw(args) => draw_command(args, set, cancel),
         Command::Sweep(args) => sweep_command(args, set, cancel),
         Command::Sensitivity(args) => sensitivity_command(args, set, cancel),
         Command::Analyze(args) => analyze_command(args, set, cancel),

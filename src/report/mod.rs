@@ -30,7 +30,8 @@ pub use check::check_summary;
 pub use frf::{frf_header, frf_rows};
 pub use html::report_html;
 pub use modal::{
-    display_shape, modal_json, modal_table, modes_failed_rows, modes_header, modes_rows,
+    body_shapes, display_shape, modal_json, modal_table, modes_failed_rows, modes_header,
+    modes_rows,
 };
 pub use sensitivity::{
     SENSITIVITY_HEADER, elasticity, sensitivity_json, sensitivity_rows, sensitivity_table,

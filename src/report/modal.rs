@@ -3,8 +3,10 @@
 //! all three show the same point: its equilibrium, linearisation and modes.
 
 use super::{MODE_COLUMNS, failed_rows, fixed, mode_cells, point_message};
+use crate::mechanics::System;
 use crate::modal::C64;
-use crate::model::Model;
+use crate::model::{FieldError, Model};
+use crate::scene::{PhysicalShape, physical_shape};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 use serde_json::{Value, json};
@@ -23,8 +25,11 @@ pub fn display_shape(shape: &[C64]) -> Vec<C64> {
 
 /// Header of the modes table (`modal --format csv`): the mode's frequencies, damping ratio,
 /// its two roots, then its shape in the free coordinates, scaled by [`display_shape`]
-/// (`shape_re:<joint>`, `shape_im:<joint>`), then `message` (the point's note, or why it
-/// failed).
+/// (`shape_re:<joint>`, `shape_im:<joint>`), the displacement of each body's centre of mass
+/// with that scaling (`cm_re:<body>.x` … `cm_im:<body>.z`, m per unit of the largest
+/// coordinate, ground axes) and of each port along its direction (`port_re:<port>`,
+/// `port_im:<port>`: m, or rad for a rotation port), then `branch` and `message` (the point's
+/// note, or why it failed).
 pub fn modes_header(model: &Model) -> Vec<String> {
     let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
     for &i in &model.free() {
@@ -32,21 +37,71 @@ pub fn modes_header(model: &Model) -> Vec<String> {
         h.push(format!("shape_re:{c}"));
         h.push(format!("shape_im:{c}"));
     }
+    for b in &model.bodies {
+        for part in ["re", "im"] {
+            for axis in ["x", "y", "z"] {
+                h.push(format!("cm_{part}:{}.{axis}", b.name));
+            }
+        }
+    }
+    for p in &model.ports {
+        h.push(format!("port_re:{}", p.name));
+        h.push(format!("port_im:{}", p.name));
+    }
     h.push("branch".into());
     h.push("message".into());
     h
 }
 
-/// Rows of the modes table at the point `p` (see [`modes_header`]).
-pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
-    p.modes
+/// Each mode's shape mapped onto the bodies and ports ([`physical_shape`]), scaled as
+/// [`display_shape`] scales it (the largest coordinate component 1), at the point `pt` solved
+/// with parameters `params`.
+pub fn body_shapes(
+    model: &Model,
+    params: &[f64],
+    pt: &Point,
+) -> Result<Vec<PhysicalShape>, FieldError> {
+    let sys = System::new(model, params, pt.speed)?;
+    Ok(pt
+        .shapes
+        .iter()
+        .map(|shape| {
+            let shape: Vec<C64> = shape.iter().copied().collect();
+            physical_shape(
+                &sys,
+                &pt.equilibrium.q,
+                &pt.linear.free,
+                &display_shape(&shape),
+            )
+        })
+        .collect())
+}
+
+/// Rows of the modes table at the point `p` solved with parameters `params` (see
+/// [`modes_header`]).
+pub fn modes_rows(
+    model: &Model,
+    params: &[f64],
+    p: &Point,
+) -> Result<Vec<Vec<String>>, FieldError> {
+    let bodies = body_shapes(model, params, p)?;
+    Ok(p.modes
         .iter()
         .zip(&p.shapes)
+        .zip(&bodies)
         .enumerate()
-        .map(|(i, (m, shape))| {
+        .map(|(i, ((m, shape), b))| {
             let mut r = mode_cells(p.speed, i, m);
             let shape: Vec<C64> = shape.iter().copied().collect();
             for z in display_shape(&shape) {
+                r.push(z.re.to_string());
+                r.push(z.im.to_string());
+            }
+            for d in &b.displacement {
+                r.extend(d.iter().map(|z| z.re.to_string()));
+                r.extend(d.iter().map(|z| z.im.to_string()));
+            }
+            for z in &b.ports {
                 r.push(z.re.to_string());
                 r.push(z.im.to_string());
             }
@@ -54,7 +109,7 @@ pub fn modes_rows(p: &Point) -> Vec<Vec<String>> {
             r.push(point_message(p, None));
             r
         })
-        .collect()
+        .collect())
 }
 
 /// Rows of the modes table of a point at `speed` that failed: one per degree of freedom,
@@ -71,8 +126,13 @@ fn matrix(m: &DMatrix<f64>) -> Value {
     )
 }
 
-/// The `modal` result as JSON.
-pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>) -> Value {
+/// The `modal` result as JSON, the bodies' and ports' shapes at parameters `params`.
+pub fn modal_json(
+    model: &Model,
+    params: &[f64],
+    speed: f64,
+    result: &Result<Point, PointError>,
+) -> Value {
     let p = match result {
         Err(e) => {
             return json!({"model": model.name, "speed": speed, "status": "failed", "message": e.to_string()});
@@ -97,6 +157,24 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
             json!({"name": c.name, "force": eq.drive_force[i], "unit": c.unit.force_symbol()})
         })
         .collect();
+    let bodies = body_shapes(model, params, p).ok();
+    let pair = |z: &C64| json!({"re": z.re, "im": z.im});
+    let motion = |i: usize| -> Value {
+        let Some(b) = bodies.as_ref().and_then(|b| b.get(i)) else {
+            return Value::Null;
+        };
+        json!({
+            "bodies": model.bodies.iter().enumerate().map(|(k, body)| json!({
+                "name": body.name,
+                "displacement": b.displacement[k].iter().map(pair).collect::<Vec<_>>(),
+                "rotation": b.rotation[k].iter().map(pair).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+            "ports": model.ports.iter().zip(&b.ports).map(|(port, z)| json!({
+                "name": port.name, "re": z.re, "im": z.im,
+                "unit": if port.rotation { "rad" } else { "m" },
+            })).collect::<Vec<_>>(),
+        })
+    };
     let modes: Vec<Value> = p
         .modes
         .iter()
@@ -107,7 +185,8 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
                    "damping_ratio": m.damping_ratio,
                    "eigenvalue": {"re": m.root.lambda.re, "im": m.root.lambda.im},
                    "partner_eigenvalue": {"re": m.partner.lambda.re, "im": m.partner.lambda.im},
-                   "shape": model.free().iter().zip(display_shape(p.shapes[i].as_slice())).map(|(&c, z)| json!({"coordinate": model.coordinates[c].name, "re": z.re, "im": z.im})).collect::<Vec<_>>()})
+                   "shape": model.free().iter().zip(display_shape(p.shapes[i].as_slice())).map(|(&c, z)| json!({"coordinate": model.coordinates[c].name, "re": z.re, "im": z.im, "unit": model.coordinates[c].unit.symbol()})).collect::<Vec<_>>(),
+                   "motion": motion(i)})
         })
         .collect();
     let names = |v: &[usize]| {
@@ -119,7 +198,8 @@ pub fn modal_json(model: &Model, speed: f64, result: &Result<Point, PointError>)
         "model": model.name,
         "speed": speed,
         "status": if p.stable() { "ok" } else { "unstable" },
-        "units": {"speed": "rad/s", "frequency": "rad/s", "revolute": "rad", "prismatic": "m"},
+        "units": {"speed": "rad/s", "frequency": "rad/s", "revolute": "rad", "prismatic": "m",
+                  "shape": "each mode's shape is scaled so that its largest coordinate component is 1 (rad or m); its motion gives, per unit of that component, each body's centre-of-mass displacement (m) and small rotation (rad) in ground axes, and each port's displacement along its direction (m, or rad for a rotation port)"},
         "equilibrium": {"coordinates": coords, "drive": drives, "lambda": eq.lambda,
                         "iterations": eq.iterations, "residual": eq.residual,
                         "constraint_violation": eq.constraint_violation},

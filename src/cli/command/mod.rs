@@ -4,6 +4,7 @@
 mod allocate;
 mod analyze;
 mod check;
+mod draw;
 mod frf;
 mod merge;
 mod modal;
@@ -13,6 +14,7 @@ mod sweep;
 pub(crate) use allocate::allocate_command;
 pub(crate) use analyze::analyze_command;
 pub(crate) use check::check_command;
+pub(crate) use draw::draw_command;
 pub(crate) use frf::frf_command;
 pub(crate) use merge::merge_command;
 pub(crate) use modal::modal_command;

@@ -37,12 +37,14 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::modal_json(m.model(), speed, &result))?
+            serde_json::to_string_pretty(&report::modal_json(m.model(), &p, speed, &result))?
         )?,
         Format::Table => write!(w, "{}", report::modal_table(m.model(), speed, &result))?,
         Format::Csv => {
             let rows = match &result {
-                Ok(pt) => report::modes_rows(pt),
+                Ok(pt) => {
+                    report::modes_rows(m.model(), &p, pt).map_err(|e| Failed(e.to_string()))?
+                }
                 Err(e) => report::modes_failed_rows(m.model(), speed, e),
             };
             write_csv(&mut w, &report::modes_header(m.model()), &rows)?

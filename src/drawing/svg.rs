@@ -1,0 +1,380 @@
+//! The three orthographic views as SVG (see the module documentation of [`super`]).
+
+use super::{Drawing, esc};
+use crate::scene::{P3, Scene};
+use std::fmt::Write;
+
+/// A view: its name, and the ground directions drawn rightwards and upwards (third-angle
+/// projection: the front looking along −z, the top looking down along −y, the side looking
+/// along −x).
+struct View {
+    name: &'static str,
+    h: P3,
+    v: P3,
+}
+
+const VIEWS: [View; 3] = [
+    View {
+        name: "front (x →, y ↑)",
+        h: [1.0, 0.0, 0.0],
+        v: [0.0, 1.0, 0.0],
+    },
+    View {
+        name: "top (x →, −z ↑)",
+        h: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, -1.0],
+    },
+    View {
+        name: "side (−z →, y ↑)",
+        h: [0.0, 0.0, -1.0],
+        v: [0.0, 1.0, 0.0],
+    },
+];
+
+/// Width and height of a view's panel (px).
+const PANEL: f64 = 360.0;
+/// Margin inside a panel (px).
+const MARGIN: f64 = 30.0;
+/// Height of the title above the panels (px).
+const TITLE: f64 = 44.0;
+
+fn dot(a: &P3, b: &P3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Where a view draws: `(ox + s·h·x, oy − s·v·x)`.
+struct Projection {
+    s: f64,
+    ox: f64,
+    oy: f64,
+    h: P3,
+    v: P3,
+}
+
+impl Projection {
+    fn at(&self, x: &P3) -> (f64, f64) {
+        (
+            self.ox + self.s * dot(&self.h, x),
+            self.oy - self.s * dot(&self.v, x),
+        )
+    }
+}
+
+/// The colours of the layers: the mechanism, the mode's extremes, its quarter periods.
+const INK: &str = "#333";
+const EXTREMES: [&str; 2] = ["#1f77b4", "#d62728"];
+const QUARTERS: &str = "#9467bd";
+
+/// The mechanism in three orthographic views, with mode `mode` (0-based) overlaid where given.
+pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
+    let width = 3.0 * PANEL;
+    let height = PANEL + TITLE;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="10" data-size="{}">"#,
+        d.size
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let mode = mode.and_then(|k| d.modes.get(k));
+    let title = format!("{} at {} rad/s", d.model, d.speed);
+    let _ = writeln!(
+        s,
+        r#"<text x="8" y="18" font-size="14" font-weight="bold">{}</text>"#,
+        esc(&title)
+    );
+    let subtitle = match mode {
+        Some(m) => format!(
+            "{}: equilibrium grey, extremes blue (φ = 0) and red (φ = π), quarter periods dashed",
+            m.label
+        ),
+        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; ports: orange arrows. Units: m".into(),
+    };
+    let _ = writeln!(
+        s,
+        r##"<text x="8" y="34" fill="#555">{}</text>"##,
+        esc(&subtitle)
+    );
+    // One scale for the three views: the largest extent of any view fits its panel.
+    let mut scenes: Vec<&Scene> = vec![&d.scene];
+    if let Some(m) = mode {
+        scenes.extend(&m.frames);
+    }
+    let extent = VIEWS
+        .iter()
+        .flat_map(|view| {
+            let span = |axis: &P3| {
+                let (lo, hi) = scenes
+                    .iter()
+                    .flat_map(|sc| sc.points())
+                    .map(|x| dot(axis, &x))
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    });
+                hi - lo
+            };
+            [span(&view.h), span(&view.v)]
+        })
+        .fold(0.0f64, f64::max);
+    let scale = (PANEL - 2.0 * MARGIN) / if extent > 0.0 { extent } else { d.size };
+    for (k, view) in VIEWS.iter().enumerate() {
+        let centre = |axis: &P3| {
+            let (lo, hi) = scenes
+                .iter()
+                .flat_map(|sc| sc.points())
+                .map(|x| dot(axis, &x))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            if lo.is_finite() { (lo + hi) / 2.0 } else { 0.0 }
+        };
+        let x0 = k as f64 * PANEL;
+        let pr = Projection {
+            s: scale,
+            ox: x0 + PANEL / 2.0 - scale * centre(&view.h),
+            oy: TITLE + PANEL / 2.0 + scale * centre(&view.v),
+            h: view.h,
+            v: view.v,
+        };
+        let _ = writeln!(
+            s,
+            r#"<g class="view" data-view="{}" data-scale="{}" data-ox="{}" data-oy="{}" data-h="{},{},{}" data-v="{},{},{}">"#,
+            k, pr.s, pr.ox, pr.oy, pr.h[0], pr.h[1], pr.h[2], pr.v[0], pr.v[1], pr.v[2]
+        );
+        let _ = writeln!(
+            s,
+            r##"<rect x="{}" y="{TITLE}" width="{}" height="{PANEL}" fill="none" stroke="#ccc"/>"##,
+            x0 + 2.0,
+            PANEL - 4.0
+        );
+        let _ = writeln!(
+            s,
+            r##"<text x="{}" y="{}" fill="#555">{}</text>"##,
+            x0 + 8.0,
+            TITLE + 14.0,
+            esc(view.name)
+        );
+        axes_mark(&mut s, &pr, x0);
+        match mode {
+            Some(m) => {
+                scene(&mut s, &pr, &d.scene, Layer::Background, d.size);
+                let n = m.frames.len();
+                if n >= 4 {
+                    for quarter in [1, 3] {
+                        scene(
+                            &mut s,
+                            &pr,
+                            &m.frames[quarter * n / 4],
+                            Layer::Quarter,
+                            d.size,
+                        );
+                    }
+                }
+                if n >= 2 {
+                    scene(&mut s, &pr, &m.frames[0], Layer::Extreme(0), d.size);
+                    scene(&mut s, &pr, &m.frames[n / 2], Layer::Extreme(1), d.size);
+                }
+            }
+            None => scene(
+                &mut s,
+                &pr,
+                &d.scene,
+                Layer::Main { labels: k == 0 },
+                d.size,
+            ),
+        }
+        let _ = writeln!(s, "</g>");
+    }
+    let _ = writeln!(s, "</svg>");
+    s
+}
+
+/// How a scene is drawn.
+#[derive(Clone, Copy, PartialEq)]
+enum Layer {
+    /// The mechanism, every mark (labels in the first view).
+    Main { labels: bool },
+    /// The equilibrium under a mode: grey links only.
+    Background,
+    /// A mode's extreme (0: φ = 0, 1: φ = π): links and marks in its colour.
+    Extreme(usize),
+    /// A quarter period: dashed links.
+    Quarter,
+}
+
+/// The ground axes' directions in a view's corner (a small triad).
+fn axes_mark(s: &mut String, pr: &Projection, x0: f64) {
+    let (cx, cy) = (x0 + PANEL - 40.0, TITLE + PANEL - 20.0);
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        let mut e = [0.0; 3];
+        e[k] = 1.0;
+        let (dx, dy) = (dot(&pr.h, &e), -dot(&pr.v, &e));
+        if dx.abs() + dy.abs() < 0.5 {
+            let _ = writeln!(
+                s,
+                r##"<text x="{}" y="{}" fill="#888">{name} ⊙</text>"##,
+                cx + 16.0,
+                cy - 2.0
+            );
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            r##"<line x1="{cx}" y1="{cy}" x2="{}" y2="{}" stroke="#888"/><text x="{}" y="{}" fill="#888">{name}</text>"##,
+            cx + 14.0 * dx,
+            cy + 14.0 * dy,
+            cx + 18.0 * dx - 3.0,
+            cy + 18.0 * dy + 3.0
+        );
+    }
+}
+
+fn line(s: &mut String, a: (f64, f64), b: (f64, f64), attrs: &str) {
+    let _ = writeln!(
+        s,
+        r#"<line x1="{}" y1="{}" x2="{}" y2="{}" {attrs}/>"#,
+        a.0, a.1, b.0, b.1
+    );
+}
+
+fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
+    let (link, width, dash) = match layer {
+        Layer::Main { .. } => (INK, 2.5, ""),
+        Layer::Background => ("#bbb", 2.0, ""),
+        Layer::Extreme(k) => (EXTREMES[k], 2.0, ""),
+        Layer::Quarter => (QUARTERS, 1.2, r#" stroke-dasharray="4 3""#),
+    };
+    for b in &sc.bodies {
+        let c = pr.at(&b.cm);
+        for x in &b.links {
+            line(
+                s,
+                c,
+                pr.at(x),
+                &format!(r#"stroke="{link}" stroke-width="{width}" stroke-linecap="round"{dash}"#),
+            );
+        }
+    }
+    let Layer::Main { labels } = layer else {
+        // A mode's layers: the links, and the centres of mass of the extremes.
+        if let Layer::Extreme(_) = layer {
+            for b in &sc.bodies {
+                let (x, y) = pr.at(&b.cm);
+                let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="3" fill="{link}"/>"#);
+            }
+        }
+        return;
+    };
+    let axis_len = 0.06 * size * pr.s;
+    for e in &sc.elements {
+        let (a, b) = (pr.at(&e.ends[0]), pr.at(&e.ends[1]));
+        let _ = writeln!(
+            s,
+            r##"<line class="element" data-name="{}" x1="{}" y1="{}" x2="{}" y2="{}" stroke="#2ca02c" stroke-width="1.5" stroke-dasharray="6 3"/>"##,
+            esc(&e.name),
+            a.0,
+            a.1,
+            b.0,
+            b.1
+        );
+    }
+    for c in &sc.cuts {
+        let (a, b) = (pr.at(&c.ends[0]), pr.at(&c.ends[1]));
+        line(
+            s,
+            a,
+            b,
+            r##"stroke="#9467bd" stroke-width="1.5" stroke-dasharray="2 2""##,
+        );
+        let _ = writeln!(
+            s,
+            r##"<g class="cut" data-name="{}"><circle cx="{}" cy="{}" r="5" fill="white" stroke="#9467bd" stroke-width="1.5"/><path d="M{} {}l7 7m0 -7l-7 7" stroke="#9467bd"/></g>"##,
+            esc(&c.name),
+            a.0,
+            a.1,
+            a.0 - 3.5,
+            a.1 - 3.5
+        );
+    }
+    for j in &sc.joints {
+        let p = pr.at(&j.at);
+        for a in &j.axes {
+            let (dx, dy) = (dot(&pr.h, a) * axis_len, -dot(&pr.v, a) * axis_len);
+            line(
+                s,
+                (p.0 - dx, p.1 - dy),
+                (p.0 + dx, p.1 + dy),
+                r##"stroke="#d62728" stroke-width="1.2""##,
+            );
+        }
+        let ring = if j.driven {
+            format!(
+                r##"<circle cx="{}" cy="{}" r="8" fill="none" stroke="{INK}" stroke-width="1"/>"##,
+                p.0, p.1
+            )
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            r##"<circle class="joint" data-name="{}" data-kind="{}" cx="{}" cy="{}" r="5" fill="white" stroke="{INK}" stroke-width="1.5"/>{ring}"##,
+            esc(&j.name),
+            j.kind,
+            p.0,
+            p.1
+        );
+        if labels {
+            let _ = writeln!(
+                s,
+                r##"<text x="{}" y="{}" fill="#a00">{}</text>"##,
+                p.0 + 7.0,
+                p.1 - 7.0,
+                esc(&j.name)
+            );
+        }
+    }
+    for b in &sc.bodies {
+        let (x, y) = pr.at(&b.cm);
+        let _ = writeln!(
+            s,
+            r##"<circle class="cm" data-name="{}" cx="{x}" cy="{y}" r="4" fill="#1f3b73"/>"##,
+            esc(&b.name)
+        );
+        if labels {
+            let _ = writeln!(
+                s,
+                r##"<text x="{}" y="{}" fill="#1f3b73">{}</text>"##,
+                x + 6.0,
+                y + 12.0,
+                esc(&b.name)
+            );
+        }
+    }
+    for p in &sc.ports {
+        let a = pr.at(&p.at);
+        let (dx, dy) = (
+            dot(&pr.h, &p.direction) * axis_len,
+            -dot(&pr.v, &p.direction) * axis_len,
+        );
+        let _ = writeln!(
+            s,
+            r##"<g class="port" data-name="{}"><line x1="{}" y1="{}" x2="{}" y2="{}" stroke="#ff7f0e" stroke-width="2"/><circle cx="{}" cy="{}" r="3" fill="#ff7f0e"/></g>"##,
+            esc(&p.name),
+            a.0,
+            a.1,
+            a.0 + dx,
+            a.1 + dy,
+            a.0,
+            a.1
+        );
+        if labels {
+            let _ = writeln!(
+                s,
+                r##"<text x="{}" y="{}" fill="#c60">{}</text>"##,
+                a.0 + 6.0,
+                a.1 + 12.0,
+                esc(&p.name)
+            );
+        }
+    }
+}

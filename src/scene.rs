@@ -1,0 +1,361 @@
+//! The mechanism as it stands at a configuration, for drawing, and its modes as motions of the
+//! bodies and ports.
+//!
+//! A [`Scene`] places every element of the model at the coordinates `q`: each body's centre
+//! of mass with the points it is joined at (its joints, cut joints, force elements and ports:
+//! drawn as links from the centre of mass), each tree joint at its point with its axes, each cut
+//! joint and force element between its two points, each port at its point with its direction.
+//! Everything comes from the bodies' poses ([`crate::mechanics::kinematics::poses`]), so what is
+//! drawn is what the equations see.
+//!
+//! A mode's physical shape ([`PhysicalShape`]) maps its complex shape `v` in the free
+//! coordinates through the partial velocities at the equilibrium: the displacement of each
+//! body's centre of mass `Σ_i J_v,i v_i`, its small rotation `Σ_i J_ω,i v_i` (ground axes), and
+//! each port's displacement along its direction (or rotation about it), `bᵀv` with the port's
+//! vector `b` of [`crate::mechanics::ports`]. A mode's motion over one period
+//! ([`mode_frames`]) poses the mechanism at `q + a Re(v e^{iφ})`: the exact kinematics at an
+//! amplitude `a` scaled for the eye ([`display_amplitude`]), so a travelling (whirling) mode moves as it does, with
+//! amplitude and phase per coordinate.
+
+use crate::mechanics::System;
+use crate::mechanics::dynamics::partials_for;
+use crate::mechanics::kinematics::poses;
+use crate::modal::C64;
+use crate::model::Model;
+use crate::real::{V3, lift1};
+use crate::rigid::Pose;
+
+/// A point in ground axes (m).
+pub type P3 = [f64; 3];
+
+fn p3(v: &V3<f64>) -> P3 {
+    [v.x, v.y, v.z]
+}
+
+/// A body: its centre of mass and the points it is joined at.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BodyMark {
+    pub name: String,
+    pub cm: P3,
+    /// Its axes: the ground axes as drawn, turned with the body (the columns of its rotation),
+    /// so that a turn about a link's own line shows.
+    pub axes: [P3; 3],
+    /// Where the body is joined (joints, cut joints, force elements, ports), each once.
+    pub links: Vec<P3>,
+}
+
+/// A tree joint at its point, with its axes (unit vectors, ground axes) where its type has them.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct JointMark {
+    pub name: String,
+    pub kind: &'static str,
+    pub at: P3,
+    pub axes: Vec<P3>,
+    pub parent: String,
+    pub child: String,
+    /// Driven (turned at the operating speed) rather than free.
+    pub driven: bool,
+}
+
+/// A cut joint or a force element: its type and its two points.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct LinkMark {
+    pub name: String,
+    pub kind: &'static str,
+    pub ends: [P3; 2],
+}
+
+/// A port at its point, with its direction (unit, ground axes).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PortMark {
+    pub name: String,
+    pub at: P3,
+    pub direction: P3,
+    pub rotation: bool,
+}
+
+/// The mechanism placed at one configuration (see the module documentation).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Scene {
+    pub bodies: Vec<BodyMark>,
+    pub joints: Vec<JointMark>,
+    pub cuts: Vec<LinkMark>,
+    pub elements: Vec<LinkMark>,
+    pub ports: Vec<PortMark>,
+}
+
+/// The name of body `b` (`None`: the ground).
+fn body_name(model: &Model, b: Option<usize>) -> String {
+    b.map_or_else(|| "ground".to_string(), |b| model.bodies[b].name.clone())
+}
+
+impl Scene {
+    /// The mechanism of `model` (instantiated as `sys`) at coordinates `q`.
+    pub fn at(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene {
+        let pose = poses(sys, q);
+        let ground = Pose::identity();
+        let pose_of = |b: Option<usize>| b.map_or(&ground, |b| &pose[b]);
+        let mut links: Vec<Vec<P3>> = vec![Vec::new(); sys.bodies.len()];
+        let mut attach = |b: Option<usize>, x: P3| {
+            if let Some(b) = b {
+                let l = &mut links[b];
+                if !l
+                    .iter()
+                    .any(|y| (0..3).all(|k| (x[k] - y[k]).abs() <= 1e-12 * (1.0 + x[k].abs())))
+                {
+                    l.push(x);
+                }
+            }
+        };
+        let mut joints = Vec::with_capacity(sys.joints.len());
+        for (k, j) in sys.joints.iter().enumerate() {
+            let mj = &model.joints[model.order[k]];
+            let [at, axis, axis2] = j.kind.uses();
+            let child = &pose[j.child];
+            let point = if at == crate::joints::Use::Unused {
+                child.apply(&sys.bodies[j.child].cm)
+            } else {
+                child.apply(&j.geometry.at)
+            };
+            let mut axes = Vec::new();
+            if axis != crate::joints::Use::Unused {
+                axes.push(p3(&(pose_of(j.parent).rot * j.geometry.axis)));
+            }
+            if axis2 != crate::joints::Use::Unused {
+                axes.push(p3(&(child.rot * j.geometry.axis2)));
+            }
+            let at = p3(&point);
+            attach(j.parent, at);
+            attach(Some(j.child), at);
+            joints.push(JointMark {
+                name: mj.name.clone(),
+                kind: j.kind.name(),
+                at,
+                axes,
+                parent: body_name(model, j.parent),
+                child: body_name(model, Some(j.child)),
+                driven: j.coords.clone().any(|c| sys.drive[c].is_some()),
+            });
+        }
+        let mut cuts = Vec::with_capacity(sys.constraints.len());
+        for (c, mc) in sys.constraints.iter().zip(&model.constraints) {
+            let g = &c.geometry;
+            let ends = [
+                p3(&pose_of(g.body1).apply(&g.point1)),
+                p3(&pose_of(g.body2).apply(&g.point2)),
+            ];
+            attach(g.body1, ends[0]);
+            attach(g.body2, ends[1]);
+            cuts.push(LinkMark {
+                name: mc.name.clone(),
+                kind: c.kind.name(),
+                ends,
+            });
+        }
+        let mut elements = Vec::with_capacity(sys.forces.len());
+        for (e, me) in sys.forces.iter().zip(&model.forces) {
+            let g = &e.geometry;
+            let [point1, point2, _] = e.kind.uses();
+            let unused = crate::joints::Use::Unused;
+            // Where a type has no points (a torque between two bodies), it joins their
+            // centres of mass.
+            let cm = |b: Option<usize>| b.map_or(V3::zeros(), |b| pose[b].apply(&sys.bodies[b].cm));
+            let ends = [
+                if point1 == unused {
+                    p3(&cm(g.body1))
+                } else {
+                    p3(&pose_of(g.body1).apply(&g.point1))
+                },
+                if point2 == unused {
+                    p3(&cm(g.body2))
+                } else {
+                    p3(&pose_of(g.body2).apply(&g.point2))
+                },
+            ];
+            if point1 != unused {
+                attach(g.body1, ends[0]);
+            }
+            if point2 != unused {
+                attach(g.body2, ends[1]);
+            }
+            elements.push(LinkMark {
+                name: me.name.clone(),
+                kind: e.kind.name(),
+                ends,
+            });
+        }
+        let mut ports = Vec::with_capacity(sys.ports.len());
+        for (p, mp) in sys.ports.iter().zip(&model.ports) {
+            let at = p3(&pose[p.body].apply(&p.point));
+            attach(Some(p.body), at);
+            ports.push(PortMark {
+                name: mp.name.clone(),
+                at,
+                direction: p3(&(pose[p.body].rot * p.direction)),
+                rotation: p.rotation,
+            });
+        }
+        let bodies = (sys.bodies.iter().zip(&model.bodies).enumerate())
+            .map(|(b, (body, mb))| BodyMark {
+                name: mb.name.clone(),
+                cm: p3(&pose[b].apply(&body.cm)),
+                axes: [0, 1, 2].map(|k| p3(&pose[b].rot.column(k).into_owned())),
+                links: std::mem::take(&mut links[b]),
+            })
+            .collect();
+        Scene {
+            bodies,
+            joints,
+            cuts,
+            elements,
+            ports,
+        }
+    }
+
+    /// Every point drawn.
+    pub fn points(&self) -> impl Iterator<Item = P3> + '_ {
+        let bodies = self
+            .bodies
+            .iter()
+            .flat_map(|b| std::iter::once(b.cm).chain(b.links.iter().copied()));
+        let joints = self.joints.iter().map(|j| j.at);
+        let links = (self.cuts.iter().chain(&self.elements)).flat_map(|l| l.ends);
+        let ports = self.ports.iter().map(|p| p.at);
+        bodies.chain(joints).chain(links).chain(ports)
+    }
+
+    /// The diagonal of the box around every point drawn, with the origin (m): the scale of the
+    /// drawing (1 where everything is at one point).
+    pub fn size(&self) -> f64 {
+        let mut lo = [0.0f64; 3];
+        let mut hi = [0.0f64; 3];
+        for x in self.points() {
+            for k in 0..3 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        let d = ((0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>()).sqrt();
+        if d > 0.0 && d.is_finite() { d } else { 1.0 }
+    }
+}
+
+/// A mode's shape mapped onto the bodies and ports (see the module documentation), for a shape
+/// `v` in the free coordinates: per unit of `v`.
+#[derive(Debug, Clone)]
+pub struct PhysicalShape {
+    /// Per body: the displacement of its centre of mass (m per unit of `v`), ground axes.
+    pub displacement: Vec<[C64; 3]>,
+    /// Per body: its small rotation (rad per unit of `v`), ground axes.
+    pub rotation: Vec<[C64; 3]>,
+    /// Per port: the displacement along its direction (m), or the rotation about it (rad).
+    pub ports: Vec<C64>,
+}
+
+/// The physical shape of the mode shape `v` over the coordinates `free` at `q`.
+pub fn physical_shape(sys: &System<f64>, q: &[f64], free: &[usize], v: &[C64]) -> PhysicalShape {
+    let j = partials_for(&sys.map(lift1), q, free);
+    let zero = [C64::new(0.0, 0.0); 3];
+    let mut displacement = vec![zero; sys.bodies.len()];
+    let mut rotation = vec![zero; sys.bodies.len()];
+    for (b, (d, r)) in displacement.iter_mut().zip(&mut rotation).enumerate() {
+        for (&i, &vi) in free.iter().zip(v) {
+            let (jv, jw) = (j.jv(sys, i, b), j.jw(sys, i, b));
+            for k in 0..3 {
+                d[k] += vi * jv[k];
+                r[k] += vi * jw[k];
+            }
+        }
+    }
+    let pose = &j.pose;
+    let ports = sys
+        .ports
+        .iter()
+        .map(|port| {
+            let b = port.body;
+            let u = pose[b].rot * port.direction;
+            let arm = pose[b].rot * (port.point - sys.bodies[b].cm);
+            let along = |x: &[C64; 3]| x[0] * u.x + x[1] * u.y + x[2] * u.z;
+            if port.rotation {
+                along(&rotation[b])
+            } else {
+                let (d, r) = (&displacement[b], &rotation[b]);
+                // d + r × arm.
+                let moved = [
+                    d[0] + r[1] * arm.z - r[2] * arm.y,
+                    d[1] + r[2] * arm.x - r[0] * arm.z,
+                    d[2] + r[0] * arm.y - r[1] * arm.x,
+                ];
+                along(&moved)
+            }
+        })
+        .collect();
+    PhysicalShape {
+        displacement,
+        rotation,
+        ports,
+    }
+}
+
+/// The amplitude `a` at which the mode `v` (over the coordinates `free`) moves the mechanism at
+/// `q` by `reach` (m): its largest first-order displacement of a drawn point, or of the tip of
+/// a body's axes drawn a twentieth of the mechanism's size long (so a turn about a link's own
+/// line shows), over the cycle, measured by a small step along the real and the imaginary part.
+/// Zero for a shape that moves nothing.
+pub fn display_amplitude(
+    model: &Model,
+    sys: &System<f64>,
+    q: &[f64],
+    free: &[usize],
+    v: &[C64],
+    reach: f64,
+) -> f64 {
+    let still = Scene::at(model, sys, q);
+    let size = still.size();
+    let h = 1e-6;
+    let moved = |part: &dyn Fn(C64) -> f64| {
+        let mut qh = q.to_vec();
+        for (&i, &vi) in free.iter().zip(v) {
+            qh[i] += h * part(vi);
+        }
+        let s = Scene::at(model, sys, &qh);
+        let dist = |a: P3, b: P3| ((0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>()).sqrt();
+        let arm = 0.05 * size;
+        let turned = (s.bodies.iter().zip(&still.bodies))
+            .flat_map(|(a, b)| (0..3).map(move |k| arm * dist(a.axes[k], b.axes[k])));
+        (s.points().zip(still.points()))
+            .map(|(a, b)| dist(a, b))
+            .chain(turned)
+            .fold(0.0f64, f64::max)
+            / h
+    };
+    let per_unit = moved(&|z: C64| z.re).max(moved(&|z: C64| z.im));
+    if per_unit > 0.0 && per_unit.is_finite() {
+        reach / per_unit
+    } else {
+        0.0
+    }
+}
+
+/// The mechanism over one period of the mode `v` (over the coordinates `free`) at amplitude
+/// `a`, at `frames` phases `φ = 2πk/frames`: posed at `q + a Re(v e^{iφ})`.
+pub fn mode_frames(
+    model: &Model,
+    sys: &System<f64>,
+    q: &[f64],
+    free: &[usize],
+    v: &[C64],
+    a: f64,
+    frames: usize,
+) -> Vec<Scene> {
+    (0..frames)
+        .map(|k| {
+            let phase = C64::from_polar(1.0, std::f64::consts::TAU * k as f64 / frames as f64);
+            let mut qk = q.to_vec();
+            for (&i, &vi) in free.iter().zip(v) {
+                qk[i] += a * (vi * phase).re;
+            }
+            Scene::at(model, sys, &qk)
+        })
+        .collect()
+}
