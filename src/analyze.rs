@@ -13,7 +13,7 @@ use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::modal::ModeClass;
 use crate::model::Case;
-use crate::montecarlo::{self, Block, McOptions, McStat, MonteCarlo, TreeFold};
+use crate::montecarlo::{self, CaseShard, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
 use crate::propagate::{Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
@@ -105,10 +105,12 @@ pub enum Split {
     #[default]
     Whole,
     /// Only the chunks of shard `k` (0-based) of `n`; no Monte Carlo rows, the blocks of chunk
-    /// moments are returned in [`Analysis::shard_states`] for [`Split::Merged`].
+    /// moments and the values kept are returned in [`Analysis::shard_states`] for
+    /// [`Split::Merged`].
     Shard(usize, usize),
-    /// The blocks of all shards, per case, in chunk order: folded as a whole run would.
-    Merged(Vec<Vec<Block>>),
+    /// The blocks of all shards, per case, in chunk order, and their values in sample order:
+    /// folded (and the quantiles taken) as a whole run would.
+    Merged(Vec<CaseShard>),
 }
 
 /// What to analyse.
@@ -186,7 +188,7 @@ pub struct Analysis {
     /// admissible, by reason: `(reason, count, first value)`; they count as failed at every speed.
     pub inadmissible: Vec<Vec<(String, usize, f64)>>,
     /// With [`Split::Shard`]: this shard's chunk moments per case, in chunk order.
-    pub shard_states: Vec<Vec<Block>>,
+    pub shard_states: Vec<CaseShard>,
     /// How the run ended: [`Termination::Cancelled`] where a stage stopped early because the
     /// run's [`Cancel`] token was cancelled (see [`AnalyzeOptions::cancel`]), as the stages'
     /// estimates report it.
@@ -439,7 +441,7 @@ struct MonteCarloPart {
     yields: Vec<YieldRow>,
     samples_done: Vec<usize>,
     inadmissible: Vec<Vec<(String, usize, f64)>>,
-    shard_states: Vec<Vec<Block>>,
+    shard_states: Vec<CaseShard>,
 }
 
 /// The Monte Carlo of every case as `opt.split` asks: all samples here, one shard's chunks
@@ -462,19 +464,23 @@ where
         let progress = stage(&format!("monte carlo {}", opt.cases[ci].name));
         let run = run.with_progress(&progress);
         let (stats, done, counts, worst) = match &opt.split {
-            Split::Merged(blocks) => {
+            Split::Merged(cases) => {
                 let mut fold = TreeFold::default();
-                for b in &blocks[ci] {
+                for b in &cases[ci].blocks {
                     fold.push(b.clone());
                 }
-                let (stats, done) = montecarlo::statistics(&fold, speeds, outs, mc.samples);
-                (stats, done, fold.total_yields(), None)
+                let (mut stats, done) = montecarlo::statistics(&fold, speeds, outs, mc.samples);
+                let worst = cases[ci].kept.clone().map(|k| k.apply(&mut stats));
+                (stats, done, fold.total_yields(), worst)
             }
             Split::Shard(k, n) => {
                 let method = MonteCarlo::shard(mc, *k, *n);
                 let states = method.propagate(study, s, &run);
                 part.termination = part.termination.and(states.termination);
-                part.shard_states.push(states.value.fold.into_blocks());
+                part.shard_states.push(CaseShard {
+                    blocks: states.value.fold.into_blocks(),
+                    kept: states.value.kept,
+                });
                 continue;
             }
             Split::Whole => {

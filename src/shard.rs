@@ -20,7 +20,9 @@
 
 use crate::analyze::Analysis;
 use crate::model::{Case, Model, Sampling, SpeedRange};
-use crate::montecarlo::{self, Block, McOptions, Moments};
+use crate::montecarlo::{self, Block, CaseShard, Kept, McOptions, Moments, MonteCarlo};
+use base64::Engine;
+use base64::engine::general_purpose::STANDARD as BASE64;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -34,8 +36,9 @@ pub fn output_count(m: &Model) -> usize {
 }
 
 /// Format tag of shard files (2: aligned blocks, digest; 3: the fingerprint by section, the
-/// quadrature's options).
-pub const FORMAT: &str = "modaltol-shard-4";
+/// quadrature's options; 4: the requirements' prefix counts; 5: the values kept for the
+/// quantiles).
+pub const FORMAT: &str = "modaltol-shard-5";
 
 /// What `analyze --shard K/N` writes.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -58,9 +61,66 @@ pub struct ShardFile {
     pub outputs: usize,
     /// Per tolerance case, the blocks of this shard's chunks, in chunk order.
     pub cases: Vec<Vec<Block>>,
+    /// Per tolerance case, its samples' values for the quantiles ([`Kept`]), where the run
+    /// keeps them ([`MonteCarlo::keeps`]; empty otherwise): so the merge's quantiles are
+    /// one run's.
+    #[serde(default)]
+    pub kept: Vec<KeptFile>,
     /// SHA-256 (hex) of the file's JSON with this field empty.
     #[serde(default)]
     pub digest: String,
+}
+
+/// A case's kept values in a shard file: per `[speed · outputs + output]` its samples' finite
+/// values (`f32`) and per requirement their worst margins (`f64`), in sample order, each list
+/// the base64 of its little-endian bytes: exact, and a third of decimal text's size.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct KeptFile {
+    pub values: Vec<String>,
+    pub worst: Vec<String>,
+}
+
+impl KeptFile {
+    fn of(k: &Kept) -> KeptFile {
+        KeptFile {
+            values: (k.values.iter())
+                .map(|v| BASE64.encode(v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>()))
+                .collect(),
+            worst: (k.worst.iter())
+                .map(|v| BASE64.encode(v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<_>>()))
+                .collect(),
+        }
+    }
+
+    /// The values, or why they cannot be read.
+    fn decode(&self) -> Result<Kept, String> {
+        let bytes = |s: &String, width: usize| -> Result<Vec<u8>, String> {
+            let b = BASE64
+                .decode(s)
+                .map_err(|e| format!("kept values are not base64 ({e})"))?;
+            if b.len() % width != 0 {
+                return Err("kept values cut short".into());
+            }
+            Ok(b)
+        };
+        let values = (self.values.iter())
+            .map(|s| {
+                Ok(bytes(s, 4)?
+                    .chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                    .collect())
+            })
+            .collect::<Result<Vec<Vec<f32>>, String>>()?;
+        let worst = (self.worst.iter())
+            .map(|s| {
+                Ok(bytes(s, 8)?
+                    .chunks_exact(8)
+                    .map(|c| f64::from_le_bytes(c.try_into().expect("eight bytes")))
+                    .collect())
+            })
+            .collect::<Result<Vec<Vec<f64>>, String>>()?;
+        Ok(Kept { values, worst })
+    }
 }
 
 /// Why a shard file is refused.
@@ -172,7 +232,7 @@ impl ShardFile {
         let complete = a
             .shard_states
             .iter()
-            .all(|c| c.last().map_or(expect.start, |b| b.chunks().end) == expect.end);
+            .all(|c| c.blocks.last().map_or(expect.start, |b| b.chunks().end) == expect.end);
         complete.then(|| ShardFile {
             format: FORMAT.into(),
             fingerprint: Fingerprint::of(model, cases, run),
@@ -184,7 +244,10 @@ impl ShardFile {
             shard: k + 1,
             of: run.of,
             outputs: output_count(model),
-            cases: a.shard_states.clone(),
+            cases: a.shard_states.iter().map(|c| c.blocks.clone()).collect(),
+            kept: (a.shard_states.iter())
+                .filter_map(|c| c.kept.as_ref().map(KeptFile::of))
+                .collect(),
             digest: String::new(),
         })
     }
@@ -247,6 +310,7 @@ impl ShardFile {
         speeds: usize,
         outputs: usize,
         cases: usize,
+        requirements: usize,
     ) -> Result<(), ShardError> {
         let err = |message: String| ShardError {
             file: file.to_string(),
@@ -319,6 +383,75 @@ impl ShardFile {
                 }
             }
         }
+        self.check_kept(speeds, outputs, cases, requirements)
+            .map_err(err)
+    }
+
+    /// The kept values: one set per case where the run keeps them (none otherwise), each
+    /// value finite, as many per output as its blocks count values, and per requirement one
+    /// worst margin per sample.
+    fn check_kept(
+        &self,
+        speeds: usize,
+        outputs: usize,
+        cases: usize,
+        requirements: usize,
+    ) -> Result<(), String> {
+        let want = if MonteCarlo::keeps(self.samples, speeds, outputs) {
+            cases
+        } else {
+            0
+        };
+        if self.kept.len() != want {
+            return Err(format!(
+                "{} sets of kept values for {want} (the run keeps its values for the quantiles: {})",
+                self.kept.len(),
+                want > 0
+            ));
+        }
+        for (ci, (k, blocks)) in self.kept.iter().zip(&self.cases).enumerate() {
+            let kept = k
+                .decode()
+                .map_err(|why| format!("case {}: {why}", ci + 1))?;
+            if kept.values.len() != speeds * outputs || kept.worst.len() != requirements {
+                return Err(format!(
+                    "case {}: kept values not for {speeds} speeds × {outputs} outputs and {requirements} requirement(s)",
+                    ci + 1
+                ));
+            }
+            for (j, v) in kept.values.iter().enumerate() {
+                let n: usize = blocks
+                    .iter()
+                    .map(|b| b.moments[j / outputs][j % outputs].n())
+                    .sum();
+                if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+                    return Err(format!(
+                        "case {}: the kept values of output {} at speed {} are not its {n} values",
+                        ci + 1,
+                        j % outputs + 1,
+                        j / outputs + 1
+                    ));
+                }
+            }
+            let samples: usize = blocks
+                .iter()
+                .map(|b| {
+                    let c = b.chunks();
+                    (c.end.saturating_mul(montecarlo::CHUNK)).min(self.samples)
+                        - (c.start * montecarlo::CHUNK).min(self.samples)
+                })
+                .sum();
+            if kept
+                .worst
+                .iter()
+                .any(|w| w.len() != samples || w.iter().any(|x| x.is_nan()))
+            {
+                return Err(format!(
+                    "case {}: the kept worst margins are not one per sample ({samples})",
+                    ci + 1
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -379,7 +512,7 @@ impl RunSettings {
 pub fn gather(
     files: Vec<(String, ShardFile)>,
     fingerprint: &Fingerprint,
-) -> Result<(RunSettings, Vec<Vec<Block>>), ShardError> {
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
     let mut files = files;
     files.sort_by_key(|(_, f)| f.shard);
     let Some((first_path, first)) = files.first() else {
@@ -418,24 +551,44 @@ pub fn gather(
         });
     }
     let cases = first.cases.len();
-    let mut blocks: Vec<Vec<Block>> = vec![Vec::new(); cases];
-    for (_, f) in files {
+    let keeps = !first.kept.is_empty();
+    let mut out: Vec<CaseShard> = (0..cases)
+        .map(|_| CaseShard {
+            blocks: Vec::new(),
+            kept: keeps.then(Kept::default),
+        })
+        .collect();
+    for (path, f) in files {
+        if f.kept.is_empty() == keeps {
+            return Err(ShardError {
+                file: path,
+                message: "kept values where the first shard has none, or none where it has".into(),
+            });
+        }
+        for (ci, k) in f.kept.iter().enumerate() {
+            let k = k.decode().map_err(|message| ShardError {
+                file: path.clone(),
+                message,
+            })?;
+            if let Some(all) = out[ci].kept.as_mut() {
+                all.extend(k);
+            }
+        }
         for (ci, b) in f.cases.into_iter().enumerate() {
-            blocks[ci].extend(b);
+            out[ci].blocks.extend(b);
         }
     }
-    Ok((run, blocks))
+    Ok((run, out))
 }
 
 /// Reads and verifies the shard files `paths` of one run of `model` with `cases` and gathers
-/// them ([`gather`]). The run's settings are those of the lowest-numbered shard; every shard
-/// must have been computed from `model`, `cases` and those settings ([`Fingerprint`]).
+/// them ([`verify`]).
 pub fn read_all(
     model: &Model,
     cases: &[Case],
     paths: &[PathBuf],
-) -> Result<(RunSettings, Vec<Vec<Block>>), ShardError> {
-    let mut files = Vec::with_capacity(paths.len());
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+    let mut texts = Vec::with_capacity(paths.len());
     for path in paths {
         let name = path.display().to_string();
         let refuse = |message: String| ShardError {
@@ -446,7 +599,25 @@ pub fn read_all(
             .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
         let text = String::from_utf8(bytes)
             .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
-        files.push((name.clone(), ShardFile::parse(&text, &name)?));
+        texts.push((name, text));
+    }
+    verify(model, cases, texts)
+}
+
+/// Parses and verifies shards given as `(name, text)` (the name says which in messages) of one
+/// run of `model` with `cases`, and gathers them ([`gather`]): what `merge` does with files,
+/// for shards that travelled as text (the Python package's executors). The run's settings are
+/// those of the lowest-numbered shard; every shard must have been computed from `model`,
+/// `cases` and those settings ([`Fingerprint`]).
+pub fn verify(
+    model: &Model,
+    cases: &[Case],
+    texts: Vec<(String, String)>,
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+    let mut files = Vec::with_capacity(texts.len());
+    for (name, text) in texts {
+        let f = ShardFile::parse(&text, &name)?;
+        files.push((name, f));
     }
     let Some((_, first)) = files.iter().min_by_key(|(_, f)| f.shard) else {
         return Err(ShardError {
@@ -462,7 +633,14 @@ pub fn read_all(
                 message: format!("speed '{}': {e}", f.speed),
             })?
             .len();
-        f.check(name, &fingerprint, speeds, output_count(model), cases.len())?;
+        f.check(
+            name,
+            &fingerprint,
+            speeds,
+            output_count(model),
+            cases.len(),
+            model.requirements.len(),
+        )?;
     }
     gather(files, &fingerprint)
 }

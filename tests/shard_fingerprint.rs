@@ -330,3 +330,44 @@ fn a_shard_of_other_settings_is_refused_naming_them() {
     assert!(e.to_string().contains("tolerance cases"), "{e}");
     read_all(model.model(), &cases, &[shard]).unwrap();
 }
+
+#[test]
+fn kept_values_that_do_not_fit_their_moments_are_refused() {
+    // A shard whose kept values (for the merge's quantiles) were cut, padded or dropped, even
+    // with its digest recomputed, is refused naming the case: the values must be exactly the
+    // finite values its blocks count, one worst margin per sample per requirement.
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example("governor_specification.toml");
+    let path = shard_of(&m, dir.path());
+    let cases = m.model().tolerance_cases(&[]).unwrap();
+    let good = std::fs::read_to_string(&path).unwrap();
+    let file = ShardFile::parse(&good, "good").unwrap();
+    assert_eq!(file.kept.len(), cases.len(), "a shard keeps its values");
+    assert!(read_all(m.model(), &cases, std::slice::from_ref(&path)).is_ok());
+    let tampered: Vec<(&str, ShardFile)> = vec![
+        ("values", {
+            let mut f = file.clone();
+            f.kept[0].values[0] = String::new();
+            f
+        }),
+        ("worst", {
+            let mut f = file.clone();
+            f.kept[0].worst.pop();
+            f
+        }),
+        ("dropped", {
+            let mut f = file.clone();
+            f.kept.clear();
+            f
+        }),
+    ];
+    for (what, f) in tampered {
+        let p = dir.path().join(format!("{what}.json"));
+        std::fs::write(&p, f.to_json()).unwrap();
+        let e = match read_all(m.model(), &cases, &[p]) {
+            Ok(_) => panic!("{what}: a shard with bad kept values accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("kept"), "{what}: {e}");
+    }
+}

@@ -9,6 +9,12 @@ A mechanism is read from a TOML model file (the format of ``docs/model-format.md
     point = gov.modal(1.595)                           # numpy M, C, K and a modes table
     res = gov.analyze(samples=3000)                    # tolerance, probabilities, summary
 
+Large Monte Carlo runs scale out: ``analyze(executor=pool)`` splits the samples into shards,
+runs them on any ``concurrent.futures``-like executor (a process pool, a Dask ``Client``, …) and
+merges them exactly (the result equals one run bit for bit); ``analyze(shard=(k, n))`` runs one
+shard anywhere (a Slurm array task, say) and :func:`merge` combines shards, those of the command
+line's ``analyze --shard`` included.
+
 Units are SI throughout: speeds and frequencies in rad/s, angles in rad, translations in m,
 drive forces in N·m (revolute) or N (prismatic). Every table has the columns of the command
 line's CSV file of the same name and the same numbers (see ``modaltol --help``).
@@ -22,8 +28,10 @@ release the GIL and stop on Ctrl-C (``KeyboardInterrupt``).
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from os import PathLike
+from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, Union
 
 import numpy as np
@@ -37,10 +45,12 @@ __all__ = [
     "Model",
     "ModalPoint",
     "ModelError",
+    "Shard",
     "SolveError",
     "__version__",
     "load",
     "loads",
+    "merge",
 ]
 
 #: Speeds or frequencies: ``"FROM:TO:STEP"`` in rad/s (TO included) or a sequence of values.
@@ -122,11 +132,61 @@ class Analysis:
         return self.tolerance[self.tolerance["method"] == "analytic"].reset_index(drop=True)
 
 
+@dataclass(frozen=True)
+class Shard:
+    """One share of a Monte Carlo run (``analyze(shard=(k, n))``, or read from a file the
+    command line's ``analyze --shard K/N`` wrote): the shard file's ``text`` and its usual file
+    ``name`` (``shard-K-of-N.json``). :func:`merge` combines shards ``1..N`` of one run,
+    checking each (digest, fingerprint of the model and settings, layout) as the command line
+    does. Plain strings, so a shard pickles and travels between processes and machines."""
+
+    name: str
+    text: str
+
+    def write(self, directory: str | PathLike[str]) -> Path:
+        """Writes the shard as ``directory/name`` (the command line's file); its path."""
+        path = Path(directory) / self.name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(self.text, encoding="utf-8")
+        os.replace(tmp, path)
+        return path
+
+    @staticmethod
+    def read(path: str | PathLike[str]) -> "Shard":
+        """A shard file (as the command line or :meth:`write` wrote it)."""
+        p = Path(path)
+        return Shard(name=str(p), text=p.read_text(encoding="utf-8"))
+
+
+def _run_shard(
+    recipe: tuple[str, dict[str, float] | None, str],
+    speeds: str | None,
+    options: dict[str, Any],
+    shard: tuple[int, int],
+) -> Shard:
+    """Runs one shard in a worker (what ``analyze(executor=...)`` submits): rebuilds the model
+    from its text and runs ``analyze(shard=...)``."""
+    text, parameters, name = recipe
+    return loads(text, parameters, name=name).analyze(speeds, shard=shard, **options)
+
+
 class Model:
     """A validated mechanism. Made by :func:`load` or :func:`loads`."""
 
-    def __init__(self, native: _modaltol.NativeModel) -> None:
+    def __init__(
+        self,
+        native: _modaltol.NativeModel,
+        recipe: tuple[str, dict[str, float] | None, str] | None = None,
+    ) -> None:
         self._native = native
+        # The model's text, parameter overrides and name, to rebuild it in other processes.
+        self._recipe = recipe
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        if self._recipe is None:
+            raise TypeError("this model cannot be pickled (it was not made by load or loads)")
+        return (_rebuild, (self._recipe,))
 
     def __repr__(self) -> str:
         return f"<modaltol.Model {self.name!r}: {self.dof} degree(s) of freedom>"
@@ -310,7 +370,10 @@ class Model:
         speed_unit: str = "rad/s",
         frequency_unit: str = "rad/s",
         sobol: int | None = None,
-    ) -> Analysis:
+        shard: tuple[int, int] | None = None,
+        executor: Any = None,
+        shards: int | None = None,
+    ) -> Any:
         """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
         per tolerance case, by first and second order, the quadrature (``analytic``: the
         answer to read) and Monte Carlo (``samples``, ``seed``, ``sampling`` = ``"random"``,
@@ -320,7 +383,55 @@ class Model:
         ``"rpm"``; the tables stay in rad/s). At most 10⁵ speeds; ``threads`` from 1 to 1024
         (``None``: one per core), the command line's rules. Ctrl-C stops it. The yield of the
         model's ``[[requirements]]`` is in ``yield_``; ``sobol=N`` adds the Sobol indices
-        (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``."""
+        (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``. Returns an :class:`Analysis`.
+
+        Scale-out (speeds then as ``"FROM:TO:STEP"`` or the model's):
+
+        * ``shard=(k, n)`` runs shard ``k`` of ``n`` of the Monte Carlo (the command line's
+          ``--shard k/n``) and returns it as a :class:`Shard`; :func:`merge` combines them.
+        * ``executor=`` any object with ``submit(fn, *args)`` returning futures with
+          ``result()`` (a ``concurrent.futures`` executor, a Dask ``Client``, …): the run is
+          split into ``shards`` shards (default 8), each submitted as one task (the model
+          travels as its text), and merged here: the result equals one run bit for bit,
+          whatever the split and the executor."""
+        if shard is not None and executor is not None:
+            raise ValueError("give shard= (one shard) or executor= (all of them), not both")
+        if executor is not None:
+            if sobol:
+                raise ValueError("sobol= runs in one process; it is not split across an executor")
+            if not monte_carlo:
+                raise ValueError("executor= splits the Monte Carlo: monte_carlo=False leaves none")
+            if speeds is not None and not isinstance(speeds, str):
+                raise ValueError('executor=: speeds as "FROM:TO:STEP" (or the model\'s)')
+            if self._recipe is None:
+                raise ValueError("this model cannot travel to an executor's workers")
+            n = 8 if shards is None else int(shards)
+            if n < 1:
+                raise ValueError(f"shards must be at least 1, got {n}")
+            options = {
+                "cases": cases,
+                "samples": samples,
+                "seed": seed,
+                "sampling": sampling,
+                "quadrature": quadrature,
+                "quadrature_tolerance": quadrature_tolerance,
+            }
+            futures = [
+                executor.submit(_run_shard, self._recipe, speeds, options, (k, n))
+                for k in range(1, n + 1)
+            ]
+            parts = [f.result() for f in futures]
+            return merge(
+                self,
+                parts,
+                cases=cases,
+                threads=threads,
+                output=output,
+                speed_unit=speed_unit,
+                frequency_unit=frequency_unit,
+            )
+        if shards is not None:
+            raise ValueError("shards= is the split of executor=; give executor= too")
         d = self._native.analyze(
             _speeds(speeds),
             {
@@ -336,20 +447,62 @@ class Model:
                 "speed_unit": speed_unit,
                 "frequency_unit": frequency_unit,
                 "sobol": sobol,
+                "shard": None if shard is None else (int(shard[0]), int(shard[1])),
             },
         )
-        return Analysis(
-            tolerance=_frame(d["tolerance"]),
-            probabilities=_frame(d["probabilities"]),
-            yield_=_frame(d["yield"]),
-            limits=_frame(d["limits"]),
-            sobol=_frame(d["sobol"]),
-            summary=json.loads(d["summary"]),
-        )
+        if shard is not None:
+            return Shard(name=d["name"], text=d["shard"])
+        return _analysis(d)
+
+
+def _analysis(d: dict[str, Any]) -> Analysis:
+    return Analysis(
+        tolerance=_frame(d["tolerance"]),
+        probabilities=_frame(d["probabilities"]),
+        yield_=_frame(d["yield"]),
+        limits=_frame(d["limits"]),
+        sobol=_frame(d["sobol"]),
+        summary=json.loads(d["summary"]),
+    )
+
+
+def merge(
+    model: Model,
+    shards: Iterable[Shard | str | PathLike[str]],
+    *,
+    cases: str | Iterable[str] | None = None,
+    threads: int | None = None,
+    output: str | PathLike[str] | None = None,
+    speed_unit: str = "rad/s",
+    frequency_unit: str = "rad/s",
+) -> Analysis:
+    """Combines shards ``1..N`` of one Monte Carlo run of ``model`` (:class:`Shard` objects, or
+    paths of shard files, the command line's included) exactly as the command line's ``merge``
+    does, refusing what it refuses (an edited or truncated shard, one of another model, other
+    tolerance cases or other settings, a missing or repeated shard). ``cases`` must be those the
+    shards were run with. The analysis is that of one run, bit for bit; ``output`` writes its
+    result directory."""
+    parts = [s if isinstance(s, Shard) else Shard.read(s) for s in shards]
+    d = model._native.merge(
+        [(s.name, s.text) for s in parts],
+        {
+            "cases": _names(cases),
+            "threads": threads,
+            "output": None if output is None else str(output),
+            "speed_unit": speed_unit,
+            "frequency_unit": frequency_unit,
+        },
+    )
+    return _analysis(d)
 
 
 def _allocation(d: dict[str, Any]) -> tuple[pd.DataFrame, dict[str, Any]]:
     return _frame(d["allocation"]), json.loads(d["summary"])
+
+
+def _rebuild(recipe: tuple[str, dict[str, float] | None, str]) -> Model:
+    text, parameters, name = recipe
+    return loads(text, parameters, name=name)
 
 
 def load(
@@ -357,7 +510,10 @@ def load(
 ) -> Model:
     """Read and validate a model file. ``parameters`` replaces nominal values (name → value,
     in the parameter's unit), exactly as editing the file would."""
-    return Model(_modaltol.load(str(path), dict(parameters) if parameters else None))
+    overrides = dict(parameters) if parameters else None
+    native = _modaltol.load(str(path), overrides)
+    # Read after it validated (so it is UTF-8): the text rebuilds it in worker processes.
+    return Model(native, (Path(path).read_text(encoding="utf-8"), overrides, str(path)))
 
 
 def loads(
@@ -368,6 +524,5 @@ def loads(
 ) -> Model:
     """Validate a model given as TOML text (``name`` names it in error messages);
     ``parameters`` as in :func:`load`."""
-    return Model(
-        _modaltol.loads(text, dict(parameters) if parameters else None, name)
-    )
+    overrides = dict(parameters) if parameters else None
+    return Model(_modaltol.loads(text, overrides, name), (text, overrides, name))

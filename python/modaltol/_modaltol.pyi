@@ -35,6 +35,14 @@ class AnalyzeOptions(TypedDict):
     speed_unit: str
     frequency_unit: str
     sobol: int | None
+    shard: tuple[int, int] | None
+
+class MergeOptions(TypedDict):
+    cases: list[str] | None
+    threads: int | None
+    output: str | None
+    speed_unit: str
+    frequency_unit: str
 
 class NativeModel:
     @property
@@ -67,6 +75,9 @@ class NativeModel:
     ) -> Columns: ...
     def analyze(
         self, speeds: str | list[float] | None, options: AnalyzeOptions
+    ) -> dict[str, Any]: ...
+    def merge(
+        self, shards: list[tuple[str, str]], options: MergeOptions
     ) -> dict[str, Any]: ...
     def allocate(
         self,

@@ -10,17 +10,20 @@
 //! Python's signals every 50 ms, and on Ctrl-C cancels the run ([`Cancel`]) and raises
 //! `KeyboardInterrupt` once the worker has stopped.
 
-use modaltol::analyze::analyze;
+use modaltol::analyze::{AnalyzeOptions, Split, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
+use modaltol::montecarlo::McOptions;
 use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::program::{Tier, Workspace};
+use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::settings::{self, ThreadsError};
+use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point_at};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -338,6 +341,20 @@ struct AnalyzeKeywords {
     speed_unit: String,
     frequency_unit: String,
     sobol: Option<i64>,
+    /// `(K, N)`: run shard K (1-based) of N of the Monte Carlo and return the shard's text.
+    shard: Option<(i64, i64)>,
+}
+
+/// The keywords of `merge` (Python's `modaltol.merge`): the cases the shards were run with and
+/// the result directory with its display units.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct MergeKeywords {
+    cases: Option<Vec<String>>,
+    threads: Option<i64>,
+    output: Option<PathBuf>,
+    speed_unit: String,
+    frequency_unit: String,
 }
 
 #[pymethods]
@@ -711,7 +728,13 @@ impl NativeModel {
             speed_unit,
             frequency_unit,
             sobol,
+            shard,
         } = options;
+        let shard = shard
+            .map(|(k, n)| {
+                settings::shard(&format!("{k}/{n}")).map_err(|e| bad(format!("shard {e}")))
+            })
+            .transpose()?;
         let (sampling, speed_unit, frequency_unit) =
             (sampling.as_deref(), &*speed_unit, &*frequency_unit);
         let m = self.m();
@@ -755,11 +778,20 @@ impl NativeModel {
             quadrature_tolerance,
             // A negative count is refused as zero is (the command line's parser refuses it too).
             threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
-            shard: None,
+            shard,
             // A negative count is refused as zero is.
             sobol: sobol.map(|n| usize::try_from(n).unwrap_or(0)),
         };
-        let Resolved { options: opt, .. } = request
+        if shard.is_some() && output.is_some() {
+            return Err(bad(
+                "a shard is returned, not written as a result directory: merge the shards \
+                 (modaltol.merge) with output=",
+            ));
+        }
+        let Resolved {
+            options: opt,
+            range,
+        } = request
             .check()
             .and_then(|r| r.resolve(m, Cancel::new()))
             .map_err(refused)?;
@@ -782,56 +814,163 @@ impl NativeModel {
             // Ctrl-C arrived between the worker's last check and its end.
             return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
         }
+        if let (Some((k, n)), Some(mc)) = (shard, mc) {
+            let range = range
+                .ok_or_else(|| bad("shards need speeds as \"FROM:TO:STEP\" (or the model's)"))?;
+            let tolerance = quadrature.then_some(quadrature_tolerance);
+            let run = RunSettings::new(&range, &mc, tolerance, n);
+            let file = ShardFile::of_analysis(m, &opt.cases, &a, &run, k).ok_or_else(|| {
+                PyRuntimeError::new_err(
+                    "the shard was not completed (a shard is complete or absent)",
+                )
+            })?;
+            let d = PyDict::new(py);
+            d.set_item("shard", file.to_json())?;
+            d.set_item("name", format!("shard-{}-of-{n}.json", k + 1))?;
+            return Ok(d);
+        }
         let used =
             threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-        if let Some(dir) = dir {
-            py.detach(|| {
-                let o = modaltol::results::WriteOptions {
-                    mc: mc.as_ref(),
-                    threads: used,
-                    display,
-                    allocation: None,
-                };
-                modaltol::results::write(model, &a, o, dir)
-            })
-            .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
-        }
-        let d = PyDict::new(py);
-        d.set_item(
-            "tolerance",
-            table(
-                py,
-                &report::tolerance_header(m, &a),
-                &report::tolerance_rows(&a, false),
-            )?,
-        )?;
-        d.set_item(
-            "probabilities",
-            table(
-                py,
-                &report::PROBABILITY_HEADER,
-                &report::probability_rows(&a),
-            )?,
-        )?;
-        d.set_item(
-            "yield",
-            table(py, &report::YIELD_HEADER, &report::yield_rows(m, &a))?,
-        )?;
-        d.set_item(
-            "limits",
-            table(py, &report::LIMITS_HEADER, &report::limit_rows(m, &a))?,
-        )?;
-        d.set_item(
-            "sobol",
-            table(py, &report::SOBOL_HEADER, &report::sobol_rows(m, &a))?,
-        )?;
-        d.set_item(
-            "summary",
-            serde_json::to_string(&report::summary_json(m, &a, mc.as_ref(), used))
-                .expect("a JSON value"),
-        )?;
-        Ok(d)
+        analysis_dict(py, model, &a, mc.as_ref(), used, dir, display)
     }
+
+    /// Merges shards `(name, text)` of one run of this model exactly as the CLI's `merge` does
+    /// (refusing what it refuses): the tables of `analyze`, and the result directory with
+    /// `output`.
+    #[pyo3(signature = (shards, options))]
+    fn merge<'py>(
+        &self,
+        py: Python<'py>,
+        shards: Vec<(String, String)>,
+        options: MergeKeywords,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let MergeKeywords {
+            cases,
+            threads,
+            output,
+            speed_unit,
+            frequency_unit,
+        } = options;
+        let m = self.m();
+        let display = Display {
+            speed: unit(&speed_unit, "speed_unit")?,
+            frequency: unit(&frequency_unit, "frequency_unit")?,
+        };
+        let request = Request {
+            speeds: Speeds::Model,
+            cases: cases.unwrap_or_default(),
+            samples: None,
+            seed: None,
+            sampling: None,
+            monte_carlo: true,
+            quadrature: true,
+            quadrature_tolerance: 1e-3,
+            threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
+            shard: None,
+            sobol: None,
+        };
+        let Resolved { options: base, .. } = request
+            .check()
+            .and_then(|r| r.resolve(m, Cancel::new()))
+            .map_err(refused)?;
+        let (first, states) =
+            modaltol::shard::verify(m, &base.cases, shards).map_err(|e| bad(e.to_string()))?;
+        let range = SpeedRange::parse(&first.speed).map_err(bad)?;
+        settings::analysis_speeds(range.len()).map_err(bad)?;
+        let mc = McOptions {
+            samples: first.samples,
+            seed: first.seed,
+            sampling: first.sampling,
+        };
+        let opt = AnalyzeOptions {
+            speeds: range.speeds().collect(),
+            // The quadrature of the run the shards belong to.
+            quadrature: first.quadrature.map(|tolerance| QuadOptions { tolerance }),
+            monte_carlo: Some(mc),
+            split: Split::Merged(states),
+            sobol: None,
+            ..base
+        };
+        let dir = output
+            .as_ref()
+            .map(|o| {
+                let inputs = Inputs::new(&self.source.iter().collect::<Vec<_>>());
+                ResultDir::create(o)
+                    .and_then(|d| d.protect(inputs, modaltol::results::is_result_file))
+                    .map_err(|e| bad(format!("{e}: {}", e.source)))
+            })
+            .transpose()?;
+        let model = &*self.model;
+        let a = interruptible(py, &opt.cancel, || {
+            analyze(model, &opt, &|_: &str, _: usize, _: usize| {})
+        })?;
+        if a.cancelled() {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
+        }
+        let used = opt
+            .threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        analysis_dict(py, model, &a, Some(&mc), used, dir, display)
+    }
+}
+
+/// The tables and summary of an analysis (and its result directory where `dir` is given).
+fn analysis_dict<'py>(
+    py: Python<'py>,
+    model: &Compiled,
+    a: &modaltol::analyze::Analysis,
+    mc: Option<&McOptions>,
+    used: usize,
+    dir: Option<ResultDir>,
+    display: Display,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = model.model();
+    if let Some(dir) = dir {
+        py.detach(|| {
+            let o = modaltol::results::WriteOptions {
+                mc,
+                threads: used,
+                display,
+                allocation: None,
+            };
+            modaltol::results::write(model, a, o, dir)
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("{e}: {}", e.source)))?;
+    }
+    let d = PyDict::new(py);
+    d.set_item(
+        "tolerance",
+        table(
+            py,
+            &report::tolerance_header(m, a),
+            &report::tolerance_rows(a, false),
+        )?,
+    )?;
+    d.set_item(
+        "probabilities",
+        table(
+            py,
+            &report::PROBABILITY_HEADER,
+            &report::probability_rows(a),
+        )?,
+    )?;
+    d.set_item(
+        "yield",
+        table(py, &report::YIELD_HEADER, &report::yield_rows(m, a))?,
+    )?;
+    d.set_item(
+        "limits",
+        table(py, &report::LIMITS_HEADER, &report::limit_rows(m, a))?,
+    )?;
+    d.set_item(
+        "sobol",
+        table(py, &report::SOBOL_HEADER, &report::sobol_rows(m, a))?,
+    )?;
+    d.set_item(
+        "summary",
+        serde_json::to_string(&report::summary_json(m, a, mc, used)).expect("a JSON value"),
+    )?;
+    Ok(d)
 }
 
 /// Parameter overrides from a dict (name → number).

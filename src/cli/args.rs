@@ -226,8 +226,8 @@ pub(crate) enum Command {
     /// governor example built into the binary.
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
-    /// (same seed, same numbers): writes the same files as `analyze`, except the Monte Carlo
-    /// quantiles q05, q50, q95 (they need every sample at once; a merge leaves them empty).
+    /// (same seed, same numbers): writes the same files as `analyze`, bit for bit, the Monte
+    /// Carlo quantiles included (each shard carries its samples' values for them).
     ///
     /// Every shard must come from the same model (with the same --set), tolerance cases,
     /// speeds, samples, seed, sampling and quadrature options: a shard computed from anything

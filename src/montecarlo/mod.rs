@@ -164,9 +164,12 @@ pub struct MonteCarlo {
     pub options: McOptions,
     /// The chunks evaluated here: all of them, or one shard's.
     pub chunks: std::ops::Range<usize>,
-    /// Keep every value for the 5/50/95 % quantiles (a whole run, unless more than
-    /// [`MAX_KEPT_VALUES`] values would be kept).
+    /// Keep every value for the 5/50/95 % quantiles (unless more than [`MAX_KEPT_VALUES`]
+    /// values would be kept).
     pub quantiles: bool,
+    /// A shard: the values kept go to the merge ([`McResult::kept`]) rather than into
+    /// quantiles here.
+    pub shard: bool,
 }
 
 /// What a [`MonteCarlo`] run gives.
@@ -182,14 +185,62 @@ pub struct McResult {
     /// Per requirement: every sample's worst margin over its range (`−∞` where it failed),
     /// sorted; where the run kept the values (see [`MonteCarlo::quantiles`]).
     pub worst_margins: Option<Vec<Vec<f64>>>,
+    /// The values kept, in sample order (a shard's, for the merge's quantiles).
+    pub kept: Option<Kept>,
 }
 
-/// What a whole run keeps besides the moments: every finite output value per
-/// `[speed · outputs + output]` and every requirement's worst margin, in sample order.
-#[derive(Default)]
-struct Kept {
-    values: Vec<Vec<f32>>,
-    worst: Vec<Vec<f64>>,
+/// One tolerance case's share of a sharded run: its blocks of chunk moments in chunk order,
+/// and the values it kept ([`Kept`], where the run keeps them); for a merge, every shard's
+/// blocks and values joined in order.
+#[derive(Debug, Clone, Default)]
+pub struct CaseShard {
+    pub blocks: Vec<Block>,
+    pub kept: Option<Kept>,
+}
+
+/// What a run keeps besides the moments, for the quantiles: every finite output value per
+/// `[speed · outputs + output]` (as `f32`) and every requirement's worst margin, in sample
+/// order. A shard keeps its samples' and the merge joins them in shard order, so the merged
+/// quantiles are a whole run's, bit for bit.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Kept {
+    pub values: Vec<Vec<f32>>,
+    pub worst: Vec<Vec<f64>>,
+}
+
+impl Kept {
+    /// Appends `other`'s samples (the next shard's) after these.
+    pub fn extend(&mut self, other: Kept) {
+        if self.values.is_empty() && self.worst.is_empty() {
+            *self = other;
+            return;
+        }
+        for (a, b) in self.values.iter_mut().zip(other.values) {
+            a.extend(b);
+        }
+        for (a, b) in self.worst.iter_mut().zip(other.worst) {
+            a.extend(b);
+        }
+    }
+
+    /// The 5, 50 and 95 % quantiles of each output into `stats` (`[speed][output]`), and each
+    /// requirement's worst margins sorted.
+    pub fn apply(self, stats: &mut [Vec<McStat>]) -> Vec<Vec<f64>> {
+        for (st, vals) in stats.iter_mut().flatten().zip(self.values) {
+            let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
+            v.sort_by(f64::total_cmp);
+            if !v.is_empty() {
+                st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
+            }
+        }
+        self.worst
+            .into_iter()
+            .map(|mut v| {
+                v.sort_by(f64::total_cmp);
+                v
+            })
+            .collect()
+    }
 }
 
 impl MonteCarlo {
@@ -199,16 +250,25 @@ impl MonteCarlo {
             options,
             chunks: 0..chunks(options.samples),
             quantiles: true,
+            shard: false,
         }
     }
 
-    /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), no quantiles.
+    /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), their values kept for the
+    /// merge's quantiles as a whole run keeps them ([`McResult::kept`]).
     pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo {
         MonteCarlo {
             options,
             chunks: shard_chunks(options.samples, k, n),
-            quantiles: false,
+            quantiles: true,
+            shard: true,
         }
+    }
+
+    /// Whether a run of `samples` samples over `speeds × outputs` keeps its values (at most
+    /// [`MAX_KEPT_VALUES`]); the same for a whole run and each of its shards.
+    pub fn keeps(samples: usize, speeds: usize, outputs: usize) -> bool {
+        samples.saturating_mul(speeds * outputs) <= MAX_KEPT_VALUES
     }
 
     /// Evaluates the chunks and folds each chunk's moments `[speed][output]` in chunk order
@@ -335,34 +395,23 @@ impl Propagation for MonteCarlo {
     fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McResult> {
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
         let samples = self.options.samples;
-        let keep = self.quantiles && samples.saturating_mul(speeds * outs) <= MAX_KEPT_VALUES;
+        let keep = self.quantiles && MonteCarlo::keeps(samples, speeds, outs);
         let mut kept = Kept::default();
         let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut kept));
         let (mut stats, done) = statistics(&fold, speeds, outs, samples);
-        let worst_margins = keep.then(|| {
-            kept.worst
-                .into_iter()
-                .map(|mut v| {
-                    v.sort_by(f64::total_cmp);
-                    v
-                })
-                .collect()
-        });
-        if keep {
-            for (st, vals) in stats.iter_mut().flatten().zip(kept.values) {
-                let mut v: Vec<f64> = vals.into_iter().map(f64::from).collect();
-                v.sort_by(f64::total_cmp);
-                if !v.is_empty() {
-                    st.quantiles = Some([0.05, 0.5, 0.95].map(|q| sorted_quantile(&v, q)));
-                }
-            }
-        }
+        // A whole run turns its values into quantiles; a shard hands them to the merge.
+        let (worst_margins, kept) = match (keep, self.shard) {
+            (true, false) => (Some(kept.apply(&mut stats)), None),
+            (true, true) => (None, Some(kept)),
+            (false, _) => (None, None),
+        };
         Estimate {
             value: McResult {
                 fold,
                 stats,
                 samples: done,
                 worst_margins,
+                kept,
             },
             termination,
         }
