@@ -196,6 +196,16 @@ pub struct Analysis {
 }
 
 impl Analysis {
+    /// The nominal point nearest the middle of the speeds analysed (`None` where every one
+    /// failed): the operating point the report draws and names the modes at.
+    pub fn middle_point(&self) -> Option<&Point> {
+        let mid = self.nominal.len() / 2;
+        (0..self.nominal.len())
+            .filter(|&i| self.nominal[i].is_some())
+            .min_by_key(|&i| i.abs_diff(mid))
+            .and_then(|i| self.nominal[i].as_ref())
+    }
+
     /// The Sobol indices worth showing: every requirement's worst margin, and each output at
     /// the speed where its analytic σ is largest; per case, margins first then outputs in
     /// order, each target's variables by decreasing total index.

@@ -7,6 +7,7 @@
 use crate::allocate::Allocation;
 use crate::analyze::Analysis;
 use crate::compiled::Compiled;
+use crate::drawing::{self, Drawing};
 use crate::files::{FileError, ResultDir};
 use crate::montecarlo::McOptions;
 use crate::plots::{self, Display};
@@ -24,6 +25,7 @@ pub fn is_result_file(name: &str) -> bool {
             | "limits.csv"
             | "sobol.csv"
             | "report.html"
+            | "mechanism.html"
             | "summary.json"
             | "manifest.json"
     ) || name.ends_with(".svg")
@@ -127,6 +129,25 @@ pub fn write(
             Err(e) => missing_png.push((p.stem.clone(), e)),
         }
     }
+    // The mechanism at the middle of the speeds, its first modes, and the 3-D page.
+    let drawing = a
+        .middle_point()
+        .and_then(|pt| Drawing::new(m.model(), &m.model().nominal(), pt).ok());
+    if let Some(d) = &drawing {
+        dir.write("mechanism.html", drawing::html(d, None).as_bytes())?;
+        let views = std::iter::once(("mechanism".to_string(), drawing::svg(d, None))).chain(
+            (0..d.modes.len().min(report::MODES_DRAWN))
+                .map(|k| (format!("mode_{}", k + 1), drawing::svg(d, Some(k)))),
+        );
+        // As every plot: SVG, and PNG beside it.
+        for (stem, svg) in views {
+            dir.write(&format!("{stem}.svg"), svg.as_bytes())?;
+            match plots::png(&svg, &fonts) {
+                Ok(png) => dir.write(&format!("{stem}.png"), &png)?,
+                Err(e) => missing_png.push((stem, e)),
+            }
+        }
+    }
     dir.write(
         "report.html",
         report::report_html(
@@ -136,7 +157,10 @@ pub fn write(
             &critical,
             mc,
             display,
-            allocation,
+            report::Extra {
+                allocation,
+                drawing: drawing.as_ref(),
+            },
         )
         .as_bytes(),
     )?;

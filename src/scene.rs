@@ -359,3 +359,99 @@ pub fn mode_frames(
         })
         .collect()
 }
+
+/// The modal assurance criterion of two shapes over the same coordinates,
+/// `|aᴴb|² / ((aᴴa)(bᴴb))` (Allemang 2003, "The modal assurance criterion — twenty years of
+/// use and abuse"): 1 for the same shape (any complex scale), 0 for orthogonal ones; 0 where
+/// a shape is zero.
+pub fn mac(a: &[C64], b: &[C64]) -> f64 {
+    let ab: C64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
+    let aa: f64 = a.iter().map(|x| x.norm_sqr()).sum();
+    let bb: f64 = b.iter().map(|x| x.norm_sqr()).sum();
+    if aa > 0.0 && bb > 0.0 {
+        ab.norm_sqr() / (aa * bb)
+    } else {
+        0.0
+    }
+}
+
+/// A short description of the mode `v` (over the coordinates `free`, the mechanism at `q`):
+/// its dominant coordinate and, where a driven revolute joint spins at this speed, its whirl
+/// about that joint's axis: the orbit of the body that moves most across the axis turns with
+/// the spin (`forward whirl`) or against it (`backward whirl`); nothing where the orbit is
+/// (nearly) a line.
+pub fn describe(model: &Model, sys: &System<f64>, q: &[f64], free: &[usize], v: &[C64]) -> String {
+    let Some((k, _)) = v
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
+    else {
+        return String::new();
+    };
+    let name = model.coordinates[free[k]].name.clone();
+    let pose = poses(sys, q);
+    let spin = sys.joints.iter().find_map(|j| {
+        let c = j.coords.start;
+        let omega = sys.drive.get(c).copied().flatten()?;
+        (j.kind == crate::joints::Kind::Revolute && omega != 0.0).then(|| {
+            let axis = j
+                .parent
+                .map_or(j.geometry.axis, |p| pose[p].rot * j.geometry.axis);
+            (axis, omega)
+        })
+    });
+    let Some((axis, omega)) = spin else {
+        return name;
+    };
+    let shape = physical_shape(sys, q, free, v);
+    let e1 = crate::rigid::perpendicular(&axis, &least_aligned(&axis));
+    let e2 = axis.cross(&e1);
+    let across = |d: &[C64; 3], e: &V3<f64>| d[0] * e.x + d[1] * e.y + d[2] * e.z;
+    let Some((u, w)) = shape
+        .displacement
+        .iter()
+        .map(|d| (across(d, &e1), across(d, &e2)))
+        .max_by(|a, b| {
+            (a.0.norm_sqr() + a.1.norm_sqr()).total_cmp(&(b.0.norm_sqr() + b.1.norm_sqr()))
+        })
+    else {
+        return name;
+    };
+    // The orbit Re(u e^{iωt}) e₁ + Re(w e^{iωt}) e₂ turns about the axis with the sign of
+    // Im(u w̄); a line where that is small against the orbit's size.
+    let turn = (u * w.conj()).im;
+    let size = u.norm_sqr() + w.norm_sqr();
+    if size == 0.0 || turn.abs() < 0.1 * size {
+        return name;
+    }
+    let forward = (turn > 0.0) == (omega > 0.0);
+    format!(
+        "{name}, {} whirl",
+        if forward { "forward" } else { "backward" }
+    )
+}
+
+/// The coordinate axis least aligned with `a`.
+fn least_aligned(a: &V3<f64>) -> V3<f64> {
+    let k = (0..3)
+        .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
+        .unwrap_or(0);
+    let mut e = V3::zeros();
+    e[k] = 1.0;
+    e
+}
+
+/// [`describe`] for every mode of the point `pt` of `model` solved with parameters `p` (empty
+/// where the model does not evaluate there).
+pub fn descriptions(model: &Model, p: &[f64], pt: &crate::sweep::Point) -> Vec<String> {
+    let Ok(sys) = System::new(model, p, pt.speed) else {
+        return Vec::new();
+    };
+    pt.shapes
+        .iter()
+        .map(|s| {
+            let v: Vec<C64> = s.iter().copied().collect();
+            describe(model, &sys, &pt.equilibrium.q, &pt.linear.free, &v)
+        })
+        .collect()
+}

@@ -33,6 +33,21 @@ pub fn check(threads: Option<usize>) -> Result<Option<usize>, ThreadsError> {
     if n > MAX_THREADS {
         return Err(ThreadsError::TooMany(n));
     }
+    if let Some(room) = address_space_room()
+        && address_space_needed(n) > room
+    {
+        let fit = (1..n)
+            .rev()
+            .find(|&k| address_space_needed(k) <= room)
+            .unwrap_or(0);
+        return Err(ThreadsError::Refused {
+            threads: n,
+            reason: format!(
+                "the address-space limit (ulimit -v) leaves room for about {fit} (each reserves \
+                 its stack, and up to eight per core an arena of the C allocator); ask for fewer"
+            ),
+        });
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
@@ -41,6 +56,46 @@ pub fn check(threads: Option<usize>) -> Result<Option<usize>, ThreadsError> {
             reason: e.to_string(),
         })?;
     Ok(threads)
+}
+
+/// The address space `n` worker threads take, to judge a count against `ulimit -v` before
+/// starting any: each its stack (std's 2 MiB) with its signal stack and guard pages, and up to
+/// eight per core an arena of the C allocator (glibc reserves 64 MiB each). A thread started
+/// where its stack fits but its signal stack does not aborts the process (the standard
+/// library cannot report that), so a count that does not fit is refused before any starts.
+fn address_space_needed(n: usize) -> u64 {
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let arenas = n.min(8 * cores) as u64;
+    (n as u64)
+        .saturating_mul((2 << 20) + (128 << 10))
+        .saturating_add(arenas.saturating_mul(64 << 20))
+}
+
+/// Room left under the address-space limit (`RLIMIT_AS`) besides what is mapped now, where
+/// there is a limit (Linux; `None` elsewhere or where it cannot be read).
+fn address_space_room() -> Option<u64> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut r = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes the struct it is given.
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0
+            || r.rlim_cur == libc::RLIM_INFINITY
+        {
+            return None;
+        }
+        let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+        let pages: u64 = statm.split_whitespace().next()?.parse().ok()?;
+        // SAFETY: sysconf reads a constant.
+        let page = u64::try_from(unsafe { libc::sysconf(libc::_SC_PAGESIZE) }).ok()?;
+        Some(r.rlim_cur.saturating_sub(pages.saturating_mul(page)))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
+    }
 }
 
 /// A pool of `threads` workers (`None`: rayon's default, one per core) or, where the

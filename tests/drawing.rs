@@ -251,3 +251,95 @@ fn an_animation_frame_is_the_mechanism_posed_along_the_shape() {
         assert!(largest <= 0.1 * d.size * 1.05, "{largest} vs {}", d.size);
     }
 }
+
+#[test]
+fn a_forward_whirl_stiffens_with_speed_and_a_backward_one_softens_whatever_the_spins_sign() {
+    // The rotor's gyroscopic pair (modes 4 and 5): the mode named forward whirl rises with the
+    // speed, the backward one falls (the splitting of a spinning disc), for either sense of
+    // spin, where the sense of each orbit flips with the spin.
+    let m = example("rotor_on_rubber_mounts.toml");
+    let model = m.model();
+    let p = model.nominal();
+    // The gyroscopic pair: modes 4 and 5 (about 250 and 265 rad/s), one named forward, the
+    // other backward, at every speed here.
+    let named = |speed: f64| {
+        let pt = at(&m, speed, &Options::default());
+        let what = modaltol::scene::descriptions(model, &p, &pt);
+        let f = |word: &str| {
+            let k = [3, 4]
+                .into_iter()
+                .find(|&k| what[k].contains(word))
+                .unwrap();
+            pt.modes[k].damped_frequency
+        };
+        (f("forward whirl"), f("backward whirl"))
+    };
+    for sign in [1.0, -1.0] {
+        let (f1, b1) = named(sign * 50.0);
+        let (f2, b2) = named(sign * 150.0);
+        assert!(
+            f2 > f1 + 1.0 && b2 < b1 - 1.0,
+            "{sign}: forward {f1} → {f2}, backward {b1} → {b2}"
+        );
+    }
+    // Without spin, no whirl is named.
+    let pt = at(&m, 0.0, &Options::default());
+    assert!(
+        modaltol::scene::descriptions(model, &p, &pt)
+            .iter()
+            .all(|w| !w.contains("whirl"))
+    );
+}
+
+#[test]
+fn the_mac_is_one_for_a_shape_at_any_scale_and_zero_across() {
+    use modaltol::scene::mac;
+    let a = [C64::new(1.0, 0.5), C64::new(-0.3, 2.0), C64::new(0.0, 0.1)];
+    let b: Vec<C64> = a.iter().map(|z| z * C64::new(-2.0, 3.0)).collect();
+    assert!((mac(&a, &b) - 1.0).abs() < 1e-14);
+    let e1 = [C64::new(1.0, 0.0), C64::new(0.0, 0.0)];
+    let e2 = [C64::new(0.0, 0.0), C64::new(0.0, 1.0)];
+    assert!(mac(&e1, &e2).abs() < 1e-15);
+    assert!(mac(&e1, &[C64::new(0.0, 0.0); 2]).abs() < 1e-15);
+}
+
+#[test]
+fn the_report_draws_the_mechanism_its_modes_and_their_mac() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let model = common::example_path("rotor_on_rubber_mounts.toml");
+    let r = common::run_with_deadline(
+        &[
+            "analyze",
+            model.to_str().unwrap(),
+            "--speed",
+            "90:110:10",
+            "--samples",
+            "20",
+            "--no-quadrature",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        std::time::Duration::from_secs(300),
+    )
+    .unwrap();
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    for f in [
+        "mechanism.svg",
+        "mechanism.html",
+        "mode_1.svg",
+        "mode_2.svg",
+        "mode_3.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("src=\"mechanism.svg\"") && html.contains("href=\"mechanism.html\""));
+    assert!(html.contains("Modal assurance criterion"));
+    // The Campbell diagram names each line by its shape, whirl included.
+    let campbell = std::fs::read_to_string(out.join("campbell.svg")).unwrap();
+    assert!(
+        campbell.contains(", FW)") && campbell.contains(", BW)"),
+        "{campbell}"
+    );
+}

@@ -283,7 +283,7 @@ fn pendulum_plots_are_readable_and_complete() {
         &critical,
         None,
         Display::default(),
-        None,
+        Default::default(),
     );
     assert!(html.contains("paper, pendulum"));
     assert!(html.contains("Summary: σ where it matters"));
@@ -332,7 +332,7 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     }
     assert!(c.svg.contains("critical speeds"), "crossings not marked");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(m.model(), &a, &refs, &critical, None, d, None);
+    let html = report::report_html(m.model(), &a, &refs, &critical, None, d, Default::default());
     assert!(
         !html.contains("paper,"),
         "paper rows in another model's report"

@@ -20,7 +20,7 @@ pub use svg::svg;
 
 use crate::mechanics::System;
 use crate::model::{FieldError, Model};
-use crate::scene::{Scene, display_amplitude, mode_frames};
+use crate::scene::{Scene, describe, display_amplitude, mode_frames};
 use crate::sweep::Point;
 
 /// Phases drawn per period in the page's animation.
@@ -59,22 +59,23 @@ impl Drawing {
         let free = &pt.linear.free;
         let modes = (pt.modes.iter().zip(&pt.shapes).enumerate())
             .map(|(k, (m, shape))| {
+                let v: Vec<_> = shape.iter().copied().collect();
+                let what = describe(model, &sys, q, free, &v);
                 let label = if m.damped_frequency.is_finite() && m.damped_frequency > 0.0 {
                     format!(
-                        "mode {}: ω_d = {:.4} rad/s, ζ = {:.4}",
+                        "mode {} ({what}): ω_d = {:.4} rad/s, ζ = {:.4}",
                         k + 1,
                         m.damped_frequency,
                         m.damping_ratio
                     )
                 } else {
                     format!(
-                        "mode {}: {} (λ = {:.4})",
+                        "mode {} ({what}): {} (λ = {:.4})",
                         k + 1,
                         m.class.as_str(),
                         m.root.lambda.re
                     )
                 };
-                let v: Vec<_> = shape.iter().copied().collect();
                 let amplitude = display_amplitude(model, &sys, q, free, &v, 0.1 * size);
                 ModeMotion {
                     label,

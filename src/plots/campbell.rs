@@ -76,6 +76,12 @@ pub(super) fn campbell(
     let mut critical = Vec::new();
     let orders = orders(model);
     let mut top = 0.0f64;
+    // Each line named by its mode's shape at the middle of the speeds (its dominant
+    // coordinate, and its whirl where a spin turns it).
+    let middle = a.middle_point();
+    let what = middle.map_or_else(Vec::new, |pt| {
+        crate::scene::descriptions(model, &model.nominal(), pt)
+    });
     for m in 0..modes {
         let rows = series(a, 0, Quantity::DampedFrequency, Some(m), Method::Analytic);
         let color = palette(m);
@@ -99,8 +105,18 @@ pub(super) fn campbell(
                 .collect(),
             color,
         });
+        // FW / BW: forward and backward whirl, as rotordynamics' Campbell diagrams say it.
+        let name = match what.get(m).filter(|w| !w.is_empty()) {
+            Some(w) => format!(
+                "mode {} ({})",
+                m + 1,
+                w.replace("forward whirl", "FW")
+                    .replace("backward whirl", "BW")
+            ),
+            None => format!("mode {}", m + 1),
+        };
         lines.push(Line::new(
-            format!("mode {}", m + 1),
+            name,
             rows.iter().map(|r| (r.speed * xs, r.mean * ys)).collect(),
             color,
         ));
@@ -131,7 +147,9 @@ pub(super) fn campbell(
             caption: format!(
                 "Damped natural frequency of every mode against speed with its ±3σ band (case \
                  {case}, analytic), the engine orders 1×, 2×, 3×Ω{} and, in red, the critical \
-                 speeds where a mode crosses one (listed with their σ above).",
+                 speeds where a mode crosses one (listed with their σ above). Each mode is named \
+                 by its shape at the middle speed: its dominant coordinate, and FW or BW where \
+                 it whirls forward or backward about a spinning joint's axis.",
                 model
                     .analysis
                     .transfer

@@ -28,7 +28,7 @@ pub use accuracy::{Outside, outside_request, outside_request_lines};
 pub use allocation::{ALLOCATION_HEADER, allocation_json, allocation_rows, allocation_table};
 pub use check::check_summary;
 pub use frf::{frf_header, frf_rows};
-pub use html::report_html;
+pub use html::{Extra, MODES_DRAWN, report_html};
 pub use modal::{
     body_shapes, display_shape, modal_json, modal_table, modes_failed_rows, modes_header,
     modes_rows,

@@ -6,25 +6,30 @@
 
 mod allocation;
 mod first_order;
+mod mechanism;
 mod sigma;
 mod specification;
 
 use super::{inadmissible_warnings, outside_request_lines, paper_timings, unfilled};
 use crate::allocate::Allocation;
 use crate::analyze::Analysis;
+use crate::drawing::Drawing;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::plots::{CriticalSpeed, Display, Plot};
 use allocation::allocation_section;
 use first_order::first_order_table;
+pub use mechanism::MODES_DRAWN;
+use mechanism::mechanism_section;
 use sigma::summary_table;
 use specification::{limits_table, sobol_table, specification};
 use std::fmt::Write;
 
-/// `report.html`: the allocation that made the design (`allocation`, where there is one), the
+/// `report.html`: the allocation that made the design (`extra.allocation`, where there is one), the
 /// specification sections, the numeric summary per case, the timing table (beside the paper's Tables 1–2
-/// for its two examples), the critical speeds, a short reading guide and the plots (each an
-/// `<stem>.svg` in the same directory), in the display units `d`.
+/// for its two examples), the critical speeds, the mechanism and its modes (`extra.drawing`,
+/// where there is one), a short reading guide and the plots (each an `<stem>.svg` in the same
+/// directory), in the display units `d`.
 pub fn report_html(
     model: &Model,
     a: &Analysis,
@@ -32,8 +37,12 @@ pub fn report_html(
     critical: &[CriticalSpeed],
     mc: Option<&McOptions>,
     d: Display,
-    allocation: Option<&Allocation>,
+    extra: Extra<'_>,
 ) -> String {
+    let Extra {
+        allocation,
+        drawing,
+    } = extra;
     let mut h = String::new();
     page_head(&mut h, model);
     notices(&mut h, a, mc);
@@ -61,10 +70,23 @@ pub fn report_html(
     for line in outside_request_lines(a) {
         let _ = writeln!(h, "<p><b>Note:</b> {}</p>", esc(&line));
     }
+    if let Some(dr) = drawing {
+        mechanism_section(&mut h, a, dr);
+    }
     reading_guide(&mut h);
     figures(&mut h, plots);
     let _ = writeln!(h, "</body></html>");
     h
+}
+
+/// What a report shows besides the analysis.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Extra<'a> {
+    /// The tolerance allocation that made the design, opening the report.
+    pub allocation: Option<&'a Allocation>,
+    /// The mechanism drawn at the middle of the speeds, its files (`mechanism.svg`,
+    /// `mechanism.html`, `mode_K.svg`) beside the report.
+    pub drawing: Option<&'a Drawing>,
 }
 
 /// The page up to its heading: the document head with its style sheet, and the title.
