@@ -18,9 +18,10 @@
 //!   event count lies within them, `m2, m4 ≥ 0`, all numbers finite, the dimensions those of
 //!   the model's outputs at the run's speeds.
 
-use crate::analyze::Analysis;
+use crate::analyze::{Analysis, AnalyzeOptions, Split};
 use crate::model::{Case, Model, Sampling, SpeedRange};
 use crate::montecarlo::{self, Block, CaseShard, Kept, McOptions, Moments, MonteCarlo};
+use crate::quadrature::QuadOptions;
 use base64::Engine;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use serde::{Deserialize, Serialize};
@@ -505,6 +506,34 @@ impl RunSettings {
             of,
         }
     }
+}
+
+/// The analysis that merges shards of the run `run` (their gathered `states`): `base`'s cases,
+/// threads and cancel token with the run's speeds, Monte Carlo and quadrature, folded as one
+/// run would. What `merge` runs, from the command line or Python; refused where the run's
+/// speeds are not a range of at most [`crate::settings::analysis_speeds`].
+pub fn merged_options(
+    run: &RunSettings,
+    states: Vec<CaseShard>,
+    base: AnalyzeOptions,
+) -> Result<(AnalyzeOptions, McOptions), String> {
+    let range = SpeedRange::parse(&run.speed)?;
+    crate::settings::analysis_speeds(range.len())?;
+    let mc = McOptions {
+        samples: run.samples,
+        seed: run.seed,
+        sampling: run.sampling,
+    };
+    let opt = AnalyzeOptions {
+        speeds: range.speeds().collect(),
+        // The quadrature of the run the shards belong to.
+        quadrature: run.quadrature.map(|tolerance| QuadOptions { tolerance }),
+        monte_carlo: Some(mc),
+        split: Split::Merged(states),
+        sobol: None,
+        ..base
+    };
+    Ok((opt, mc))
 }
 
 /// Checks that `files` (path, parsed shard) are shards `1..=N` of one run, each once, made from

@@ -10,7 +10,7 @@
 //! Python's signals every 50 ms, and on Ctrl-C cancels the run ([`Cancel`]) and raises
 //! `KeyboardInterrupt` once the worker has stopped.
 
-use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
@@ -18,7 +18,6 @@ use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::program::{Tier, Workspace};
-use modaltol::quadrature::QuadOptions;
 use modaltol::report::{self, SweepColumns};
 use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
@@ -355,6 +354,22 @@ struct MergeKeywords {
     output: Option<PathBuf>,
     speed_unit: String,
     frequency_unit: String,
+}
+
+impl NativeModel {
+    /// The result directory `output` (none without one), refused where it is the model file
+    /// or holds files other than a result's.
+    fn result_dir(&self, output: &Option<PathBuf>) -> PyResult<Option<ResultDir>> {
+        output
+            .as_ref()
+            .map(|o| {
+                let inputs = Inputs::new(&self.source.iter().collect::<Vec<_>>());
+                ResultDir::create(o)
+                    .and_then(|d| d.protect(inputs, modaltol::results::is_result_file))
+                    .map_err(|e| bad(format!("{e}: {}", e.source)))
+            })
+            .transpose()
+    }
 }
 
 #[pymethods]
@@ -797,23 +812,9 @@ impl NativeModel {
             .map_err(refused)?;
         let (mc, threads) = (opt.monte_carlo, opt.threads);
         // Fail early where the results cannot be written.
-        let dir = output
-            .as_ref()
-            .map(|o| {
-                let inputs = Inputs::new(&self.source.iter().collect::<Vec<_>>());
-                ResultDir::create(o)
-                    .and_then(|d| d.protect(inputs, modaltol::results::is_result_file))
-                    .map_err(|e| bad(format!("{e}: {}", e.source)))
-            })
-            .transpose()?;
+        let dir = self.result_dir(&output)?;
         let model = &*self.model;
-        let a = interruptible(py, &opt.cancel, || {
-            analyze(model, &opt, &|_: &str, _: usize, _: usize| {})
-        })?;
-        if a.cancelled() {
-            // Ctrl-C arrived between the worker's last check and its end.
-            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
-        }
+        let a = run_analysis(py, model, &opt)?;
         if let (Some((k, n)), Some(mc)) = (shard, mc) {
             let range = range
                 .ok_or_else(|| bad("shards need speeds as \"FROM:TO:STEP\" (or the model's)"))?;
@@ -875,43 +876,31 @@ impl NativeModel {
             .map_err(refused)?;
         let (first, states) =
             modaltol::shard::verify(m, &base.cases, shards).map_err(|e| bad(e.to_string()))?;
-        let range = SpeedRange::parse(&first.speed).map_err(bad)?;
-        settings::analysis_speeds(range.len()).map_err(bad)?;
-        let mc = McOptions {
-            samples: first.samples,
-            seed: first.seed,
-            sampling: first.sampling,
-        };
-        let opt = AnalyzeOptions {
-            speeds: range.speeds().collect(),
-            // The quadrature of the run the shards belong to.
-            quadrature: first.quadrature.map(|tolerance| QuadOptions { tolerance }),
-            monte_carlo: Some(mc),
-            split: Split::Merged(states),
-            sobol: None,
-            ..base
-        };
-        let dir = output
-            .as_ref()
-            .map(|o| {
-                let inputs = Inputs::new(&self.source.iter().collect::<Vec<_>>());
-                ResultDir::create(o)
-                    .and_then(|d| d.protect(inputs, modaltol::results::is_result_file))
-                    .map_err(|e| bad(format!("{e}: {}", e.source)))
-            })
-            .transpose()?;
+        let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(bad)?;
+        let dir = self.result_dir(&output)?;
         let model = &*self.model;
-        let a = interruptible(py, &opt.cancel, || {
-            analyze(model, &opt, &|_: &str, _: usize, _: usize| {})
-        })?;
-        if a.cancelled() {
-            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
-        }
+        let a = run_analysis(py, model, &opt)?;
         let used = opt
             .threads
             .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         analysis_dict(py, model, &a, Some(&mc), used, dir, display)
     }
+}
+
+/// Runs the analysis `opt` of `model` without the GIL, stopping on Ctrl-C.
+fn run_analysis(
+    py: Python<'_>,
+    model: &Compiled,
+    opt: &AnalyzeOptions,
+) -> PyResult<modaltol::analyze::Analysis> {
+    let a = interruptible(py, &opt.cancel, || {
+        analyze(model, opt, &|_: &str, _: usize, _: usize| {})
+    })?;
+    if a.cancelled() {
+        // Ctrl-C arrived between the worker's last check and its end.
+        return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
+    }
+    Ok(a)
 }
 
 /// The tables and summary of an analysis (and its result directory where `dir` is given).

@@ -2,14 +2,10 @@
 
 use crate::cli::*;
 use anyhow::Result;
-use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::files::{Inputs, ResultDir};
-use modaltol::model::SpeedRange;
-use modaltol::montecarlo::McOptions;
-use modaltol::quadrature::QuadOptions;
 use modaltol::results::WriteOptions;
-use modaltol::settings;
 use std::path::PathBuf;
 
 /// `modaltol merge` (see its `--help`).
@@ -25,24 +21,13 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
     let cases = tolerance_cases(m.model(), &only)?;
     let (first, states) = modaltol::shard::read_all(m.model(), &cases, &shards)
         .map_err(|e| InputError(e.to_string()))?;
-    let range = SpeedRange::parse(&first.speed).map_err(InputError)?;
-    settings::analysis_speeds(range.len()).map_err(InputError)?;
-    let mc = McOptions {
-        samples: first.samples,
-        seed: first.seed,
-        sampling: first.sampling,
-    };
-    let opt = AnalyzeOptions {
-        speeds: range.speeds().collect(),
+    let base = AnalyzeOptions {
         cases,
-        // The quadrature of the run the shards belong to.
-        quadrature: first.quadrature.map(|tolerance| QuadOptions { tolerance }),
-        monte_carlo: Some(mc),
-        split: Split::Merged(states),
         threads: None,
         cancel: cancel.clone(),
-        sobol: None,
+        ..Default::default()
     };
+    let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(InputError)?;
     let mut inputs: Vec<&PathBuf> = model.iter().collect();
     inputs.extend(&shards);
     let inputs = Inputs::new(&inputs);
