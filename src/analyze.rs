@@ -353,7 +353,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
                 continue;
             };
             let q = quad[ci].as_ref().map(|q| q.stats[si].as_slice());
-            rows.extend(analytic_rows(opt.speeds[si], ci, lm, &stats, q));
+            rows.extend(analytic_rows(study.speeds[si], ci, lm, &stats, q));
         }
         if let Some(q) = &quad[ci] {
             probabilities.extend(quadrature_probabilities(&study, ci, q));

@@ -100,6 +100,14 @@ impl Compiled {
         Model::from_str(text, file).map(Compiled::new)
     }
 
+    /// The model with its target yield (`[allocation] target_yield`) replaced by one the
+    /// caller has checked ([`crate::settings::target_yield`]): what every yield output is judged
+    /// against, the margins met at it and the reaches.
+    pub fn with_target_yield(mut self, target: f64) -> Self {
+        self.model.allocation.target_yield = target;
+        self
+    }
+
     /// The model.
     pub fn model(&self) -> &Model {
         &self.model

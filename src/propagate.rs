@@ -121,7 +121,8 @@ pub trait Propagation {
 }
 
 impl<'a> Study<'a> {
-    /// The nominal sweep of `model` over `speeds` and, at each point, the local model for
+    /// The nominal sweep of `model` over `speeds` (with every requirement's range ends added:
+    /// [`crate::model::Model::judged_speeds`]) and, at each point, the local model for
     /// `vars`, in two stages: the values and exact gradients (first order), then the exact
     /// Hessians (second order), each timed ([`Study::seconds`]). The sweep is sequential
     /// (continuation); each point's gradients are independent, so they are handed to the
@@ -131,6 +132,8 @@ impl<'a> Study<'a> {
     /// a cancelled run leaves the speeds after it as failures ("interrupted") and the
     /// Hessians not yet computed as "not computed".
     pub fn build(model: &'a Compiled, vars: Vec<usize>, speeds: Vec<f64>, run: &Run) -> Self {
+        // Every requirement judged over its range: its ends among the speeds.
+        let speeds = model.model().judged_speeds(&speeds);
         let transfer = model.model().analysis.transfer;
         let p = model.model().nominal();
         let n = speeds.len();

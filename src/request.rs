@@ -52,6 +52,8 @@ pub struct Request {
     pub shard: Option<(usize, usize)>,
     /// Base samples of the Sobol indices (`None`: none computed).
     pub sobol: Option<usize>,
+    /// The target yield (`None`: the model's `[allocation] target_yield`).
+    pub target_yield: Option<f64>,
 }
 
 impl Default for Request {
@@ -70,6 +72,7 @@ impl Default for Request {
             threads: None,
             shard: None,
             sobol: None,
+            target_yield: None,
         }
     }
 }
@@ -84,6 +87,7 @@ pub enum Setting {
     Threads,
     Shard,
     Sobol,
+    TargetYield,
 }
 
 /// Why a request is refused. Each message leaves the setting unnamed ([`RequestError::setting`]
@@ -109,6 +113,11 @@ pub enum RequestError {
     /// The Sobol indices' base samples are refused.
     #[error("{0}")]
     Sobol(String),
+    #[error("{0}")]
+    TargetYield(String),
+    /// Sobol indices asked of a shard: they are not split across shards.
+    #[error("is not split across shards: run the Sobol indices in a whole run (without the shard)")]
+    SobolInShard,
     #[error("splits the Monte Carlo; it cannot go without the Monte Carlo")]
     ShardWithoutMonteCarlo,
     #[error(
@@ -129,7 +138,8 @@ impl RequestError {
             }
             RequestError::Cases(_) => Setting::Cases,
             RequestError::Samples(_) => Setting::Samples,
-            RequestError::Sobol(_) => Setting::Sobol,
+            RequestError::Sobol(_) | RequestError::SobolInShard => Setting::Sobol,
+            RequestError::TargetYield(_) => Setting::TargetYield,
             RequestError::ShardWithoutMonteCarlo | RequestError::TooManyShards { .. } => {
                 Setting::Shard
             }
@@ -148,6 +158,9 @@ pub struct Checked(Request);
 pub struct Resolved {
     pub options: AnalyzeOptions,
     pub range: Option<SpeedRange>,
+    /// The target yield asked for, to replace the model's
+    /// ([`crate::compiled::Compiled::with_target_yield`]); `None`: the model's.
+    pub target_yield: Option<f64>,
 }
 
 impl Request {
@@ -159,6 +172,12 @@ impl Request {
         settings::threads(self.threads).map_err(RequestError::Threads)?;
         if let Some(n) = self.sobol {
             settings::samples(n).map_err(RequestError::Sobol)?;
+            if self.shard.is_some() {
+                return Err(RequestError::SobolInShard);
+            }
+        }
+        if let Some(y) = self.target_yield {
+            settings::target_yield(y).map_err(RequestError::TargetYield)?;
         }
         Ok(Checked(self))
     }
@@ -171,6 +190,7 @@ impl Checked {
     /// the quadrature). `cancel` is the run's cancellation.
     pub fn resolve(self, model: &Model, cancel: Cancel) -> Result<Resolved, RequestError> {
         let Checked(request) = self;
+        let from_model = matches!(request.speeds, Speeds::Model);
         let (speeds, range) = match request.speeds {
             Speeds::Model => {
                 let r = model.analysis.speed.ok_or(RequestError::NoSpeeds)?;
@@ -187,6 +207,16 @@ impl Checked {
                 (v, None)
             }
         };
+        // Every requirement judged over its range (refused where the speeds cannot: see
+        // `Model::check_requirement_speeds`), its ends among the speeds.
+        model.check_requirement_speeds(&speeds).map_err(|e| {
+            if from_model {
+                RequestError::ModelSpeeds(e)
+            } else {
+                RequestError::Speeds(e)
+            }
+        })?;
+        let speeds = model.judged_speeds(&speeds);
         let cases = model
             .tolerance_cases(&request.cases)
             .map_err(|e| RequestError::Cases(e.to_string()))?;
@@ -221,15 +251,13 @@ impl Checked {
                 split,
                 threads: request.threads,
                 cancel,
-                sobol: request
-                    .sobol
-                    .filter(|_| request.shard.is_none())
-                    .map(|samples| crate::sobol::SobolOptions {
-                        samples,
-                        seed: request.seed.unwrap_or(model.analysis.seed),
-                    }),
+                sobol: request.sobol.map(|samples| crate::sobol::SobolOptions {
+                    samples,
+                    seed: request.seed.unwrap_or(model.analysis.seed),
+                }),
             },
             range,
+            target_yield: request.target_yield,
         })
     }
 }

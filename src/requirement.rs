@@ -21,6 +21,7 @@
 //! Per-mode margins are written once over any scalar ([`Real`]), so that the first-order
 //! method differentiates them exactly ([`mode_margin_gradient`]).
 
+use crate::model::judged::same_speed;
 use crate::model::{Requirement, RequirementKind, SeparationMargin};
 use crate::pair;
 use crate::real::Real;
@@ -93,15 +94,18 @@ pub fn margins_at(
     }
 }
 
-/// Is `speed` in the requirement's operating range?
+/// Is `speed` in the requirement's operating range (its ends to within [`same_speed`])?
 pub fn covers(req: &Requirement, speed: f64) -> bool {
-    req.speeds.is_none_or(|(a, b)| a <= speed && speed <= b)
+    req.speeds.is_none_or(|(a, b)| {
+        (a <= speed || same_speed(a, speed)) && (speed <= b || same_speed(b, speed))
+    })
 }
 
 /// Is `speed` at or above the start of the requirement's operating range? The speeds where the
 /// largest operating range it meets is sought (from the range's start up, beyond its end).
 pub fn reaches(req: &Requirement, speed: f64) -> bool {
-    req.speeds.is_none_or(|(a, _)| a <= speed)
+    req.speeds
+        .is_none_or(|(a, _)| a <= speed || same_speed(a, speed))
 }
 
 /// Does the requirement have a margin with a distribution (every kind but the branch, which is

@@ -37,6 +37,9 @@ pub fn is_result_file(name: &str) -> bool {
 pub struct Written {
     /// The result is partial (the run was cancelled); the directory says so too.
     pub partial: bool,
+    /// Where the result went: the target, or beside it where a partial result would have
+    /// replaced a complete one ([`crate::files::ResultDir::commit`]).
+    pub place: std::path::PathBuf,
     /// Plots that got no PNG, with the reason (their SVG is written).
     pub missing_png: Vec<(String, String)>,
 }
@@ -171,9 +174,10 @@ pub fn write(
             .expect("a JSON value")
             .as_bytes(),
     )?;
-    dir.commit(partial)?;
+    let place = dir.commit(partial)?;
     Ok(Written {
         partial,
+        place,
         missing_png,
     })
 }

@@ -50,6 +50,35 @@ pub fn quadrature_tolerance(x: f64) -> Result<f64, String> {
     }
 }
 
+/// A target yield: a probability strictly between 0 and 1.
+pub fn target_yield(y: f64) -> Result<f64, String> {
+    if y > 0.0 && y < 1.0 {
+        Ok(y)
+    } else {
+        Err(format!(
+            "must be a probability strictly between 0 and 1, e.g. 0.9973 (got {y})"
+        ))
+    }
+}
+
+/// Samples expected beyond a quantile below which a Monte Carlo of `n` samples cannot bound
+/// it at 95 %: with none beyond in `n` draws the chance is `(1 − q)ⁿ ≈ e^{−nq}`, above 2.5 %
+/// while `nq < 3.7`.
+pub const QUANTILE_SAMPLES: f64 = 3.7;
+
+/// What a Monte Carlo of `n` samples cannot resolve at target yield `y`: `Some(why)` where
+/// fewer than [`QUANTILE_SAMPLES`] samples are expected beyond the margin met at it.
+pub fn unresolved_target(y: f64, n: usize) -> Option<String> {
+    let beyond = n as f64 * y.min(1.0 - y);
+    (beyond < QUANTILE_SAMPLES).then(|| {
+        format!(
+            "target yield {y} with {n} samples: {beyond:.3} expected beyond the margin met at \
+             it, fewer than the {QUANTILE_SAMPLES} a 95 % interval needs; the Monte Carlo's \
+             margin there is left unbounded (limits.csv says so), the quadrature's is not"
+        )
+    })
+}
+
 /// The most speeds an analysis takes. An analysis holds every speed's nominal point, local
 /// model and statistics in memory (tens of kilobytes per speed for a small model); 10⁵ is 200
 /// times the examples' ranges, and a range beyond it is refused before anything is allocated.

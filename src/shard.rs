@@ -656,11 +656,17 @@ pub fn verify(
     };
     let fingerprint = Fingerprint::of(model, cases, &first.run());
     for (name, f) in &files {
-        let speeds = SpeedRange::parse(&f.speed)
+        // The speeds analysed: the range's, with the requirements' range ends
+        // (`Model::judged_speeds`), as the run that wrote the shard had them.
+        let range = SpeedRange::parse(&f.speed)
+            .map_err(|e| e.to_string())
+            .and_then(|r| crate::settings::analysis_speeds(r.len()).map(|_| r))
             .map_err(|e| ShardError {
                 file: name.clone(),
                 message: format!("speed '{}': {e}", f.speed),
-            })?
+            })?;
+        let speeds = model
+            .judged_speeds(&range.speeds().collect::<Vec<_>>())
             .len();
         f.check(
             name,

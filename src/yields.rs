@@ -20,7 +20,7 @@ use crate::model::{Requirement, RequirementKind};
 use crate::montecarlo::YieldCounts;
 use crate::output::{Output, Quantity};
 use crate::propagate::Study;
-use crate::quadrature::QuadYield;
+use crate::quadrature::{MarginStat, QuadYield};
 use crate::requirement::{
     carriers, covers, has_margin, mode_margin, mode_margin_gradient, reaches,
 };
@@ -66,6 +66,10 @@ pub struct YieldRow {
     pub cpk: Option<f64>,
     /// Samples (Monte Carlo) or nodes (quadrature) behind the row.
     pub evaluations: usize,
+    /// Quadrature: does the error estimate meet the requested accuracy (the quadrature's
+    /// tolerance, as an absolute error of the probability)? Where not, the rule's largest stage
+    /// was reached first.
+    pub within_request: Option<bool>,
     /// What the design meets at the target yield (range rows of a requirement).
     pub limit: Option<Limit>,
 }
@@ -73,7 +77,7 @@ pub struct YieldRow {
 /// What a design with its tolerances as they are meets at the target yield: the inverse
 /// questions of a specification. Each as `[estimate, low, high]`: from the probability itself
 /// and from the low and high ends of its interval (first order: three times its value).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Limit {
     /// The highest analysed speed up to which, from the start of the requirement's range on
     /// (beyond its end too), the probability of meeting it at every speed is at least the
@@ -83,6 +87,45 @@ pub struct Limit {
     /// (`−∞` where more than `1 − target` of the designs fail without a margin; first order:
     /// the worst speed's `m₀ − z σ`, `Φ(z)` = target); `None` for a pass-or-fail requirement.
     pub margin: Option<[f64; 3]>,
+    /// Why the margin or an end of its interval has no value (`±∞` or NaN in `margin`, blank
+    /// in `limits.csv`), in words; `None` where every value is a number.
+    pub why: Option<String>,
+}
+
+impl Limit {
+    /// The limit with `why` derived from `margin`'s unbounded parts: `reasons` gives the words
+    /// for an estimate of `−∞`, a low end of `−∞` and a high end of `+∞`, in that order.
+    fn new(reach: [Option<f64>; 3], margin: Option<[f64; 3]>, reasons: [&str; 3]) -> Limit {
+        let why = margin.and_then(|m| {
+            let parts: Vec<&str> = [
+                !m[0].is_finite(),
+                !m[0].is_finite() || !m[1].is_finite(),
+                !m[0].is_finite() || !m[2].is_finite(),
+            ]
+            .iter()
+            .zip(reasons)
+            .filter(|(bad, _)| **bad)
+            .map(|(_, why)| why)
+            .collect();
+            // An unbounded estimate leaves its interval so: one reason says both.
+            let parts = if !m[0].is_finite() {
+                vec![parts[0]]
+            } else {
+                parts
+            };
+            (!parts.is_empty()).then(|| parts.join("; "))
+        });
+        Limit { reach, margin, why }
+    }
+
+    /// A limit without a margin for `why` (a requirement with one, where no design has it).
+    fn without_margin(reach: [Option<f64>; 3], why: &str) -> Limit {
+        Limit {
+            reach,
+            margin: None,
+            why: Some(why.to_string()),
+        }
+    }
 }
 
 /// The last speed of the initial run of `prefix` (speed, probability) at or above `target`.
@@ -160,6 +203,13 @@ pub fn quadrature_rows(
     target: f64,
 ) -> Vec<YieldRow> {
     let ci = |(p, e): (f64, f64)| ((p - e).max(0.0), (p + e).min(1.0));
+    // Within the request: the probability's error (absolute), and the worst margin's mean and
+    // σ errors relative to its σ.
+    let within = |(_, e): (f64, f64)| e <= y.request;
+    let margin_within = |m: &MarginStat| {
+        let allowed = y.request * m.std;
+        m.mean_error <= allowed && m.std_error <= allowed
+    };
     let mut out = vec![YieldRow {
         case,
         method: Method::Quadrature,
@@ -170,6 +220,7 @@ pub fn quadrature_rows(
         margin: None,
         cpk: None,
         evaluations: nodes,
+        within_request: Some(within(y.all)),
         limit: None,
     }];
     for (r, &each) in y.each.iter().enumerate() {
@@ -190,12 +241,23 @@ pub fn quadrature_rows(
             margin,
             cpk: margin.and_then(|(m, s)| cpk(m, s)),
             evaluations: nodes,
-            limit: Some(Limit {
-                reach: reach(&prefix, target),
-                margin: y.margins[r].map(|m| {
-                    let e = m.at_target_error;
-                    [m.at_target, m.at_target - e, m.at_target + e]
-                }),
+            within_request: Some(within(each) && y.margins[r].as_ref().is_none_or(margin_within)),
+            limit: Some(match y.margins[r].and_then(|m| m.at_target) {
+                Some(t) => Limit::new(
+                    reach(&prefix, target),
+                    Some([t.estimate, t.low, t.high]),
+                    [
+                        "more than 1 − target of the designs fail without a margin",
+                        "margin_low unbounded: the target plus the probability's error exceeds \
+                         the share of designs with a margin",
+                        "margin_high unbounded: the target less the probability's error is ≤ 0",
+                    ],
+                ),
+                None if has_margin(&reqs[r]) => Limit::without_margin(
+                    reach(&prefix, target),
+                    "no design has a margin over the range (every node failed or has no value)",
+                ),
+                None => Limit::new(reach(&prefix, target), None, [""; 3]),
             }),
         });
     }
@@ -214,6 +276,7 @@ pub fn quadrature_rows(
                 margin: None,
                 cpk: None,
                 evaluations: nodes,
+                within_request: Some(within(p)),
                 limit: None,
             });
         }
@@ -244,6 +307,7 @@ pub fn monte_carlo_rows(
         margin: None,
         cpk: None,
         evaluations: n,
+        within_request: None,
         limit: None,
     }];
     for (r, &k) in y.each.iter().enumerate() {
@@ -259,13 +323,10 @@ pub fn monte_carlo_rows(
                 (w, p(k), wilson(k, n))
             })
             .collect();
-        let at_target = worst
+        let kept = worst
             .and_then(|w| w.get(r))
-            .filter(|w| has_margin(&reqs[r]) && !w.is_empty())
-            .map(|w| {
-                let [e, lo, hi] = quantile_interval(w, 1.0 - target);
-                [e, lo, hi]
-            });
+            .filter(|w| has_margin(&reqs[r]) && !w.is_empty());
+        let at_target = kept.map(|w| quantile_interval(w, 1.0 - target));
         out.push(YieldRow {
             case,
             method: Method::MonteCarlo,
@@ -276,9 +337,24 @@ pub fn monte_carlo_rows(
             margin,
             cpk: margin.and_then(|(m, s)| cpk(m, s)),
             evaluations: n,
-            limit: Some(Limit {
-                reach: reach(&prefix, target),
-                margin: at_target,
+            within_request: None,
+            limit: Some(if has_margin(&reqs[r]) && kept.is_none() {
+                Limit::without_margin(
+                    reach(&prefix, target),
+                    "the run has no sample's margin (none kept, or no sample)",
+                )
+            } else {
+                Limit::new(
+                    reach(&prefix, target),
+                    at_target,
+                    [
+                        "more than 1 − target of the samples fail without a margin",
+                        "margin_low unbounded: too few samples below the 1 − target quantile \
+                         for its 95 % interval",
+                        "margin_high unbounded: too few samples above the 1 − target quantile \
+                         for its 95 % interval",
+                    ],
+                )
             }),
         });
     }
@@ -298,6 +374,7 @@ pub fn monte_carlo_rows(
                 margin: None,
                 cpk: None,
                 evaluations: n,
+                within_request: None,
                 limit: None,
             });
         }
@@ -428,6 +505,7 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                 margin: None,
                 cpk: None,
                 evaluations: 0,
+                within_request: None,
                 limit: None,
             });
             at_target = at_target.min(m0 - z * s);
@@ -447,10 +525,12 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                     margin: Some((m0, s)),
                     cpk: cpk(m0, s),
                     evaluations: 0,
-                    limit: Some(Limit {
-                        reach: reach(&prefix, target),
-                        margin: Some([at_target; 3]),
-                    }),
+                    within_request: None,
+                    limit: Some(Limit::new(
+                        reach(&prefix, target),
+                        Some([at_target; 3]),
+                        ["the margin's first-order quantile is unbounded"; 3],
+                    )),
                 });
                 worst_all = worst_all.map(|x| x.min(p));
             }
@@ -472,6 +552,7 @@ pub fn first_order_rows(study: &Study, case: usize, spread: &Spread) -> Vec<Yiel
                 margin: None,
                 cpk: None,
                 evaluations: 0,
+                within_request: None,
                 limit: None,
             },
         );

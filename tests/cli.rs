@@ -882,3 +882,215 @@ fn sweep_gives_the_tuning_order_of_every_mode() {
         }
     }
 }
+
+#[test]
+fn a_requirement_range_beyond_the_speeds_is_refused_by_analyze_and_allocate() {
+    // A range written in rpm by mistake: no analysed speed can judge it.
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("rpm.toml");
+    let text = std::fs::read_to_string(common::example_path("rotating_pendulum.toml")).unwrap();
+    std::fs::write(
+        &model,
+        format!("{text}\n[[requirements]]\nname = \"in_rpm\"\nkind = \"damping\"\nmode = 1\nmin = 0.1\nspeeds = [1000, 3000]\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("o");
+    for args in [
+        vec!["analyze", "--no-monte-carlo", "--speed", "0:6:0.5"],
+        vec!["allocate", "--speed", "0:6:0.5"],
+    ] {
+        let mut a = args.clone();
+        a.extend([model.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        let o = run(&a);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("--speed") && e.contains("'in_rpm'") && e.contains("1000–3000"),
+            "{e}"
+        );
+        assert!(!out.exists(), "nothing written");
+    }
+}
+
+/// The pendulum example with a requirement "ω_d ≥ 2 over 4–5 rad/s" appended, in `dir`.
+fn pendulum_with_requirement(dir: &std::path::Path) -> std::path::PathBuf {
+    let model = dir.join("req.toml");
+    let text = std::fs::read_to_string(common::example_path("rotating_pendulum.toml")).unwrap();
+    std::fs::write(
+        &model,
+        format!("{text}\n[[requirements]]\nname = \"clear\"\nkind = \"frequency\"\nmode = 1\nmin = 2.0\nspeeds = [4, 5]\n"),
+    )
+    .unwrap();
+    model
+}
+
+/// `path`'s header and rows.
+fn table(path: &std::path::Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let h = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
+    (h, rows)
+}
+
+#[test]
+fn limits_are_numbers_or_blank_with_a_reason_at_any_target_yield() {
+    // Targets that no sample count resolves (10⁻³⁰⁰, 1 − 10⁻¹²) and a few samples: every
+    // unbounded end is blank and says why; nothing is ±inf or NaN; the note is on stderr.
+    let dir = tempfile::tempdir().unwrap();
+    let model = pendulum_with_requirement(dir.path());
+    for (i, target) in ["1e-300", "0.999999999999", "0.9"].into_iter().enumerate() {
+        let out = dir.path().join(format!("o{i}"));
+        let o = run(&[
+            "analyze",
+            model.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--speed",
+            "4:5:0.5",
+            "--samples",
+            "64",
+            "--target-yield",
+            target,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let (h, rows) = table(&out.join("limits.csv"));
+        let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+        assert_eq!(h.last().map(String::as_str), Some("reason"));
+        let mut blanks = 0;
+        for r in &rows {
+            assert_eq!(r[col("target")], target.parse::<f64>().unwrap().to_string());
+            for cell in r {
+                let l = cell.to_lowercase();
+                assert!(!l.contains("inf") && !l.contains("nan"), "{r:?}");
+            }
+            let blank = ["margin_at_target", "margin_low", "margin_high"]
+                .iter()
+                .any(|c| r[col(c)].is_empty());
+            if blank {
+                blanks += 1;
+                assert!(
+                    !r[col("reason")].is_empty(),
+                    "a blank without a reason: {r:?}"
+                );
+            } else {
+                assert!(r[col("reason")].is_empty(), "{r:?}");
+            }
+        }
+        let e = stderr(&o);
+        if i < 2 {
+            assert!(
+                blanks > 0 && e.contains("expected beyond the margin"),
+                "{e}"
+            );
+        } else {
+            assert!(!e.contains("expected beyond the margin"), "{e}");
+        }
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            summary["yield"]["target_yield"].as_f64(),
+            Some(target.parse().unwrap())
+        );
+    }
+}
+
+#[test]
+fn a_target_yield_outside_zero_one_and_sobol_in_a_shard_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = pendulum_with_requirement(dir.path());
+    let out = dir.path().join("o");
+    let m = model.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    for (args, flag) in [
+        (
+            vec!["analyze", m, "-o", o, "--target-yield", "1"],
+            "--target-yield",
+        ),
+        (
+            vec!["analyze", m, "-o", o, "--target-yield", "0"],
+            "--target-yield",
+        ),
+        (
+            vec!["analyze", m, "-o", o, "--target-yield", "NaN"],
+            "--target-yield",
+        ),
+        (
+            vec!["analyze", m, "-o", o, "--target-yield", "-0.5"],
+            "--target-yield",
+        ),
+        (
+            vec!["allocate", m, "-o", o, "--target-yield", "1.5"],
+            "--target-yield",
+        ),
+        (
+            vec![
+                "merge",
+                "--model",
+                m,
+                "-o",
+                o,
+                "--target-yield",
+                "2",
+                "x.json",
+            ],
+            "--target-yield",
+        ),
+        (
+            vec!["analyze", m, "-o", o, "--shard", "1/2", "--sobol", "16"],
+            "--sobol",
+        ),
+    ] {
+        let r = run(&args);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {}", stderr(&r));
+        assert!(stderr(&r).contains(flag), "{args:?}: {}", stderr(&r));
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
+}
+
+#[test]
+fn sobol_indices_refused_for_a_correlated_case_are_said_on_stderr_and_in_the_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("corr.toml");
+    let text = std::fs::read_to_string(common::example_path("rotating_pendulum.toml")).unwrap();
+    std::fs::write(
+        &model,
+        format!("{text}\n[[analysis.cases]]\nname = \"tied\"\ntolerances = {{ L = \"3%\", c = \"5%\" }}\ncorrelation = [[1, 0.5], [0.5, 1]]\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("o");
+    let o = run(&[
+        "analyze",
+        model.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--speed",
+        "4:5:0.5",
+        "--no-monte-carlo",
+        "--no-quadrature",
+        "--case",
+        "tied",
+        "--sobol",
+        "16",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no Sobol indices for case 'tied'"),
+        "{}",
+        stderr(&o)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let refused = summary["sobol_refused"].as_array().unwrap();
+    assert_eq!(refused.len(), 1);
+    assert_eq!(refused[0]["case"], "tied");
+    assert!(
+        refused[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("correlation")
+    );
+}

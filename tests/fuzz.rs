@@ -83,3 +83,97 @@ fn fuzz_corpus_replays() {
     }
     assert!(n >= 1, "the corpus is empty");
 }
+
+/// A requirement of any kind over any range, as the docs allow writing it (and some they do
+/// not): its TOML.
+fn requirement_text(kind: usize, mode: usize, a: f64, b: f64, from: f64, to: f64) -> String {
+    let mode = if mode == 0 {
+        String::new()
+    } else {
+        format!("mode = {mode}\n")
+    };
+    let body = match kind {
+        0 => format!("kind = \"frequency\"\nmin = {a}\n"),
+        1 => format!("kind = \"frequency\"\nmax = {b}\n"),
+        2 => format!("kind = \"avoid\"\nband = [{a}, {b}]\n"),
+        3 => format!("kind = \"damping\"\nmin = {}\n", a / 20.0),
+        4 => "kind = \"underdamped\"\n".into(),
+        5 => "kind = \"stable\"\n".into(),
+        6 => "kind = \"branch\"\n".into(),
+        7 => format!(
+            "kind = \"separation\"\norders = [1, 2]\nmargin = \"{}%\"\n",
+            a
+        ),
+        _ => "kind = \"separation\"\norders = [1]\nmargin = \"api684\"\n".into(),
+    };
+    format!("[[requirements]]\n{mode}{body}speeds = [{from}, {to}]\n")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(24),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Random requirements (every kind, ranges on, between and off the grid) and targets on
+    /// the pendulum: the model validates or is refused cleanly; an analysis (quadrature and a
+    /// small Monte Carlo) never panics, every probability is in [0, 1] with its interval around
+    /// it, and every value of `limits.csv` is a number or blank with a reason.
+    #[test]
+    fn random_requirements_give_honest_yields_and_limits(
+        reqs in prop::collection::vec(
+            (0usize..9, 0usize..3, 0.0f64..8.0, 0.0f64..8.0, 3.5f64..6.0, 0.0f64..1.0),
+            1..4,
+        ),
+        target in prop::sample::select(vec![1e-300, 1e-6, 0.5, 0.9, 0.9973, 1.0 - 1e-12]),
+        two in any::<bool>(),
+    ) {
+        let mut text = common::example_text("rotating_pendulum.toml");
+        for (kind, mode, a, b, from, width) in &reqs {
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            text.push_str(&requirement_text(*kind, *mode, *lo, *hi, *from, from + width));
+        }
+        text.push_str(&format!("[allocation]\ntarget_yield = {target}\n"));
+        if two {
+            text.push_str("[[analysis.cases]]\nname = \"two\"\ntolerances = { L = \"6%\", c = \"20%\" }\n");
+        }
+        let Ok(model) = Compiled::from_str(&text, "fuzz.toml") else { return Ok(()) };
+        let m = model.model();
+        let grid: Vec<f64> = (0..=5).map(|i| 3.5 + 0.5 * i as f64).collect();
+        if m.check_requirement_speeds(&grid).is_err() {
+            return Ok(());
+        }
+        let opt = modaltol::analyze::AnalyzeOptions {
+            speeds: m.judged_speeds(&grid),
+            cases: vec![m.analysis.cases.last().unwrap().clone()],
+            monte_carlo: Some(modaltol::montecarlo::McOptions {
+                samples: 16,
+                seed: 3,
+                sampling: modaltol::model::Sampling::Random,
+            }),
+            ..Default::default()
+        };
+        let a = modaltol::analyze::analyze(&model, &opt, &|_, _, _| {});
+        for y in &a.yields {
+            prop_assert!((0.0..=1.0).contains(&y.probability) || y.probability.is_nan(), "{y:?}");
+            if !y.probability.is_nan() {
+                prop_assert!(y.ci.0 <= y.probability + 1e-12 && y.probability <= y.ci.1 + 1e-12, "{y:?}");
+            }
+        }
+        let rows = modaltol::report::limit_rows(m, &a);
+        let width = modaltol::report::LIMITS_HEADER.len();
+        for r in &rows {
+            prop_assert_eq!(r.len(), width);
+            for cell in r {
+                let l = cell.to_lowercase();
+                prop_assert!(!l.contains("inf") && !l.contains("nan"), "{:?}", r);
+            }
+            let blank = r[11].is_empty() || r[12].is_empty() || r[13].is_empty();
+            let has_unit = !r[10].is_empty();
+            if has_unit && blank {
+                prop_assert!(!r[width - 1].is_empty(), "a blank without a reason: {:?}", r);
+            }
+        }
+    }
+}

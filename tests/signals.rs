@@ -291,3 +291,81 @@ fn a_closed_stdout_is_an_error_and_other_write_failures_too() {
         assert_eq!(sh(&format!("\"$M\" {command} >/dev/null")).code, Some(0));
     }
 }
+
+#[test]
+fn a_partial_result_goes_beside_a_complete_one_and_never_replaces_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let pendulum = example("rotating_pendulum.toml");
+    let results = dir.path().join("results");
+    let r = results.display().to_string();
+    // A complete result first.
+    let done = bin()
+        .args([
+            "analyze",
+            &pendulum,
+            "-o",
+            &r,
+            "--speed",
+            "1:1.5:0.5",
+            "--samples",
+            "50",
+        ])
+        .output()
+        .unwrap();
+    assert!(done.status.success());
+    let before = std::fs::read(results.join("summary.json")).unwrap();
+    let manifest = std::fs::read(results.join("manifest.json")).unwrap();
+    for (round, signal) in ["TERM", "INT"].into_iter().enumerate() {
+        let (child, _) = start(
+            &[
+                "analyze",
+                &pendulum,
+                "-o",
+                &r,
+                "--speed",
+                "1:1.5:0.5",
+                "--samples",
+                "100000000",
+            ],
+            None,
+        );
+        std::thread::sleep(Duration::from_millis(500));
+        kill(&child, signal);
+        let (_, stderr) = finish(child);
+        // The complete result is as it was; the partial one is beside it, flagged, and the
+        // message says where (the second replaces the first partial one there).
+        assert_eq!(std::fs::read(results.join("summary.json")).unwrap(), before);
+        assert_eq!(
+            std::fs::read(results.join("manifest.json")).unwrap(),
+            manifest
+        );
+        let beside = dir.path().join("results.partial");
+        let summary = std::fs::read_to_string(beside.join("summary.json")).unwrap();
+        assert!(summary.contains("\"partial\": true"), "round {round}");
+        assert!(
+            stderr.contains("is kept") && stderr.contains("results.partial"),
+            "{stderr}"
+        );
+        assert!(
+            hidden(dir.path()).is_empty(),
+            "left {:?}",
+            hidden(dir.path())
+        );
+    }
+    // A complete run replaces the complete one as before; the partial one beside it stays.
+    let again = bin()
+        .args([
+            "analyze",
+            &pendulum,
+            "-o",
+            &r,
+            "--speed",
+            "1:1.5:0.5",
+            "--samples",
+            "60",
+        ])
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    assert_ne!(std::fs::read(results.join("summary.json")).unwrap(), before);
+}

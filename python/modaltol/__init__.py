@@ -28,6 +28,7 @@ release the GIL and stop on Ctrl-C (``KeyboardInterrupt``).
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from dataclasses import dataclass
 from os import PathLike
@@ -138,10 +139,12 @@ class Shard:
     command line's ``analyze --shard K/N`` wrote): the shard file's ``text`` and its usual file
     ``name`` (``shard-K-of-N.json``). :func:`merge` combines shards ``1..N`` of one run,
     checking each (digest, fingerprint of the model and settings, layout) as the command line
-    does. Plain strings, so a shard pickles and travels between processes and machines."""
+    does. Plain strings, so a shard pickles and travels between processes and machines.
+    ``source`` is the path it was read from (what a refusal names), empty for one made here."""
 
     name: str
     text: str
+    source: str = ""
 
     def write(self, directory: str | PathLike[str]) -> Path:
         """Writes the shard as ``directory/name`` (the command line's file); its path."""
@@ -156,7 +159,19 @@ class Shard:
     def read(path: str | PathLike[str]) -> "Shard":
         """A shard file (as the command line or :meth:`write` wrote it)."""
         p = Path(path)
-        return Shard(name=str(p), text=p.read_text(encoding="utf-8"))
+        return Shard(name=p.name, text=p.read_text(encoding="utf-8"), source=str(p))
+
+
+def _shard_pair(shard: Any) -> tuple[int, int]:
+    """``shard=(k, n)`` as two whole numbers, refused otherwise (the range is checked later,
+    as the command line's ``--shard K/N`` is)."""
+    if (
+        not isinstance(shard, (tuple, list))
+        or len(shard) != 2
+        or not all(isinstance(x, numbers.Integral) and not isinstance(x, bool) for x in shard)
+    ):
+        raise ValueError(f"shard must be (k, n), two whole numbers: shard k of n, got {shard!r}")
+    return int(shard[0]), int(shard[1])
 
 
 def _run_shard(
@@ -373,6 +388,7 @@ class Model:
         shard: tuple[int, int] | None = None,
         executor: Any = None,
         shards: int | None = None,
+        target_yield: float | None = None,
     ) -> Any:
         """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
         per tolerance case, by first and second order, the quadrature (``analytic``: the
@@ -383,7 +399,9 @@ class Model:
         ``"rpm"``; the tables stay in rad/s). At most 10⁵ speeds; ``threads`` from 1 to 1024
         (``None``: one per core), the command line's rules. Ctrl-C stops it. The yield of the
         model's ``[[requirements]]`` is in ``yield_``; ``sobol=N`` adds the Sobol indices
-        (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``. Returns an :class:`Analysis`.
+        (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``; ``target_yield`` replaces the
+        model's ``[allocation] target_yield`` (what ``limits`` is met at and ``yield_`` is judged
+        against). Returns an :class:`Analysis`.
 
         Scale-out (speeds then as ``"FROM:TO:STEP"`` or the model's):
 
@@ -405,9 +423,20 @@ class Model:
                 raise ValueError('executor=: speeds as "FROM:TO:STEP" (or the model\'s)')
             if self._recipe is None:
                 raise ValueError("this model cannot travel to an executor's workers")
+            if shards is not None and (
+                not isinstance(shards, numbers.Integral) or isinstance(shards, bool)
+            ):
+                raise ValueError(f"shards must be a whole number, got {shards!r}")
             n = 8 if shards is None else int(shards)
             if n < 1:
                 raise ValueError(f"shards must be at least 1, got {n}")
+            # Refused before any task is submitted (as the command line's --shard K/N is).
+            total = self._native.samples if samples is None else samples
+            if isinstance(total, numbers.Integral) and n > total:
+                raise ValueError(
+                    f"shard {n} shards of {total} samples would leave shards without a sample; "
+                    f"use at most {total} shards"
+                )
             options = {
                 "cases": cases,
                 "samples": samples,
@@ -416,15 +445,32 @@ class Model:
                 "quadrature": quadrature,
                 "quadrature_tolerance": quadrature_tolerance,
             }
-            futures = [
-                executor.submit(_run_shard, self._recipe, speeds, options, (k, n))
-                for k in range(1, n + 1)
-            ]
-            parts = [f.result() for f in futures]
+            futures = []
+            try:
+                for k in range(1, n + 1):
+                    futures.append(
+                        executor.submit(_run_shard, self._recipe, speeds, options, (k, n))
+                    )
+                parts = [f.result() for f in futures]
+            except BaseException:
+                # Interrupted, or a task failed: the tasks not started are withdrawn.
+                for f in futures:
+                    cancel = getattr(f, "cancel", None)
+                    if callable(cancel):
+                        cancel()
+                raise
+            for k, p in enumerate(parts, start=1):
+                if not isinstance(p, Shard):
+                    raise TypeError(
+                        f"the executor's task for shard {k} of {n} returned "
+                        f"{type(p).__name__}, not a Shard: executor= needs submit(fn, *args) "
+                        "whose future's result() is fn(*args)"
+                    )
             return merge(
                 self,
                 parts,
                 cases=cases,
+                target_yield=target_yield,
                 threads=threads,
                 output=output,
                 speed_unit=speed_unit,
@@ -447,7 +493,8 @@ class Model:
                 "speed_unit": speed_unit,
                 "frequency_unit": frequency_unit,
                 "sobol": sobol,
-                "shard": None if shard is None else (int(shard[0]), int(shard[1])),
+                "shard": None if shard is None else _shard_pair(shard),
+                "target_yield": None if target_yield is None else float(target_yield),
             },
         )
         if shard is not None:
@@ -475,18 +522,20 @@ def merge(
     output: str | PathLike[str] | None = None,
     speed_unit: str = "rad/s",
     frequency_unit: str = "rad/s",
+    target_yield: float | None = None,
 ) -> Analysis:
     """Combines shards ``1..N`` of one Monte Carlo run of ``model`` (:class:`Shard` objects, or
     paths of shard files, the command line's included) exactly as the command line's ``merge``
     does, refusing what it refuses (an edited or truncated shard, one of another model, other
     tolerance cases or other settings, a missing or repeated shard). ``cases`` must be those the
     shards were run with. The analysis is that of one run, bit for bit; ``output`` writes its
-    result directory."""
+    result directory; ``target_yield`` replaces the model's as in :meth:`Model.analyze`."""
     parts = [s if isinstance(s, Shard) else Shard.read(s) for s in shards]
     d = model._native.merge(
-        [(s.name, s.text) for s in parts],
+        [(s.source or s.name, s.text) for s in parts],
         {
             "cases": _names(cases),
+            "target_yield": None if target_yield is None else float(target_yield),
             "threads": threads,
             "output": None if output is None else str(output),
             "speed_unit": speed_unit,

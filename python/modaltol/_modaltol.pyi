@@ -36,9 +36,11 @@ class AnalyzeOptions(TypedDict):
     frequency_unit: str
     sobol: int | None
     shard: tuple[int, int] | None
+    target_yield: float | None
 
 class MergeOptions(TypedDict):
     cases: list[str] | None
+    target_yield: float | None
     threads: int | None
     output: str | None
     speed_unit: str
@@ -49,6 +51,8 @@ class NativeModel:
     def name(self) -> str: ...
     @property
     def dof(self) -> int: ...
+    @property
+    def samples(self) -> int: ...
     def parameters(self) -> Columns: ...
     def coordinates(self) -> Columns: ...
     def cases(self) -> list[str]: ...

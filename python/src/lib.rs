@@ -81,6 +81,7 @@ fn refused(e: RequestError) -> PyErr {
                 Setting::QuadratureTolerance => "quadrature_tolerance",
                 Setting::Threads => "threads",
                 Setting::Shard => "shard",
+                Setting::TargetYield => "target_yield",
             };
             bad(format!("{name} {e}"))
         }
@@ -239,6 +240,14 @@ struct NativeModel {
 }
 
 impl NativeModel {
+    /// The model with the target yield asked for (checked), else itself.
+    fn targeted(&self, target_yield: Option<f64>) -> Arc<Compiled> {
+        match target_yield {
+            Some(y) => Arc::new((*self.model).clone().with_target_yield(y)),
+            None => self.model.clone(),
+        }
+    }
+
     fn m(&self) -> &Model {
         self.model.model()
     }
@@ -342,6 +351,7 @@ struct AnalyzeKeywords {
     sobol: Option<i64>,
     /// `(K, N)`: run shard K (1-based) of N of the Monte Carlo and return the shard's text.
     shard: Option<(i64, i64)>,
+    target_yield: Option<f64>,
 }
 
 /// The keywords of `merge` (Python's `modaltol.merge`): the cases the shards were run with and
@@ -350,6 +360,7 @@ struct AnalyzeKeywords {
 #[pyo3(from_item_all)]
 struct MergeKeywords {
     cases: Option<Vec<String>>,
+    target_yield: Option<f64>,
     threads: Option<i64>,
     output: Option<PathBuf>,
     speed_unit: String,
@@ -399,12 +410,11 @@ impl NativeModel {
                 .ok_or_else(|| bad("no speeds given and the model has no [analysis] speed"))?,
         };
         settings::analysis_speeds(range.len()).map_err(|e| bad(format!("speeds: {e}")))?;
-        let target = target_yield.unwrap_or(m.allocation.target_yield);
-        if !(target > 0.0 && target < 1.0) {
-            return Err(bad(format!(
-                "target_yield must be strictly between 0 and 1, got {target}"
-            )));
-        }
+        let grid: Vec<f64> = range.speeds().collect();
+        m.check_requirement_speeds(&grid)
+            .map_err(|e| bad(format!("speeds: {e}")))?;
+        let target = settings::target_yield(target_yield.unwrap_or(m.allocation.target_yield))
+            .map_err(|e| bad(format!("target_yield {e}")))?;
         let start = match case.as_deref().or(m.allocation.case.as_deref()) {
             Some(n) => m
                 .analysis
@@ -416,7 +426,7 @@ impl NativeModel {
             None => modaltol::model::Case::from_parameters(m),
         };
         let opt = modaltol::allocate::AllocateOptions {
-            speeds: range.speeds().collect(),
+            speeds: m.judged_speeds(&grid),
             case: start,
             target,
             costs: Vec::new(),
@@ -457,6 +467,12 @@ impl NativeModel {
     #[getter]
     fn dof(&self) -> usize {
         self.m().dof()
+    }
+
+    /// The model's Monte Carlo samples (`[analysis] samples`).
+    #[getter]
+    fn samples(&self) -> usize {
+        self.m().analysis.samples
     }
 
     /// The parameters: name, nominal value, tolerance (absolute, in the parameter's unit; NaN
@@ -744,6 +760,7 @@ impl NativeModel {
             frequency_unit,
             sobol,
             shard,
+            target_yield,
         } = options;
         let shard = shard
             .map(|(k, n)| {
@@ -796,6 +813,7 @@ impl NativeModel {
             shard,
             // A negative count is refused as zero is.
             sobol: sobol.map(|n| usize::try_from(n).unwrap_or(0)),
+            target_yield,
         };
         if shard.is_some() && output.is_some() {
             return Err(bad(
@@ -806,6 +824,7 @@ impl NativeModel {
         let Resolved {
             options: opt,
             range,
+            target_yield,
         } = request
             .check()
             .and_then(|r| r.resolve(m, Cancel::new()))
@@ -813,7 +832,8 @@ impl NativeModel {
         let (mc, threads) = (opt.monte_carlo, opt.threads);
         // Fail early where the results cannot be written.
         let dir = self.result_dir(&output)?;
-        let model = &*self.model;
+        let targeted = self.targeted(target_yield);
+        let model = &*targeted;
         let a = run_analysis(py, model, &opt)?;
         if let (Some((k, n)), Some(mc)) = (shard, mc) {
             let range = range
@@ -847,6 +867,7 @@ impl NativeModel {
     ) -> PyResult<Bound<'py, PyDict>> {
         let MergeKeywords {
             cases,
+            target_yield,
             threads,
             output,
             speed_unit,
@@ -869,8 +890,13 @@ impl NativeModel {
             threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
             shard: None,
             sobol: None,
+            target_yield,
         };
-        let Resolved { options: base, .. } = request
+        let Resolved {
+            options: base,
+            target_yield,
+            ..
+        } = request
             .check()
             .and_then(|r| r.resolve(m, Cancel::new()))
             .map_err(refused)?;
@@ -878,7 +904,8 @@ impl NativeModel {
             modaltol::shard::verify(m, &base.cases, shards).map_err(|e| bad(e.to_string()))?;
         let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(bad)?;
         let dir = self.result_dir(&output)?;
-        let model = &*self.model;
+        let targeted = self.targeted(target_yield);
+        let model = &*targeted;
         let a = run_analysis(py, model, &opt)?;
         let used = opt
             .threads

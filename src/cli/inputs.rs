@@ -100,6 +100,7 @@ pub(crate) fn refused(
                 Setting::Threads => "--threads",
                 Setting::Samples => "--samples",
                 Setting::Sobol => "--sobol",
+                Setting::TargetYield => "--target-yield",
                 _ => unreachable!("named above"),
             };
             InputError(format!("{flag} {e}")).into()

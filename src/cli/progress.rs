@@ -1,5 +1,6 @@
 //! Progress of long runs on stderr.
 
+use modaltol::settings;
 use std::io::{IsTerminal, Write};
 
 /// Progress on stderr: on a terminal one line rewritten in place; otherwise (a batch job's
@@ -23,5 +24,20 @@ pub(crate) fn progress_printer() -> impl Fn(&str, usize, usize) + Sync {
             *last = (stage.to_string(), tenth);
             note!("{stage}: {done}/{total}");
         }
+    }
+}
+
+/// Says on stderr where the Monte Carlo of `mc` cannot bound the margin met at the model's
+/// target yield (too few samples expected beyond it: [`settings::unresolved_target`]).
+pub(crate) fn note_unresolved_target(
+    m: &modaltol::compiled::Compiled,
+    mc: Option<&modaltol::montecarlo::McOptions>,
+) {
+    let md = m.model();
+    if let Some(mc) = mc
+        && !md.requirements.is_empty()
+        && let Some(why) = settings::unresolved_target(md.allocation.target_yield, mc.samples)
+    {
+        note!("modaltol: {why}");
     }
 }

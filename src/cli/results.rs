@@ -32,8 +32,16 @@ pub(crate) fn write_outputs(
             ", Monte Carlo {t:.3} s (ratio {:.0})",
             t / a.analytic_seconds
         )),
-        output.display()
+        written.place.display()
     );
+    if written.place != modaltol::files::write_target(output) {
+        note!(
+            "modaltol: the complete earlier result in {} is kept: a partial result does not \
+             replace it; this one is in {}",
+            output.display(),
+            written.place.display()
+        );
+    }
     for w in report::inadmissible_warnings(a) {
         note!("modaltol: warning: {w}");
     }
@@ -48,6 +56,12 @@ pub(crate) fn write_outputs(
     }
     for line in report::outside_request_lines(a) {
         note!("modaltol: note: {line}");
+    }
+    for (case, why) in &a.sobol_refused {
+        note!(
+            "modaltol: note: no Sobol indices for case '{}': {why}",
+            a.cases[*case].name
+        );
     }
     if partial {
         if a.samples_done.is_empty() {

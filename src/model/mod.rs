@@ -7,6 +7,7 @@
 
 pub mod admissible;
 pub mod expr;
+pub mod judged;
 pub mod schema;
 mod symmetry;
 mod validate;
@@ -553,6 +554,13 @@ pub struct Cost {
     pub b: f64,
     pub k: f64,
     pub max: Option<Tolerance>,
+}
+
+impl Cost {
+    /// The cost of tolerance `t`: `a + b / t^k`.
+    pub fn of(&self, t: f64) -> f64 {
+        self.a + self.b / t.powf(self.k)
+    }
 }
 
 impl Default for Cost {

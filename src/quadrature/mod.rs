@@ -67,6 +67,7 @@ mod line;
 mod roots;
 mod rules;
 mod sums;
+mod surrogate;
 mod yields;
 
 use crate::program::{Tier, Workspace};
@@ -81,8 +82,8 @@ use rayon::prelude::*;
 use rules::{Levels, Line, Rule, Stage, Transverse, design, grid};
 use statrs::distribution::{ContinuousCDF, Normal};
 use sums::{evaluate, next_stage, within};
-pub use yields::{MarginStat, QuadYield};
-use yields::{Requirements, evaluate_yield};
+pub use yields::{AtTarget, MarginStat, QuadYield};
+use yields::{Requirements, at_target, evaluate_yield};
 
 /// Settings of the quadrature.
 #[derive(Debug, Clone, Copy)]
@@ -272,8 +273,10 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
     let requirements = &study.model.model().requirements;
     let reqs = (!requirements.is_empty()).then(|| Requirements {
         list: requirements,
+        request: tolerance,
         speeds: &study.speeds,
         shift: nominal_margins(study, requirements),
+        offset: vec![0.0; requirements.len()],
         target: study.model.model().allocation.target_yield,
     });
     let mut stage = rule.first();
@@ -289,11 +292,14 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
                 .install(|| evaluate_yield(&store, rule, stage, &nominal, reqs))
         });
         let yield_error = yields.as_ref().map(|(y, parts)| {
+            // Every yield row: over the ranges, per speed, and the operating ranges met.
             let worst = y
                 .each
                 .iter()
                 .chain([&y.all])
+                .chain(y.curves.iter().chain(&y.prefix).flatten())
                 .map(|e| e.1)
+                .filter(|e| !e.is_nan())
                 .fold(0.0, f64::max);
             (*parts, worst)
         });
@@ -301,6 +307,10 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
             Some(next) => stage = next,
             None => break,
         }
+    }
+    if let (Some(reqs), Some((y, _))) = (&reqs, &mut yields) {
+        run.pool
+            .install(|| at_target(&store, rule, stage, &nominal, reqs, y));
     }
     let met = within(&result.stats, tolerance);
     for (row, within) in result.stats.iter_mut().zip(met) {

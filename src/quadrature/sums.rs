@@ -379,8 +379,12 @@ pub(super) fn next_stage(
         ..stage
     })
     .filter(|s| along > 0.5 && s.level <= rule.levels.last && affordable(*s));
+    // The tensor rule's next order (3, 5, 7 points), the scrambled rule's doubled lines.
     let wider = Some(Stage {
-        per: 2 * stage.per,
+        per: match rule.transverse {
+            Transverse::Tensor => stage.per + 1,
+            _ => 2 * stage.per,
+        },
         ..stage
     })
     .filter(|s| across > 0.5 && s.per <= rule.per.1 && affordable(*s));

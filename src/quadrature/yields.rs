@@ -12,22 +12,50 @@
 //! then a line integral of an indicator with located jumps (the preintegration of Griewank,
 //! Kuo, Leövey & Sloan 2018), its error estimated as the moments' are: the node grid against
 //! every other node, and the transverse rule against its check.
+//!
+//! The worst margin met at the target yield `Y` is the root `q` of `P(M ≥ q) = Y`: the same
+//! integral with every margin moved by `q`, so that its precision is the probability's
+//! ([`at_target`]). The root is bracketed and found by regula falsi on `Φ⁻¹(P)` (nearly linear
+//! in `q` for a nearly normal margin), with a bisection wherever two steps did not halve the
+//! bracket (the safeguard of Brent's and Dekker's methods; Brent, *Algorithms for Minimization
+//! without Derivatives*, 1973, ch. 4); the interval is the pair of roots at `Y ± e`, `e` the
+//! probability's error estimate there: every `q` whose probability is within the error of `Y`.
 
 use super::line::{Context, GL_W, GL_X, Stencil, density, normal_mass};
-use super::rules::{Rule, Stage, Transverse};
-use super::sums::{ErrorParts, across, sorted_quantile};
+use super::rules::{Rule, Stage, TENSOR_ORDERS, Transverse};
+use super::sums::{ErrorParts, across};
+use super::surrogate::{VirtualRule, interpolate};
 use super::{NodeData, Reference};
 use crate::model::Requirement;
 use crate::requirement::{State, covers, has_margin, margin, reaches};
 use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Longest sub-interval of a line (in standard deviations) across which a margin's sign is
 /// taken from its ends: a quarter of the finest node spacing.
 const STEP: f64 = 0.1875;
 
+/// The root of `P(M ≥ q) = Y` is taken as found where `P` is this fraction of the request
+/// (or of `Y` or `1 − Y`, where smaller) from `Y`, or the bracket is at rounding: well inside
+/// the error the answer states.
+const ROOT_FRACTION: f64 = 1e-3;
+
+/// The least error claimed for a probability: across the lines the rules' outermost nodes lie
+/// 4 to 6 σ out, so the tails beyond (10⁻⁹ of the mass beyond 6 σ) enter through the
+/// interpolated carriers only; probabilities within 10⁻¹¹ of 1 were seen 5·10⁻¹² off where the
+/// estimate said 10⁻¹³.
+const PROBABILITY_FLOOR: f64 = 1e-10;
+
+/// Integrations at most per root of `P(M ≥ q) = Y` (bracketing and refining; the bracket
+/// grows by doubling from the margin's σ, so 40 reach 10¹² σ).
+const ROOT_ITERATIONS: usize = 60;
+
 /// The yield of one case by the quadrature, with error estimates (absolute).
 #[derive(Debug, Clone, PartialEq)]
 pub struct QuadYield {
+    /// The error requested of every probability (absolute): a row whose error estimate
+    /// exceeds it is outside the request.
+    pub request: f64,
     /// Every requirement met at every speed of its range.
     pub all: (f64, f64),
     /// Per requirement: probability and error.
@@ -44,27 +72,39 @@ pub struct QuadYield {
     pub prefix: Vec<Vec<(f64, f64)>>,
 }
 
-/// Mean and σ of a requirement's worst margin over its range, with error estimates.
+/// Mean and σ of a requirement's worst margin over its range, with error estimates, and the
+/// margin met at the target yield.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarginStat {
     pub mean: f64,
     pub std: f64,
     pub mean_error: f64,
     pub std_error: f64,
-    /// The margin met at the target yield (its `1 − target` quantile, `−∞` where more than
-    /// `1 − target` of the designs fail without a margin) and its error estimate.
-    pub at_target: f64,
-    pub at_target_error: f64,
+    /// The margin met at the target yield, `None` until the quadrature has sought it (after its
+    /// last stage).
+    pub at_target: Option<AtTarget>,
+}
+
+/// The worst margin met at the target yield `Y`: `q` with `P(M ≥ q) = Y`, and the roots at
+/// `Y + e` (`low`) and `Y − e` (`high`), `e` the probability's error estimate. `−∞` where
+/// that many designs do not reach a margin (more than `1 − Y` fail without one), `+∞` where
+/// `Y − e ≤ 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtTarget {
+    pub estimate: f64,
+    pub low: f64,
+    pub high: f64,
+    /// The probability's error estimate at the estimate.
+    pub probability_error: f64,
 }
 
 /// The additive sums of one line (or a rule): the mass, the mass meeting everything, per
 /// requirement the mass meeting it and the worst margin's defined mass and first two moments
 /// about `shift`, per speed and requirement the mass meeting it there and from its range's
-/// start up to there; and per requirement the worst margin's weighted atoms (its quantiles).
+/// start up to there.
 #[derive(Debug, Clone)]
 struct Tally {
     v: Vec<f64>,
-    atoms: Vec<Vec<(f64, f64)>>,
 }
 
 /// Where each part of a [`Tally`] sits.
@@ -103,26 +143,12 @@ impl Tally {
     fn new(l: Layout) -> Tally {
         Tally {
             v: vec![0.0; l.len()],
-            atoms: vec![Vec::new(); l.reqs],
         }
     }
     fn add_scaled(&mut self, b: &Tally, w: f64) {
         for (x, y) in self.v.iter_mut().zip(&b.v) {
             *x += w * y;
         }
-        for (x, y) in self.atoms.iter_mut().zip(&b.atoms) {
-            x.extend(y.iter().map(|&(v, wv)| (v, w * wv)));
-        }
-    }
-    /// Requirement `r`'s worst margin at quantile `q` (`None` without atoms).
-    fn quantile(&self, r: usize, q: f64) -> Option<f64> {
-        let mut a = self.atoms[r].clone();
-        if a.is_empty() {
-            return None;
-        }
-        a.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let total = a.iter().map(|x| x.1).sum();
-        Some(sorted_quantile(&a, total, q))
     }
     fn ratio(&self, l: Layout, k: usize) -> f64 {
         self.v[k] / self.v[l.mass()]
@@ -138,15 +164,284 @@ impl Tally {
 }
 
 /// What the yield integration needs besides the nodes: the requirements, their nominal
-/// worst margins (the shift of the moments) and the target yield (the margin met at it).
+/// worst margins (the shift of the moments), the offsets their margins are moved by and the
+/// target yield.
+#[derive(Clone)]
 pub(super) struct Requirements<'a> {
     pub list: &'a [Requirement],
+    /// The error requested of each probability (absolute).
+    pub request: f64,
     pub speeds: &'a [f64],
     pub shift: Vec<f64>,
+    /// Each requirement is met where its margin is at least this (0 but while the margin met
+    /// at the target is sought).
+    pub offset: Vec<f64>,
     pub target: f64,
 }
 
-/// The yield at `stage` with its error estimates' parts.
+/// The tallies of one stage: on the node grid in use (`fine`) and on every other node of it
+/// (`rough`, the along-line error), and what gives the transverse error.
+struct Tallies {
+    fine: Tally,
+    rough: Tally,
+    across: Across,
+}
+
+/// What the transverse error of a statistic comes from.
+enum Across {
+    /// One line: none.
+    None,
+    /// Pairs of estimates whose distances add up (the tensor rule's surrogate against the one
+    /// of the order below; the virtual lines' rule against its half).
+    Pairs(Vec<(Tally, Tally)>),
+    /// Independent replicates of the estimator (the scrambled rule): their Student-t 95 %
+    /// half-width.
+    Replicates(Vec<Tally>),
+}
+
+impl Across {
+    /// The transverse error of the statistic `f` (∞ where a part has none).
+    fn error(&self, f: &dyn Fn(&Tally) -> Option<f64>) -> f64 {
+        let e = match self {
+            Across::None => 0.0,
+            Across::Pairs(pairs) => pairs
+                .iter()
+                .map(|(a, b)| match (f(a), f(b)) {
+                    (Some(x), Some(y)) => (x - y).abs(),
+                    _ => f64::NAN,
+                })
+                .sum(),
+            // The tensor pair is not read for the scrambled rule.
+            Across::Replicates(reps) => across(
+                Transverse::Scrambled {
+                    replicates: reps.len(),
+                },
+                (&reps[0], &reps[0]),
+                reps,
+                f,
+            ),
+        };
+        if e.is_nan() { f64::INFINITY } else { e }
+    }
+}
+
+impl Tallies {
+    /// The probability at `k` with its error estimate (the grid's and the transverse rule's),
+    /// the error 1 where it has none.
+    fn probability(&self, l: Layout, k: usize) -> ((f64, f64), ErrorParts) {
+        let p = self.fine.ratio(l, k);
+        let along = 2.0 * (p - self.rough.ratio(l, k)).abs();
+        let cross = self.across.error(&|t: &Tally| Some(t.ratio(l, k)));
+        let err = along + cross;
+        (
+            (
+                p,
+                if err.is_finite() {
+                    err.max(PROBABILITY_FLOOR)
+                } else {
+                    1.0
+                },
+            ),
+            ErrorParts {
+                along,
+                across: cross,
+            },
+        )
+    }
+}
+
+/// The per-speed contexts of `store`'s lines.
+fn contexts<'a>(store: &'a NodeData, nominal: &'a Reference) -> Vec<Context<'a>> {
+    (0..store.speeds)
+        .map(|i| Context {
+            store,
+            speed: i,
+            outs: nominal.outs,
+            modes: nominal.modes,
+            shift: &[],
+            branch: nominal.branches[i] as u32,
+        })
+        .collect()
+}
+
+/// `Σ w · tally` over `lines` (line index and weight) of `store` with the nodes at `stride`,
+/// the lines in parallel.
+fn weighted(
+    store: &NodeData,
+    nominal: &Reference,
+    lines: &[(usize, f64)],
+    stride: usize,
+    reqs: &Requirements,
+    l: Layout,
+) -> Tally {
+    let contexts = contexts(store, nominal);
+    let parts: Vec<(f64, Tally)> = lines
+        .par_iter()
+        .map(|&(li, w)| (w, line_tally(&contexts, li, stride, reqs, l)))
+        .collect();
+    let mut sum = Tally::new(l);
+    for (w, t) in &parts {
+        sum.add_scaled(t, *w);
+    }
+    sum
+}
+
+/// The lines a stage's tallies are integrated on, prepared once for every integration of
+/// the stage (the margin at the target integrates many times).
+enum Source<'a> {
+    /// The tensor rule's surrogate ([`super::surrogate`]): virtual lines interpolated across
+    /// the lines in use (`main`), across those of the order below (`check`, at the coarsest
+    /// grid), and the main surrogate on the virtual rule's half (`half`).
+    Tensor {
+        main: NodeData,
+        check: NodeData,
+        half: NodeData,
+        fine_lines: Vec<(usize, f64)>,
+        half_lines: Vec<(usize, f64)>,
+        stride: usize,
+        check_stride: usize,
+    },
+    /// Real lines (one, or the scrambled replicates): index, weight and replicate.
+    Lines {
+        store: &'a NodeData,
+        used: Vec<(usize, f64, usize)>,
+        stride: usize,
+        replicates: usize,
+    },
+}
+
+impl<'a> Source<'a> {
+    fn new(store: &'a NodeData, rule: &Rule, stage: Stage) -> Source<'a> {
+        let stride = 1 << (rule.levels.last - stage.level);
+        match rule.transverse {
+            Transverse::Tensor => {
+                let check_stride = 1 << (rule.levels.last - rule.levels.first);
+                let dims = rule.lines.first().map_or(0, |line| line.y.len());
+                let (fine_rule, half_rule) = VirtualRule::for_dims(dims);
+                let (main, check) = (stage.per, stage.per - 1);
+                let order = |rank: usize| TENSOR_ORDERS[rank];
+                let lines_of = |r: &VirtualRule| -> Vec<(usize, f64)> {
+                    r.points
+                        .iter()
+                        .enumerate()
+                        .map(|(v, (_, w))| (v, *w))
+                        .collect()
+                };
+                Source::Tensor {
+                    main: interpolate(store, rule, main, order(main), stride, &fine_rule),
+                    check: interpolate(store, rule, check, order(check), check_stride, &fine_rule),
+                    half: interpolate(store, rule, main, order(main), stride, &half_rule),
+                    fine_lines: lines_of(&fine_rule),
+                    half_lines: lines_of(&half_rule),
+                    stride,
+                    check_stride,
+                }
+            }
+            _ => {
+                let replicates = match rule.transverse {
+                    Transverse::Scrambled { replicates } => replicates,
+                    _ => 1,
+                };
+                Source::Lines {
+                    store,
+                    used: (0..rule.lines.len())
+                        .filter(|&li| rule.uses(&rule.lines[li], stage))
+                        .map(|li| {
+                            let line = &rule.lines[li];
+                            (li, rule.weight(line, stage), line.replicate)
+                        })
+                        .collect(),
+                    stride,
+                    replicates,
+                }
+            }
+        }
+    }
+
+    /// The estimate alone.
+    fn fine(&self, nominal: &Reference, reqs: &Requirements, l: Layout) -> Tally {
+        match self {
+            Source::Tensor {
+                main,
+                fine_lines,
+                stride,
+                ..
+            } => weighted(main, nominal, fine_lines, *stride, reqs, l),
+            Source::Lines {
+                store,
+                used,
+                stride,
+                ..
+            } => {
+                let lines: Vec<(usize, f64)> = used.iter().map(|x| (x.0, x.1)).collect();
+                weighted(store, nominal, &lines, *stride, reqs, l)
+            }
+        }
+    }
+
+    /// The estimate with what its error estimate needs.
+    fn tallies(&self, nominal: &Reference, reqs: &Requirements, l: Layout) -> Tallies {
+        match self {
+            Source::Tensor {
+                main,
+                check,
+                half,
+                fine_lines,
+                half_lines,
+                stride,
+                check_stride,
+            } => {
+                let w = |store, lines, stride| weighted(store, nominal, lines, stride, reqs, l);
+                let fine = w(main, fine_lines, *stride);
+                let main_at_check = w(main, fine_lines, *check_stride);
+                let checked = w(check, fine_lines, *check_stride);
+                let half = w(half, half_lines, *stride);
+                Tallies {
+                    rough: w(main, fine_lines, *stride << 1),
+                    across: Across::Pairs(vec![(main_at_check, checked), (fine.clone(), half)]),
+                    fine,
+                }
+            }
+            Source::Lines {
+                store,
+                used,
+                stride,
+                replicates,
+            } => {
+                let contexts = contexts(store, nominal);
+                let per_line: Vec<(Tally, Tally)> = used
+                    .par_iter()
+                    .map(|&(li, _, _)| {
+                        (
+                            line_tally(&contexts, li, *stride, reqs, l),
+                            line_tally(&contexts, li, *stride << 1, reqs, l),
+                        )
+                    })
+                    .collect();
+                let mut fine = Tally::new(l);
+                let mut rough = Tally::new(l);
+                let mut reps = vec![Tally::new(l); *replicates];
+                for (&(_, w, rep), (t, r)) in used.iter().zip(&per_line) {
+                    fine.add_scaled(t, w);
+                    rough.add_scaled(r, w);
+                    reps[rep].add_scaled(t, w * *replicates as f64);
+                }
+                Tallies {
+                    fine,
+                    rough,
+                    across: if *replicates > 1 {
+                        Across::Replicates(reps)
+                    } else {
+                        Across::None
+                    },
+                }
+            }
+        }
+    }
+}
+
+/// The yield at `stage` with its error estimates' parts (the margins met at the target are
+/// left to [`at_target`]).
 pub(super) fn evaluate_yield(
     store: &NodeData,
     rule: &Rule,
@@ -158,79 +453,13 @@ pub(super) fn evaluate_yield(
         reqs: reqs.list.len(),
         speeds: store.speeds,
     };
-    let (first_level, last_level) = (rule.levels.first, rule.levels.last);
-    let stride = 1 << (last_level - stage.level);
-    let coarse = stride << 1;
-    let check_stride = 1 << (last_level - first_level);
-    let transverse = rule.transverse;
-    let replicates = match transverse {
-        Transverse::Scrambled { replicates } => replicates,
-        _ => 1,
-    };
-    let contexts: Vec<Context> = (0..store.speeds)
-        .map(|i| Context {
-            store,
-            speed: i,
-            outs: nominal.outs,
-            modes: nominal.modes,
-            shift: &[],
-            branch: nominal.branches[i] as u32,
-        })
-        .collect();
-    // Per line in use: (line, weight, is check, tallies at stride / coarse / check stride).
-    let used: Vec<usize> = (0..rule.lines.len())
-        .filter(|&li| rule.uses(&rule.lines[li], stage))
-        .collect();
-    let per_line: Vec<(usize, Vec<Tally>)> = used
-        .par_iter()
-        .map(|&li| {
-            let line = &rule.lines[li];
-            let strides: Vec<usize> = if rule.checks(line, stage) {
-                vec![check_stride]
-            } else if transverse == Transverse::Tensor {
-                vec![stride, coarse, check_stride]
-            } else {
-                vec![stride, coarse]
-            };
-            let t = strides
-                .iter()
-                .map(|&s| line_tally(&contexts, li, s, reqs, l))
-                .collect();
-            (li, t)
-        })
-        .collect();
-    let mut fine = Tally::new(l);
-    let mut rough = Tally::new(l);
-    let mut check = Tally::new(l);
-    let mut main_at_check = Tally::new(l);
-    let mut reps = vec![Tally::new(l); replicates];
-    for (li, t) in &per_line {
-        let line = &rule.lines[*li];
-        let w = rule.weight(line, stage);
-        if rule.checks(line, stage) {
-            check.add_scaled(&t[0], w);
-            continue;
-        }
-        fine.add_scaled(&t[0], w);
-        rough.add_scaled(&t[1], w);
-        reps[line.replicate].add_scaled(&t[0], w * replicates as f64);
-        if transverse == Transverse::Tensor {
-            main_at_check.add_scaled(&t[2], w);
-        }
-    }
-    let across = |f: &dyn Fn(&Tally) -> Option<f64>| -> f64 {
-        let e = across(transverse, (&main_at_check, &check), &reps, f);
-        if e.is_nan() { f64::INFINITY } else { e }
-    };
+    let tallies = Source::new(store, rule, stage).tallies(nominal, reqs, l);
     let mut parts = ErrorParts::default();
     let mut prob = |k: usize| -> (f64, f64) {
-        let p = fine.ratio(l, k);
-        let along = 2.0 * (p - rough.ratio(l, k)).abs();
-        let cross = across(&|t: &Tally| Some(t.ratio(l, k)));
-        parts.along = parts.along.max(along);
-        parts.across = parts.across.max(cross);
-        let err = along + cross;
-        (p, if err.is_finite() { err } else { 1.0 })
+        let (p, e) = tallies.probability(l, k);
+        parts.along = parts.along.max(e.along);
+        parts.across = parts.across.max(e.across);
+        p
     };
     let all = prob(l.all());
     let each: Vec<(f64, f64)> = (0..l.reqs).map(|r| prob(l.each(r))).collect();
@@ -253,34 +482,31 @@ pub(super) fn evaluate_yield(
     };
     let curves = per_speed(covers, Layout::curve);
     let prefix = per_speed(reaches, Layout::prefix);
+    let (fine, rough) = (&tallies.fine, &tallies.rough);
     let margins = (0..l.reqs)
         .map(|r| {
             let shift = reqs.shift[r];
             let (mean, std) = fine.moments(l, r, shift)?;
             let (rm, rs) = rough.moments(l, r, shift).unwrap_or((f64::NAN, f64::NAN));
-            let cm = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.0));
-            let cs = across(&|t: &Tally| t.moments(l, r, shift).map(|m| m.1));
+            let cm = tallies
+                .across
+                .error(&|t: &Tally| t.moments(l, r, shift).map(|m| m.0));
+            let cs = tallies
+                .across
+                .error(&|t: &Tally| t.moments(l, r, shift).map(|m| m.1));
             let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
-            let q = 1.0 - reqs.target;
-            let at_target = fine.quantile(r, q).unwrap_or(f64::NAN);
-            let rq = rough.quantile(r, q).unwrap_or(f64::NAN);
-            let cq = across(&|t: &Tally| t.quantile(r, q));
             Some(MarginStat {
                 mean,
                 std,
                 mean_error: finite(2.0 * (mean - rm).abs() + cm),
                 std_error: finite(2.0 * (std - rs).abs() + cs),
-                at_target,
-                at_target_error: if at_target.is_finite() {
-                    finite(2.0 * (at_target - rq).abs() + cq)
-                } else {
-                    0.0
-                },
+                at_target: None,
             })
         })
         .collect();
     (
         QuadYield {
+            request: reqs.request,
             all,
             each,
             margins,
@@ -289,6 +515,231 @@ pub(super) fn evaluate_yield(
         },
         parts,
     )
+}
+
+/// Fills every margin's [`AtTarget`] at `stage` (the last): the roots of `P(M_r ≥ q) = Y`,
+/// then of `Y ± e` with `e` the probability's error estimate at the first root.
+pub(super) fn at_target(
+    store: &NodeData,
+    rule: &Rule,
+    stage: Stage,
+    nominal: &Reference,
+    reqs: &Requirements,
+    y: &mut QuadYield,
+) {
+    let n = reqs.list.len();
+    let with_margin: Vec<usize> = (0..n).filter(|&r| y.margins[r].is_some()).collect();
+    if with_margin.is_empty() {
+        return;
+    }
+    let source = Source::new(store, rule, stage);
+    let target = reqs.target;
+    // Each sought root as (requirement, target probability); several at once share an
+    // integration: the requirements are repeated, each copy with its own offset.
+    let solve = |goals: &[(usize, f64)]| -> Vec<f64> {
+        let list: Vec<Requirement> = goals.iter().map(|g| reqs.list[g.0].clone()).collect();
+        let l = Layout {
+            reqs: goals.len(),
+            speeds: store.speeds,
+        };
+        let moved = |offset: &[f64]| Requirements {
+            list: &list,
+            offset: offset.to_vec(),
+            shift: goals.iter().map(|g| reqs.shift[g.0]).collect(),
+            ..reqs.clone()
+        };
+        // P(M ≥ q) for q → −∞: the designs with a margin.
+        let reached = source.fine(nominal, &moved(&vec![f64::NEG_INFINITY; goals.len()]), l);
+        let roots = goals
+            .iter()
+            .enumerate()
+            .map(|(k, &(r, p))| {
+                let m = y.margins[r].expect("a margin");
+                Root::new(p, reached.ratio(l, l.each(k)), m.mean, m.std, reqs.request)
+            })
+            .collect::<Vec<_>>();
+        find_roots(roots, |q| {
+            let t = source.fine(nominal, &moved(q), l);
+            (0..goals.len()).map(|k| t.ratio(l, l.each(k))).collect()
+        })
+    };
+    let first: Vec<(usize, f64)> = with_margin.iter().map(|&r| (r, target)).collect();
+    let estimates = solve(&first);
+    // The probability's error at each estimate.
+    let l = Layout {
+        reqs: n,
+        speeds: store.speeds,
+    };
+    let mut offset = vec![0.0; n];
+    for (&r, &q) in with_margin.iter().zip(&estimates) {
+        offset[r] = if q.is_finite() { q } else { 0.0 };
+    }
+    let tallies = source.tallies(
+        nominal,
+        &Requirements {
+            offset,
+            ..reqs.clone()
+        },
+        l,
+    );
+    let errors: Vec<f64> = with_margin
+        .iter()
+        .zip(&estimates)
+        .map(|(&r, q)| {
+            if q.is_finite() {
+                tallies.probability(l, l.each(r)).0.1
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let ends: Vec<(usize, f64)> = with_margin
+        .iter()
+        .zip(&errors)
+        .flat_map(|(&r, &e)| [(r, target + e), (r, target - e)])
+        .collect();
+    let ends = solve(&ends);
+    for (k, &r) in with_margin.iter().enumerate() {
+        let m = y.margins[r].as_mut().expect("a margin");
+        m.at_target = Some(AtTarget {
+            estimate: estimates[k],
+            low: ends[2 * k],
+            high: ends[2 * k + 1],
+            probability_error: errors[k],
+        });
+    }
+}
+
+/// One sought root of a decreasing `P(q)` (`P(M ≥ q)`): `P(q) = goal`, with the bracket
+/// found so far (`q` where `P ≥ goal`, and where `P < goal`, each with its `P`).
+struct Root {
+    goal: f64,
+    /// Where the search starts (the normal quantile of the margin's moments) and its scale.
+    start: f64,
+    scale: f64,
+    /// `|P − goal|` at which the root is taken as found.
+    tolerance: f64,
+    above: Option<(f64, f64)>,
+    below: Option<(f64, f64)>,
+    /// Where the root is (once known), `±∞` where the goal is beyond what `P` reaches.
+    found: Option<f64>,
+    /// Steps taken, and the bracket's widths after the last two (the bisection safeguard).
+    steps: usize,
+    widths: [f64; 2],
+}
+
+impl Root {
+    /// The root of `P(q) = goal` given `P(−∞) = reached` and the margin's mean and σ.
+    fn new(goal: f64, reached: f64, mean: f64, std: f64, request: f64) -> Root {
+        let found = if goal <= 0.0 {
+            Some(f64::INFINITY)
+        } else if goal >= reached || goal >= 1.0 {
+            // More than 1 − goal of the designs fail without a margin.
+            Some(f64::NEG_INFINITY)
+        } else if std.is_nan() || std <= 0.0 {
+            // Every design with a margin has the same: the step from `reached` to 0 is there.
+            Some(mean)
+        } else {
+            None
+        };
+        let z = Normal::standard().inverse_cdf(1.0 - goal.clamp(1e-300, 1.0 - 1e-16));
+        Root {
+            goal,
+            start: mean + std * z,
+            scale: std,
+            // Relative to the goal near 0 or 1, where the request is coarser than the goal.
+            tolerance: ROOT_FRACTION * request.min(goal).min(1.0 - goal),
+            above: None,
+            below: None,
+            found,
+            steps: 0,
+            widths: [f64::INFINITY; 2],
+        }
+    }
+
+    /// The next `q` to integrate at, `None` once found.
+    fn next(&mut self) -> Option<f64> {
+        if self.found.is_some() {
+            return None;
+        }
+        let grow = self.scale * 2f64.powi(self.steps as i32);
+        Some(match (self.above, self.below) {
+            (None, None) => self.start,
+            (Some(a), None) => a.0 + grow,
+            (None, Some(b)) => b.0 - grow,
+            (Some(a), Some(b)) => {
+                let w = b.0 - a.0;
+                // Regula falsi on Φ⁻¹(P) − Φ⁻¹(goal), nearly linear in q for a nearly
+                // normal margin; bisection where it does not shrink the bracket fast enough.
+                let nd = Normal::standard();
+                let g = |p: f64| nd.inverse_cdf(p.clamp(1e-300, 1.0 - 1e-16));
+                let (ga, gb) = (g(a.1) - g(self.goal), g(b.1) - g(self.goal));
+                let falsi = a.0 + w * ga / (ga - gb);
+                let slow = w > 0.5 * self.widths[0];
+                if slow || !(falsi > a.0 + 1e-3 * w && falsi < b.0 - 1e-3 * w) {
+                    0.5 * (a.0 + b.0)
+                } else {
+                    falsi
+                }
+            }
+        })
+    }
+
+    /// Takes `p = P(q)`.
+    fn take(&mut self, q: f64, p: f64) {
+        self.steps += 1;
+        if (p - self.goal).abs() <= self.tolerance {
+            self.found = Some(q);
+            return;
+        }
+        if p >= self.goal {
+            self.above = Some((q, p));
+        } else {
+            self.below = Some((q, p));
+        }
+        if let (Some(a), Some(b)) = (self.above, self.below) {
+            let w = b.0 - a.0;
+            self.widths = [self.widths[1], w];
+            if w <= 4.0 * f64::EPSILON * (a.0.abs() + b.0.abs() + self.scale) {
+                // The bracket is at rounding: a step of P there (an atom of the margin).
+                self.found = Some(if (a.1 - self.goal) < (self.goal - b.1) {
+                    a.0
+                } else {
+                    b.0
+                });
+            }
+        }
+        if self.steps >= ROOT_ITERATIONS && self.found.is_none() {
+            self.found = Some(match (self.above, self.below) {
+                (Some(a), Some(b)) => 0.5 * (a.0 + b.0),
+                (Some(_), None) => f64::INFINITY,
+                _ => f64::NEG_INFINITY,
+            });
+        }
+    }
+}
+
+/// Every root of `roots`, each integration `eval(q)` giving `P` at every root's `q` (roots
+/// already found keep theirs).
+fn find_roots(mut roots: Vec<Root>, eval: impl Fn(&[f64]) -> Vec<f64>) -> Vec<f64> {
+    loop {
+        let qs: Vec<Option<f64>> = roots.iter_mut().map(Root::next).collect();
+        if qs.iter().all(Option::is_none) {
+            break;
+        }
+        let at: Vec<f64> = roots
+            .iter()
+            .zip(&qs)
+            .map(|(r, q)| q.unwrap_or_else(|| r.found.filter(|f| f.is_finite()).unwrap_or(0.0)))
+            .collect();
+        let p = eval(&at);
+        for ((root, q), p) in roots.iter_mut().zip(&qs).zip(p) {
+            if let Some(q) = q {
+                root.take(*q, p);
+            }
+        }
+    }
+    roots.iter().map(|r| r.found.expect("found")).collect()
 }
 
 /// The pieces of one line at every speed, and the requirements' margins at a point of it.
@@ -318,10 +769,20 @@ impl LineView<'_> {
         })
     }
 
+    /// Requirement `r`'s margin less its offset (`−∞` stays: no margin at any offset).
+    fn moved(&self, r: usize, s: &State) -> f64 {
+        let m = margin(&self.reqs.list[r], s);
+        if m == f64::NEG_INFINITY {
+            m
+        } else {
+            m - self.reqs.offset[r]
+        }
+    }
+
     /// The margin of requirement `r` at speed `i` at `t` on piece `at` of that speed.
     fn margin(&self, t: f64, at: usize, i: usize, r: usize, c: &mut Vec<f64>) -> f64 {
         self.state(t, at, i, c)
-            .map_or(f64::NEG_INFINITY, |s| margin(&self.reqs.list[r], &s))
+            .map_or(f64::NEG_INFINITY, |s| self.moved(r, &s))
     }
 
     /// The margin of every (speed, requirement) at `t`, `[speed][requirement]` flattened
@@ -338,7 +799,7 @@ impl LineView<'_> {
             for &k in active {
                 out[i * r + k] = state
                     .as_ref()
-                    .map_or(f64::NEG_INFINITY, |s| margin(&self.reqs.list[k], s));
+                    .map_or(f64::NEG_INFINITY, |s| self.moved(k, s));
             }
         }
     }
@@ -507,7 +968,6 @@ fn add_piece(
                 .filter(|&i| view.covered[i * nr + r])
                 .map(|i| mm[i * nr + r])
                 .fold(f64::INFINITY, f64::min);
-            tally.atoms[r].push((worst, wt));
             if worst.is_finite() {
                 let d = worst - view.reqs.shift[r];
                 tally.v[l.margin(r, 0)] += wt;

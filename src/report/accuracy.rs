@@ -4,6 +4,7 @@
 
 use crate::analyze::{Analysis, Method};
 use crate::tolerance::Quantity;
+use crate::yields;
 
 /// Quadrature rows of one case and output whose error estimates exceed the request.
 #[derive(Debug, Clone)]
@@ -32,6 +33,37 @@ pub fn outside_request(a: &Analysis) -> Vec<Outside> {
                 quantity: r.quantity,
                 mode: r.mode,
                 speeds: vec![r.speed],
+            }),
+        }
+    }
+    out
+}
+
+/// Quadrature yield rows of one case and requirement (`None`: all together) whose error
+/// estimates exceed the request: over the range (`None`) or at speeds.
+#[derive(Debug, Clone)]
+pub struct YieldOutside {
+    pub case: usize,
+    pub requirement: Option<usize>,
+    pub speeds: Vec<Option<f64>>,
+}
+
+/// Every quadrature yield row outside the requested accuracy, grouped by case and requirement.
+pub fn yield_outside_request(a: &Analysis) -> Vec<YieldOutside> {
+    let mut out: Vec<YieldOutside> = Vec::new();
+    for y in &a.yields {
+        if y.method != yields::Method::Quadrature || y.within_request != Some(false) {
+            continue;
+        }
+        match out
+            .iter_mut()
+            .find(|o| o.case == y.case && o.requirement == y.requirement)
+        {
+            Some(o) => o.speeds.push(y.speed),
+            None => out.push(YieldOutside {
+                case: y.case,
+                requirement: y.requirement,
+                speeds: vec![y.speed],
             }),
         }
     }
@@ -93,6 +125,26 @@ pub fn outside_request_lines(a: &Analysis) -> Vec<String> {
                  {rows} row(s) (within_request = false in tolerance.csv): {}{more}",
                 a.cases[case].name,
                 outputs.join("; ")
+            ))
+        })
+        .chain(yield_outside_lines(a))
+        .collect()
+}
+
+/// One line per case whose quadrature yield rows miss the requested accuracy.
+fn yield_outside_lines(a: &Analysis) -> Vec<String> {
+    let groups = yield_outside_request(a);
+    (0..a.cases.len())
+        .filter_map(|case| {
+            let of: Vec<&YieldOutside> = groups.iter().filter(|o| o.case == case).collect();
+            if of.is_empty() {
+                return None;
+            }
+            let rows: usize = of.iter().map(|o| o.speeds.len()).sum();
+            Some(format!(
+                "case '{}': the quadrature's yield error estimate exceeds the requested \
+                 accuracy at {rows} row(s) (within_request = false in yield.csv)",
+                a.cases[case].name
             ))
         })
         .collect()

@@ -66,6 +66,10 @@ pub fn allocation_json(model: &Model, a: &Allocation) -> Value {
         "cost_before": a.cost_before,
         "cost_after": a.cost_after,
         "constraints": a.constraints,
+        "verified_yield": a.rounds[a.chosen].verified.0,
+        "verified_error": a.rounds[a.chosen].verified.1,
+        "chosen_round": a.chosen + 1,
+        "cost_gap": a.cost_gap,
         "variables": a.variables.iter().map(|v| json!({
             "parameter": model.parameters[v.parameter].name, "tolerance_before": v.before,
             "tolerance_after": v.after, "max": v.max, "at_max": v.at_bound,
@@ -101,18 +105,29 @@ pub fn allocation_table(model: &Model, a: &Allocation) -> String {
             if v.at_bound { "  (at its largest)" } else { "" }
         );
     }
-    let last = a.rounds.last();
+    let r = &a.rounds[a.chosen];
     let _ = writeln!(
         s,
-        "cost {:.6} → {:.6}; verified yield {} (target {}): {}",
+        "cost {:.6} → {:.6}; verified yield {:.6} ± {:.2e} (target {}): {}",
         a.cost_before,
         a.cost_after,
-        last.map_or("–".into(), |r| format!(
-            "{:.6} ± {:.2e}",
-            r.verified.0, r.verified.1
-        )),
+        r.verified.0,
+        r.verified.1,
         a.target,
         if a.met { "met" } else { "NOT met" }
+    );
+    let _ = writeln!(
+        s,
+        "round {} of {}; {}",
+        a.chosen + 1,
+        a.rounds.len(),
+        match a.cost_gap {
+            Some(g) => format!(
+                "{:.3} % above the cheapest design found short of the target",
+                100.0 * g
+            ),
+            None => "no design short of the target was tried: the cost is not bracketed".into(),
+        }
     );
     s
 }

@@ -24,7 +24,9 @@ mod tolerance;
 mod unfilled;
 mod yields;
 
-pub use accuracy::{Outside, outside_request, outside_request_lines};
+pub use accuracy::{
+    Outside, YieldOutside, outside_request, outside_request_lines, yield_outside_request,
+};
 pub use allocation::{ALLOCATION_HEADER, allocation_json, allocation_rows, allocation_table};
 pub use check::check_summary;
 pub use frf::{frf_header, frf_rows};

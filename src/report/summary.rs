@@ -3,7 +3,7 @@
 //! and failures, and every row without a value. Its own file because it condenses the whole
 //! run into one document.
 
-use super::{outside_request, unfilled};
+use super::{outside_request, unfilled, yield_outside_request};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
@@ -109,6 +109,12 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         "quadrature_outside_request": outside_request(a).iter().map(|o| json!({
             "case": a.cases[o.case].name, "quantity": o.quantity.as_str(), "mode": o.mode.map(|m| m + 1),
             "rows": o.speeds.len(), "speeds": o.speeds})).collect::<Vec<_>>(),
+        "quadrature_yield_outside_request": yield_outside_request(a).iter().map(|o| json!({
+            "case": a.cases[o.case].name,
+            "requirement": o.requirement.map_or("all".to_string(), |r| model.requirements[r].name.clone()),
+            "rows": o.speeds.len(), "speeds": o.speeds})).collect::<Vec<_>>(),
+        "sobol_refused": a.sobol_refused.iter().map(|(case, why)| json!({
+            "case": a.cases[*case].name, "reason": why})).collect::<Vec<_>>(),
         "unfilled": unfilled(a).iter().map(|u| json!({
             "case": a.cases[u.case].name, "method": u.method.as_str(), "quantity": u.quantity.as_str(),
             "mode": u.mode.map(|m| m + 1), "reason": u.reason, "rows": u.speeds.len(),

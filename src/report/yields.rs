@@ -9,7 +9,7 @@ use crate::yields::{Method, YieldRow};
 use serde_json::{Value, json};
 
 /// Header of `yield.csv`.
-pub const YIELD_HEADER: [&str; 18] = [
+pub const YIELD_HEADER: [&str; 19] = [
     "case",
     "method",
     "requirement",
@@ -28,6 +28,7 @@ pub const YIELD_HEADER: [&str; 18] = [
     "margin_std",
     "cpk",
     "evaluations",
+    "within_request",
 ];
 
 /// The requirement's kind as written in the model file.
@@ -160,6 +161,7 @@ pub fn yield_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                 opt(y.margin.map(|m| m.1)),
                 opt(y.cpk),
                 y.evaluations.to_string(),
+                y.within_request.map_or(String::new(), |w| w.to_string()),
             ]
         })
         .collect()
@@ -181,14 +183,15 @@ pub fn yield_summary(model: &Model, a: &Analysis) -> Value {
             "meets_target": verdict(y.ci, target),
             "margin_mean": y.margin.map(|m| m.0), "margin_std": y.margin.map(|m| m.1),
             "cpk": y.cpk,
-            "at_target": y.limit.map(|l| json!({
+            "at_target": y.limit.as_ref().map(|l| json!({
                 "reach": l.reach, "margin": l.margin.map(|m| m.map(finite_or_null)),
+                "reason": l.why,
             }))})).collect::<Vec<_>>(),
     })
 }
 
 /// Header of `limits.csv`.
-pub const LIMITS_HEADER: [&str; 15] = [
+pub const LIMITS_HEADER: [&str; 16] = [
     "case",
     "method",
     "requirement",
@@ -204,6 +207,7 @@ pub const LIMITS_HEADER: [&str; 15] = [
     "margin_low",
     "margin_high",
     "tightest",
+    "reason",
 ];
 
 /// The tightest requirement of `r`'s kind that designs meet at the target yield, in words,
@@ -254,9 +258,14 @@ pub fn limit_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
     let speed = |w: Option<f64>| w.map_or(String::new(), |w| w.to_string());
     a.yields
         .iter()
-        .filter_map(|y| Some((y, y.limit?, &model.requirements[y.requirement?])))
+        .filter_map(|y| Some((y, y.limit.as_ref()?, &model.requirements[y.requirement?])))
         .map(|(y, l, r)| {
-            let m = |k: usize| l.margin.map_or(String::new(), |m| m[k].to_string());
+            // An unbounded or missing end is blank; `reason` says why.
+            let m = |k: usize| {
+                l.margin
+                    .filter(|m| m[k].is_finite())
+                    .map_or(String::new(), |m| m[k].to_string())
+            };
             vec![
                 a.cases[y.case].name.clone(),
                 y.method.as_str().to_string(),
@@ -273,6 +282,7 @@ pub fn limit_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                 m(1),
                 m(2),
                 l.margin.map_or(String::new(), |m| tightest(r, m[0], &tu)),
+                l.why.clone().unwrap_or_default(),
             ]
         })
         .collect()

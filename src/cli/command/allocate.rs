@@ -31,15 +31,15 @@ pub(crate) fn allocate_command(
     settings::quadrature_tolerance(quadrature_tolerance)
         .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
     settings::threads(threads).map_err(|e| InputError(format!("--threads {e}")))?;
-    if let Some(y) = target_yield
-        && !(y > 0.0 && y < 1.0)
-    {
-        return Err(InputError(format!(
-            "--target-yield must be a probability strictly between 0 and 1 (got {y})"
-        ))
-        .into());
+    if let Some(y) = target_yield {
+        settings::target_yield(y).map_err(|e| InputError(format!("--target-yield {e}")))?;
     }
     let m = load(&model, set)?;
+    // The allocation's target is what its analysis is judged against too.
+    let m = match target_yield {
+        Some(y) => m.with_target_yield(y),
+        None => m,
+    };
     let md = m.model();
     let range = match &speed {
         Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
@@ -48,6 +48,9 @@ pub(crate) fn allocate_command(
         })?,
     };
     settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
+    let grid: Vec<f64> = range.speeds().collect();
+    md.check_requirement_speeds(&grid)
+        .map_err(|e| InputError(format!("--speed: {e}")))?;
     let start = start_case(md, case.as_deref())?;
     let costs = costs
         .iter()
@@ -57,9 +60,9 @@ pub(crate) fn allocate_command(
     refuse_input(&inputs, &output)?;
     let mut dir = protect(ResultDir::create(&output)?, inputs)?;
     let opt = AllocateOptions {
-        speeds: range.speeds().collect(),
+        speeds: md.judged_speeds(&grid),
         case: start,
-        target: target_yield.unwrap_or(md.allocation.target_yield),
+        target: md.allocation.target_yield,
         costs,
         quadrature: QuadOptions {
             tolerance: quadrature_tolerance,

@@ -33,6 +33,7 @@ pub(crate) fn analyze_command(
         shard,
         cases: only,
         sobol,
+        target_yield,
         display,
     } = args;
     let request = Request {
@@ -59,6 +60,7 @@ pub(crate) fn analyze_command(
             .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
             .transpose()?,
         sobol,
+        target_yield,
     };
     // The settings that need no model first: a bad flag is reported before a slow load.
     let chosen = !request.cases.is_empty();
@@ -67,9 +69,15 @@ pub(crate) fn analyze_command(
     let Resolved {
         options: opt,
         range,
+        target_yield,
     } = request
         .resolve(m.model(), cancel.clone())
         .map_err(|e| refused(e, &shard, chosen))?;
+    let m = match target_yield {
+        Some(y) => m.with_target_yield(y),
+        None => m,
+    };
+    note_unresolved_target(&m, opt.monte_carlo.as_ref());
     let (mc, split) = (opt.monte_carlo, opt.split.clone());
     // Fail early where the results cannot be written.
     let inputs = Inputs::new(&model.iter().collect::<Vec<_>>());

@@ -15,9 +15,20 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         output,
         shards,
         cases: only,
+        target_yield,
         display,
     } = args;
+    let target_yield = target_yield
+        .map(|y| {
+            modaltol::settings::target_yield(y)
+                .map_err(|e| InputError(format!("--target-yield {e}")))
+        })
+        .transpose()?;
     let m = model_or_governor(&model, set)?;
+    let m = match target_yield {
+        Some(y) => m.with_target_yield(y),
+        None => m,
+    };
     let cases = tolerance_cases(m.model(), &only)?;
     let (first, states) = modaltol::shard::read_all(m.model(), &cases, &shards)
         .map_err(|e| InputError(e.to_string()))?;
@@ -28,6 +39,7 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         ..Default::default()
     };
     let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(InputError)?;
+    note_unresolved_target(&m, Some(&mc));
     let mut inputs: Vec<&PathBuf> = model.iter().collect();
     inputs.extend(&shards);
     let inputs = Inputs::new(&inputs);

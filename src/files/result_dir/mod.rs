@@ -148,23 +148,56 @@ impl ResultDir {
         Ok(())
     }
 
-    /// Writes the manifest and puts the run in place of the target.
-    pub fn commit(self, partial: bool) -> Result<(), FileError> {
+    /// Writes the manifest and puts the run in place of the target; returns where it went.
+    /// A `partial` run never replaces a complete one: where the target holds a complete run,
+    /// the partial one goes beside it (`TARGET.partial`, or `TARGET/partial` where the run is
+    /// staged inside the target) and the complete one stays.
+    pub fn commit(self, partial: bool) -> Result<PathBuf, FileError> {
         self.commit_with(partial, &mut |a, b| std::fs::rename(a, b))
     }
 
     /// [`ResultDir::commit`] with `rename` moving each file.
-    fn commit_with(mut self, partial: bool, rename: &mut Rename<'_>) -> Result<(), FileError> {
+    fn commit_with(mut self, partial: bool, rename: &mut Rename<'_>) -> Result<PathBuf, FileError> {
         let manifest = Manifest {
             format: MANIFEST_FORMAT.into(),
             partial,
             files: std::mem::take(&mut self.files),
         };
+        if partial && Manifest::read(&self.target).is_some_and(|m| !m.partial) {
+            self.target = self.partial_place()?;
+        }
         let staging = self.staging.take().expect("not committed").keep();
         let result = self.install(&staging, &manifest, rename);
         // Whatever happened, nothing of the staging directory stays behind.
         let _ = std::fs::remove_dir_all(&staging);
-        result
+        result.map(|()| self.target.clone())
+    }
+
+    /// Where a partial run goes when the target holds a complete one: `TARGET.partial` beside
+    /// it (on the same file system as the staging directory), or `TARGET/partial` where the run
+    /// is staged inside the target.
+    fn partial_place(&self) -> Result<PathBuf, FileError> {
+        Ok(match self.place {
+            Staging::Beside => {
+                let mut name = self.target.file_name().unwrap_or_default().to_os_string();
+                name.push(".partial");
+                let place = self.target.with_file_name(name);
+                if place.exists() && !place.is_dir() {
+                    return Err(invalid(
+                        &place,
+                        "cannot write the partial result beside the complete one",
+                        "a file stands at its name".into(),
+                    ));
+                }
+                place
+            }
+            Staging::Inside => {
+                let place = self.target.join("partial");
+                std::fs::create_dir_all(&place)
+                    .map_err(fail(&place, "cannot create the directory"))?;
+                place
+            }
+        })
     }
 
     /// Puts the staged run in place; `rename` moves one file (a parameter so that tests can
@@ -322,15 +355,39 @@ mod tests {
         m.verify(&target).unwrap();
         let mut r = ResultDir::create(&target).unwrap();
         r.write("a.csv", b"new a").unwrap();
-        r.commit(true).unwrap();
+        assert_eq!(r.commit(false).unwrap(), target);
         assert_eq!(std::fs::read(target.join("a.csv")).unwrap(), b"new a");
         assert!(!target.join("stale.svg").exists(), "a stale file stayed");
         let m = Manifest::read(&target).unwrap();
-        assert!(m.partial);
+        assert!(!m.partial);
         m.verify(&target).unwrap();
         // Nothing of the staging directories is left beside the target.
         let left: Vec<_> = std::fs::read_dir(root.path()).unwrap().collect();
         assert_eq!(left.len(), 1);
+    }
+
+    #[test]
+    fn a_partial_run_goes_beside_a_complete_one_and_replaces_a_partial_one() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("results");
+        let beside = root.path().join("results.partial");
+        let mut r = ResultDir::create(&target).unwrap();
+        r.write("a.csv", b"complete").unwrap();
+        r.commit(false).unwrap();
+        let mut r = ResultDir::create(&target).unwrap();
+        r.write("a.csv", b"partial").unwrap();
+        assert_eq!(r.commit(true).unwrap(), beside);
+        assert_eq!(std::fs::read(target.join("a.csv")).unwrap(), b"complete");
+        assert_eq!(std::fs::read(beside.join("a.csv")).unwrap(), b"partial");
+        assert!(Manifest::read(&beside).unwrap().partial);
+        // Over a partial one, a partial run replaces it in place.
+        let other = root.path().join("other");
+        for (text, partial) in [(&b"first"[..], true), (&b"second"[..], true)] {
+            let mut r = ResultDir::create(&other).unwrap();
+            r.write("a.csv", text).unwrap();
+            assert_eq!(r.commit(partial).unwrap(), other);
+        }
+        assert_eq!(std::fs::read(other.join("a.csv")).unwrap(), b"second");
     }
 
     #[test]

@@ -11,6 +11,9 @@ use crate::model::{
 };
 use toml::Spanned;
 
+/// What the outputs call every requirement together (`yield.csv`, `summary.json`).
+const ALL: &str = "all";
+
 /// The kinds of requirement, as written.
 const KINDS: &str =
     "separation, frequency, avoid, damping, underdamped, stable, branch or transfer";
@@ -37,6 +40,16 @@ pub(super) fn requirements(
         if out.iter().any(|x| x.name == name) {
             let span = r.name.as_ref().map_or(at.clone(), |n| n.span());
             return Err(ctx.err(span, format!("duplicate requirement name '{name}'")));
+        }
+        if name == ALL {
+            let span = r.name.as_ref().map_or(at.clone(), |n| n.span());
+            return Err(ctx.err(
+                span,
+                format!(
+                    "requirement name '{ALL}' is taken: the outputs name every requirement \
+                     together so"
+                ),
+            ));
         }
         let what = format!("requirement '{name}'");
         let kind = kind(ctx, r, &what)?;
@@ -286,6 +299,31 @@ pub(super) fn allocation(
                 .map(|m| tolerance(ctx, m.get_ref(), m.span(), "allocation cost max"))
                 .transpose()?,
         };
+        if let Some(m) = &s.max
+            && cost
+                .max
+                .is_some_and(|t| t.absolute(params[pi].value) <= 0.0)
+        {
+            return Err(ctx.err(
+                m.span(),
+                format!(
+                    "allocation cost of '{}': max must be a tolerance > 0 (the largest allowed)",
+                    name.get_ref()
+                ),
+            ));
+        }
+        let toleranced = params[pi].tolerance.is_some()
+            || cases.iter().any(|c| c.tolerances.iter().any(|t| t.0 == pi));
+        if !toleranced {
+            return Err(ctx.err(
+                name.span(),
+                format!(
+                    "allocation cost of '{}': the parameter has no tolerance (neither its own \
+                     nor in a case of [analysis]), so there is nothing to allocate",
+                    name.get_ref()
+                ),
+            ));
+        }
         if !(cost.a.is_finite()
             && cost.b.is_finite()
             && cost.b > 0.0

@@ -162,7 +162,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
     let tu = transfer_unit(model);
     let speed = |w: Option<f64>| w.map_or("none".to_string(), sig);
     for y in rows {
-        let (Some(l), Some(r)) = (y.limit, y.requirement) else {
+        let (Some(l), Some(r)) = (y.limit.as_ref(), y.requirement) else {
             continue;
         };
         let r = &model.requirements[r];
