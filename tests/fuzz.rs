@@ -177,3 +177,49 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(6),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Random cost tables (tiny to huge b, k up to 400, any max) and targets: `allocate`
+    /// answers with finite tolerances and costs, or refuses with a reason; never a panic, an
+    /// infinite cost or a NaN tolerance.
+    #[test]
+    fn random_costs_and_targets_allocate_or_refuse_cleanly(
+        b in prop::sample::select(vec![1e-300, 1e-6, 1.0, 1e6, 1e300]),
+        k in prop::sample::select(vec![0.5, 1.0, 2.0, 40.0, 400.0]),
+        max in prop::sample::select(vec!["", "max = \"0.5%\", ", "max = 0.2, "]),
+        target in prop::sample::select(vec![0.5, 0.9, 0.9973, 0.999999]),
+    ) {
+        let w = 5.0;
+        let text = format!(
+            "{}\n[[requirements]]\nname = \"clear\"\nkind = \"frequency\"\nmode = 1\nmin = 3.6\nspeeds = [{w}, {w}]\n\n[allocation]\ntarget_yield = {target}\ncost = {{ L = {{ {max}b = {b}, k = {k} }} }}\n",
+            common::example_text("rotating_pendulum.toml")
+        );
+        let Ok(model) = Compiled::from_str(&text, "fuzz.toml") else { return Ok(()) };
+        let case = model.model().analysis.cases[0].clone();
+        let opt = modaltol::allocate::AllocateOptions {
+            speeds: vec![w],
+            case,
+            target,
+            costs: Vec::new(),
+            quadrature: modaltol::quadrature::QuadOptions::default(),
+            threads: Some(1),
+            cancel: Default::default(),
+        };
+        match modaltol::allocate::allocate(&model, &opt, &|_| {}) {
+            Ok(a) => {
+                prop_assert!(a.cost_before.is_finite() && a.cost_after.is_finite(), "{a:?}");
+                for v in &a.variables {
+                    prop_assert!(v.after.is_finite() && v.after > 0.0 && v.after <= v.max * (1.0 + 1e-12), "{v:?}");
+                }
+                prop_assert!(a.chosen < a.rounds.len());
+            }
+            Err(e) => prop_assert!(!e.to_string().is_empty()),
+        }
+    }
+}

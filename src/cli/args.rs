@@ -207,11 +207,15 @@ pub(crate) enum Command {
     /// quadrature|monte_carlo|first_order, requirement (all: every one together), kind, mode,
     /// speed_from, speed_to, speed (empty: over the range, every speed at once), probability,
     /// ci_low, ci_high, target, meets_target = yes|no|undecided, margin_unit, margin_mean,
-    /// margin_std (the worst margin over the range), cpk, evaluations), DIR/limits.csv (what
-    /// the design meets at the target yield, per case, method and requirement: reach,
-    /// reach_low, reach_high = the highest speed up to which, from the range's start, it holds
-    /// at the target yield; margin_at_target, margin_low, margin_high = the worst margin's
-    /// 1 − target quantile; tightest = the tightest requirement of its kind met, in words) and
+    /// margin_std (the worst margin over the range), cpk, evaluations, within_request (the
+    /// quadrature's: whether its error estimate meets --quadrature-tolerance as an absolute
+    /// error of the probability)), DIR/limits.csv (what the design meets at the target yield
+    /// (--target-yield), per case, method and requirement: reach, reach_low, reach_high = the
+    /// highest speed up to which, from the range's start, it holds at the target yield;
+    /// margin_at_target, margin_low, margin_high = the worst margin's 1 − target quantile and
+    /// its interval; tightest = the tightest requirement of its kind met, in words; reason =
+    /// why a value is blank). Each requirement is judged over its whole range: its ends are
+    /// added to the speeds analysed, and a range beyond --speed is refused. And
     /// a specification section at the top of the report; with --sobol, DIR/sobol.csv (case, target, speed,
     /// quantity, mode, variable, first, first_ci_low, first_ci_high, total, total_ci_low,
     /// total_ci_high, derivative_bound, rows); DIR/summary.json (cases, wall times of the
