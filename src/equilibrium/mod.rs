@@ -276,6 +276,21 @@ impl<'a> Problem<'a> {
             return Err(EquilibriumError::NotFinite { iterations });
         }
         if !converged {
+            // The limit reached: the exact Jacobian's step at the last point decides, by the
+            // one criterion of convergence, so that a point the last iteration reached (a
+            // chord's step, say) is not reported as a failure when it has converged.
+            if !it.fresh {
+                it.refresh(self, settings.drive_force);
+            }
+            converged = it.lu.solve(&it.f).is_some_and(|step| {
+                let dir = self.direction(&it, step);
+                matches!(
+                    it.certify(&dir, iterations, settings.step_tolerance),
+                    Some(Step::Converged)
+                )
+            });
+        }
+        if !converged {
             return Err(EquilibriumError::NewtonDiverged {
                 iterations,
                 residual: max_abs(&it.f),

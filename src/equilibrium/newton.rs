@@ -7,6 +7,17 @@ use super::{EquilibriumError, Problem, ROUNDING_FLOOR, max_abs};
 use crate::equations::Rates;
 use nalgebra::DMatrix;
 
+/// The slowest contraction `ρ` per step for which chord steps (a kept Jacobian) go on: the
+/// steps must at least halve.
+const CHORD_RATE: f64 = 0.5;
+
+/// The most chord steps a contraction rate `ρ` may still need to reach the certificate (an
+/// error left below a thousandth of the tolerance), else the Jacobian is evaluated: a sweep's
+/// chord from the previous speed's Jacobian contracts by 1e-3 or faster and needs one or two,
+/// while a chord that contracts by 0.07 from a Jacobian far from the solution needed twelve
+/// where Newton's steps need three or four.
+const CHORD_STEPS: f64 = 2.0;
+
 /// How one Newton–chord iteration ends ([`Problem::solve`]'s loop).
 pub(super) enum Step {
     /// The exact Jacobian's step at the current point is below the tolerance.
@@ -96,8 +107,12 @@ impl Iterate {
     /// The contraction test of a chord step `dir` (a kept Jacobian): with a contraction rate
     /// `ρ = size/last_step`, the error left is about `ρ/(1−ρ)` times the step. Where that is
     /// below a thousandth of `tol` (or the steps stop contracting at the tolerance), the step
-    /// is taken and the Jacobian evaluated there to certify it; where the steps shrink less
-    /// than twofold, the Jacobian is evaluated here. `true` when it was (the iteration ends).
+    /// is taken and the Jacobian evaluated there to certify it. Where the steps shrink less
+    /// than twofold, the Jacobian is evaluated here. Where they contract, but so slowly that
+    /// more than [`CHORD_STEPS`] further steps would be needed (the chord converges only
+    /// linearly, at the rate `ρ`, which its Jacobian's distance from the solution sets), the
+    /// step is taken and the Jacobian evaluated there: Newton's steps, quadratic near the
+    /// solution, go on from it. `true` when the Jacobian was evaluated (the iteration ends).
     pub(super) fn chord(
         &mut self,
         problem: &Problem,
@@ -118,13 +133,16 @@ impl Iterate {
         } else {
             size
         };
-        if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
+        // The chord steps still needed at the rate ρ to bring the error left below a
+        // thousandth of the tolerance (where the step is certified).
+        let slow = rho < CHORD_RATE && (1e-3 * tol / left).ln() / rho.ln() > CHORD_STEPS;
+        if left <= 1e-3 * tol || (size <= tol && rho > CHORD_RATE) || slow {
             dir.apply(&mut self.q, &mut self.lambda, 1.0);
             self.refresh(problem, drive_wanted);
             return true;
         }
         // Steps that do not contract fast: evaluate the Jacobian here.
-        if size > 0.5 * self.last_step {
+        if size > CHORD_RATE * self.last_step {
             self.refresh(problem, drive_wanted);
             return true;
         }
