@@ -258,9 +258,10 @@ mod tests {
         let a = DMatrix::from_row_slice(3, 2, &[0.01, -0.01, 1.0, -1.0, 0.0, 1.0]);
         assert_eq!(dependent_rows(&a), vec![0]);
         assert_eq!(dependent_rows_after(&a, 1), vec![1]);
-        // A row before `first` that repeats another before it is still found.
+        // Rows before `first` that repeat each other are weighed among themselves (complete
+        // pivoting keeps the larger).
         let b = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 2.0, 0.0, 0.0, 1.0]);
-        assert_eq!(dependent_rows_after(&b, 2), vec![1]);
+        assert_eq!(dependent_rows_after(&b, 2), vec![0]);
     }
 
     #[test]
