@@ -74,16 +74,12 @@ pub enum EquilibriumError {
         sensitivity: f64,
     },
     #[error(
-        "no steady state: the linearisation depends on the value of the driven coordinate '{coordinate}' although the equilibrium does not (its {matrix} changes by {change:.3e}, on a scale of {scale:.3e}, as the coordinate turns), so the modes would be those of a periodic system; is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
+        "no steady state: the linearisation depends on the value of the driven coordinate '{coordinate}' although the equilibrium does not (as the coordinate turns, {change}), so the modes would be those of a periodic system; is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
     )]
     UnsteadyLinearisation {
         coordinate: String,
-        /// The matrix that changes.
-        matrix: &'static str,
-        /// Its largest entry's change.
-        change: f64,
-        /// What the change is measured against.
-        scale: f64,
+        /// What changes, and by how much against what scale.
+        change: String,
     },
 }
 
@@ -247,7 +243,9 @@ impl<'a> Problem<'a> {
     /// the steps stop contracting), the Jacobian is evaluated there, with the linearisation's
     /// other matrices, and its step confirms it (else Newton goes on from there). So the
     /// returned Jacobian, and the rates, are those of the returned point, which the
-    /// linearisation and the sensitivities use.
+    /// linearisation and the sensitivities use. Where `F` is zero to rounding there but that
+    /// Jacobian is nearly singular along a continuum of equilibria its factorisation did not
+    /// flag, its step is rounding and the chord's estimate certifies the point alone.
     pub fn solve(
         &self,
         speed: f64,
@@ -344,6 +342,7 @@ impl<'a> Problem<'a> {
             lu,
             last_step: f64::INFINITY,
             at_floor: 0,
+            chord_certified: false,
         }
     }
 
@@ -526,20 +525,14 @@ impl<'a> Problem<'a> {
         let mut qo = q.to_vec();
         for offset in OFFSETS {
             qo[c] = q[c] + offset;
-            let unsteady = |matrix: &'static str, change: f64, scale: f64| {
-                EquilibriumError::UnsteadyLinearisation {
-                    coordinate: self.names[c].to_string(),
-                    matrix,
-                    change,
-                    scale,
-                }
+            let unsteady = |change: String| EquilibriumError::UnsteadyLinearisation {
+                coordinate: self.names[c].to_string(),
+                change,
             };
             let Ok(lin) = self.route.linearize(&qo, lambda, &base.independent, None) else {
                 // Φ_R lost the rank it has at the solution: the constraints turn with it.
                 return Err(unsteady(
-                    "constraint Jacobian Φ_R",
-                    f64::INFINITY,
-                    base.scale.basis,
+                    "the constraint Jacobian Φ_R loses its rank".to_string(),
                 ));
             };
             for (matrix, a, b, scale) in [
@@ -565,7 +558,9 @@ impl<'a> Problem<'a> {
             ] {
                 let change = (a - b).amax();
                 if change.is_nan() || change > STEADY_TOLERANCE * scale {
-                    return Err(unsteady(matrix, change, scale));
+                    return Err(unsteady(format!(
+                        "its {matrix} changes by {change:.3e}, on a scale of {scale:.3e}"
+                    )));
                 }
             }
         }

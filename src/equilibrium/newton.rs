@@ -53,6 +53,9 @@ pub(super) struct Iterate {
     pub(super) last_step: f64,
     /// Fresh Jacobians evaluated where F is at its rounding floor.
     pub(super) at_floor: usize,
+    /// The current point is where chord steps put the error left below a thousandth of the
+    /// tolerance ([`Iterate::chord`]), and `jac` was evaluated there to certify it.
+    pub(super) chord_certified: bool,
 }
 
 impl Iterate {
@@ -78,7 +81,13 @@ impl Iterate {
             let floor = 1.0 + balance.amax(&self.jac) * dir.q_scale.max(dir.l_scale);
             balance.norm(&self.f) <= ROUNDING_FLOOR * floor
         };
-        if self.fresh && dir.size <= tol {
+        // Where the chord's contraction put the error left below a thousandth of the
+        // tolerance and F is zero to rounding, the point is converged although the exact
+        // Jacobian's step is not small: that step is rounding through a Jacobian nearly
+        // singular along a continuum of equilibria (a cone's azimuth) that its factorisation
+        // did not flag, and Newton would wander along the continuum.
+        let by_chord = self.chord_certified && at_rounding;
+        if self.fresh && (dir.size <= tol || by_chord) {
             // A least-squares step is small on an inconsistent singular system too (a
             // free slider pushed by a constant force): there is no equilibrium then.
             if self.lu.singular() && !at_rounding {
@@ -139,6 +148,7 @@ impl Iterate {
         if left <= 1e-3 * tol || (size <= tol && rho > CHORD_RATE) || slow {
             dir.apply(&mut self.q, &mut self.lambda, 1.0);
             self.refresh(problem, drive_wanted);
+            self.chord_certified = left <= 1e-3 * tol;
             return true;
         }
         // Steps that do not contract fast: evaluate the Jacobian here.
@@ -188,6 +198,7 @@ impl Iterate {
         }
         (self.q, self.lambda, self.f) = (q_new, l_new, f_new);
         (self.fresh, self.rates, self.drive) = (false, None, None);
+        self.chord_certified = false;
         self.last_step = alpha * dir.size;
     }
 }
