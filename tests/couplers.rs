@@ -105,6 +105,25 @@ fn bad_couplers_are_refused_at_their_place() {
             "[[couplers]]\nname = \"m\"\ncoordinates = [\"shaft1\", \"shaft2\"]\ncoefficients = [\"r1\", \"r2\"]\n[[couplers]]\nname = \"m2\"\ncoordinates = [\"shaft2\", \"shaft1\"]\ncoefficients = [\"2*r2\", \"2*r1\"]",
             "a combination of the cut joints' and the other couplers'",
         ),
+        // A parallelogram (cranks of 0.04 m, a rod closing them as a distance cut) already has
+        // q₁ = q₂ from its loop: the coupler repeating it is refused, though its coefficients
+        // are larger than the cut's row (0.14 × 0.04).
+        (
+            "[[constraints]]\nname = \"rod\"\ntype = \"distance\"\nbody1 = \"gear1\"\npoint1 = [0, 0.04, 0]\nbody2 = \"gear2\"\npoint2 = [\"r1 + r2\", 0.04, 0]\n[[couplers]]\nname = \"m\"\ncoordinates = [\"shaft1\", \"shaft2\"]\ncoefficients = [1, -1]",
+            "coupler 'm': its equation is a combination of the cut joints'",
+        ),
+        // Cranks of 0.04 and 0.1 m: the loop's tangent at the drawing is r₁q₁ = r₂q₂, which
+        // the coupler imposes exactly; the two lock the mechanism, so it is refused (not
+        // counted as one degree of freedom with the cut's equation dropped).
+        (
+            "[[constraints]]\nname = \"rod\"\ntype = \"distance\"\nbody1 = \"gear1\"\npoint1 = [0, \"r1\", 0]\nbody2 = \"gear2\"\npoint2 = [\"r1 + r2\", \"r2\", 0]\n[[couplers]]\nname = \"belt\"\ncoordinates = [\"shaft1\", \"shaft2\"]\ncoefficients = [\"r1\", \"-r2\"]",
+            "only tangent to it there (then the two lock the mechanism)",
+        ),
+        // Couplers share the joints' names.
+        (
+            "[[couplers]]\nname = \"shaft1\"\ncoordinates = [\"shaft1\", \"shaft2\"]\ncoefficients = [\"r1\", \"r2\"]",
+            "duplicate name 'shaft1': a joint has it",
+        ),
     ] {
         let e = match Compiled::from_str(&gears(extra), "bad.toml") {
             Ok(_) => panic!("accepted: {extra}"),

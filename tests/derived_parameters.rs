@@ -122,7 +122,7 @@ fn refused(extra_parameters: &str, rest: &str) -> String {
 #[test]
 fn bad_derived_parameters_are_refused_at_their_place() {
     for (params, rest, expect) in [
-        ("a = \"b + 1\"\nb = \"2*a\"", "", "cycle (a, b)"),
+        ("a = \"b + 1\"\nb = \"2*a\"", "", "cycle (a → b → a)"),
         ("a = \"L + nope\"", "", "unknown parameter 'nope'"),
         ("a = \"L*speed\"", "", "cannot depend on the speed"),
         (
@@ -145,6 +145,46 @@ fn bad_derived_parameters_are_refused_at_their_place() {
         assert!(e.contains(expect), "{params} / {rest}: {e}");
         assert!(e.contains("refused.toml:"), "located: {e}");
     }
+    // A cycle is reported at its first member, naming its members only (not `u` and `v`,
+    // which use it, nor `w`, which `v` uses), in the order each uses the next.
+    let params = "u = \"a + 1\"\nv = \"u*w\"\nw = \"L/2\"\nb = \"2*a + L\"\na = \"sqrt(b)\"";
+    let e = refused(params, "");
+    let line = 1
+        + example_text("rotating_pendulum.toml")
+            .lines()
+            .position(|l| l == "[parameters]")
+            .unwrap()
+        + params.lines().position(|l| l.starts_with("b = ")).unwrap()
+        + 1;
+    assert!(
+        e.contains(
+            "parameter 'b': derived parameters defined through each other in a cycle (b → a → b)"
+        ) && e.contains(&format!("refused.toml:{line}:")),
+        "{e}"
+    );
+    // The limit is 100 000 terms (numbers and parameters written), as documented: with
+    // a_k = a_{k−1} + a_{k−1} and a0 = L + L, a_k has 2^(k+1) terms, so a15 + a14 + a9 + a8 +
+    // a6 + a4 has 65 536 + 32 768 + 1 024 + 512 + 128 + 32 = 100 000 and is accepted, and one
+    // more term is refused.
+    let mut chain = String::from("a0 = \"L + L\"\n");
+    for k in 1..16 {
+        chain.push_str(&format!("a{k} = \"a{} + a{}\"\n", k - 1, k - 1));
+    }
+    let at_limit = format!("{chain}b = \"a15 + a14 + a9 + a8 + a6 + a4\"\n");
+    let text = example_text("rotating_pendulum.toml").replacen(
+        "[parameters]\n",
+        &format!("[parameters]\n{at_limit}"),
+        1,
+    );
+    let model = Model::from_str(&text, "limit.toml").unwrap_or_else(|e| panic!("{e}"));
+    let b = model.derived.iter().find(|d| d.name == "b").unwrap();
+    assert_eq!(b.value, 100_000.0);
+    let over = format!("{chain}b = \"a15 + a14 + a9 + a8 + a6 + a4 + 1\"\n");
+    let e = refused(&over, "");
+    assert!(
+        e.contains("parameter 'b': its expression expands to more than 100000 terms"),
+        "{e}"
+    );
     // A chain doubling at every link: 2^20 terms.
     let mut chain = String::from("a0 = \"L + L\"\n");
     for k in 1..20 {
@@ -161,4 +201,47 @@ fn bad_derived_parameters_are_refused_at_their_place() {
     // A derived parameter may use one written after it.
     let ok = text.replace("h = \"L/20\"", "h = \"k/20\"\nk = \"L*1\"");
     assert!(Compiled::from_str(&ok, "ok.toml").is_ok());
+}
+
+/// `--wrt` (a sensitivity's variables) refuses a derived parameter: it is a function of the
+/// parameters it is made of, so a derivative with respect to it alone is not defined. The
+/// message says so and names them, on the command line too.
+#[test]
+fn a_derived_parameter_is_not_a_variable_to_differentiate_by() {
+    let model = Model::from_str(&derived_text(), "d.toml").unwrap();
+    let e = model
+        .design_variables(Some(&["h".to_string()]))
+        .expect_err("derived");
+    assert!(
+        e.contains("parameter 'h' is derived (= \"L/20\") from L")
+            && e.contains("ask for it instead"),
+        "{e}"
+    );
+    let e = model
+        .design_variables(Some(&["nope".to_string()]))
+        .unwrap_err();
+    assert!(e.contains("unknown parameter 'nope'"), "{e}");
+    let dir = std::env::temp_dir().join(format!("modaltol-wrt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("d.toml");
+    std::fs::write(&file, derived_text()).unwrap();
+    let run = common::run_with_deadline(
+        &[
+            "sensitivity",
+            file.to_str().unwrap(),
+            "--speed",
+            "10",
+            "--wrt",
+            "h",
+        ],
+        std::time::Duration::from_secs(60),
+    )
+    .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_ne!(run.code, Some(0));
+    assert!(
+        run.stderr.contains("--wrt: parameter 'h' is derived"),
+        "{}",
+        run.stderr
+    );
 }

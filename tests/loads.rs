@@ -20,6 +20,7 @@ use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
 use modaltol::model::Case;
 use modaltol::output::Quantity;
+use modaltol::sweep::{Options, Sweep};
 use num_dual::{Dual64, DualNum};
 
 const G: f64 = 9.80665;
@@ -107,6 +108,34 @@ force = [{f}, 0, 0]
     let theta = (2.0 * f / (M * G)).atan();
     let k = 0.5 * M * G * L * theta.cos() + f * L * theta.sin();
     check(&m, 0.0, theta, k);
+}
+
+/// A dead load on the spinning pendulum's rod is steady where nothing turns: at speed 0 it
+/// equals the hinged rod's closed form; at a turning speed it is refused, also in a sweep that
+/// started at rest.
+#[test]
+fn a_dead_load_on_a_driven_body_is_accepted_at_rest_and_refused_turning() {
+    let f = 5.0;
+    let load = format!(
+        r#"
+[[loads]]
+name = "pull"
+type = "force"
+body = "rod"
+point = [0, "-L", 0]
+force = [{f}, 0, 0]
+"#
+    );
+    let m = pendulum(&load);
+    let theta = (2.0 * f / (M * G)).atan();
+    let k = 0.5 * M * G * L * theta.cos() + f * L * theta.sin();
+    check(&m, 0.0, theta, k);
+    let mut sweep = Sweep::new(&m, m.model().nominal(), Options::default());
+    assert!(sweep.step(0.0).is_ok());
+    for speed in [0.5, 1.0] {
+        let e = sweep.step(speed).expect_err("turning").to_string();
+        assert!(e.contains("no steady state"), "{speed}: {e}");
+    }
 }
 
 #[test]

@@ -73,6 +73,14 @@ pub enum EquilibriumError {
         coordinate: String,
         sensitivity: f64,
     },
+    #[error(
+        "no steady state: the linearisation depends on the value of the driven coordinate '{coordinate}' although the equilibrium does not (as the coordinate turns, {change}), so the modes would be those of a periodic system; is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
+    )]
+    UnsteadyLinearisation {
+        coordinate: String,
+        /// What changes, and by how much against what scale.
+        change: String,
+    },
 }
 
 /// A converged dynamic equilibrium.
@@ -235,7 +243,9 @@ impl<'a> Problem<'a> {
     /// the steps stop contracting), the Jacobian is evaluated there, with the linearisation's
     /// other matrices, and its step confirms it (else Newton goes on from there). So the
     /// returned Jacobian, and the rates, are those of the returned point, which the
-    /// linearisation and the sensitivities use.
+    /// linearisation and the sensitivities use. Where `F` is zero to rounding there but that
+    /// Jacobian is nearly singular along a continuum of equilibria its factorisation did not
+    /// flag, its step is rounding and the chord's estimate certifies the point alone.
     pub fn solve(
         &self,
         speed: f64,
@@ -262,6 +272,21 @@ impl<'a> Problem<'a> {
         }
         if it.f.iter().any(|v| !v.is_finite()) {
             return Err(EquilibriumError::NotFinite { iterations });
+        }
+        if !converged {
+            // The limit reached: the exact Jacobian's step at the last point decides, by the
+            // one criterion of convergence, so that a point the last iteration reached (a
+            // chord's step, say) is not reported as a failure when it has converged.
+            if !it.fresh {
+                it.refresh(self, settings.drive_force);
+            }
+            converged = it.lu.solve(&it.f).is_some_and(|step| {
+                let dir = self.direction(&it, step);
+                matches!(
+                    it.certify(&dir, iterations, settings.step_tolerance),
+                    Some(Step::Converged)
+                )
+            });
         }
         if !converged {
             return Err(EquilibriumError::NewtonDiverged {
@@ -317,6 +342,7 @@ impl<'a> Problem<'a> {
             lu,
             last_step: f64::INFINITY,
             at_floor: 0,
+            chord_certified: false,
         }
     }
 
@@ -432,12 +458,19 @@ impl<'a> Problem<'a> {
         self.route.evaluate_fitted(q, drive, &least_squares)
     }
 
-    /// Fails when `F` depends on a driven coordinate's value: then `q_D = Ω t` makes the
-    /// equilibrium drift and there is no steady state. Checked by `F` itself at three other
-    /// values of each driven coordinate. With `F = 0` at the solution, that is four conditions:
-    /// a dependence through one revolution's sine and cosine (gravity off a spin axis) cannot
-    /// vanish at all four, wherever it is stationary. Coordinates on which `F` cannot depend by
-    /// the model's symmetry (`symmetric`) are not evaluated.
+    /// Fails when the motion at the solution is not steady: `q_D = Ω t` turns each driven
+    /// coordinate, so the equations of the free coordinates must not depend on its value,
+    /// neither `F` (else the equilibrium drifts as it turns) nor its linearisation (else the
+    /// modes are those of a periodic system, `K = −(mgL/2) cos ψ` for a rod with gravity
+    /// across the drive axis, although its equilibrium may not move).
+    ///
+    /// Checked by evaluation at three other values of each driven coordinate: `F` first. With
+    /// `F = 0` at the solution that is four conditions: a dependence through one revolution's
+    /// sine and cosine (gravity off a spin axis) cannot vanish at all four, wherever it is
+    /// stationary. Then the linearisation ([`Problem::check_steady_linearisation`]). Skipped
+    /// are the coordinates on which the equations cannot depend by the model's symmetry
+    /// (`symmetric`, a proof for the whole equations of motion) and those that do not turn at
+    /// this speed (a drive at speed 0: nothing turns, and any load is steady).
     fn check_steady(
         &self,
         q: &[f64],
@@ -454,11 +487,12 @@ impl<'a> Problem<'a> {
                 + q.iter()
                     .fold(0.0f64, |s, v| s.max(v.abs()))
                     .max(lambda.iter().fold(0.0f64, |s, v| s.max(v.abs())) / alpha);
-            1e-8 * alpha * balance.amax(jac).max(1.0) * x_scale
+            STEADY_TOLERANCE * alpha * balance.amax(jac).max(1.0) * x_scale
         });
-        const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
+        // The linearisation at the solution, made once where a drive is checked.
+        let base = std::cell::LazyCell::new(|| Steady::at(self, q, lambda, jac, balance));
         for (d, &c) in self.driven.iter().enumerate() {
-            if self.symmetric.contains(&c) {
+            if self.symmetric.contains(&c) || self.qd[c] == 0.0 {
                 continue;
             }
             let change = self
@@ -470,6 +504,64 @@ impl<'a> Problem<'a> {
                     coordinate: self.names[c].to_string(),
                     sensitivity: change,
                 });
+            }
+            if let Some(base) = &*base {
+                self.check_steady_linearisation(base, q, lambda, c)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Fails when the linearisation's full matrices `K`, `C`, `M` (over the free coordinates,
+    /// `λ` held) or its null-space basis `R` change at the values `q_c + OFFSETS` of the driven
+    /// coordinate `c`, beyond [`STEADY_TOLERANCE`] of their scales ([`Steady`]).
+    fn check_steady_linearisation(
+        &self,
+        base: &Steady,
+        q: &[f64],
+        lambda: &[f64],
+        c: usize,
+    ) -> Result<(), EquilibriumError> {
+        let mut qo = q.to_vec();
+        for offset in OFFSETS {
+            qo[c] = q[c] + offset;
+            let unsteady = |change: String| EquilibriumError::UnsteadyLinearisation {
+                coordinate: self.names[c].to_string(),
+                change,
+            };
+            let Ok(lin) = self.route.linearize(&qo, lambda, &base.independent, None) else {
+                // Φ_R lost the rank it has at the solution: the constraints turn with it.
+                return Err(unsteady(
+                    "the constraint Jacobian Φ_R loses its rank".to_string(),
+                ));
+            };
+            for (matrix, a, b, scale) in [
+                (
+                    "stiffness matrix K",
+                    &lin.k_full,
+                    &base.lin.k_full,
+                    base.scale.k,
+                ),
+                (
+                    "damping matrix C",
+                    &lin.c_full,
+                    &base.lin.c_full,
+                    base.scale.c,
+                ),
+                ("mass matrix M", &lin.m_full, &base.lin.m_full, base.scale.m),
+                (
+                    "constraints' null-space basis R",
+                    &lin.basis,
+                    &base.lin.basis,
+                    base.scale.basis,
+                ),
+            ] {
+                let change = (a - b).amax();
+                if change.is_nan() || change > STEADY_TOLERANCE * scale {
+                    return Err(unsteady(format!(
+                        "its {matrix} changes by {change:.3e}, on a scale of {scale:.3e}"
+                    )));
+                }
             }
         }
         Ok(())
@@ -488,6 +580,80 @@ impl<'a> Problem<'a> {
     /// Newton unknowns.
     pub fn unknowns(&self) -> usize {
         self.n_unknowns()
+    }
+}
+
+/// The values of a driven coordinate, as offsets from the solution's (rad or m), at which the
+/// steady-state check evaluates the equations: with the solution's own, four values, at which
+/// no dependence through one revolution's sine and cosine vanishes at once.
+const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
+
+/// A change of the equations or their linearisation with a driven coordinate's value beyond
+/// this fraction of their scale is a dependence: rounding changes them by ~1e-15 of it, and a
+/// physical dependence (gravity off the spin axis) by order one.
+const STEADY_TOLERANCE: f64 = 1e-8;
+
+/// The linearisation at the solution that the steady-state check compares with those at other
+/// values of the driven coordinates, and the scale of each of its matrices.
+struct Steady {
+    /// The independent coordinates chosen at the solution (those of the basis `R` compared).
+    independent: Vec<usize>,
+    lin: crate::linearize::Linearization<f64>,
+    scale: SteadyScale,
+}
+
+/// What a change of each matrix is measured against: `K` against Newton's balanced Jacobian
+/// (`α max(max|J'|, 1)`, the residual check's scale per unit coordinate), `M` against its
+/// largest entry, `C` against the larger of its own and `√(K M)` (the damping of a mode of
+/// that stiffness and mass at ζ of order one), `R` against `max(max|R|, 1)`.
+struct SteadyScale {
+    k: f64,
+    c: f64,
+    m: f64,
+    basis: f64,
+}
+
+impl Steady {
+    /// The linearisation of `problem` at the solution `(q, λ)` (Newton's Jacobian `jac`
+    /// balanced by `balance`); `None` where it fails or is not finite there (the
+    /// linearisation of the point says why, later).
+    fn at(
+        problem: &Problem,
+        q: &[f64],
+        lambda: &[f64],
+        jac: &DMatrix<f64>,
+        balance: Balance,
+    ) -> Option<Steady> {
+        let independent = if problem.m == 0 {
+            problem.free.clone()
+        } else {
+            let phi_r = problem.route.constraint_jacobian(q);
+            crate::linearize::choose_independent(&phi_r, &problem.free, None).ok()?
+        };
+        let lin = problem
+            .route
+            .linearize(q, lambda, &independent, None)
+            .ok()?;
+        let finite = |a: &DMatrix<f64>| a.iter().all(|v| v.is_finite());
+        if ![&lin.k_full, &lin.c_full, &lin.m_full, &lin.basis]
+            .into_iter()
+            .all(finite)
+        {
+            return None;
+        }
+        let k = balance.alpha * balance.amax(jac).max(1.0);
+        let m = lin.m_full.amax();
+        let scale = SteadyScale {
+            k,
+            m,
+            c: lin.c_full.amax().max((k * m).sqrt()),
+            basis: lin.basis.amax().max(1.0),
+        };
+        Some(Steady {
+            independent,
+            lin,
+            scale,
+        })
     }
 }
 

@@ -7,6 +7,17 @@ use super::{EquilibriumError, Problem, ROUNDING_FLOOR, max_abs};
 use crate::equations::Rates;
 use nalgebra::DMatrix;
 
+/// The slowest contraction `ρ` per step for which chord steps (a kept Jacobian) go on: the
+/// steps must at least halve.
+const CHORD_RATE: f64 = 0.5;
+
+/// The most chord steps a contraction rate `ρ` may still need to reach the certificate (an
+/// error left below a thousandth of the tolerance), else the Jacobian is evaluated: a sweep's
+/// chord from the previous speed's Jacobian contracts by 1e-3 or faster and needs one or two,
+/// while a chord that contracts by 0.07 from a Jacobian far from the solution needed twelve
+/// where Newton's steps need three or four.
+const CHORD_STEPS: f64 = 2.0;
+
 /// How one Newton–chord iteration ends ([`Problem::solve`]'s loop).
 pub(super) enum Step {
     /// The exact Jacobian's step at the current point is below the tolerance.
@@ -42,6 +53,9 @@ pub(super) struct Iterate {
     pub(super) last_step: f64,
     /// Fresh Jacobians evaluated where F is at its rounding floor.
     pub(super) at_floor: usize,
+    /// The current point is where chord steps put the error left below a thousandth of the
+    /// tolerance ([`Iterate::chord`]), and `jac` was evaluated there to certify it.
+    pub(super) chord_certified: bool,
 }
 
 impl Iterate {
@@ -67,7 +81,13 @@ impl Iterate {
             let floor = 1.0 + balance.amax(&self.jac) * dir.q_scale.max(dir.l_scale);
             balance.norm(&self.f) <= ROUNDING_FLOOR * floor
         };
-        if self.fresh && dir.size <= tol {
+        // Where the chord's contraction put the error left below a thousandth of the
+        // tolerance and F is zero to rounding, the point is converged although the exact
+        // Jacobian's step is not small: that step is rounding through a Jacobian nearly
+        // singular along a continuum of equilibria (a cone's azimuth) that its factorisation
+        // did not flag, and Newton would wander along the continuum.
+        let by_chord = self.chord_certified && at_rounding;
+        if self.fresh && (dir.size <= tol || by_chord) {
             // A least-squares step is small on an inconsistent singular system too (a
             // free slider pushed by a constant force): there is no equilibrium then.
             if self.lu.singular() && !at_rounding {
@@ -96,8 +116,12 @@ impl Iterate {
     /// The contraction test of a chord step `dir` (a kept Jacobian): with a contraction rate
     /// `ρ = size/last_step`, the error left is about `ρ/(1−ρ)` times the step. Where that is
     /// below a thousandth of `tol` (or the steps stop contracting at the tolerance), the step
-    /// is taken and the Jacobian evaluated there to certify it; where the steps shrink less
-    /// than twofold, the Jacobian is evaluated here. `true` when it was (the iteration ends).
+    /// is taken and the Jacobian evaluated there to certify it. Where the steps shrink less
+    /// than twofold, the Jacobian is evaluated here. Where they contract, but so slowly that
+    /// more than [`CHORD_STEPS`] further steps would be needed (the chord converges only
+    /// linearly, at the rate `ρ`, which its Jacobian's distance from the solution sets), the
+    /// step is taken and the Jacobian evaluated there: Newton's steps, quadratic near the
+    /// solution, go on from it. `true` when the Jacobian was evaluated (the iteration ends).
     pub(super) fn chord(
         &mut self,
         problem: &Problem,
@@ -118,13 +142,17 @@ impl Iterate {
         } else {
             size
         };
-        if left <= 1e-3 * tol || (size <= tol && rho > 0.5) {
+        // The chord steps still needed at the rate ρ to bring the error left below a
+        // thousandth of the tolerance (where the step is certified).
+        let slow = rho < CHORD_RATE && (1e-3 * tol / left).ln() / rho.ln() > CHORD_STEPS;
+        if left <= 1e-3 * tol || (size <= tol && rho > CHORD_RATE) || slow {
             dir.apply(&mut self.q, &mut self.lambda, 1.0);
             self.refresh(problem, drive_wanted);
+            self.chord_certified = left <= 1e-3 * tol;
             return true;
         }
         // Steps that do not contract fast: evaluate the Jacobian here.
-        if size > 0.5 * self.last_step {
+        if size > CHORD_RATE * self.last_step {
             self.refresh(problem, drive_wanted);
             return true;
         }
@@ -170,6 +198,7 @@ impl Iterate {
         }
         (self.q, self.lambda, self.f) = (q_new, l_new, f_new);
         (self.fresh, self.rates, self.drive) = (false, None, None);
+        self.chord_certified = false;
         self.last_step = alpha * dir.size;
     }
 }

@@ -23,7 +23,7 @@ pub use bounded::{
     Definite, DenseEigen, SWEEPS_PER_ROW, WELL_CONDITIONED, eigen_dense, schur, svd,
     symmetric_definite, symmetric_eigen,
 };
-pub use rank::{dependent_rows, pivot_columns};
+pub use rank::{dependent_rows, dependent_rows_after, pivot_columns};
 pub use solve::{Lu, jacobian, least_squares, solve};
 
 use nalgebra::DMatrix;
@@ -250,6 +250,18 @@ mod tests {
         let a = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 2.0, 0.0, 1.0, 0.0, 2.0, 0.0, 4.0]);
         assert_eq!(dependent_rows(&a), vec![0]);
         assert!(dependent_rows(&DMatrix::identity(2, 3)).is_empty());
+    }
+
+    #[test]
+    fn dependent_rows_after_reports_the_later_duplicate_whatever_its_size() {
+        // Row 1 is 100 × row 0: complete pivoting alone would keep the larger, row 1.
+        let a = DMatrix::from_row_slice(3, 2, &[0.01, -0.01, 1.0, -1.0, 0.0, 1.0]);
+        assert_eq!(dependent_rows(&a), vec![0]);
+        assert_eq!(dependent_rows_after(&a, 1), vec![1]);
+        // Rows before `first` that repeat each other are weighed among themselves (complete
+        // pivoting keeps the larger).
+        let b = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 2.0, 0.0, 0.0, 1.0]);
+        assert_eq!(dependent_rows_after(&b, 2), vec![0]);
     }
 
     #[test]

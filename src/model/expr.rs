@@ -151,14 +151,37 @@ impl Expr {
         Ok(e)
     }
 
-    /// The number of nodes of the tree (what a chain of derived parameters could multiply).
-    pub fn size(&self) -> usize {
-        1 + match self {
-            Expr::Num(_) | Expr::Param(_) | Expr::Speed => 0,
-            Expr::Neg(a) => a.size(),
-            Expr::Bin(_, a, b) => a.size() + b.size(),
-            Expr::Call(_, args) => args.iter().map(Expr::size).sum(),
+    /// The number of terms: the numbers, parameters and speeds written, the leaves of the
+    /// tree (what a chain of derived parameters could multiply; the tree has fewer than twice
+    /// as many nodes).
+    pub fn terms(&self) -> usize {
+        match self {
+            Expr::Num(_) | Expr::Param(_) | Expr::Speed => 1,
+            Expr::Neg(a) => a.terms(),
+            Expr::Bin(_, a, b) => a.terms() + b.terms(),
+            Expr::Call(_, args) => args.iter().map(Expr::terms).sum(),
         }
+    }
+
+    /// The parameters (indices) the expression uses, each once, in increasing order.
+    pub fn parameters(&self) -> Vec<usize> {
+        fn walk(e: &Expr, out: &mut Vec<usize>) {
+            match e {
+                Expr::Param(i) => out.push(*i),
+                Expr::Num(_) | Expr::Speed => {}
+                Expr::Neg(a) => walk(a, out),
+                Expr::Bin(_, a, b) => {
+                    walk(a, out);
+                    walk(b, out);
+                }
+                Expr::Call(_, args) => args.iter().for_each(|a| walk(a, out)),
+            }
+        }
+        let mut out = Vec::new();
+        walk(self, &mut out);
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 
     /// Does the expression mention the operating speed?

@@ -794,18 +794,42 @@ impl Model {
     }
 
     /// The design variables named (parameter indices), or, without names, those that carry a
-    /// tolerance. An unknown name is an error naming it.
+    /// tolerance. An unknown name is an error naming it. So is a derived parameter: it is a
+    /// function of the parameters it is made of, so a derivative with respect to it alone (the
+    /// others held) is not defined; the message names them, the variables to ask for instead.
     pub fn design_variables(&self, names: Option<&[String]>) -> Result<Vec<usize>, String> {
         match names {
             Some(names) => names
                 .iter()
                 .map(|n| {
                     self.parameter(n)
-                        .ok_or_else(|| format!("unknown parameter '{n}'"))
+                        .ok_or_else(|| self.not_a_design_variable(n))
                 })
                 .collect(),
             None => Ok(self.toleranced()),
         }
+    }
+
+    /// Why `name` is not a design variable: derived (from which parameters), or unknown.
+    fn not_a_design_variable(&self, name: &str) -> String {
+        let Some(d) = self.derived.iter().find(|d| d.name == name) else {
+            return format!("unknown parameter '{name}'");
+        };
+        let from: Vec<&str> = (d.expr.parameters().into_iter())
+            .map(|i| self.parameters[i].name.as_str())
+            .collect();
+        if from.is_empty() {
+            return format!(
+                "parameter '{name}' is derived (= \"{}\") and a constant: it is not a design variable",
+                d.text
+            );
+        }
+        format!(
+            "parameter '{name}' is derived (= \"{}\") from {}: a function of them, not a design variable, so a derivative with respect to it alone is not defined; ask for {} instead",
+            d.text,
+            from.join(", "),
+            if from.len() == 1 { "it" } else { "them" }
+        )
     }
 
     /// Free coordinates named as the independent ones (coordinate indices): as many as the

@@ -10,7 +10,9 @@
 //! of `F` but its own drive row. So `F` cannot depend on the joint's angle when nothing the joint
 //! does not carry sees that part of the world turn: no force element and no cut joint joins a
 //! carried body to one it does not carry (or to the ground), no load fixed in ground axes acts
-//! on a carried body, and gravity is along the axis (or zero). The proof is exact; where it does not apply, the numerical check runs as before.
+//! on a carried body, and gravity is along the axis (or zero). The proof is exact and covers
+//! the whole equations of motion, so their linearisation too; where it does not apply, the
+//! numerical check runs as before.
 
 use super::Model;
 use crate::joints::Kind;

@@ -55,7 +55,8 @@ pub struct Sweep<'a> {
     options: Options,
     /// The last solutions, newest first (at most [`PREDICTOR_NODES`]), for the predictor.
     history: Vec<Solved>,
-    /// The steady-state check passed at an earlier speed (the parameters do not change).
+    /// The steady-state check passed at an earlier speed where every drive turned (the
+    /// parameters do not change; at a speed where a drive stands still it is not checked).
     steady_known: bool,
     last_shapes: Option<Vec<DVector<C64>>>,
     last_stable: Option<bool>,
@@ -280,7 +281,8 @@ impl<'a> Sweep<'a> {
         }
         self.history.truncate(PREDICTOR_NODES - 1);
         self.history.insert(0, Solved::from(&pt));
-        self.steady_known = true;
+        let eq = &pt.equilibrium;
+        self.steady_known |= (self.model.model().driven().iter()).all(|&c| eq.qd[c] != 0.0);
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
         Ok(pt)

@@ -3,32 +3,26 @@
 //! stage because it names coordinates, so it comes after the joints; its equation joins the cut
 //! joints' in the mobility count.
 
-use super::names::check_name;
+use super::names::element_name;
 use super::{Ctx, R};
 use crate::model::schema::CouplerSchema;
 use crate::model::{Coordinate, Coupler};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use toml::Spanned;
 
-/// Parses and checks the `[[couplers]]` tables (names shared with the joints, force elements
-/// and cut joints in `elements`).
+/// Parses and checks the `[[couplers]]` tables (names shared with the joints, `joint_names`,
+/// and the force elements and cut joints, `elements`).
 pub(super) fn couplers(
     ctx: &Ctx,
     raw: &[Spanned<CouplerSchema>],
     coordinates: &[Coordinate],
+    joint_names: &HashMap<String, usize>,
     elements: &mut HashSet<String>,
 ) -> R<Vec<Coupler>> {
     let mut out = Vec::new();
     for item in raw {
         let s = item.get_ref();
-        check_name(ctx, &s.name, "coupler")?;
-        let name = s.name.get_ref().clone();
-        if !elements.insert(name.clone()) {
-            return Err(ctx.err(
-                s.name.span(),
-                format!("duplicate name '{name}' (joints, force elements, cut joints and couplers share names)"),
-            ));
-        }
+        let name = element_name(ctx, &s.name, "coupler", joint_names, elements)?;
         let owner = format!("coupler '{name}'");
         let list = s.coordinates.get_ref();
         if list.len() != 2 {

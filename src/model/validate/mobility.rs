@@ -38,7 +38,7 @@ pub(super) fn mobility(
             return Err(ctx.err(
                 span,
                 format!(
-                    "coupler '{}': its equation is a combination of the cut joints' and the other couplers' (a duplicate); remove it",
+                    "coupler '{}': its equation is a combination of the cut joints' and the other couplers' at the reference configuration: a duplicate of what the loop imposes, or only tangent to it there (then the two lock the mechanism); remove it",
                     couplers[k].name
                 ),
             ));

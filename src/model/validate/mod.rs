@@ -59,7 +59,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     let (body_names, bodies) = bodies::bodies(&ctx, &raw.bodies)?;
     let tree = joints::joints(&ctx, &raw.joints, &body_names, &bodies)?;
     let order = tree::order(&ctx, &raw, &bodies, &tree)?;
-    // Force elements and cut joints share one namespace (with the joints).
+    // Force elements, cut joints and couplers share one namespace (with the joints).
     let mut elements = HashSet::new();
     let forces = forces::forces(&ctx, &raw.forces, &body_names, &tree.names, &mut elements)?;
     let mut constraints = cuts::constraints(
@@ -69,7 +69,13 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         &tree.names,
         &mut elements,
     )?;
-    let couplers = couplers::couplers(&ctx, &raw.couplers, &tree.coordinates, &mut elements)?;
+    let couplers = couplers::couplers(
+        &ctx,
+        &raw.couplers,
+        &tree.coordinates,
+        &tree.names,
+        &mut elements,
+    )?;
     let independent = mobility::mobility(
         &ctx,
         &raw,

@@ -37,8 +37,9 @@ pub(super) fn check_name(ctx: &Ctx, name: &Spanned<String>, kind: &str) -> R<()>
     Ok(())
 }
 
-/// The name of a force element or cut joint (`what`): well formed and unique across joints,
-/// force elements and cut joints (`elements` collects the latter two).
+/// The name of a force element, cut joint or coupler (`what`): well formed and unique across
+/// joints, force elements, cut joints and couplers (`elements` collects all but the joints),
+/// which share one namespace (outputs and messages name them alike).
 pub(super) fn element_name(
     ctx: &Ctx,
     name: &Spanned<String>,
@@ -48,8 +49,18 @@ pub(super) fn element_name(
 ) -> R<String> {
     check_name(ctx, name, what)?;
     let n = name.get_ref().clone();
-    if !elements.insert(n.clone()) || joint_names.contains_key(&n) {
-        return Err(ctx.err(name.span(), format!("duplicate name '{n}'")));
+    let taken = if joint_names.contains_key(&n) {
+        Some("a joint")
+    } else if !elements.insert(n.clone()) {
+        Some("another force element, cut joint or coupler")
+    } else {
+        None
+    };
+    if let Some(by) = taken {
+        return Err(ctx.err(
+            name.span(),
+            format!("duplicate name '{n}': {by} has it (joints, force elements, cut joints and couplers share names)"),
+        ));
     }
     Ok(n)
 }

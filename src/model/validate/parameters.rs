@@ -24,8 +24,8 @@ pub(super) struct RawDerived {
     span: Range<usize>,
 }
 
-/// Derived parameters may expand to at most this many terms (a chain of parameters each using
-/// the previous one twice doubles it at every link).
+/// Derived parameters may expand to at most this many terms ([`Expr::terms`]: a chain of
+/// parameters each using the previous one twice doubles them at every link).
 const MAX_TERMS: usize = 100_000;
 
 /// The parameters in file order, with the `overrides` applied, and the derived ones as written.
@@ -107,7 +107,7 @@ pub(super) fn derived(ctx: &Ctx, raw: &[RawDerived]) -> R<Vec<Derived>> {
                     ),
                 ));
             }
-            if e.size() > MAX_TERMS {
+            if e.terms() > MAX_TERMS {
                 return Err(ctx.err(
                     d.span.clone(),
                     format!(
@@ -122,19 +122,16 @@ pub(super) fn derived(ctx: &Ctx, raw: &[RawDerived]) -> R<Vec<Derived>> {
             break;
         }
         if !progress {
-            let left: Vec<&RawDerived> = raw
-                .iter()
-                .zip(&done)
-                .filter(|(_, e)| e.is_none())
-                .map(|(r, _)| r)
-                .collect();
-            let names: Vec<&str> = left.iter().map(|r| r.name.as_str()).collect();
+            let members = cycle(ctx, raw, &done);
+            let mut names: Vec<&str> = members.iter().map(|&k| raw[k].name.as_str()).collect();
+            names.push(names[0]);
+            let first = &raw[members[0]];
             return Err(ctx.err(
-                left[0].span.clone(),
+                first.span.clone(),
                 format!(
                     "parameter '{}': derived parameters defined through each other in a cycle ({})",
-                    left[0].name,
-                    names.join(", ")
+                    first.name,
+                    names.join(" → ")
                 ),
             ));
         }
@@ -156,6 +153,42 @@ pub(super) fn derived(ctx: &Ctx, raw: &[RawDerived]) -> R<Vec<Derived>> {
             })
         })
         .collect()
+}
+
+/// A cycle among the derived parameters left unresolved (`done[k]` is `None`), as indices into
+/// `raw` in the order each uses the next, starting at the one written first. Every unresolved
+/// parameter uses another unresolved one (else it would have resolved), so a walk along such
+/// uses from any of them comes back to a parameter it has passed: the walk from there on is a
+/// cycle, and the parameters that merely use it are not in it.
+fn cycle(ctx: &Ctx, raw: &[RawDerived], done: &[Option<Expr>]) -> Vec<usize> {
+    let waiting_on = |k: usize| {
+        let used = std::cell::RefCell::new(Vec::new());
+        let lookup = |name: &str| {
+            if let Some(j) = raw.iter().position(|r| r.name == name) {
+                used.borrow_mut().push(j);
+            } else if !ctx.params.iter().any(|p| p == name) {
+                return None;
+            }
+            Some(Expr::Num(0.0))
+        };
+        // Parsed once before without an error, so only the uses matter.
+        let _ = Expr::parse_with(&raw[k].text, &lookup);
+        used.into_inner().into_iter().find(|&j| done[j].is_none())
+    };
+    let Some(start) = done.iter().position(Option::is_none) else {
+        return Vec::new();
+    };
+    let mut path = vec![start];
+    while let Some(next) = waiting_on(*path.last().unwrap_or(&start)) {
+        if let Some(at) = path.iter().position(|&p| p == next) {
+            let mut members = path.split_off(at);
+            let first = (0..members.len()).min_by_key(|&i| members[i]).unwrap_or(0);
+            members.rotate_left(first);
+            return members;
+        }
+        path.push(next);
+    }
+    path
 }
 
 /// A tolerance: `"3%"` (relative) or a number (absolute), finite and not negative.

@@ -1,6 +1,8 @@
 //! Redundant cut-joint equations: the rows of the constraint Jacobian `Φ_R` (over the free
 //! coordinates) that are combinations of the others at the reference configuration, found by
-//! elimination with complete pivoting ([`crate::linalg::dependent_rows`]) and dropped. A planar
+//! elimination with complete pivoting ([`crate::linalg::dependent_rows_after`], the cut joints'
+//! rows before the couplers', so that a coupler repeating them is found, and refused) and
+//! dropped. A planar
 //! loop closed by a `point` or `revolute` cut (whose out-of-plane equations vanish identically)
 //! and overconstrained mobile loops (Bricard's) then count their degrees of freedom from the
 //! rank, as Adams and Simscape Multibody do; that the rank stays the same at each equilibrium
@@ -113,7 +115,9 @@ pub(super) fn redundant(
     if phi.iter().any(|x| !x.is_finite()) {
         return None;
     }
-    let dependent = crate::linalg::dependent_rows(&phi);
+    // The cut joints' equations weighed first: a coupler that repeats them (or is only tangent
+    // to their loop) is the equation reported, not one of theirs dropped for it.
+    let dependent = crate::linalg::dependent_rows_after(&phi, cut_rows);
     let coupled: Vec<usize> = dependent
         .iter()
         .filter(|&&r| r >= cut_rows)
