@@ -13,9 +13,10 @@
 //! body's centre of mass `Σ_i J_v,i v_i`, its small rotation `Σ_i J_ω,i v_i` (ground axes), and
 //! each port's displacement along its direction (or rotation about it), `bᵀv` with the port's
 //! vector `b` of [`crate::mechanics::ports`]. A mode's motion over one period
-//! ([`mode_frames`]) poses the mechanism at `q + a Re(v e^{iφ})`: the exact kinematics at an
-//! amplitude `a` scaled for the eye ([`display_amplitude`]), so a travelling (whirling) mode moves as it does, with
-//! amplitude and phase per coordinate.
+//! ([`mode_frames`]) poses the mechanism at `q + a Re(v e^{iφ})` by the exact kinematics, so a
+//! travelling (whirling) mode moves as it does, with amplitude and phase per coordinate; a
+//! drawing animates the same motion to first order from the physical shape, every vector of a
+//! scene moving with the body that placed it ([`Scene::anchored`]).
 
 use crate::mechanics::System;
 use crate::mechanics::dynamics::partials_for;
@@ -32,25 +33,26 @@ fn p3(v: &V3<f64>) -> P3 {
     [v.x, v.y, v.z]
 }
 
-/// A body: its centre of mass and the points it is joined at.
+/// A body: its centre of mass and the points it is joined at. `P` is what stands for a point
+/// or a direction ([`P3`] in a scene as drawn; see [`Scene::map`]).
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct BodyMark {
+pub struct BodyMark<P = P3> {
     pub name: String,
-    pub cm: P3,
+    pub cm: P,
     /// Its axes: the ground axes as drawn, turned with the body (the columns of its rotation),
     /// so that a turn about a link's own line shows.
-    pub axes: [P3; 3],
+    pub axes: [P; 3],
     /// Where the body is joined (joints, cut joints, force elements, ports), each once.
-    pub links: Vec<P3>,
+    pub links: Vec<P>,
 }
 
 /// A tree joint at its point, with its axes (unit vectors, ground axes) where its type has them.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct JointMark {
+pub struct JointMark<P = P3> {
     pub name: String,
     pub kind: &'static str,
-    pub at: P3,
-    pub axes: Vec<P3>,
+    pub at: P,
+    pub axes: Vec<P>,
     pub parent: String,
     pub child: String,
     /// Driven (turned at the operating speed) rather than free.
@@ -59,29 +61,94 @@ pub struct JointMark {
 
 /// A cut joint or a force element: its type and its two points.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct LinkMark {
+pub struct LinkMark<P = P3> {
     pub name: String,
     pub kind: &'static str,
-    pub ends: [P3; 2],
+    pub ends: [P; 2],
 }
 
 /// A port at its point, with its direction (unit, ground axes).
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct PortMark {
+pub struct PortMark<P = P3> {
     pub name: String,
-    pub at: P3,
-    pub direction: P3,
+    pub at: P,
+    pub direction: P,
     pub rotation: bool,
 }
 
 /// The mechanism placed at one configuration (see the module documentation).
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct Scene {
-    pub bodies: Vec<BodyMark>,
-    pub joints: Vec<JointMark>,
-    pub cuts: Vec<LinkMark>,
-    pub elements: Vec<LinkMark>,
-    pub ports: Vec<PortMark>,
+pub struct Scene<P = P3> {
+    pub bodies: Vec<BodyMark<P>>,
+    pub joints: Vec<JointMark<P>>,
+    pub cuts: Vec<LinkMark<P>>,
+    pub elements: Vec<LinkMark<P>>,
+    pub ports: Vec<PortMark<P>>,
+}
+
+/// Where a vector of a scene comes from: the body whose pose placed it (`None`: the ground),
+/// and whether it is a direction (it turns with the body) or a point (it moves with it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anchor {
+    pub body: Option<usize>,
+    pub direction: bool,
+}
+
+/// A vector of a scene with its [`Anchor`].
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    x: P3,
+    anchor: Anchor,
+}
+
+impl<P> Scene<P> {
+    /// The same scene with every vector (point or direction) `p` replaced by `f(p)`, called in
+    /// one fixed order (bodies: centre of mass, axes, links; joints: point, axes; cut joints and
+    /// force elements: ends; ports: point, direction), so that scenes of one mechanism map
+    /// alike.
+    pub fn map<Q>(&self, f: &mut impl FnMut(&P) -> Q) -> Scene<Q> {
+        let link = |l: &LinkMark<P>, f: &mut dyn FnMut(&P) -> Q| LinkMark {
+            name: l.name.clone(),
+            kind: l.kind,
+            ends: [f(&l.ends[0]), f(&l.ends[1])],
+        };
+        let bodies = (self.bodies.iter())
+            .map(|b| BodyMark {
+                name: b.name.clone(),
+                cm: f(&b.cm),
+                axes: [f(&b.axes[0]), f(&b.axes[1]), f(&b.axes[2])],
+                links: b.links.iter().map(&mut *f).collect(),
+            })
+            .collect();
+        let joints = (self.joints.iter())
+            .map(|j| JointMark {
+                name: j.name.clone(),
+                kind: j.kind,
+                at: f(&j.at),
+                axes: j.axes.iter().map(&mut *f).collect(),
+                parent: j.parent.clone(),
+                child: j.child.clone(),
+                driven: j.driven,
+            })
+            .collect();
+        let cuts = self.cuts.iter().map(|l| link(l, f)).collect();
+        let elements = self.elements.iter().map(|l| link(l, f)).collect();
+        let ports = (self.ports.iter())
+            .map(|p| PortMark {
+                name: p.name.clone(),
+                at: f(&p.at),
+                direction: f(&p.direction),
+                rotation: p.rotation,
+            })
+            .collect();
+        Scene {
+            bodies,
+            joints,
+            cuts,
+            elements,
+            ports,
+        }
+    }
 }
 
 /// The name of body `b` (`None`: the ground).
@@ -92,124 +159,18 @@ fn body_name(model: &Model, b: Option<usize>) -> String {
 impl Scene {
     /// The mechanism of `model` (instantiated as `sys`) at coordinates `q`.
     pub fn at(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene {
-        let pose = poses(sys, q);
-        let ground = Pose::identity();
-        let pose_of = |b: Option<usize>| b.map_or(&ground, |b| &pose[b]);
-        let mut links: Vec<Vec<P3>> = vec![Vec::new(); sys.bodies.len()];
-        let mut attach = |b: Option<usize>, x: P3| {
-            if let Some(b) = b {
-                let l = &mut links[b];
-                if !l
-                    .iter()
-                    .any(|y| (0..3).all(|k| (x[k] - y[k]).abs() <= 1e-12 * (1.0 + x[k].abs())))
-                {
-                    l.push(x);
-                }
-            }
-        };
-        let mut joints = Vec::with_capacity(sys.joints.len());
-        for (k, j) in sys.joints.iter().enumerate() {
-            let mj = &model.joints[model.order[k]];
-            let [at, axis, axis2] = j.kind.uses();
-            let child = &pose[j.child];
-            let point = if at == crate::joints::Use::Unused {
-                child.apply(&sys.bodies[j.child].cm)
-            } else {
-                child.apply(&j.geometry.at)
-            };
-            let mut axes = Vec::new();
-            if axis != crate::joints::Use::Unused {
-                axes.push(p3(&(pose_of(j.parent).rot * j.geometry.axis)));
-            }
-            if axis2 != crate::joints::Use::Unused {
-                axes.push(p3(&(child.rot * j.geometry.axis2)));
-            }
-            let at = p3(&point);
-            attach(j.parent, at);
-            attach(Some(j.child), at);
-            joints.push(JointMark {
-                name: mj.name.clone(),
-                kind: j.kind.name(),
-                at,
-                axes,
-                parent: body_name(model, j.parent),
-                child: body_name(model, Some(j.child)),
-                driven: j.coords.clone().any(|c| sys.drive[c].is_some()),
-            });
-        }
-        let mut cuts = Vec::with_capacity(sys.constraints.len());
-        for (c, mc) in sys.constraints.iter().zip(&model.constraints) {
-            let g = &c.geometry;
-            let ends = [
-                p3(&pose_of(g.body1).apply(&g.point1)),
-                p3(&pose_of(g.body2).apply(&g.point2)),
-            ];
-            attach(g.body1, ends[0]);
-            attach(g.body2, ends[1]);
-            cuts.push(LinkMark {
-                name: mc.name.clone(),
-                kind: c.kind.name(),
-                ends,
-            });
-        }
-        let mut elements = Vec::with_capacity(sys.forces.len());
-        for (e, me) in sys.forces.iter().zip(&model.forces) {
-            let g = &e.geometry;
-            let [point1, point2, _] = e.kind.uses();
-            let unused = crate::joints::Use::Unused;
-            // Where a type has no points (a torque between two bodies), it joins their
-            // centres of mass.
-            let cm = |b: Option<usize>| b.map_or(V3::zeros(), |b| pose[b].apply(&sys.bodies[b].cm));
-            let ends = [
-                if point1 == unused {
-                    p3(&cm(g.body1))
-                } else {
-                    p3(&pose_of(g.body1).apply(&g.point1))
-                },
-                if point2 == unused {
-                    p3(&cm(g.body2))
-                } else {
-                    p3(&pose_of(g.body2).apply(&g.point2))
-                },
-            ];
-            if point1 != unused {
-                attach(g.body1, ends[0]);
-            }
-            if point2 != unused {
-                attach(g.body2, ends[1]);
-            }
-            elements.push(LinkMark {
-                name: me.name.clone(),
-                kind: e.kind.name(),
-                ends,
-            });
-        }
-        let mut ports = Vec::with_capacity(sys.ports.len());
-        for (p, mp) in sys.ports.iter().zip(&model.ports) {
-            let at = p3(&pose[p.body].apply(&p.point));
-            attach(Some(p.body), at);
-            ports.push(PortMark {
-                name: mp.name.clone(),
-                at,
-                direction: p3(&(pose[p.body].rot * p.direction)),
-                rotation: p.rotation,
-            });
-        }
-        let bodies = (sys.bodies.iter().zip(&model.bodies).enumerate())
-            .map(|(b, (body, mb))| BodyMark {
-                name: mb.name.clone(),
-                cm: p3(&pose[b].apply(&body.cm)),
-                axes: [0, 1, 2].map(|k| p3(&pose[b].rot.column(k).into_owned())),
-                links: std::mem::take(&mut links[b]),
-            })
-            .collect();
-        Scene {
-            bodies,
-            joints,
-            cuts,
-            elements,
-            ports,
-        }
+        Scene::anchored(model, sys, q).0
+    }
+
+    /// [`Scene::at`], and the [`Anchor`] of every vector in the order of [`Scene::map`].
+    pub fn anchored(model: &Model, sys: &System<f64>, q: &[f64]) -> (Scene, Vec<Anchor>) {
+        let placed = placed(model, sys, q);
+        let mut anchors = Vec::new();
+        let scene = placed.map(&mut |p: &Placed| {
+            anchors.push(p.anchor);
+            p.x
+        });
+        (scene, anchors)
     }
 
     /// Every point drawn.
@@ -240,6 +201,154 @@ impl Scene {
     }
 }
 
+/// A point placed by body `body`'s pose (`None`: the ground).
+fn point(body: Option<usize>, x: &V3<f64>) -> Placed {
+    Placed {
+        x: p3(x),
+        anchor: Anchor {
+            body,
+            direction: false,
+        },
+    }
+}
+
+/// A direction turned by body `body`'s pose (`None`: the ground).
+fn direction(body: Option<usize>, u: &V3<f64>) -> Placed {
+    Placed {
+        x: p3(u),
+        anchor: Anchor {
+            body,
+            direction: true,
+        },
+    }
+}
+
+/// The mechanism of `model` (instantiated as `sys`) at coordinates `q`, every vector with the
+/// body that placed it (see [`Scene::at`]).
+fn placed(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene<Placed> {
+    let pose = poses(sys, q);
+    let ground = Pose::identity();
+    let pose_of = |b: Option<usize>| b.map_or(&ground, |b| &pose[b]);
+    let mut links: Vec<Vec<Placed>> = vec![Vec::new(); sys.bodies.len()];
+    // A point joins body `b` once (a link keeps the anchor of the first point placed there).
+    let mut attach = |b: Option<usize>, p: Placed| {
+        if let Some(b) = b {
+            let l = &mut links[b];
+            let x = p.x;
+            if !l
+                .iter()
+                .any(|y| (0..3).all(|k| (x[k] - y.x[k]).abs() <= 1e-12 * (1.0 + x[k].abs())))
+            {
+                l.push(p);
+            }
+        }
+    };
+    let unused = crate::joints::Use::Unused;
+    let mut joints = Vec::with_capacity(sys.joints.len());
+    for (k, j) in sys.joints.iter().enumerate() {
+        let mj = &model.joints[model.order[k]];
+        let [at, axis, axis2] = j.kind.uses();
+        let child = &pose[j.child];
+        let at = point(
+            Some(j.child),
+            &child.apply(if at == unused {
+                &sys.bodies[j.child].cm
+            } else {
+                &j.geometry.at
+            }),
+        );
+        let mut axes = Vec::new();
+        if axis != unused {
+            axes.push(direction(
+                j.parent,
+                &(pose_of(j.parent).rot * j.geometry.axis),
+            ));
+        }
+        if axis2 != unused {
+            axes.push(direction(Some(j.child), &(child.rot * j.geometry.axis2)));
+        }
+        attach(j.parent, at);
+        attach(Some(j.child), at);
+        joints.push(JointMark {
+            name: mj.name.clone(),
+            kind: j.kind.name(),
+            at,
+            axes,
+            parent: body_name(model, j.parent),
+            child: body_name(model, Some(j.child)),
+            driven: j.coords.clone().any(|c| sys.drive[c].is_some()),
+        });
+    }
+    let mut cuts = Vec::with_capacity(sys.constraints.len());
+    for (c, mc) in sys.constraints.iter().zip(&model.constraints) {
+        let g = &c.geometry;
+        let ends = [
+            point(g.body1, &pose_of(g.body1).apply(&g.point1)),
+            point(g.body2, &pose_of(g.body2).apply(&g.point2)),
+        ];
+        attach(g.body1, ends[0]);
+        attach(g.body2, ends[1]);
+        cuts.push(LinkMark {
+            name: mc.name.clone(),
+            kind: c.kind.name(),
+            ends,
+        });
+    }
+    let mut elements = Vec::with_capacity(sys.forces.len());
+    for (e, me) in sys.forces.iter().zip(&model.forces) {
+        let g = &e.geometry;
+        let [point1, point2, _] = e.kind.uses();
+        // Where a type has no points (a torque between two bodies), it joins their centres of
+        // mass.
+        let end = |b: Option<usize>, used: bool, x: &V3<f64>| match b {
+            Some(b) if !used => point(Some(b), &pose[b].apply(&sys.bodies[b].cm)),
+            None if !used => point(None, &V3::zeros()),
+            _ => point(b, &pose_of(b).apply(x)),
+        };
+        let ends = [
+            end(g.body1, point1 != unused, &g.point1),
+            end(g.body2, point2 != unused, &g.point2),
+        ];
+        if point1 != unused {
+            attach(g.body1, ends[0]);
+        }
+        if point2 != unused {
+            attach(g.body2, ends[1]);
+        }
+        elements.push(LinkMark {
+            name: me.name.clone(),
+            kind: e.kind.name(),
+            ends,
+        });
+    }
+    let mut ports = Vec::with_capacity(sys.ports.len());
+    for (p, mp) in sys.ports.iter().zip(&model.ports) {
+        let at = point(Some(p.body), &pose[p.body].apply(&p.point));
+        attach(Some(p.body), at);
+        ports.push(PortMark {
+            name: mp.name.clone(),
+            at,
+            direction: direction(Some(p.body), &(pose[p.body].rot * p.direction)),
+            rotation: p.rotation,
+        });
+    }
+    let bodies = (sys.bodies.iter().zip(&model.bodies).enumerate())
+        .map(|(b, (body, mb))| BodyMark {
+            name: mb.name.clone(),
+            cm: point(Some(b), &pose[b].apply(&body.cm)),
+            axes: [0, 1, 2].map(|k| direction(Some(b), &pose[b].rot.column(k).into_owned())),
+            links: std::mem::take(&mut links[b]),
+        })
+        .collect();
+    Scene {
+        bodies,
+        joints,
+        cuts,
+        elements,
+        ports,
+    }
+}
+
 /// A mode's shape mapped onto the bodies and ports (see the module documentation), for a shape
 /// `v` in the free coordinates: per unit of `v`.
 #[derive(Debug, Clone)]
@@ -254,91 +363,76 @@ pub struct PhysicalShape {
 
 /// The physical shape of the mode shape `v` over the coordinates `free` at `q`.
 pub fn physical_shape(sys: &System<f64>, q: &[f64], free: &[usize], v: &[C64]) -> PhysicalShape {
-    let j = partials_for(&sys.map(lift1), q, free);
-    let zero = [C64::new(0.0, 0.0); 3];
-    let mut displacement = vec![zero; sys.bodies.len()];
-    let mut rotation = vec![zero; sys.bodies.len()];
-    for (b, (d, r)) in displacement.iter_mut().zip(&mut rotation).enumerate() {
-        for (&i, &vi) in free.iter().zip(v) {
-            let (jv, jw) = (j.jv(sys, i, b), j.jw(sys, i, b));
-            for k in 0..3 {
-                d[k] += vi * jv[k];
-                r[k] += vi * jw[k];
-            }
-        }
-    }
-    let pose = &j.pose;
-    let ports = sys
-        .ports
-        .iter()
-        .map(|port| {
-            let b = port.body;
-            let u = pose[b].rot * port.direction;
-            let arm = pose[b].rot * (port.point - sys.bodies[b].cm);
-            let along = |x: &[C64; 3]| x[0] * u.x + x[1] * u.y + x[2] * u.z;
-            if port.rotation {
-                along(&rotation[b])
-            } else {
-                let (d, r) = (&displacement[b], &rotation[b]);
-                // d + r × arm.
-                let moved = [
-                    d[0] + r[1] * arm.z - r[2] * arm.y,
-                    d[1] + r[2] * arm.x - r[0] * arm.z,
-                    d[2] + r[0] * arm.y - r[1] * arm.x,
-                ];
-                along(&moved)
-            }
-        })
-        .collect();
-    PhysicalShape {
-        displacement,
-        rotation,
-        ports,
-    }
+    let mut one = physical_shapes(sys, q, free, std::slice::from_ref(&v));
+    one.pop().expect("one shape in, one out")
 }
 
-/// The amplitude `a` at which the mode `v` (over the coordinates `free`) moves the mechanism at
-/// `q` by `reach` (m): its largest first-order displacement of a drawn point, or of the tip of
-/// a body's axes drawn a twentieth of the mechanism's size long (so a turn about a link's own
-/// line shows), over the cycle, measured by a small step along the real and the imaginary part.
-/// Zero for a shape that moves nothing.
-pub fn display_amplitude(
-    model: &Model,
+/// [`physical_shape`] of each of `shapes`, the partial velocities evaluated once for all.
+pub fn physical_shapes<V: AsRef<[C64]>>(
     sys: &System<f64>,
     q: &[f64],
     free: &[usize],
-    v: &[C64],
-    reach: f64,
-) -> f64 {
-    let still = Scene::at(model, sys, q);
-    let size = still.size();
-    let h = 1e-6;
-    let moved = |part: &dyn Fn(C64) -> f64| {
-        let mut qh = q.to_vec();
-        for (&i, &vi) in free.iter().zip(v) {
-            qh[i] += h * part(vi);
-        }
-        let s = Scene::at(model, sys, &qh);
-        let dist = |a: P3, b: P3| ((0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>()).sqrt();
-        let arm = 0.05 * size;
-        let turned = (s.bodies.iter().zip(&still.bodies))
-            .flat_map(|(a, b)| (0..3).map(move |k| arm * dist(a.axes[k], b.axes[k])));
-        (s.points().zip(still.points()))
-            .map(|(a, b)| dist(a, b))
-            .chain(turned)
-            .fold(0.0f64, f64::max)
-            / h
-    };
-    let per_unit = moved(&|z: C64| z.re).max(moved(&|z: C64| z.im));
-    if per_unit > 0.0 && per_unit.is_finite() {
-        reach / per_unit
-    } else {
-        0.0
-    }
+    shapes: &[V],
+) -> Vec<PhysicalShape> {
+    let j = partials_for(&sys.map(lift1), q, free);
+    let jv: Vec<Vec<V3<f64>>> = (0..sys.bodies.len())
+        .map(|b| free.iter().map(|&i| j.jv(sys, i, b)).collect())
+        .collect();
+    let jw: Vec<Vec<V3<f64>>> = (0..sys.bodies.len())
+        .map(|b| free.iter().map(|&i| j.jw(sys, i, b)).collect())
+        .collect();
+    let pose = &j.pose;
+    let zero = [C64::new(0.0, 0.0); 3];
+    shapes
+        .iter()
+        .map(|v| {
+            let v = v.as_ref();
+            let combine = |rows: &[V3<f64>]| {
+                let mut out = zero;
+                for (r, &vi) in rows.iter().zip(v) {
+                    for k in 0..3 {
+                        out[k] += vi * r[k];
+                    }
+                }
+                out
+            };
+            let displacement: Vec<[C64; 3]> = jv.iter().map(|rows| combine(rows)).collect();
+            let rotation: Vec<[C64; 3]> = jw.iter().map(|rows| combine(rows)).collect();
+            let ports = sys
+                .ports
+                .iter()
+                .map(|port| {
+                    let b = port.body;
+                    let u = pose[b].rot * port.direction;
+                    let arm = pose[b].rot * (port.point - sys.bodies[b].cm);
+                    let along = |x: &[C64; 3]| x[0] * u.x + x[1] * u.y + x[2] * u.z;
+                    if port.rotation {
+                        along(&rotation[b])
+                    } else {
+                        let (d, r) = (&displacement[b], &rotation[b]);
+                        // d + r × arm.
+                        let moved = [
+                            d[0] + r[1] * arm.z - r[2] * arm.y,
+                            d[1] + r[2] * arm.x - r[0] * arm.z,
+                            d[2] + r[0] * arm.y - r[1] * arm.x,
+                        ];
+                        along(&moved)
+                    }
+                })
+                .collect();
+            PhysicalShape {
+                displacement,
+                rotation,
+                ports,
+            }
+        })
+        .collect()
 }
 
 /// The mechanism over one period of the mode `v` (over the coordinates `free`) at amplitude
-/// `a`, at `frames` phases `φ = 2πk/frames`: posed at `q + a Re(v e^{iφ})`.
+/// `a`, at `frames` phases `φ = 2πk/frames`: posed at `q + a Re(v e^{iφ})` by the exact
+/// kinematics (the reference that a drawing's first-order frames,
+/// [`crate::drawing::ModeMotion::frame`], are checked against).
 pub fn mode_frames(
     model: &Model,
     sys: &System<f64>,
@@ -379,8 +473,15 @@ pub fn mac(a: &[C64], b: &[C64]) -> f64 {
 /// its dominant coordinate and, where a driven revolute joint spins at this speed, its whirl
 /// about that joint's axis: the orbit of the body that moves most across the axis turns with
 /// the spin (`forward whirl`) or against it (`backward whirl`); nothing where the orbit is
-/// (nearly) a line.
-pub fn describe(model: &Model, sys: &System<f64>, q: &[f64], free: &[usize], v: &[C64]) -> String {
+/// (nearly) a line. `shape` is the mode's [`physical_shape`].
+pub fn describe(
+    model: &Model,
+    sys: &System<f64>,
+    q: &[f64],
+    free: &[usize],
+    v: &[C64],
+    shape: &PhysicalShape,
+) -> String {
     let Some((k, _)) = v
         .iter()
         .enumerate()
@@ -403,7 +504,6 @@ pub fn describe(model: &Model, sys: &System<f64>, q: &[f64], free: &[usize], v: 
     let Some((axis, omega)) = spin else {
         return name;
     };
-    let shape = physical_shape(sys, q, free, v);
     let e1 = crate::rigid::perpendicular(&axis, &least_aligned(&axis));
     let e2 = axis.cross(&e1);
     let across = |d: &[C64; 3], e: &V3<f64>| d[0] * e.x + d[1] * e.y + d[2] * e.z;
@@ -447,11 +547,12 @@ pub fn descriptions(model: &Model, p: &[f64], pt: &crate::sweep::Point) -> Vec<S
     let Ok(sys) = System::new(model, p, pt.speed) else {
         return Vec::new();
     };
-    pt.shapes
-        .iter()
-        .map(|s| {
-            let v: Vec<C64> = s.iter().copied().collect();
-            describe(model, &sys, &pt.equilibrium.q, &pt.linear.free, &v)
-        })
+    let (q, free) = (&pt.equilibrium.q, &pt.linear.free);
+    let shapes: Vec<Vec<C64>> = (pt.shapes.iter())
+        .map(|s| s.iter().copied().collect())
+        .collect();
+    let physical = physical_shapes(&sys, q, free, &shapes);
+    (shapes.iter().zip(&physical))
+        .map(|(v, shape)| describe(model, &sys, q, free, v, shape))
         .collect()
 }

@@ -6,19 +6,22 @@
 //! - a mode's displacement of every body's centre of mass and its rotation equal central
 //!   differences of the poses along the mode's real and imaginary parts, and a port's equals
 //!   the port's vector (the transfer function's `b`) applied to the shape;
-//! - an animation frame at phase φ is the mechanism posed at `q + a Re(v e^{iφ})`.
+//! - an animation frame at phase φ (the motion of every point and direction to first order,
+//!   from the bodies' motions) is the mechanism posed at `q + a Re(v e^{iφ})` to `O(a²)`, and
+//!   the page's data posed as its script poses it is that frame;
+//! - a 150-body chain's page animates every mode in under 5 MB.
 
 mod common;
 
 use common::{at, example};
 use modaltol::compiled::Compiled;
-use modaltol::drawing::{Drawing, svg};
+use modaltol::drawing::{Drawing, MOTION_BUDGET, ModeMotion, animated, html, svg};
 use modaltol::mechanics::System;
 use modaltol::mechanics::kinematics::poses;
 use modaltol::mechanics::ports::port_vectors;
 use modaltol::modal::C64;
 use modaltol::rigid::Pose;
-use modaltol::scene::{Scene, physical_shape};
+use modaltol::scene::{Scene, mode_frames, physical_shape};
 use modaltol::sweep::Options;
 
 /// The value of attribute `name` in the tag `tag`.
@@ -208,48 +211,239 @@ fn pose_of(sys: &System<f64>, q: &[f64], k: usize) -> nalgebra::Matrix3<f64> {
     poses(sys, q)[k].rot
 }
 
+/// The largest distance between corresponding vectors of two scenes of one mechanism.
+fn farthest(a: &Scene, b: &Scene) -> f64 {
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    a.map(&mut |p| x.push(*p));
+    b.map(&mut |p| y.push(*p));
+    assert_eq!(x.len(), y.len());
+    (x.iter().zip(&y))
+        .map(|(p, q)| ((0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>()).sqrt())
+        .fold(0.0, f64::max)
+}
+
 #[test]
-fn an_animation_frame_is_the_mechanism_posed_along_the_shape() {
-    let m = example("rotor_on_rubber_mounts.toml");
-    let model = m.model();
-    let (p, pt) = solved(&m, 100.0);
-    let d = Drawing::new(model, &p, &pt).unwrap();
-    let sys = System::new(model, &p, 100.0).unwrap();
-    let q = &pt.equilibrium.q;
-    let still = Scene::at(model, &sys, q);
-    for (mode, shape) in d.modes.iter().zip(&pt.shapes) {
-        let n = mode.frames.len();
-        assert_eq!(n, 24);
-        let v: Vec<C64> = shape.iter().copied().collect();
-        let a = mode.amplitude;
-        assert!(a > 0.0 && a.is_finite());
-        // Every frame: the mechanism at q + a Re(v e^{iφ}).
-        for (f, frame) in mode.frames.iter().enumerate() {
-            let phase = C64::from_polar(1.0, std::f64::consts::TAU * f as f64 / n as f64);
-            let mut qf = q.clone();
-            for (&i, z) in pt.linear.free.iter().zip(&v) {
-                qf[i] += a * (z * phase).re;
+fn an_animation_frame_is_the_mechanism_posed_along_the_shape_to_second_order() {
+    // A drawing's frame at phase φ (what the page animates) against the exact kinematics at
+    // q + a Re(v e^{iφ}) (`mode_frames`): the difference is O(a²), so a tenth of the amplitude
+    // leaves about a hundredth of it; and at the drawn amplitude the largest motion is a
+    // tenth of the mechanism's size.
+    for (name, speed) in [
+        ("rotor_on_rubber_mounts.toml", 100.0),
+        ("spinning_spatial_fourbar.toml", 3.0),
+        ("governor.toml", 1.6),
+        ("fourbar_diagonal_spring.toml", 0.0),
+        ("rotating_blade.toml", 20.0),
+    ] {
+        let m = example(name);
+        let model = m.model();
+        let (p, pt) = solved(&m, speed);
+        let d = Drawing::new(model, &p, &pt).unwrap();
+        let sys = System::new(model, &p, speed).unwrap();
+        let q = &pt.equilibrium.q;
+        let n = 8;
+        for (mode, shape) in d.modes.iter().zip(&pt.shapes) {
+            let v: Vec<C64> = shape.iter().copied().collect();
+            let a = mode.amplitude;
+            assert!(a > 0.0 && a.is_finite(), "{name}: {}", mode.label);
+            let small = ModeMotion {
+                amplitude: a / 10.0,
+                motion: (mode.motion.iter())
+                    .map(|m| m.map(|x| x.map(|z| z / 10.0)))
+                    .collect(),
+                ..mode.clone()
+            };
+            let exact = mode_frames(model, &sys, q, &pt.linear.free, &v, a, n);
+            let exact_small = mode_frames(model, &sys, q, &pt.linear.free, &v, a / 10.0, n);
+            for k in 0..n {
+                let phase = std::f64::consts::TAU * k as f64 / n as f64;
+                let (big, little) = (
+                    farthest(&mode.frame(&d, phase), &exact[k]),
+                    farthest(&small.frame(&d, phase), &exact_small[k]),
+                );
+                assert!(
+                    little <= 0.02 * big + 1e-9 * d.size,
+                    "{name}, {}, φ = {phase}: {big} at a, {little} at a/10",
+                    mode.label
+                );
             }
-            let want = Scene::at(model, &sys, &qf);
-            for (x, y) in frame.points().zip(want.points()) {
-                for c in 0..3 {
-                    assert!((x[c] - y[c]).abs() < 1e-9 * d.size, "frame {f}");
+            // Along the shape's real and imaginary parts (φ = 0, π/2), no point moves more
+            // than a tenth of the size.
+            for phase in [0.0, std::f64::consts::FRAC_PI_2] {
+                let mut moved = Vec::new();
+                mode.frame(&d, phase).map(&mut |x| moved.push(*x));
+                let mut still = Vec::new();
+                d.scene.map(&mut |x| still.push(*x));
+                for ((x, y), anchor) in moved.iter().zip(&still).zip(&d.anchors) {
+                    let dist = ((0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>()).sqrt();
+                    assert!(
+                        anchor.direction || dist <= 0.1 * d.size * (1.0 + 1e-9),
+                        "{name}: {dist} vs {}",
+                        d.size
+                    );
                 }
             }
         }
-        // The largest motion is a tenth of the size (first order, so to a few per cent).
-        let largest = mode
-            .frames
-            .iter()
-            .flat_map(|fr| {
-                fr.points()
-                    .zip(still.points())
-                    .map(|(x, y)| ((0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>()).sqrt())
-                    .collect::<Vec<_>>()
-            })
-            .fold(0.0, f64::max);
-        assert!(largest <= 0.1 * d.size * 1.05, "{largest} vs {}", d.size);
     }
+}
+
+/// The vectors of the page's data posed at phase `phase` of its mode `m` as its script
+/// (src/drawing/viewer.js) poses them.
+fn page_frame(data: &serde_json::Value, m: usize, phase: f64) -> Vec<[f64; 3]> {
+    let num = |v: &serde_json::Value| v.as_f64().unwrap();
+    let x: Vec<f64> = data["x"].as_array().unwrap().iter().map(num).collect();
+    let anchor: Vec<i64> = (data["anchor"].as_array().unwrap().iter())
+        .map(|v| v.as_i64().unwrap())
+        .collect();
+    let mode = &data["modes"][m];
+    let re: Vec<f64> = mode["re"].as_array().unwrap().iter().map(num).collect();
+    let im: Vec<f64> = mode["im"].as_array().unwrap().iter().map(num).collect();
+    let (c, s) = (phase.cos(), phase.sin());
+    (0..anchor.len())
+        .map(|i| {
+            let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+            if anchor[i] == 0 {
+                return p;
+            }
+            let b = (anchor[i].unsigned_abs() - 1) as usize;
+            let at = |k: usize| re[6 * b + k] * c - im[6 * b + k] * s;
+            let w = [at(3), at(4), at(5)];
+            let cm = data["scene"]["bodies"][b]["cm"].as_u64().unwrap() as usize;
+            let r: [f64; 3] = if anchor[i] > 0 {
+                [0, 1, 2].map(|k| p[k] - x[3 * cm + k])
+            } else {
+                p
+            };
+            let turned = [
+                w[1] * r[2] - w[2] * r[1],
+                w[2] * r[0] - w[0] * r[2],
+                w[0] * r[1] - w[1] * r[0],
+            ];
+            let y = [0, 1, 2].map(|k| p[k] + turned[k] + if anchor[i] > 0 { at(k) } else { 0.0 });
+            if anchor[i] > 0 {
+                y
+            } else {
+                let n = dot(&y, &y).sqrt();
+                y.map(|v| v / n)
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn the_pages_data_poses_the_frames_of_the_drawing() {
+    // The page carries the equilibrium once and each mode's body motions; posed from them as
+    // its script poses them, a frame equals the drawing's (to the page's rounding, a millionth
+    // of the size).
+    for (name, speed) in [
+        ("rotor_on_rubber_mounts.toml", 100.0),
+        ("spinning_spatial_fourbar.toml", 3.0),
+    ] {
+        let m = example(name);
+        let (p, pt) = solved(&m, speed);
+        let d = Drawing::new(m.model(), &p, &pt).unwrap();
+        let page = html(&d, None);
+        let start = page
+            .find(r#"<script id="data" type="application/json">"#)
+            .unwrap();
+        let text = &page[start..];
+        let text = &text[text.find('>').unwrap() + 1..text.find("</script>").unwrap()];
+        let data: serde_json::Value = serde_json::from_str(&text.replace("<\\/", "</")).unwrap();
+        assert_eq!(data["modes"].as_array().unwrap().len(), d.modes.len());
+        for (k, mode) in d.modes.iter().enumerate() {
+            for phase in [0.0, 1.0, 2.5, 4.0] {
+                let mut want = Vec::new();
+                mode.frame(&d, phase).map(&mut |x| want.push(*x));
+                let got = page_frame(&data, k, phase);
+                assert_eq!(got.len(), want.len());
+                for (g, w) in got.iter().zip(&want) {
+                    for c in 0..3 {
+                        assert!(
+                            (g[c] - w[c]).abs() < 1e-5 * d.size.max(1.0),
+                            "{name}, {}: {g:?} vs {w:?}",
+                            mode.label
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A chain of `n` segments (the rotating blade's family: 1 m, springs between segments,
+/// flapping out of the plane of rotation), hinged to a hub spinning about z.
+fn chain(n: usize) -> String {
+    let h = 1.0 / n as f64;
+    let mut s = format!(
+        "name = \"chain {n}\"\ngravity = [0, 0, 0]\n[[bodies]]\nname = \"hub\"\nmass = 1\n\
+         inertia = [0.01, 0.01, 0.01]\ncm = [0, 0, 0]\n[[joints]]\nname = \"spin\"\n\
+         type = \"revolute\"\nparent = \"ground\"\nchild = \"hub\"\nat = [0, 0, 0]\n\
+         axis = [0, 0, 1]\ndrive = \"speed\"\n"
+    );
+    for i in 0..n {
+        let parent = if i == 0 {
+            "hub".into()
+        } else {
+            format!("s{}", i - 1)
+        };
+        s += &format!(
+            "[[bodies]]\nname = \"s{i}\"\nmass = {}\ninertia = [0, {i2}, {i2}]\n\
+             cm = [{}, 0, 0]\n[[joints]]\nname = \"j{i}\"\ntype = \"revolute\"\n\
+             parent = \"{parent}\"\nchild = \"s{i}\"\nat = [{}, 0, 0]\naxis = [0, -1, 0]\n\
+             stiffness = {}\n",
+            2.0 * h,
+            (i as f64 + 0.5) * h,
+            i as f64 * h,
+            50.0 / h,
+            i2 = 2.0 * h * h * h / 12.0,
+        );
+    }
+    s
+}
+
+#[test]
+fn a_150_body_chains_page_is_a_few_mb_and_animates_every_mode() {
+    // Its 150 modes at 24 frames each made a page of 243 MB; posed by the page from each
+    // body's motion, every mode fits in under 5 MB, drawn in seconds.
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("chain.toml");
+    std::fs::write(&model, chain(150)).unwrap();
+    let page = dir.path().join("chain.html");
+    let t = std::time::Instant::now();
+    let r = common::run_with_deadline(
+        &[
+            "draw",
+            model.to_str().unwrap(),
+            "--speed",
+            "5",
+            "-o",
+            page.to_str().unwrap(),
+        ],
+        std::time::Duration::from_secs(120),
+    )
+    .unwrap();
+    let took = t.elapsed().as_secs_f64();
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let text = std::fs::read_to_string(&page).unwrap();
+    assert!(text.len() < 5_000_000, "{} bytes", text.len());
+    assert!(took < 30.0, "{took} s");
+    assert_eq!(text.matches("<option value=").count(), 151);
+    assert!(!text.contains("This page animates modes 1 to"));
+}
+
+#[test]
+fn a_page_animates_the_lowest_modes_that_fit_and_the_mode_asked_for() {
+    // 150 bodies: all 150 modes; 3000 bodies: the lowest 8 of 3000 (12 numbers a body and
+    // mode within the budget), and mode 2000 where asked for.
+    assert_eq!(animated(151, 150, None), (0..150).collect::<Vec<_>>());
+    let few = animated(3001, 3000, Some(1999));
+    let lowest = MOTION_BUDGET / (12 * 3001);
+    assert!((1..3000).contains(&lowest));
+    assert_eq!(few.len(), lowest + 1);
+    assert_eq!(few[lowest], 1999);
+    assert_eq!(animated(3001, 3000, Some(2)).len(), lowest);
+    assert_eq!(animated(1_000_000, 5, None), vec![0]);
+    assert_eq!(animated(3, 0, None), Vec::<usize>::new());
 }
 
 #[test]

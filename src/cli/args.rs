@@ -162,8 +162,11 @@ pub(crate) enum Command {
     /// amplitude a tenth of the mechanism's size.
     ///
     /// HTML (`-o FILE.html`): the same views and a 3-D view (drag to turn, wheel to zoom) that
-    /// animates any mode over one period (each body's pose from the mode's amplitude and phase,
-    /// so whirl looks like whirl); it opens offline. `--mode K` chooses the mode shown first.
+    /// animates any mode over one period, to first order in its amplitude (each body moved and
+    /// turned by the mode's amplitude and phase, so whirl looks like whirl); it opens offline.
+    /// The page carries six complex numbers a body per mode: every mode where 300,000 numbers
+    /// hold them (about 150 bodies with all their modes), else the lowest modes that fit,
+    /// which the page names. `--mode K` chooses the mode shown first, and animates it in any case.
     Draw(DrawArgs),
     /// Sweep the operating speed: one CSV row per (speed, mode).
     ///
@@ -302,7 +305,8 @@ pub(crate) struct DrawArgs {
     /// Operating speed, rad/s (default: the first speed of the model's [analysis] speed, or 0).
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) speed: Option<f64>,
-    /// The mode to draw (1-based, as `modal` numbers them).
+    /// The mode to draw (1-based, as `modal` numbers them): overlaid in the SVG; shown first,
+    /// and animated whatever its number, in the page.
     #[arg(long)]
     pub(crate) mode: Option<usize>,
     /// Which equilibrium to draw (as for `modal`).

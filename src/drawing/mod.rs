@@ -2,51 +2,138 @@
 //! views in SVG ([`svg`]) and a page ([`html`]) with those views and an interactive 3-D view that
 //! animates each mode over one period.
 //!
-//! The geometry is the [`Scene`] at the point's equilibrium; a mode is drawn as the mechanism
-//! posed over its period by [`mode_frames`] (the exact kinematics at `q + a Re(v e^{iφ})`, `a`
-//! scaled so the largest displacement is a tenth of the mechanism's size), so a whirling mode
-//! whirls. The SVG overlays the mode's two extremes (φ = 0 and π, solid) and the quarter periods
-//! (dashed) on the equilibrium (grey). The page draws with a canvas and a few lines of its own
-//! script, no library and nothing fetched: it opens offline. Every view group of the SVG carries
-//! its projection (`data-h`, `data-v`, `data-scale`, `data-ox`, `data-oy`: a point `x` is drawn
-//! at `(ox + scale·h·x, oy − scale·v·x)`), and every mark its name, so a drawing can be read
-//! back and checked against the model.
+//! The geometry is the [`Scene`] at the point's equilibrium, every vector of it (a point or a
+//! direction) with the body that placed it ([`Anchor`]). A mode is drawn as its motion to first
+//! order in its amplitude `a` (scaled so the largest displacement is a tenth of the
+//! mechanism's size): each body's centre of mass moves by `Re(a d e^{iφ})` and the body turns by
+//! `Re(a ω e^{iφ})` (the mode's [`PhysicalShape`], exact partial velocities), so a point `x` of
+//! body `b` moves by `Re(a (d_b + ω_b × (x − c_b)) e^{iφ})` and a direction `u` turns by
+//! `Re(a ω_b e^{iφ}) × u` (kept unit): the pose at `q + a Re(v e^{iφ})` to `O(a²)`
+//! ([`ModeMotion::frame`]), and a whirling mode whirls. This is what the page carries: the
+//! equilibrium once, and per mode six complex numbers a body, from which its script poses every
+//! frame itself, so the page grows with the bodies times the modes it animates, not with its
+//! frames ([`html`] bounds it). The SVG overlays the mode's two extremes (φ = 0 and π, solid)
+//! and the quarter periods (dashed) on the equilibrium (grey). The page draws with a canvas and
+//! a few lines of its own script, no library and nothing fetched: it opens offline. Every view
+//! group of the SVG carries its projection (`data-h`, `data-v`, `data-scale`, `data-ox`,
+//! `data-oy`: a point `x` is drawn at `(ox + scale·h·x, oy − scale·v·x)`), and every mark its
+//! name, so a drawing can be read back and checked against the model.
 
 mod html;
 mod svg;
 
-pub use html::html;
+pub use html::{MOTION_BUDGET, animated, html};
 pub use svg::svg;
 
 use crate::mechanics::System;
+use crate::modal::C64;
 use crate::model::{FieldError, Model};
-use crate::scene::{Scene, describe, display_amplitude, mode_frames};
+use crate::scene::{Anchor, P3, PhysicalShape, Scene, describe, physical_shapes};
 use crate::sweep::Point;
 
-/// Phases drawn per period in the page's animation.
-const FRAMES: usize = 24;
-
 /// What a drawing shows: the mechanism at a point's equilibrium and each mode's motion.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone)]
 pub struct Drawing {
     pub model: String,
     /// The operating speed (rad/s).
     pub speed: f64,
     pub scene: Scene,
+    /// The body that placed each vector of `scene`, in the order of [`Scene::map`].
+    pub anchors: Vec<Anchor>,
     /// The diagonal of the box around the mechanism (m).
     pub size: f64,
     pub modes: Vec<ModeMotion>,
 }
 
-/// One mode over one period.
-#[derive(Debug, Clone, serde::Serialize)]
+/// One mode's motion, to first order in its amplitude.
+#[derive(Debug, Clone)]
 pub struct ModeMotion {
     /// `mode k: ω_d = … rad/s, ζ = …` (or its status where it has no frequency).
     pub label: String,
-    /// The shape's scale in the frames: the mechanism is posed at `q + a Re(v e^{iφ})`.
+    /// The shape's scale `a`: the motion is that of the pose at `q + a Re(v e^{iφ})`.
     pub amplitude: f64,
-    /// The mechanism at 24 phases over one period (frame 0: φ = 0).
-    pub frames: Vec<Scene>,
+    /// Per body: the displacement of its centre of mass (m) and its small rotation (rad,
+    /// ground axes) at that amplitude, `a` times the mode's [`PhysicalShape`].
+    pub motion: Vec<[[C64; 3]; 2]>,
+}
+
+/// `a × b` for complex `a` and real `b`.
+fn cross(a: &[C64; 3], b: &P3) -> [C64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// The first-order motion of the vector `x` placed by `anchor` in `scene`, where the bodies
+/// move by `motion` (per body: displacement and rotation, complex).
+fn moved(scene: &Scene, motion: &[[[C64; 3]; 2]], anchor: &Anchor, x: &P3) -> [C64; 3] {
+    let zero = [C64::new(0.0, 0.0); 3];
+    let Some(b) = anchor.body else {
+        return zero;
+    };
+    let [d, w] = &motion[b];
+    if anchor.direction {
+        cross(w, x)
+    } else {
+        let c = scene.bodies[b].cm;
+        let turned = cross(w, &[x[0] - c[0], x[1] - c[1], x[2] - c[2]]);
+        [d[0] + turned[0], d[1] + turned[1], d[2] + turned[2]]
+    }
+}
+
+impl ModeMotion {
+    /// The mechanism at phase `φ` (rad) of this mode, to first order: every point `x` moved by,
+    /// and every direction `u` turned by, `Re(δ e^{iφ})` with `δ` its motion (see the module
+    /// documentation), a direction then scaled back to unit length. Equal to the mechanism
+    /// posed at `q + a Re(v e^{iφ})` to `O(a²)`; what the page's script draws.
+    pub fn frame(&self, d: &Drawing, phase: f64) -> Scene {
+        let turn = C64::from_polar(1.0, phase);
+        let mut k = 0;
+        d.scene.map(&mut |x: &P3| {
+            let anchor = &d.anchors[k];
+            k += 1;
+            let m = moved(&d.scene, &self.motion, anchor, x);
+            let y = [0, 1, 2].map(|c| x[c] + (m[c] * turn).re);
+            if anchor.direction {
+                let n = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+                if n > 0.0 { y.map(|c| c / n) } else { *x }
+            } else {
+                y
+            }
+        })
+    }
+}
+
+/// The amplitude at which the motion `unit` (per body, per unit of the shape) moves a vector of
+/// `scene` by at most `reach` (m): the largest displacement of a point, or of the tip of a
+/// direction drawn a twentieth of the mechanism's size `size` long (so a turn about a link's
+/// own line shows), along the shape's real and its imaginary part. Zero for a shape that moves
+/// nothing.
+fn amplitude(
+    scene: &Scene,
+    anchors: &[Anchor],
+    unit: &[[[C64; 3]; 2]],
+    size: f64,
+    reach: f64,
+) -> f64 {
+    let mut k = 0;
+    let mut most = 0.0f64;
+    scene.map(&mut |x: &P3| {
+        let anchor = &anchors[k];
+        k += 1;
+        let m = moved(scene, unit, anchor, x);
+        let arm = if anchor.direction { 0.05 * size } else { 1.0 };
+        let re = m.iter().map(|z| z.re * z.re).sum::<f64>().sqrt();
+        let im = m.iter().map(|z| z.im * z.im).sum::<f64>().sqrt();
+        most = most.max(arm * re.max(im));
+    });
+    if most > 0.0 && most.is_finite() {
+        reach / most
+    } else {
+        0.0
+    }
 }
 
 impl Drawing {
@@ -54,13 +141,16 @@ impl Drawing {
     pub fn new(model: &Model, p: &[f64], pt: &Point) -> Result<Drawing, FieldError> {
         let sys = System::new(model, p, pt.speed)?;
         let q = &pt.equilibrium.q;
-        let scene = Scene::at(model, &sys, q);
+        let (scene, anchors) = Scene::anchored(model, &sys, q);
         let size = scene.size();
         let free = &pt.linear.free;
-        let modes = (pt.modes.iter().zip(&pt.shapes).enumerate())
-            .map(|(k, (m, shape))| {
-                let v: Vec<_> = shape.iter().copied().collect();
-                let what = describe(model, &sys, q, free, &v);
+        let shapes: Vec<Vec<C64>> = (pt.shapes.iter())
+            .map(|s| s.iter().copied().collect())
+            .collect();
+        let physical = physical_shapes(&sys, q, free, &shapes);
+        let modes = (pt.modes.iter().zip(&shapes).zip(&physical).enumerate())
+            .map(|(k, ((m, v), shape))| {
+                let what = describe(model, &sys, q, free, v, shape);
                 let label = if m.damped_frequency.is_finite() && m.damped_frequency > 0.0 {
                     format!(
                         "mode {} ({what}): ω_d = {:.4} rad/s, ζ = {:.4}",
@@ -76,11 +166,12 @@ impl Drawing {
                         m.root.lambda.re
                     )
                 };
-                let amplitude = display_amplitude(model, &sys, q, free, &v, 0.1 * size);
+                let unit = body_motion(shape, 1.0);
+                let a = amplitude(&scene, &anchors, &unit, size, 0.1 * size);
                 ModeMotion {
                     label,
-                    amplitude,
-                    frames: mode_frames(model, &sys, q, free, &v, amplitude, FRAMES),
+                    amplitude: a,
+                    motion: body_motion(shape, a),
                 }
             })
             .collect();
@@ -88,10 +179,18 @@ impl Drawing {
             model: model.name.clone(),
             speed: pt.speed,
             scene,
+            anchors,
             size,
             modes,
         })
     }
+}
+
+/// Per body: `a` times the displacement and the rotation of `shape`.
+fn body_motion(shape: &PhysicalShape, a: f64) -> Vec<[[C64; 3]; 2]> {
+    (shape.displacement.iter().zip(&shape.rotation))
+        .map(|(d, w)| [d.map(|z| z * a), w.map(|z| z * a)])
+        .collect()
 }
 
 /// Text for SVG and HTML: `&`, `<`, `>`, `"` escaped.

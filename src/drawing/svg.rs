@@ -95,11 +95,15 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
         r##"<text x="8" y="34" fill="#555">{}</text>"##,
         esc(&subtitle)
     );
+    // The mode at its quarter periods (φ = 0, π/2, π, 3π/2), to first order as the page
+    // animates it.
+    let quarters: Vec<Scene> = mode.map_or_else(Vec::new, |m| {
+        (0..4)
+            .map(|k| m.frame(d, std::f64::consts::FRAC_PI_2 * k as f64))
+            .collect()
+    });
     // One scale for the three views: the largest extent of any view fits its panel.
-    let mut scenes: Vec<&Scene> = vec![&d.scene];
-    if let Some(m) = mode {
-        scenes.extend(&m.frames);
-    }
+    let scenes: Vec<&Scene> = std::iter::once(&d.scene).chain(&quarters).collect();
     let extent = VIEWS
         .iter()
         .flat_map(|view| {
@@ -155,27 +159,16 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
             esc(view.name)
         );
         axes_mark(&mut s, &pr, x0);
-        match mode {
-            Some(m) => {
+        match &quarters[..] {
+            [zero, quarter, half, three_quarters] => {
                 scene(&mut s, &pr, &d.scene, Layer::Background, d.size);
-                let n = m.frames.len();
-                if n >= 4 {
-                    for quarter in [1, 3] {
-                        scene(
-                            &mut s,
-                            &pr,
-                            &m.frames[quarter * n / 4],
-                            Layer::Quarter,
-                            d.size,
-                        );
-                    }
+                for q in [quarter, three_quarters] {
+                    scene(&mut s, &pr, q, Layer::Quarter, d.size);
                 }
-                if n >= 2 {
-                    scene(&mut s, &pr, &m.frames[0], Layer::Extreme(0), d.size);
-                    scene(&mut s, &pr, &m.frames[n / 2], Layer::Extreme(1), d.size);
-                }
+                scene(&mut s, &pr, zero, Layer::Extreme(0), d.size);
+                scene(&mut s, &pr, half, Layer::Extreme(1), d.size);
             }
-            None => scene(
+            _ => scene(
                 &mut s,
                 &pr,
                 &d.scene,

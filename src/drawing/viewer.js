@@ -1,26 +1,49 @@
 // The 3-D view of a drawing page (src/drawing/html.rs): the mechanism projected after a turn
-// by yaw and pitch, a mode animated over its period. Reads the drawing from #data.
+// by yaw and pitch, a mode animated over its period. Reads the drawing from #data: the scene's
+// vectors are indices into D.x; a mode's frame at phase φ moves every point x of body b by
+// Re((d_b + ω_b × (x − c_b)) e^{iφ}) and turns every direction u by Re(ω_b e^{iφ}) × u (kept
+// unit), as ModeMotion::frame does in src/drawing/mod.rs.
 "use strict";
 const D = JSON.parse(document.getElementById("data").textContent);
 const canvas = document.getElementById("view"), ctx = canvas.getContext("2d");
 const select = document.getElementById("mode"), button = document.getElementById("play");
 const phaseText = document.getElementById("phase");
-let yaw = 0.7, pitch = 0.45, zoom = 1, mode = Number(document.getElementById("view").dataset.start), playing = true, frame = 0;
-const PERIOD = 2400;
+const FRAMES = 24, PERIOD = 2400;
+let yaw = 0.7, pitch = 0.45, zoom = 1, mode = Number(canvas.dataset.start), playing = true, frame = 0;
 const hash = /mode=(\d+)/.exec(location.hash);
-if (hash) mode = Number(hash[1]) - 1;
+if (hash) mode = D.modes.findIndex(m => m.number === Number(hash[1]));
 if (mode >= D.modes.length) mode = -1;
 select.value = String(mode);
-function points(sc) {
+const S = D.scene, X = D.x, A = D.anchor;
+// The vectors at phase φ of mode m (the equilibrium where m is null), 3 numbers each.
+function posed(m, phi) {
+  if (!m) return X;
+  const c = Math.cos(phi), s = Math.sin(phi), out = new Float64Array(X.length);
+  for (let i = 0; i < A.length; i++) {
+    const x = [X[3 * i], X[3 * i + 1], X[3 * i + 2]];
+    let y = x;
+    if (A[i] !== 0) {
+      const b = Math.abs(A[i]) - 1, o = 6 * b, at = k => m.re[o + k] * c - m.im[o + k] * s;
+      const w = [at(3), at(4), at(5)];
+      const r = A[i] > 0 ? [0, 1, 2].map(k => x[k] - X[3 * S.bodies[b].cm + k]) : x;
+      y = [0, 1, 2].map(k => x[k] + w[(k + 1) % 3] * r[(k + 2) % 3] - w[(k + 2) % 3] * r[(k + 1) % 3]);
+      if (A[i] > 0) y = y.map((v, k) => v + at(k));
+      else { const n = Math.hypot(y[0], y[1], y[2]); if (n > 0) y = y.map(v => v / n); }
+    }
+    out[3 * i] = y[0]; out[3 * i + 1] = y[1]; out[3 * i + 2] = y[2];
+  }
+  return out;
+}
+function pointIndices() {
   const out = [];
-  for (const b of sc.bodies) { out.push(b.cm); for (const l of b.links) out.push(l); }
-  for (const j of sc.joints) out.push(j.at);
-  for (const l of sc.cuts.concat(sc.elements)) { out.push(l.ends[0]); out.push(l.ends[1]); }
-  for (const p of sc.ports) out.push(p.at);
+  for (const b of S.bodies) { out.push(b.cm); for (const l of b.links) out.push(l); }
+  for (const j of S.joints) out.push(j.at);
+  for (const l of S.cuts.concat(S.elements)) { out.push(l.ends[0]); out.push(l.ends[1]); }
+  for (const p of S.ports) out.push(p.at);
   return out;
 }
 const centre = [0, 1, 2].map(k => {
-  const v = points(D.scene).map(p => p[k]);
+  const v = pointIndices().map(i => X[3 * i + k]);
   return v.length ? (Math.min(...v) + Math.max(...v)) / 2 : 0;
 });
 function project(p) {
@@ -47,30 +70,31 @@ function label(a, text, colour) {
   const p = project(a);
   ctx.fillStyle = colour; ctx.font = "11px sans-serif"; ctx.fillText(text, p[0] + 7, p[1] - 7);
 }
-function drawScene(sc, faint) {
+function drawScene(P, faint) {
+  const v = i => [P[3 * i], P[3 * i + 1], P[3 * i + 2]];
   const ink = faint ? "#c8c8c8" : "#333";
-  for (const b of sc.bodies) for (const l of b.links) seg(b.cm, l, ink, faint ? 2 : 3);
+  for (const b of S.bodies) for (const l of b.links) seg(v(b.cm), v(l), ink, faint ? 2 : 3);
   if (faint) return;
   const L = 0.06 * D.size;
-  for (const e of sc.elements) seg(e.ends[0], e.ends[1], "#2ca02c", 1.5, [6, 3]);
-  for (const c of sc.cuts) { seg(c.ends[0], c.ends[1], "#9467bd", 1.5, [2, 2]); dot(c.ends[0], 5, "white", "#9467bd"); }
-  for (const j of sc.joints) {
-    for (const a of j.axes) seg([j.at[0] - L * a[0], j.at[1] - L * a[1], j.at[2] - L * a[2]],
-                                [j.at[0] + L * a[0], j.at[1] + L * a[1], j.at[2] + L * a[2]], "#d62728", 1.5);
-    dot(j.at, j.driven ? 7 : 5, "white", "#333");
-    label(j.at, j.name, "#a00");
+  const along = (p, a, t) => [p[0] + t * a[0], p[1] + t * a[1], p[2] + t * a[2]];
+  for (const e of S.elements) seg(v(e.ends[0]), v(e.ends[1]), "#2ca02c", 1.5, [6, 3]);
+  for (const c of S.cuts) { seg(v(c.ends[0]), v(c.ends[1]), "#9467bd", 1.5, [2, 2]); dot(v(c.ends[0]), 5, "white", "#9467bd"); }
+  for (const j of S.joints) {
+    const at = v(j.at);
+    for (const a of j.axes) seg(along(at, v(a), -L), along(at, v(a), L), "#d62728", 1.5);
+    dot(at, j.driven ? 7 : 5, "white", "#333");
+    label(at, j.name, "#a00");
   }
   const T = 0.05 * D.size, tints = ["#e377c2", "#17becf", "#bcbd22"];
-  for (const b of sc.bodies) {
-    for (let k = 0; k < 3; k++) {
-      const a = b.axes[k];
-      seg(b.cm, [b.cm[0] + T * a[0], b.cm[1] + T * a[1], b.cm[2] + T * a[2]], tints[k], 1);
-    }
-    dot(b.cm, 4, "#1f3b73"); label(b.cm, b.name, "#1f3b73");
+  for (const b of S.bodies) {
+    const cm = v(b.cm);
+    for (let k = 0; k < 3; k++) seg(cm, along(cm, v(b.axes[k]), T), tints[k], 1);
+    dot(cm, 4, "#1f3b73"); label(cm, b.name, "#1f3b73");
   }
-  for (const p of sc.ports) {
-    seg(p.at, [p.at[0] + L * p.direction[0], p.at[1] + L * p.direction[1], p.at[2] + L * p.direction[2]], "#ff7f0e", 2.5);
-    label(p.at, p.name, "#c60");
+  for (const p of S.ports) {
+    const at = v(p.at);
+    seg(at, along(at, v(p.direction), L), "#ff7f0e", 2.5);
+    label(at, p.name, "#c60");
   }
 }
 function triad() {
@@ -87,25 +111,24 @@ function triad() {
 function draw() {
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   if (mode >= 0) {
-    const frames = D.modes[mode].frames;
-    drawScene(D.scene, true);
-    drawScene(frames[frame % frames.length], false);
-    phaseText.textContent = "φ = " + Math.round(360 * frame / frames.length) + "°";
+    drawScene(X, true);
+    drawScene(posed(D.modes[mode], 2 * Math.PI * frame / FRAMES), false);
+    phaseText.textContent = "φ = " + Math.round(360 * frame / FRAMES) + "°";
   } else {
-    drawScene(D.scene, false);
+    drawScene(X, false);
     phaseText.textContent = "";
   }
   triad();
   canvas.dataset.frame = String(frame);
-  canvas.dataset.mode = String(mode + 1);
+  canvas.dataset.mode = String(mode >= 0 ? D.modes[mode].number : 0);
 }
 // The animation runs on a timer (so a headless browser's virtual time advances it too).
 setInterval(() => {
   if (playing && mode >= 0) {
-    frame = (frame + 1) % D.modes[mode].frames.length;
+    frame = (frame + 1) % FRAMES;
     draw();
   }
-}, PERIOD / 24);
+}, PERIOD / FRAMES);
 select.addEventListener("change", () => { mode = Number(select.value); frame = 0; draw(); });
 button.addEventListener("click", () => { playing = !playing; button.textContent = playing ? "pause" : "play"; });
 let drag = null;
