@@ -277,6 +277,9 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         speeds: &study.speeds,
         shift: nominal_margins(study, requirements),
         offset: vec![0.0; requirements.len()],
+        // The refinement reads the probabilities' errors; the margins' moments are
+        // integrated once, at the last stage.
+        moments: false,
         target: study.model.model().allocation.target_yield,
     });
     let mut stage = rule.first();
@@ -308,10 +311,18 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
             None => break,
         }
     }
-    if let (Some(reqs), Some((y, _))) = (&reqs, &mut yields) {
+    let yields = reqs.map(|reqs| {
+        let reqs = Requirements {
+            moments: true,
+            ..reqs
+        };
+        let (mut y, _) = run
+            .pool
+            .install(|| evaluate_yield(&store, rule, stage, &nominal, &reqs));
         run.pool
-            .install(|| at_target(&store, rule, stage, &nominal, reqs, y));
-    }
+            .install(|| at_target(&store, rule, stage, &nominal, &reqs, &mut y));
+        y
+    });
     let met = within(&result.stats, tolerance);
     for (row, within) in result.stats.iter_mut().zip(met) {
         for (stat, ok) in row.iter_mut().zip(within) {
@@ -325,7 +336,7 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         probabilities: result.probabilities,
         nodes: count.swept,
         rule: rule.describe(active.len(), stage, count.swept),
-        yields: yields.map(|y| y.0),
+        yields,
     }
 }
 

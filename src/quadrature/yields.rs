@@ -177,6 +177,9 @@ pub(super) struct Requirements<'a> {
     /// at the target is sought).
     pub offset: Vec<f64>,
     pub target: f64,
+    /// Are the worst margins' moments integrated (5-point Gauss–Legendre on every piece)? Not
+    /// while the margin met at the target is sought: its probabilities alone are read.
+    pub moments: bool,
 }
 
 /// The tallies of one stage: on the node grid in use (`fine`) and on every other node of it
@@ -534,11 +537,29 @@ pub(super) fn at_target(
     }
     let source = Source::new(store, rule, stage);
     let target = reqs.target;
-    // Each sought root as (requirement, target probability); several at once share an
-    // integration: the requirements are repeated, each copy with its own offset.
-    let solve = |goals: &[(usize, f64)]| -> Vec<f64> {
+    let l = Layout {
+        reqs: n,
+        speeds: store.speeds,
+    };
+    // P(M ≥ q) for q → −∞: the designs with a margin.
+    let reqs = &Requirements {
+        moments: false,
+        ..reqs.clone()
+    };
+    let reached = source.fine(
+        nominal,
+        &Requirements {
+            offset: vec![f64::NEG_INFINITY; n],
+            ..reqs.clone()
+        },
+        l,
+    );
+    let reached = |r: usize| reached.ratio(l, l.each(r));
+    // Each sought root as (requirement, target probability, start, scale); several at once
+    // share an integration: the requirements are repeated, each copy with its own offset.
+    let solve = |goals: &[(usize, f64, f64, f64)]| -> Vec<Root> {
         let list: Vec<Requirement> = goals.iter().map(|g| reqs.list[g.0].clone()).collect();
-        let l = Layout {
+        let lg = Layout {
             reqs: goals.len(),
             speeds: store.speeds,
         };
@@ -548,28 +569,27 @@ pub(super) fn at_target(
             shift: goals.iter().map(|g| reqs.shift[g.0]).collect(),
             ..reqs.clone()
         };
-        // P(M ≥ q) for q → −∞: the designs with a margin.
-        let reached = source.fine(nominal, &moved(&vec![f64::NEG_INFINITY; goals.len()]), l);
         let roots = goals
             .iter()
-            .enumerate()
-            .map(|(k, &(r, p))| {
-                let m = y.margins[r].expect("a margin");
-                Root::new(p, reached.ratio(l, l.each(k)), m.mean, m.std, reqs.request)
-            })
+            .map(|&(r, p, start, scale)| Root::new(p, reached(r), start, scale, reqs.request))
             .collect::<Vec<_>>();
         find_roots(roots, |q| {
-            let t = source.fine(nominal, &moved(q), l);
-            (0..goals.len()).map(|k| t.ratio(l, l.each(k))).collect()
+            let t = source.fine(nominal, &moved(q), lg);
+            (0..goals.len()).map(|k| t.ratio(lg, lg.each(k))).collect()
         })
     };
-    let first: Vec<(usize, f64)> = with_margin.iter().map(|&r| (r, target)).collect();
-    let estimates = solve(&first);
+    // From the normal quantile of the margin's moments, on the scale of its σ.
+    let z = Normal::standard().inverse_cdf((1.0 - target).clamp(1e-300, 1.0 - 1e-16));
+    let first: Vec<(usize, f64, f64, f64)> = with_margin
+        .iter()
+        .map(|&r| {
+            let m = y.margins[r].expect("a margin");
+            (r, target, m.mean + m.std * z, m.std)
+        })
+        .collect();
+    let roots = solve(&first);
+    let estimates: Vec<f64> = roots.iter().map(|r| r.found.expect("found")).collect();
     // The probability's error at each estimate.
-    let l = Layout {
-        reqs: n,
-        speeds: store.speeds,
-    };
     let mut offset = vec![0.0; n];
     for (&r, &q) in with_margin.iter().zip(&estimates) {
         offset[r] = if q.is_finite() { q } else { 0.0 };
@@ -593,18 +613,28 @@ pub(super) fn at_target(
             }
         })
         .collect();
-    let ends: Vec<(usize, f64)> = with_margin
+    // The ends start where the slope of P at the estimate puts them, `∓ e / |P'|`.
+    let ends: Vec<(usize, f64, f64, f64)> = with_margin
         .iter()
         .zip(&errors)
-        .flat_map(|(&r, &e)| [(r, target + e), (r, target - e)])
+        .zip(&roots)
+        .flat_map(|((&r, &e), root)| {
+            let q = root.found.filter(|q| q.is_finite()).unwrap_or(0.0);
+            let std = y.margins[r].map_or(0.0, |m| m.std);
+            let step = root.slope().map_or(std, |s| e / s).max(1e-12 * std);
+            [
+                (r, target + e, q - step, step),
+                (r, target - e, q + step, step),
+            ]
+        })
         .collect();
     let ends = solve(&ends);
     for (k, &r) in with_margin.iter().enumerate() {
         let m = y.margins[r].as_mut().expect("a margin");
         m.at_target = Some(AtTarget {
             estimate: estimates[k],
-            low: ends[2 * k],
-            high: ends[2 * k + 1],
+            low: ends[2 * k].found.expect("found"),
+            high: ends[2 * k + 1].found.expect("found"),
             probability_error: errors[k],
         });
     }
@@ -614,7 +644,7 @@ pub(super) fn at_target(
 /// found so far (`q` where `P ≥ goal`, and where `P < goal`, each with its `P`).
 struct Root {
     goal: f64,
-    /// Where the search starts (the normal quantile of the margin's moments) and its scale.
+    /// Where the search starts and its scale.
     start: f64,
     scale: f64,
     /// `|P − goal|` at which the root is taken as found.
@@ -629,24 +659,24 @@ struct Root {
 }
 
 impl Root {
-    /// The root of `P(q) = goal` given `P(−∞) = reached` and the margin's mean and σ.
-    fn new(goal: f64, reached: f64, mean: f64, std: f64, request: f64) -> Root {
+    /// The root of `P(q) = goal` given `P(−∞) = reached`, searched from `start` on `scale`
+    /// (a scale of 0: every design with a margin has the same, `start`).
+    fn new(goal: f64, reached: f64, start: f64, scale: f64, request: f64) -> Root {
         let found = if goal <= 0.0 {
             Some(f64::INFINITY)
         } else if goal >= reached || goal >= 1.0 {
             // More than 1 − goal of the designs fail without a margin.
             Some(f64::NEG_INFINITY)
-        } else if std.is_nan() || std <= 0.0 {
-            // Every design with a margin has the same: the step from `reached` to 0 is there.
-            Some(mean)
+        } else if scale.is_nan() || scale <= 0.0 {
+            // The step from `reached` to 0 is there.
+            Some(start)
         } else {
             None
         };
-        let z = Normal::standard().inverse_cdf(1.0 - goal.clamp(1e-300, 1.0 - 1e-16));
         Root {
             goal,
-            start: mean + std * z,
-            scale: std,
+            start,
+            scale,
             // Relative to the goal near 0 or 1, where the request is coarser than the goal.
             tolerance: ROOT_FRACTION * request.min(goal).min(1.0 - goal),
             above: None,
@@ -655,6 +685,13 @@ impl Root {
             steps: 0,
             widths: [f64::INFINITY; 2],
         }
+    }
+
+    /// `−dP/dq` across the last bracket, where there is one.
+    fn slope(&self) -> Option<f64> {
+        let (a, b) = (self.above?, self.below?);
+        let s = (a.1 - b.1) / (b.0 - a.0);
+        (s.is_finite() && s > 0.0).then_some(s)
     }
 
     /// The next `q` to integrate at, `None` once found.
@@ -721,7 +758,7 @@ impl Root {
 
 /// Every root of `roots`, each integration `eval(q)` giving `P` at every root's `q` (roots
 /// already found keep theirs).
-fn find_roots(mut roots: Vec<Root>, eval: impl Fn(&[f64]) -> Vec<f64>) -> Vec<f64> {
+fn find_roots(mut roots: Vec<Root>, eval: impl Fn(&[f64]) -> Vec<f64>) -> Vec<Root> {
     loop {
         let qs: Vec<Option<f64>> = roots.iter_mut().map(Root::next).collect();
         if qs.iter().all(Option::is_none) {
@@ -739,7 +776,7 @@ fn find_roots(mut roots: Vec<Root>, eval: impl Fn(&[f64]) -> Vec<f64>) -> Vec<f6
             }
         }
     }
-    roots.iter().map(|r| r.found.expect("found")).collect()
+    roots
 }
 
 /// The pieces of one line at every speed, and the requirements' margins at a point of it.
@@ -954,6 +991,9 @@ fn add_piece(
     }
     if all {
         tally.v[l.all()] += mass;
+    }
+    if !view.reqs.moments {
+        return;
     }
     // The worst margin over each requirement's range.
     for (&x, &wx) in GL_X.iter().zip(&GL_W) {
