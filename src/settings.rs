@@ -70,11 +70,19 @@ pub const QUANTILE_SAMPLES: f64 = 3.7;
 /// fewer than [`QUANTILE_SAMPLES`] samples are expected beyond the margin met at it.
 pub fn unresolved_target(y: f64, n: usize) -> Option<String> {
     let beyond = n as f64 * y.min(1.0 - y);
+    // 10⁻³⁰⁰ and 1 − 10⁻¹² in words a reader takes in.
+    let shown = if y < 1e-4 {
+        format!("{y:e}")
+    } else if 1.0 - y < 1e-4 {
+        format!("1 − {:e}", 1.0 - y)
+    } else {
+        y.to_string()
+    };
     (beyond < QUANTILE_SAMPLES).then(|| {
         format!(
-            "target yield {y} with {n} samples: {beyond:.3} expected beyond the margin met at \
-             it, fewer than the {QUANTILE_SAMPLES} a 95 % interval needs; the Monte Carlo's \
-             margin there is left unbounded (limits.csv says so), the quadrature's is not"
+            "target yield {shown} with {n} samples: {beyond:.3e} expected beyond the margin met \
+             at it, fewer than the {QUANTILE_SAMPLES} a 95 % interval needs; the Monte Carlo's \
+             margin there is left unbounded (limits.csv says why)"
         )
     })
 }

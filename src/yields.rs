@@ -166,7 +166,8 @@ pub fn quantile_interval(sorted: &[f64], q: f64) -> [f64; 3] {
     let upper = (1..=n)
         .find(|&u| b.cdf(u as u64 - 1) >= 0.975)
         .map_or(f64::INFINITY, |u| sorted[u - 1]);
-    [est, lower, upper]
+    // The estimate interpolates between order statistics: the interval's ends hold it.
+    [est, lower.min(est), upper.max(est)]
 }
 
 /// The 95 % Wilson score interval of `k` successes in `n` trials.

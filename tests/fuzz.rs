@@ -161,6 +161,12 @@ proptest! {
                 prop_assert!(y.ci.0 <= y.probability + 1e-12 && y.probability <= y.ci.1 + 1e-12, "{y:?}");
             }
         }
+        for l in a.yields.iter().filter_map(|y| y.limit.as_ref()) {
+            if let Some([est, low, high]) = l.margin {
+                prop_assert!(!(low > est) && !(est > high), "{l:?}");
+                prop_assert!(!(est.is_nan() || low.is_nan() || high.is_nan()), "{l:?}");
+            }
+        }
         let rows = modaltol::report::limit_rows(m, &a);
         let width = modaltol::report::LIMITS_HEADER.len();
         for r in &rows {

@@ -631,10 +631,13 @@ pub(super) fn at_target(
     let ends = solve(&ends);
     for (k, &r) in with_margin.iter().enumerate() {
         let m = y.margins[r].as_mut().expect("a margin");
+        // The ends hold the estimate (at an atom of the margin, the three roots meet to
+        // rounding: ω_d = 0 for every overdamped design).
+        let q = estimates[k];
         m.at_target = Some(AtTarget {
-            estimate: estimates[k],
-            low: ends[2 * k].found.expect("found"),
-            high: ends[2 * k + 1].found.expect("found"),
+            estimate: q,
+            low: ends[2 * k].found.expect("found").min(q),
+            high: ends[2 * k + 1].found.expect("found").max(q),
             probability_error: errors[k],
         });
     }

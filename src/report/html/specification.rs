@@ -21,7 +21,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
         "<h2 id=\"specification\">Specification: yield against the target {}</h2>\
 <p>The probability that a design meets each requirement at every analysed speed of its range, and all of them together (<code>yield.csv</code>, with the per-speed curves). Quadrature: ± its error estimate; Monte Carlo: 95 % Wilson interval; first order: at the worst speed, an upper bound. <b>meets</b> is <i>yes</i> where the whole interval is at or above the target, <i>no</i> where below, <i>undecided</i> where it holds the target.</p>\
 <table><tr><th>requirement</th><th>case</th><th>method</th><th>yield</th><th>interval</th><th>meets</th><th>worst margin, mean ± σ</th><th>C<sub>pk</sub></th></tr>",
-        sig(target)
+        target_text(target)
     );
     let tu = transfer_unit(model);
     let mut rows: Vec<&crate::yields::YieldRow> =
@@ -157,7 +157,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
         "<h3 id=\"at-target\">What the design meets at the target yield {}</h3>\
 <p>With the tolerances as they are: the <b>largest operating range</b>, the highest analysed speed up to which (from the start of the requirement's range, beyond its end too) a design meets the requirement at every speed with probability ≥ the target, and in brackets the same from the interval's low and high ends; and the <b>worst margin met</b> at the target yield (its 1 − target quantile over the designs, with its interval), i.e. the tightest requirement of its kind the designs meet. Negative: the requirement must be relaxed by that much. First order: from the linearised margin at each speed, an estimate. In <code>limits.csv</code>.</p>\
 <table><tr><th>requirement</th><th>case</th><th>method</th><th>range met up to (rad/s)</th><th>worst margin met</th><th>tightest met</th></tr>",
-        sig(target)
+        target_text(target)
     );
     let tu = transfer_unit(model);
     let speed = |w: Option<f64>| w.map_or("none".to_string(), sig);
@@ -176,14 +176,25 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
                 speed(l.reach[2])
             )
         };
-        let margin = l.margin.map_or("–".into(), |m| {
+        // An unbounded end reads "unbounded"; the reason follows, as in limits.csv.
+        let num = |x: f64| {
+            if x.is_finite() {
+                sig(x)
+            } else {
+                "unbounded".to_string()
+            }
+        };
+        let mut margin = l.margin.map_or("–".into(), |m| {
             let u = crate::requirement::unit(r, &tu);
             if y.method == crate::yields::Method::FirstOrder {
-                format!("{} {}", sig(m[0]), esc(&u))
+                format!("{} {}", num(m[0]), esc(&u))
             } else {
-                format!("{} [{}, {}] {}", sig(m[0]), sig(m[1]), sig(m[2]), esc(&u))
+                format!("{} [{}, {}] {}", num(m[0]), num(m[1]), num(m[2]), esc(&u))
             }
         });
+        if let Some(why) = &l.why {
+            margin.push_str(&format!("<br><small>{}</small>", esc(why)));
+        }
         let _ = writeln!(
             h,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
@@ -198,4 +209,15 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
         );
     }
     let _ = writeln!(h, "</table>");
+}
+
+/// The target yield as written in a heading: to six figures, in full where that would read 0
+/// or 1 (a target of 1 − 10⁻¹² is not 1.00000).
+fn target_text(target: f64) -> String {
+    let short = sig(target);
+    if short == "1" || short == "0" || short.parse::<f64>().is_ok_and(|x| x <= 0.0 || x >= 1.0) {
+        target.to_string()
+    } else {
+        short
+    }
 }
