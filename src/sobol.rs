@@ -1,6 +1,6 @@
 //! Global sensitivity: which tolerance matters. First-order and total Sobol indices of every
 //! output at every speed and of every requirement's worst margin, by the pick-freeze Monte Carlo
-//! of Saltelli et al. (2010), with bootstrap confidence intervals, beside the derivative-based
+//! of Saltelli et al. (2010), with jackknife confidence intervals, beside the derivative-based
 //! upper bound on the total index from the exact gradients and Hessians.
 //!
 //! Two independent sample matrices `A`, `B` of `N` designs and, per variable `i`, `A_B^(i)`
@@ -12,8 +12,16 @@
 //! S_Ti = (1/2N) Σ_j (f(A)_j − f(A_B^(i))_j)² / V               (total, Jansen 1999)
 //! ```
 //!
-//! Their 95 % intervals are bootstrap percentiles over the `N` rows (200 resamples, a fixed
-//! seed: deterministic). The **derivative bound** (Sobol & Kucherenko 2009; Lamboni et al.
+//! Their 95 % intervals are the estimate ± 1.96 delete-one jackknife standard errors over the
+//! `N` rows (Efron & Stein 1981), computed from the estimators' sums in `O(N)`: deterministic;
+//! the total's on the log scale (it is a mean of squares, skewed to the right). A coverage
+//! study against exact indices (the tests below: |H| of one resonance, 2400 intervals of each
+//! kind) chose them over the bootstrap percentile intervals used before: at `N` = 256 those
+//! held the exact first-order index in 93.0 % of the cases, these in 94.3 %; the totals' hold
+//! it in 94.8 % at `N` = 1024 and about 93 % at `N` = 256, where the estimator's skew is not
+//! yet normal (a small `N` gives intervals a little too narrow).
+//!
+//! The **derivative bound** (Sobol & Kucherenko 2009; Lamboni et al.
 //! 2013 for the Poincaré constant of the normal law) is `S_Ti ≤ σ_i² E[(∂f/∂x_i)²] / V` (a
 //! uniform variable's constant is `(b − a)²/π² = 12σ²/π²`). The expectation and `V` are
 //! integrated by one rule over the distribution with the exact gradient at every node: the
@@ -37,8 +45,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal};
 
-/// Bootstrap resamples of the confidence intervals.
-const RESAMPLES: usize = 200;
+/// The standard normal's 97.5 % quantile: the intervals' half-width in standard errors.
+const Z95: f64 = 1.959_963_984_540_054;
 
 /// Settings of the Sobol indices.
 #[derive(Debug, Clone, Copy)]
@@ -190,11 +198,9 @@ pub fn sobol(
             if rows.len() < 2 {
                 continue;
             }
-            let (first, total, var_f) = estimate(&rows, rows.iter().map(|_| 1usize));
-            if var_f.is_nan() || var_f <= 0.0 {
+            let Some((first, total, first_ci, total_ci)) = estimate(&rows) else {
                 continue;
-            }
-            let (first_ci, total_ci) = bootstrap(&rows, opt.seed ^ (t as u64) << 20 ^ i as u64);
+            };
             let bound = match target {
                 Target::Output(s, o) => bounds[s][o].as_ref().map(|(nu, v)| nu[i] / v),
                 Target::Margin(_) => None,
@@ -258,57 +264,92 @@ fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -
     v
 }
 
-/// `(S_i, S_Ti, V)` from the rows `(f(A), f(B), f(A_B^(i)))` taken `counts` times each. The
-/// first-order sum is taken with `f(B)` centred on the pooled mean (the same estimator in the
-/// limit; its variance does not grow with the output's mean).
-fn estimate(
-    rows: &[(f64, f64, f64)],
-    counts: impl Iterator<Item = usize> + Clone,
-) -> (f64, f64, f64) {
-    let (mut n, mut s1) = (0.0, 0.0);
-    for (&(fa, fb, _), c) in rows.iter().zip(counts.clone()) {
-        n += c as f64;
-        s1 += c as f64 * (fa + fb);
-    }
-    let mean = s1 / (2.0 * n);
-    let (mut s2, mut first, mut total) = (0.0, 0.0, 0.0);
-    for (&(fa, fb, fab), c) in rows.iter().zip(counts) {
-        let c = c as f64;
-        let (ya, yb) = (fa - mean, fb - mean);
-        s2 += c * (ya * ya + yb * yb);
-        first += c * yb * (fab - fa);
-        total += c * (fa - fab) * (fa - fab);
-    }
-    let var = s2 / (2.0 * n);
-    (first / n / var, total / (2.0 * n) / var, var)
+/// The sums the two estimators are made of, over rows `(f(A), f(B), f(A_B^(i)))` shifted by
+/// one constant (the pooled mean of all rows, so that the variance is not a difference of
+/// large numbers). A row is added or, for the jackknife, taken out again.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    n: f64,
+    a: f64,
+    b: f64,
+    aa: f64,
+    bb: f64,
+    /// `Σ f(B) (f(A_B^(i)) − f(A))`.
+    bd: f64,
+    /// `Σ (f(A_B^(i)) − f(A))`.
+    d: f64,
+    /// `Σ (f(A_B^(i)) − f(A))²`.
+    dd: f64,
 }
 
-/// 95 % bootstrap percentile intervals of `S_i` and `S_Ti`.
-fn bootstrap(rows: &[(f64, f64, f64)], seed: u64) -> ((f64, f64), (f64, f64)) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let n = rows.len();
-    let (mut f, mut t) = (Vec::with_capacity(RESAMPLES), Vec::with_capacity(RESAMPLES));
-    let mut counts = vec![0usize; n];
-    for _ in 0..RESAMPLES {
-        counts.iter_mut().for_each(|c| *c = 0);
-        for _ in 0..n {
-            counts[rng.random_range(0..n)] += 1;
-        }
-        let (a, b, v) = estimate(rows, counts.iter().copied());
-        if v > 0.0 {
-            f.push(a);
-            t.push(b);
-        }
+impl Sums {
+    fn add(&mut self, (fa, fb, fab): (f64, f64, f64), sign: f64) {
+        let d = fab - fa;
+        self.n += sign;
+        self.a += sign * fa;
+        self.b += sign * fb;
+        self.aa += sign * fa * fa;
+        self.bb += sign * fb * fb;
+        self.bd += sign * fb * d;
+        self.d += sign * d;
+        self.dd += sign * d * d;
     }
-    let interval = |x: &mut Vec<f64>| {
-        x.sort_by(f64::total_cmp);
-        if x.is_empty() {
-            return (f64::NAN, f64::NAN);
+
+    /// `(S_i, S_Ti, V)`. The first-order sum is taken with `f(B)` centred on the pooled mean
+    /// (the same estimator in the limit; its variance does not grow with the output's mean).
+    fn indices(&self) -> (f64, f64, f64) {
+        let n = self.n;
+        let mean = (self.a + self.b) / (2.0 * n);
+        let var = (self.aa + self.bb) / (2.0 * n) - mean * mean;
+        let first = (self.bd - mean * self.d) / n / var;
+        let total = self.dd / (2.0 * n) / var;
+        (first, total, var)
+    }
+}
+
+/// `S_i`, `S_Ti` and their 95 % intervals of `S_i` and `S_Ti` from the rows
+/// `(f(A), f(B), f(A_B^(i)))`: the estimate ± 1.96 delete-one jackknife standard errors
+/// (Efron & Stein 1981; the estimators are smooth functions of means, asymptotically normal,
+/// Janon et al. 2014). `None` where the variance or a delete-one estimate is not positive and
+/// finite (too few distinct rows for an interval).
+#[allow(clippy::type_complexity)]
+fn estimate(rows: &[(f64, f64, f64)]) -> Option<(f64, f64, (f64, f64), (f64, f64))> {
+    let shift = rows.iter().map(|r| r.0 + r.1).sum::<f64>() / (2 * rows.len()) as f64;
+    let shifted = |r: &(f64, f64, f64)| (r.0 - shift, r.1 - shift, r.2 - shift);
+    let mut all = Sums::default();
+    for r in rows {
+        all.add(shifted(r), 1.0);
+    }
+    let (first, total, var) = all.indices();
+    if !(var > 0.0 && first.is_finite() && total.is_finite()) {
+        return None;
+    }
+    let mut deleted = Vec::with_capacity(rows.len());
+    for r in rows {
+        let mut s = all;
+        s.add(shifted(r), -1.0);
+        let (f, t, v) = s.indices();
+        if !(v > 0.0 && f.is_finite() && t.is_finite()) {
+            return None;
         }
-        let at = |q: f64| x[((x.len() - 1) as f64 * q).round() as usize];
-        (at(0.025), at(0.975))
+        deleted.push((f, t));
+    }
+    let n = rows.len() as f64;
+    let interval = |x: &dyn Fn(&(f64, f64)) -> f64, at: f64| {
+        let m = deleted.iter().map(x).sum::<f64>() / n;
+        let se = ((n - 1.0) / n * deleted.iter().map(|d| (x(d) - m).powi(2)).sum::<f64>()).sqrt();
+        (at - Z95 * se, at + Z95 * se)
     };
-    (interval(&mut f), interval(&mut t))
+    let first_ci = interval(&|d| d.0, first);
+    // The total is a mean of squares, skewed to the right: its interval on the log scale
+    // (exact at 0, where every row agrees and the variable has no effect).
+    let total_ci = if total > 0.0 && deleted.iter().all(|d| d.1 > 0.0) {
+        let (lo, hi) = interval(&|d| d.1.ln(), total.ln());
+        (lo.exp(), hi.exp())
+    } else {
+        interval(&|d| d.1, total)
+    };
+    Some((first, total, first_ci, total_ci))
 }
 
 /// Nodes of the derivative bound's rule per variable for up to [`TENSOR_MAX`] variables.
@@ -440,4 +481,180 @@ fn derivative_bounds(
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The receptance magnitude of one degree of freedom, `|H| = 1/|k − mω² + icω|`, with
+    /// `m`, `k`, `c` normal about 1, 1, 0.1 (σ 5 %, 5 %, 20 %), near resonance: skewed and
+    /// far from additive, as |H| is.
+    fn receptance(omega: f64) -> impl Fn(&[f64; 3]) -> f64 {
+        move |z| {
+            let (m, k, c) = (
+                1.0 + 0.05 * z[0],
+                1.0 + 0.05 * z[1],
+                0.1 * (1.0 + 0.2 * z[2]),
+            );
+            1.0 / ((k - m * omega * omega).powi(2) + (c * omega).powi(2)).sqrt()
+        }
+    }
+
+    /// The exact first-order and total indices by a 40-point Gauss–Hermite tensor rule:
+    /// `S_i = Var(E[f|x_i])/V`, `S_Ti = E[Var(f|x_~i)]/V`.
+    fn exact(f: &impl Fn(&[f64; 3]) -> f64) -> [(f64, f64); 3] {
+        const P: usize = 40;
+        let (x, w) = crate::linalg::gauss_hermite(P);
+        let at = |i: usize, k: usize, p: usize, q: usize| -> [usize; 3] {
+            match i {
+                0 => [k, p, q],
+                1 => [p, k, q],
+                _ => [p, q, k],
+            }
+        };
+        let mut vals = vec![0.0; P * P * P];
+        for a in 0..P {
+            for b in 0..P {
+                for c in 0..P {
+                    vals[(a * P + b) * P + c] = f(&[x[a], x[b], x[c]]);
+                }
+            }
+        }
+        let v = |n: [usize; 3]| vals[(n[0] * P + n[1]) * P + n[2]];
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for a in 0..P {
+            for b in 0..P {
+                for c in 0..P {
+                    let wt = w[a] * w[b] * w[c];
+                    m1 += wt * v([a, b, c]);
+                    m2 += wt * v([a, b, c]).powi(2);
+                }
+            }
+        }
+        let var = m2 - m1 * m1;
+        std::array::from_fn(|i| {
+            let (mut c1, mut c2, mut total) = (0.0, 0.0, 0.0);
+            for k in 0..P {
+                let mut cond = 0.0;
+                for p in 0..P {
+                    for q in 0..P {
+                        cond += w[p] * w[q] * v(at(i, k, p, q));
+                    }
+                }
+                c1 += w[k] * cond;
+                c2 += w[k] * cond * cond;
+            }
+            for p in 0..P {
+                for q in 0..P {
+                    let (mut s1, mut s2) = (0.0, 0.0);
+                    for (k, wk) in w.iter().enumerate() {
+                        let y = v(at(i, k, p, q));
+                        s1 += wk * y;
+                        s2 += wk * y * y;
+                    }
+                    total += w[p] * w[q] * (s2 - s1 * s1);
+                }
+            }
+            ((c2 - c1 * c1) / var, total / var)
+        })
+    }
+
+    /// Over `reps` independent pick-freeze estimates with `n` rows: how often each kind of
+    /// interval misses the exact index, `(first, total)`, out of `3 reps`.
+    fn misses(f: &impl Fn(&[f64; 3]) -> f64, n: usize, reps: usize, seed: u64) -> (usize, usize) {
+        let exact = exact(f);
+        let normal = Normal::standard();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut z = || normal.inverse_cdf(rng.random::<f64>().clamp(1e-12, 1.0 - 1e-12));
+        let (mut first, mut total) = (0, 0);
+        for _ in 0..reps {
+            let a: Vec<[f64; 3]> = (0..n).map(|_| [z(), z(), z()]).collect();
+            let b: Vec<[f64; 3]> = (0..n).map(|_| [z(), z(), z()]).collect();
+            for (i, e) in exact.iter().enumerate() {
+                let rows: Vec<(f64, f64, f64)> = (0..n)
+                    .map(|j| {
+                        let mut ab = a[j];
+                        ab[i] = b[j][i];
+                        (f(&a[j]), f(&b[j]), f(&ab))
+                    })
+                    .collect();
+                let (_, _, fc, tc) = estimate(&rows).unwrap();
+                first += usize::from(!(fc.0 <= e.0 && e.0 <= fc.1));
+                total += usize::from(!(tc.0 <= e.1 && e.1 <= tc.1));
+            }
+        }
+        (first, total)
+    }
+
+    /// The Wilson score interval (z = 2.576, 99 %) of a proportion `k/n`.
+    fn wilson99(k: usize, n: usize) -> (f64, f64) {
+        let (z, n, p) = (2.576, n as f64, k as f64 / n as f64);
+        let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+        let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+        (centre - half, centre + half)
+    }
+
+    /// The 95 % intervals of |H|'s indices hold the exact ones 95 % of the time: over 2400
+    /// intervals of each kind (|H| below and above resonance, three variables, 400
+    /// repetitions), the 99 % interval of the miss rate holds 5 %: the first-order indices'
+    /// at `N` = 256 (the bootstrap percentile intervals used before missed 7 % there, which
+    /// this refuses), the totals' at `N` = 1024 (at 256 they miss about 7 %: the estimator's
+    /// skew is not yet normal).
+    #[test]
+    fn intervals_of_a_resonant_magnitude_cover_the_exact_indices_at_their_level() {
+        for (n, kind) in [(256, 0), (1024, 1)] {
+            let (mut missed, mut count) = (0, 0);
+            for (omega, seed) in [(0.95, 1), (1.05, 2)] {
+                let m = misses(&receptance(omega), n, 400, seed);
+                missed += [m.0, m.1][kind];
+                count += 3 * 400;
+            }
+            let w = wilson99(missed, count);
+            let what = ["first-order", "total"][kind];
+            eprintln!("{what} at N = {n}: {missed} of {count} missed, 99 % interval {w:?}");
+            assert!(
+                w.0 <= 0.05 && 0.05 <= w.1,
+                "{what}: {missed} of {count} missed"
+            );
+        }
+    }
+
+    /// The delete-one jackknife from the sums equals the one recomputed from the rows left.
+    #[test]
+    fn the_jackknife_from_sums_equals_the_estimates_recomputed() {
+        let f = receptance(1.0);
+        let rows: Vec<(f64, f64, f64)> = (0..7)
+            .map(|j| {
+                let x = j as f64 * 0.37 - 1.0;
+                (f(&[x, 0.3, -x]), f(&[-x, x, 0.5]), f(&[x, x, -x]))
+            })
+            .collect();
+        let direct = |r: &[(f64, f64, f64)]| {
+            let n = r.len() as f64;
+            let mean = r.iter().map(|x| x.0 + x.1).sum::<f64>() / (2.0 * n);
+            let var = r
+                .iter()
+                .map(|x| (x.0 - mean).powi(2) + (x.1 - mean).powi(2))
+                .sum::<f64>()
+                / (2.0 * n);
+            let first = r.iter().map(|x| (x.1 - mean) * (x.2 - x.0)).sum::<f64>() / n / var;
+            let total = r.iter().map(|x| (x.0 - x.2).powi(2)).sum::<f64>() / (2.0 * n) / var;
+            (first, total)
+        };
+        let (first, total, fc, _) = estimate(&rows).unwrap();
+        let whole = direct(&rows);
+        assert!((first - whole.0).abs() < 1e-12 && (total - whole.1).abs() < 1e-12);
+        let left: Vec<f64> = (0..rows.len())
+            .map(|j| {
+                let mut r = rows.clone();
+                r.remove(j);
+                direct(&r).0
+            })
+            .collect();
+        let n = rows.len() as f64;
+        let m = left.iter().sum::<f64>() / n;
+        let se = ((n - 1.0) / n * left.iter().map(|x| (x - m).powi(2)).sum::<f64>()).sqrt();
+        assert!((fc.1 - fc.0 - 2.0 * Z95 * se).abs() < 1e-10, "{fc:?} {se}");
+    }
 }

@@ -421,7 +421,7 @@ pub(crate) struct AnalyzeArgs {
     #[arg(long = "case", value_name = "NAME")]
     pub(crate) cases: Vec<String>,
     /// Also the first-order and total Sobol indices of every output and of every
-    /// requirement's worst margin, with 95 % bootstrap intervals, by the pick-freeze Monte
+    /// requirement's worst margin, with 95 % jackknife intervals, by the pick-freeze Monte
     /// Carlo (Saltelli 2010) with N base samples (N·(d+2) sweeps for d variables), beside the
     /// derivative-based bound on the total index: DIR/sobol.csv and a table in the report.
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]

@@ -1,7 +1,7 @@
 //! Which tolerance matters, as bars: per case, each variable's first-order Sobol index S
 //! (solid) and total index S_T (light) of each target the report's table shows (every
 //! requirement's worst margin, then each output at the speed of its largest σ), their 95 %
-//! bootstrap intervals as whiskers and the derivative-based bound on S_T as a dash.
+//! jackknife intervals as whiskers and the derivative-based bound on S_T as a dash.
 
 use super::Plot;
 use super::draw::{Area, palette, panels, short};
@@ -64,7 +64,7 @@ pub(super) fn sobol_bars(model: &Model, a: &Analysis, case: usize) -> Option<Plo
             caption: format!(
                 "Which tolerance matters, case {}: per variable, the first-order Sobol index S \
                  (solid: the share of the variance it causes alone) and the total index S_T \
-                 (light: with its interactions) of each target, 95 % bootstrap intervals as \
+                 (light: with its interactions) of each target, 95 % jackknife intervals as \
                  whiskers, the derivative-based upper bound on S_T as a black dash (an arrow \
                  where it is above the axes). The numbers are in the table above and sobol.csv.",
                 a.cases[case].name
@@ -246,7 +246,7 @@ fn draw_legend(legend: &Area, series: &[String]) -> Result<(), String> {
                 .draw(&PathElement::new(vec![(25, y - 7), (25, y + 7)], BLACK))
                 .map_err(|e| e.to_string())
         },
-        "95 % bootstrap interval",
+        "95 % jackknife interval",
     )?;
     Ok(())
 }

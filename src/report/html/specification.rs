@@ -99,7 +99,7 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
     let _ = writeln!(
         h,
         "<h2 id=\"sobol\">Which tolerance matters: Sobol indices</h2>\
-<p>First-order index S (the share of the variance a variable causes alone) and total index S<sub>T</sub> (with its interactions), 95 % bootstrap intervals, pick-freeze Monte Carlo (Saltelli 2010); the derivative bound on S<sub>T</sub> from the exact gradients (Sobol &amp; Kucherenko 2009); the first-order variance share of the Taylor method beside it where the target is an output. Every speed and output in <code>sobol.csv</code>; here each requirement's worst margin and each output at the speed of its largest σ.</p>\
+<p>First-order index S (the share of the variance a variable causes alone) and total index S<sub>T</sub> (with its interactions), 95 % jackknife intervals, pick-freeze Monte Carlo (Saltelli 2010); the derivative bound on S<sub>T</sub> from the exact gradients (Sobol &amp; Kucherenko 2009); the first-order variance share of the Taylor method beside it where the target is an output. Every speed and output in <code>sobol.csv</code>; here each requirement's worst margin and each output at the speed of its largest σ.</p>\
 <table><tr><th>case</th><th>target</th><th>variable</th><th>S</th><th>S<sub>T</sub></th><th>bound on S<sub>T</sub></th><th>first-order share</th></tr>"
     );
     let shown = a.sobol_shown();
