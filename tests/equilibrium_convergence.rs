@@ -263,3 +263,22 @@ fn the_iteration_limit_does_not_fail_a_converged_point() {
         }
     }
 }
+
+/// From the default start (the hanging disk) a single solve at each speed from 7 to 12 rad/s,
+/// on both routes, reaches the independent equilibrium (the stable one continued from rest),
+/// not a failure and not another stationary point.
+#[test]
+fn a_single_solve_from_the_hanging_disk_reaches_the_equilibrium_at_every_speed() {
+    let model = Compiled::from_str(MODEL, "disk.toml").unwrap_or_else(|e| panic!("{e}"));
+    for w in [7.0, 8.0, 8.5, 9.0, 9.5, 10.0, 12.0] {
+        let exact = independent_equilibrium(w);
+        for direct in [false, true] {
+            let pt = solve(&model, w, direct);
+            let q = ball(&model, &pt);
+            assert!(
+                error(q, &exact) < 1e-12,
+                "Ω = {w}: {q:?} vs {exact} (direct: {direct})"
+            );
+        }
+    }
+}
