@@ -2,7 +2,6 @@
 //! a live run holds locked and the next run writing to the same place removes (rolling back a
 //! result directory cut midway first).
 
-use super::result_dir::roll_back;
 use super::truncate;
 use std::fs::File;
 use std::path::Path;
@@ -17,10 +16,10 @@ pub(super) fn mark_in_use(f: &File) {
 
 /// Removes what killed runs left in `dir` for the target named `name`: staging files and
 /// directories `.NAME.XXXXXX.partial` (`tempfile`'s six random characters) that no live run
-/// holds locked. A staging directory of a result directory `target` killed while its files
-/// were renamed in one by one is first rolled back ([`roll_back`]), so that the target holds
-/// the earlier run again.
-pub(super) fn remove_leftovers(dir: &Path, name: &str, target: Option<&Path>) {
+/// holds locked. A staging directory is first handed to `roll_back` (a result directory's
+/// staging directory, killed while its files were renamed in one by one, puts the earlier
+/// run back in its target), so that the target holds the earlier run again.
+pub(super) fn remove_leftovers(dir: &Path, name: &str, roll_back: Option<&dyn Fn(&Path)>) {
     let prefix = format!(".{}.", truncate(name, 60));
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -54,8 +53,8 @@ pub(super) fn remove_leftovers(dir: &Path, name: &str, target: Option<&Path>) {
         if f.try_lock().is_err() {
             continue;
         }
-        if let (true, Some(target)) = (kind.is_dir(), target) {
-            roll_back(&path, target);
+        if let (true, Some(roll_back)) = (kind.is_dir(), roll_back) {
+            roll_back(&path);
         }
         let _ = if kind.is_dir() {
             std::fs::remove_dir_all(&path)

@@ -3,24 +3,13 @@
 
 use super::pairing::pair_roots;
 use super::rigid::RigidTest;
-use super::{C64, IM_TOL, ModalError, Mode, Root, normalize};
+use super::{
+    C64, IM_TOL, MAX_MASS_CONDITION, MAX_MASS_CONDITION_BY_STIFFNESS, ModalError, Mode, Root,
+    normalize,
+};
 use crate::linalg;
 use crate::schur::Eigen;
 use nalgebra::{DMatrix, Dyn, LU};
-
-/// Condition number of `M̂` above which the modes are refused where a route divides by `M̂` (a
-/// coordinate moves next to no mass: the roots would be rounding): every root then carries
-/// errors of `ε cond(M̂)` relative to the largest (1e-4 here).
-pub(super) const MAX_MASS_CONDITION: f64 = 1e12;
-
-/// The same where a route divides by `K̂` instead (`M̂` the worse conditioned; see
-/// [`linalg::symmetric_definite`] and [`first_order_modes`]): the low modes keep a few ε
-/// whatever `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the
-/// highest, depend on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts
-/// as singular where that smallest eigenvalue carries 1 % of rounding (its frequency then
-/// 0.5 %): a coordinate moving next to no mass. A chain of a thousand segments in joint
-/// coordinates (`cond(M̂)` 3.9e12, growing like n⁴) is within.
-pub(super) const MAX_MASS_CONDITION_BY_STIFFNESS: f64 = 1e-2 / f64::EPSILON;
 
 /// The modes from the 2n×2n first-order form (any `M̂`, `Ĉ`, `K̂`; see the module
 /// documentation), unsorted.

@@ -65,7 +65,7 @@ pub use tracking::{match_shapes, permute, similarities, similarity};
 
 use crate::linalg;
 use crate::pair;
-use first_order::{MAX_MASS_CONDITION, MAX_MASS_CONDITION_BY_STIFFNESS, first_order_modes};
+use first_order::first_order_modes;
 use nalgebra::{Complex, DMatrix, DVector};
 use rigid::RigidTest;
 
@@ -147,6 +147,20 @@ pub enum ModalError {
         im: f64,
     },
 }
+
+/// Condition number of `M̂` above which the modes are refused where a route divides by `M̂` (a
+/// coordinate moves next to no mass: the roots would be rounding): every root then carries
+/// errors of `ε cond(M̂)` relative to the largest (1e-4 here).
+const MAX_MASS_CONDITION: f64 = 1e12;
+
+/// The same where a route divides by `K̂` instead (`M̂` the worse conditioned; see
+/// [`crate::linalg::symmetric_definite`] and [`first_order_modes`]): the low modes keep a few ε
+/// whatever `cond(M̂)`, and only the modes that live where `M̂` is nearly singular, the
+/// highest, depend on `M̂`'s smallest eigenvalue, itself known to `ε cond(M̂)`. So `M̂` counts
+/// as singular where that smallest eigenvalue carries 1 % of rounding (its frequency then
+/// 0.5 %): a coordinate moving next to no mass. A chain of a thousand segments in joint
+/// coordinates (`cond(M̂)` 3.9e12, growing like n⁴) is within.
+const MAX_MASS_CONDITION_BY_STIFFNESS: f64 = 1e-2 / f64::EPSILON;
 
 /// Relative size below which an imaginary part counts as zero (roots are then real).
 const IM_TOL: f64 = 1e-9;

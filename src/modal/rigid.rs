@@ -2,8 +2,7 @@
 //! documentation of [`crate::modal`]), found by a Rayleigh quotient of `K̂` on the mode's right
 //! vector.
 
-use super::first_order::MAX_MASS_CONDITION_BY_STIFFNESS;
-use super::{C64, Mode, ModeClass, Root};
+use super::{C64, MAX_MASS_CONDITION_BY_STIFFNESS, Mode, ModeClass, Root};
 use crate::linalg;
 use nalgebra::{DMatrix, DVector};
 

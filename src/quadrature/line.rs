@@ -6,9 +6,8 @@ use super::NodeData;
 use super::control::OnLine;
 use super::roots::{root_in, roots_in};
 use super::rules::grid;
-use super::sums::Sums;
 use crate::pair;
-use crate::tolerance::{Output, Quantity};
+use crate::tolerance::{Output, Quantity, sigma_of};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Where the extrapolated tails end (normal mass outside: 2·10⁻¹⁹).
@@ -29,6 +28,61 @@ pub(super) const GL_W: [f64; 5] = [
     0.478_628_670_499_366_5,
     0.236_926_885_056_189_1,
 ];
+
+/// Sums of one line (or of a rule) at one speed: per output the mass where it is defined and
+/// the first two moments about the nominal value; the event masses; the total mass.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Sums {
+    pub mass: f64,
+    pub defined: Vec<f64>,
+    pub s1: Vec<f64>,
+    pub s2: Vec<f64>,
+    /// Overdamped per mode, then unstable, then other branch.
+    pub events: Vec<f64>,
+}
+
+impl Sums {
+    pub fn new(outs: usize, modes: usize) -> Sums {
+        Sums {
+            mass: 0.0,
+            defined: vec![0.0; outs],
+            s1: vec![0.0; outs],
+            s2: vec![0.0; outs],
+            events: vec![0.0; modes + 2],
+        }
+    }
+
+    pub(super) fn add_scaled(&mut self, b: &Sums, w: f64) {
+        self.mass += w * b.mass;
+        for (x, y) in self
+            .defined
+            .iter_mut()
+            .chain(&mut self.s1)
+            .chain(&mut self.s2)
+            .chain(&mut self.events)
+            .zip(b.defined.iter().chain(&b.s1).chain(&b.s2).chain(&b.events))
+        {
+            *x += w * y;
+        }
+    }
+
+    /// Mean and σ of output `o` (shifted back by `shift`).
+    pub(super) fn moments(&self, o: usize, shift: f64) -> Option<(f64, f64)> {
+        let w = self.defined[o];
+        (w > 0.0).then(|| {
+            let m1 = self.s1[o] / w;
+            (m1 + shift, sigma_of(self.s2[o] / w - m1 * m1))
+        })
+    }
+
+    pub(super) fn probability(&self, e: usize) -> f64 {
+        if self.mass > 0.0 {
+            self.events[e] / self.mass
+        } else {
+            f64::NAN
+        }
+    }
+}
 
 /// Where a line integral collects its weighted output values for the quantiles (per output),
 /// and the line's weight.

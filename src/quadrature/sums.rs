@@ -2,10 +2,9 @@
 //! transverse error estimates: the statistics of one refinement level.
 
 use super::control::Control;
-use super::line::Context;
+use super::line::{Context, Sums};
 use super::rules::{Rule, Stage, Transverse};
 use super::{Event, NodeData, Probability, QuadStat, Reference};
-use crate::tolerance::sigma_of;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -13,61 +12,6 @@ use statrs::distribution::{ContinuousCDF, StudentsT};
 /// near 10⁻¹², a little amplified near a bifurcation): a floor of the error estimates, times
 /// the size of the output.
 const EVAL_PRECISION: f64 = 1e-9;
-
-/// Sums of one line (or of a rule) at one speed: per output the mass where it is defined and
-/// the first two moments about the nominal value; the event masses; the total mass.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Sums {
-    pub mass: f64,
-    pub defined: Vec<f64>,
-    pub s1: Vec<f64>,
-    pub s2: Vec<f64>,
-    /// Overdamped per mode, then unstable, then other branch.
-    pub events: Vec<f64>,
-}
-
-impl Sums {
-    pub fn new(outs: usize, modes: usize) -> Sums {
-        Sums {
-            mass: 0.0,
-            defined: vec![0.0; outs],
-            s1: vec![0.0; outs],
-            s2: vec![0.0; outs],
-            events: vec![0.0; modes + 2],
-        }
-    }
-
-    fn add_scaled(&mut self, b: &Sums, w: f64) {
-        self.mass += w * b.mass;
-        for (x, y) in self
-            .defined
-            .iter_mut()
-            .chain(&mut self.s1)
-            .chain(&mut self.s2)
-            .chain(&mut self.events)
-            .zip(b.defined.iter().chain(&b.s1).chain(&b.s2).chain(&b.events))
-        {
-            *x += w * y;
-        }
-    }
-
-    /// Mean and σ of output `o` (shifted back by `shift`).
-    fn moments(&self, o: usize, shift: f64) -> Option<(f64, f64)> {
-        let w = self.defined[o];
-        (w > 0.0).then(|| {
-            let m1 = self.s1[o] / w;
-            (m1 + shift, sigma_of(self.s2[o] / w - m1 * m1))
-        })
-    }
-
-    fn probability(&self, e: usize) -> f64 {
-        if self.mass > 0.0 {
-            self.events[e] / self.mass
-        } else {
-            f64::NAN
-        }
-    }
-}
 
 /// What one refinement stage gives: per speed and output the statistics and their error
 /// estimates' two parts (along the lines, across them: [`ErrorParts`]), and per speed the

@@ -5,7 +5,7 @@
 //! it can move; the chain rule is applied chunk by chunk over those lanes ([`Lanes`]). The
 //! derivatives are read where the pass left them ([`Rows`]).
 
-use super::seeding::Mark;
+use super::seeding::{CHUNK, Mark};
 use super::{BLOCK, Op, Seeding, Tape, Term};
 use crate::real::Real;
 use std::borrow::Cow;
@@ -275,10 +275,6 @@ impl<S: Clone> Rows<'_, S> {
         &self.tan[self.start[k]..self.start[k] + self.lanes]
     }
 }
-
-/// Lanes are processed in chunks of this many (fixed-size loops the compiler unrolls and
-/// vectorises; the lane ranges are mostly 1 to 4 wide).
-pub(super) const CHUNK: usize = 4;
 
 /// Scalars too wide to move a chunk of lanes as one array ([`crate::dual4::Dual4`], 40 bytes:
 /// three operands' chunks are 480 bytes, which the compiler copies through memory, eight times

@@ -21,8 +21,7 @@
 //!
 //! Cranelift: <https://cranelift.dev>, the code generator of Wasmtime.
 
-use super::forward::CHUNK;
-use super::seeding::Mark;
+use super::seeding::{CHUNK, Mark};
 use super::{Op, Seeding, Tape, Term};
 use cranelift_codegen::ir::{
     AbiParam, InstBuilder, MemFlagsData, StackSlotData, StackSlotKind, UserFuncName, Value, types,
@@ -77,10 +76,15 @@ impl std::fmt::Debug for NativePass {
 }
 
 /// Value and local partial derivatives of operation `i` (division and the functions), as the
-/// interpreter computes them: `out = [value, ∂/∂a, ∂/∂b]`.
-extern "C" fn partials(ops: *const Op, i: usize, val: *const f64, out: *mut f64) {
-    // SAFETY: the compiled code passes its program's operations, an index into them, the
-    // values of the operations before `i` and a stack slot of three numbers.
+/// interpreter computes them: `out = [value, ∂/∂a, ∂/∂b]`. Called by the compiled code only.
+///
+/// # Safety
+///
+/// `ops` points to at least `i + 1` operations, `val` to the `i` values of the operations
+/// before `i`, and `out` to three writable numbers that alias neither (the compiled code
+/// passes its program's operations, its value row and a stack slot of its own).
+unsafe extern "C" fn partials(ops: *const Op, i: usize, val: *const f64, out: *mut f64) {
+    // SAFETY: the caller's contract above.
     let (op, val, out) = unsafe {
         (
             *ops.add(i),
@@ -95,8 +99,14 @@ extern "C" fn partials(ops: *const Op, i: usize, val: *const f64, out: *mut f64)
 }
 
 /// Value of operation `i` as [`Tape::eval`] computes it (the operations not compiled inline).
-extern "C" fn value(ops: *const Op, i: usize, val: *const f64) -> f64 {
-    // SAFETY: as in `partials`.
+/// Called by the compiled code only.
+///
+/// # Safety
+///
+/// `ops` points to at least `i + 1` operations and `val` to the `i` values of the operations
+/// before `i`, as for [`partials`].
+unsafe extern "C" fn value(ops: *const Op, i: usize, val: *const f64) -> f64 {
+    // SAFETY: the caller's contract above.
     let (op, val) = unsafe { (*ops.add(i), std::slice::from_raw_parts(val, i)) };
     op.eval(val)
 }

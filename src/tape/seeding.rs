@@ -5,7 +5,6 @@
 //! [`Tape::forward`] and the compiled passes of [`native`](super::native) run a program along a
 //! seeding; making it is kept apart from running it, which happens many times.
 
-use super::forward::CHUNK;
 use super::{Op, Tape, Term};
 use std::sync::{Arc, Weak};
 
@@ -260,6 +259,10 @@ impl Mark {
         std::ptr::eq(self.0.as_ptr(), Arc::as_ptr(&id.0))
     }
 }
+
+/// Lanes are processed in chunks of this many (fixed-size loops the compiler unrolls and
+/// vectorises; the lane ranges are mostly 1 to 4 wide).
+pub(super) const CHUNK: usize = 4;
 
 /// Most lanes one pass of [`Tape::forward`] carries (see [`Tape::seeding`]).
 pub const BLOCK: usize = 256;

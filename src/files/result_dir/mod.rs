@@ -6,8 +6,6 @@
 mod exchange;
 mod one_by_one;
 
-pub(super) use one_by_one::roll_back;
-
 use super::inputs::{Identity, Inputs};
 use super::leftovers::{mark_in_use, remove_leftovers};
 use super::manifest::{
@@ -15,7 +13,7 @@ use super::manifest::{
 };
 use super::{FileError, directory_of, fail, invalid, sync, sync_parent, truncate, write_target};
 use exchange::exchange;
-use one_by_one::Rename;
+use one_by_one::{Rename, roll_back};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
@@ -65,10 +63,11 @@ impl ResultDir {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "results".into());
-        remove_leftovers(&parent, &name, Some(&resolved));
+        let undo = |staging: &Path| roll_back(staging, &resolved);
+        remove_leftovers(&parent, &name, Some(&undo));
         let exists = resolved.is_dir();
         if exists {
-            remove_leftovers(&resolved, INSIDE, Some(&resolved));
+            remove_leftovers(&resolved, INSIDE, Some(&undo));
         }
         let stage = |dir: &Path, name: &str| {
             tempfile::Builder::new()

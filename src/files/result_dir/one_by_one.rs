@@ -87,7 +87,7 @@ impl Moves {
 /// that reached the target are removed and the earlier ones (kept in `staging/.previous`) put
 /// back. A staging directory without that backup never started an install, and one without
 /// its manifest finished it: nothing to undo.
-pub(in crate::files) fn roll_back(staging: &Path, target: &Path) {
+pub(super) fn roll_back(staging: &Path, target: &Path) {
     let backup = staging.join(".previous");
     let Some(new) = Manifest::read(staging) else {
         return;

@@ -3,20 +3,10 @@
 //! coordinate, and the `independent` coordinates that span the remaining degrees of freedom.
 //! Its own stage because it weighs the joints against the cut joints, so it comes after both.
 
-use super::{Ctx, R};
+use super::{Ctx, Mechanism, R};
 use crate::model::schema::FileSchema;
-use crate::model::{Constraint, Coordinate, Coupler, Joint};
+use crate::model::{Constraint, Coordinate, Coupler};
 use toml::Spanned;
-
-/// The tree the cut joints close: joints (parents before children in `order`), the number of
-/// bodies and the coordinates.
-#[derive(Clone, Copy)]
-pub(super) struct Mechanism<'a> {
-    pub joints: &'a [Joint],
-    pub order: &'a [usize],
-    pub bodies: usize,
-    pub coordinates: &'a [Coordinate],
-}
 
 /// Drops the cut joints' redundant equations, checks that the mechanism can move, and returns
 /// the `independent` coordinates (indices into `coordinates`) if the file lists them.

@@ -79,7 +79,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     let independent = mobility::mobility(
         &ctx,
         &raw,
-        mobility::Mechanism {
+        Mechanism {
             joints: &tree.joints,
             order: &order,
             bodies: bodies.len(),
@@ -149,6 +149,16 @@ struct Ctx<'a> {
 
 /// The result of a check: the first error found stops validation.
 type R<T> = Result<T, ModelError>;
+
+/// The tree the cut joints close: joints (parents before children in `order`), the number of
+/// bodies and the coordinates.
+#[derive(Clone, Copy)]
+struct Mechanism<'a> {
+    pub joints: &'a [crate::model::Joint],
+    pub order: &'a [usize],
+    pub bodies: usize,
+    pub coordinates: &'a [crate::model::Coordinate],
+}
 
 impl<'a> Ctx<'a> {
     fn new(text: &'a str, file: &'a str) -> Self {

@@ -13,7 +13,7 @@
 //! the column `∂Φ/∂q_i` is the dual part of the cut equations with those bodies at
 //! `Rel_i(ε)` (exact, dual numbers). Fields are evaluated at the nominal parameters and speed 0.
 
-use super::mobility::Mechanism;
+use super::Mechanism;
 use crate::model::{Constraint, Coupler, Field};
 use crate::real::V3;
 use crate::rigid::Pose;
