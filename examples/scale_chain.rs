@@ -25,7 +25,7 @@
 //! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
 //! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
 //! `modaltol analyze` (`… -- model n k` prints the model file).
-use modaltol::analyze::{AnalyzeOptions, Method, Row, analyze};
+use modaltol::analyze::{AnalyzeOptions, Row, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
@@ -34,6 +34,7 @@ use modaltol::montecarlo::{McOptions, McStat};
 use modaltol::output::Quantity;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
+use modaltol::propagate::Method;
 use modaltol::quadrature::QuadOptions;
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};

@@ -29,10 +29,11 @@ use crate::analyze::{AnalyzeOptions, analyze};
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::{Case, Cost, Distribution, Tolerance};
+use crate::propagate::Method;
 use crate::propagate::{Run, Study};
 use crate::quadrature::QuadOptions;
 use crate::requirement::covers;
-use crate::yields::{Method, linear_margin};
+use crate::yields::linear_margin;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Rounds of search and verification at most.

@@ -15,44 +15,15 @@ use crate::modal::ModeClass;
 use crate::model::Case;
 use crate::montecarlo::{self, CaseShard, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
-use crate::propagate::{Propagation, Run, Study, Termination};
+use crate::propagate::{Method, Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
 use crate::sobol::{SobolIndex, SobolOptions, Target, sobol};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
 use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
 use crate::yields::{self, YieldRow};
+
 use std::time::Instant;
-
-/// Propagation methods, as named in the outputs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    FirstOrder,
-    SecondOrder,
-    /// ω_d from the pair invariants (see [`crate::tolerance`]).
-    Invariant,
-    MonteCarlo,
-    /// The whole pipeline integrated over the distribution ([`crate::quadrature`]).
-    Quadrature,
-    /// The answer to read: [`Method::Quadrature`] where it ran and gave a value; otherwise
-    /// the automatic choice among the Taylor methods (for ω_d the invariant method within
-    /// [`crate::tolerance::KINK_SIGMAS`] σ of a change of class, otherwise second order where
-    /// it exists, else first order). The row's `basis` says which.
-    Analytic,
-}
-
-impl Method {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Method::FirstOrder => "first_order",
-            Method::SecondOrder => "second_order",
-            Method::Invariant => "invariant",
-            Method::MonteCarlo => "monte_carlo",
-            Method::Quadrature => "quadrature",
-            Method::Analytic => "analytic",
-        }
-    }
-}
 
 /// One line of the result: a statistic of one output at one speed by one method.
 #[derive(Debug, Clone)]

@@ -19,32 +19,13 @@
 use crate::model::{Requirement, RequirementKind};
 use crate::montecarlo::YieldCounts;
 use crate::output::{Output, Quantity};
-use crate::propagate::Study;
+use crate::propagate::{Method, Study};
 use crate::quadrature::{MarginStat, QuadYield};
 use crate::requirement::{
     carriers, covers, has_margin, mode_margin, mode_margin_gradient, reaches,
 };
 use crate::tolerance::Spread;
 use statrs::distribution::{ContinuousCDF, Normal};
-
-/// The methods that give a yield, as named in the outputs (those of
-/// [`crate::analyze::Method`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    FirstOrder,
-    Quadrature,
-    MonteCarlo,
-}
-
-impl Method {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Method::FirstOrder => "first_order",
-            Method::Quadrature => "quadrature",
-            Method::MonteCarlo => "monte_carlo",
-        }
-    }
-}
 
 /// One line of `yield.csv`: the probability of meeting a requirement (or all of them) over its
 /// range or at one speed, by one method.

@@ -187,10 +187,11 @@ fn modal_takes_the_stable_branch_unless_asked_and_says_which_in_every_format() {
 /// cone's ω_d and ζ by the quadrature agree with Monte Carlo's 95 % interval.
 #[test]
 fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
-    use modaltol::analyze::{AnalyzeOptions, Method, analyze};
+    use modaltol::analyze::{AnalyzeOptions, analyze};
     use modaltol::model::Sampling;
     use modaltol::montecarlo::McOptions;
     use modaltol::output::Quantity;
+    use modaltol::propagate::Method;
     use modaltol::quadrature::{Event, QuadOptions};
     let text = format!(
         "{}[[analysis.cases]]\nname = \"geometry\"\ntolerances = {{ m = \"3%\", L = \"2%\" }}\n",

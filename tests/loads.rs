@@ -15,11 +15,12 @@
 mod common;
 
 use common::{example_text, roots, same_roots, solve};
-use modaltol::analyze::{AnalyzeOptions, Method, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
 use modaltol::model::Case;
 use modaltol::output::Quantity;
+use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Sweep};
 use num_dual::{Dual64, DualNum};
 

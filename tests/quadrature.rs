@@ -11,9 +11,10 @@ mod common;
 use common::pendulum::G;
 
 use common::example;
-use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
+use modaltol::analyze::{Analysis, AnalyzeOptions, Row, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::Case;
+use modaltol::propagate::Method;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::report::{outside_request, outside_request_lines};
 use modaltol::tolerance::Quantity;

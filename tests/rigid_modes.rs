@@ -5,12 +5,13 @@
 //! `modal`, `sweep`, the quadrature or the Monte Carlo. Generated over masses, lengths, dampers
 //! and speeds (all below the speeds where the bodies' own equilibria lose stability).
 
-use modaltol::analyze::{AnalyzeOptions, Method, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
 use modaltol::output::Quantity;
+use modaltol::propagate::Method;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
 

@@ -16,8 +16,9 @@ use modaltol::allocate::{AllocateOptions, allocate};
 use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::montecarlo::McOptions;
+use modaltol::propagate::Method;
 use modaltol::quadrature::QuadOptions;
-use modaltol::yields::{Method, YieldRow};
+use modaltol::yields::YieldRow;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// σ of L: the example's 3 % case (±3σ).

@@ -332,9 +332,10 @@ fn on_a_free_joint_each_axis_has_its_own_spring_and_damper() {
 fn the_first_order_spread_of_the_damping_ratio_equals_the_hand_derivations() {
     // Tolerances on the damper and the rod's length (3σ): the first-order σ of ζ on the cone is
     // the root-sum-square of ∂ζ/∂c σ_c and ∂ζ/∂L σ_L, by central differences of the hand form.
-    use modaltol::analyze::{AnalyzeOptions, Method, analyze};
+    use modaltol::analyze::{AnalyzeOptions, analyze};
     use modaltol::model::Case;
     use modaltol::output::Quantity;
+    use modaltol::propagate::Method;
     let omega = 8.0;
     let theta = (rod().2 / (omega * omega)).acos();
     let text = cone(

@@ -11,11 +11,12 @@
 mod common;
 
 use common::{example, example_text};
-use modaltol::analyze::{AnalyzeOptions, Method, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::modal::{Smoothness, smoothness};
 use modaltol::output::{Missing, Quantity};
 use modaltol::program::Workspace;
+use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Point, Sweep};
 use modaltol::tolerance::{LocalModel, local_model, match_modes};
 use nalgebra::DMatrix;

@@ -8,11 +8,12 @@ use common::pendulum::G;
 use modaltol::program::Workspace;
 
 use common::example;
-use modaltol::analyze::{Analysis, AnalyzeOptions, Method, Row, analyze};
+use modaltol::analyze::{Analysis, AnalyzeOptions, Row, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::{Case, Sampling};
 use modaltol::montecarlo::McOptions;
 use modaltol::output::Missing;
+use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use modaltol::tolerance::Quantity;
 use modaltol::tolerance::{LocalModel, local_model, match_modes};

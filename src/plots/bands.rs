@@ -5,7 +5,8 @@
 
 use super::draw::{Band, Line, Style, draw};
 use super::{Output, Plot, method_color, scale, series, unit};
-use crate::analyze::{Analysis, Method};
+use crate::analyze::Analysis;
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 use plotters::prelude::*;
 

@@ -4,8 +4,9 @@
 
 use super::draw::{Band, Line, Style, draw, palette};
 use super::{Display, Plot, series};
-use crate::analyze::{Analysis, Method, Row};
+use crate::analyze::{Analysis, Row};
 use crate::model::Model;
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 use plotters::prelude::*;
 

@@ -33,8 +33,9 @@ pub use campbell::CriticalSpeed;
 pub use draw::{AXES_WIDTH, LEGEND_WIDTH, tick_label};
 pub use png::{fonts, png};
 
-use crate::analyze::{Analysis, Method, Row};
+use crate::analyze::{Analysis, Row};
 use crate::model::{Case, Model};
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 use bands::band;
 use campbell::campbell;

@@ -4,8 +4,9 @@
 
 use super::draw::{Line, Style, draw, palette};
 use super::{Display, Plot};
-use crate::analyze::{Analysis, Method};
+use crate::analyze::Analysis;
 use crate::model::Model;
+use crate::propagate::Method;
 
 /// Probabilities of character of one case against speed, quadrature and Monte Carlo (a colour
 /// per event, solid for the quadrature and dots for Monte Carlo); `None` when every

@@ -2,9 +2,9 @@
 //! reached its finest grid first. They keep their values (with their error estimates); this
 //! says plainly which they are, in `summary.json`, the report and on stderr.
 
-use crate::analyze::{Analysis, Method};
+use crate::analyze::Analysis;
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
-use crate::yields;
 
 /// Quadrature rows of one case and output whose error estimates exceed the request.
 #[derive(Debug, Clone)]
@@ -52,7 +52,7 @@ pub struct YieldOutside {
 pub fn yield_outside_request(a: &Analysis) -> Vec<YieldOutside> {
     let mut out: Vec<YieldOutside> = Vec::new();
     for y in &a.yields {
-        if y.method != yields::Method::Quadrature || y.within_request != Some(false) {
+        if y.method != crate::propagate::Method::Quadrature || y.within_request != Some(false) {
             continue;
         }
         match out

@@ -4,7 +4,8 @@
 //! admissible. Its own file because three outputs (stderr, JSON, HTML) say it.
 
 use super::accuracy::{bounds, output_name, speed_range};
-use crate::analyze::{Analysis, Method};
+use crate::analyze::Analysis;
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 
 /// Rows of one method for one output and case that have no value, for one reason.

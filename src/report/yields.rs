@@ -4,8 +4,9 @@
 
 use crate::analyze::Analysis;
 use crate::model::{Model, Requirement, RequirementKind, SeparationMargin};
+use crate::propagate::Method;
 use crate::requirement::unit;
-use crate::yields::{Method, YieldRow};
+use crate::yields::YieldRow;
 use serde_json::{Value, json};
 
 /// Header of `yield.csv`.

@@ -2,7 +2,8 @@
 //! speed ranges where first order's σ is more than 10 % off the quadrature's, and the worst.
 
 use super::esc;
-use crate::analyze::{Analysis, Method};
+use crate::analyze::Analysis;
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 use std::fmt::Write;
 

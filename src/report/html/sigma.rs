@@ -2,10 +2,11 @@
 //! and of |H| by every method at the speeds that matter, and how the methods agree there.
 
 use super::{esc, sig};
-use crate::analyze::{Analysis, Method, Row};
+use crate::analyze::{Analysis, Row};
 use crate::model::Model;
 use crate::montecarlo::McStat;
 use crate::plots::{CriticalSpeed, Display};
+use crate::propagate::Method;
 use crate::tolerance::Quantity;
 use std::fmt::Write;
 

@@ -43,7 +43,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
                 String::new(),
             ),
         };
-        let verdict = if y.method == crate::yields::Method::FirstOrder {
+        let verdict = if y.method == crate::propagate::Method::FirstOrder {
             if y.probability < target {
                 "no"
             } else {
@@ -113,7 +113,7 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
                 .iter()
                 .find(|r| {
                     r.case == *case
-                        && r.method == crate::analyze::Method::FirstOrder
+                        && r.method == crate::propagate::Method::FirstOrder
                         && r.speed.to_bits() == a.speeds[i].to_bits()
                         && r.quantity == a.outputs[o].quantity
                         && r.mode == a.outputs[o].mode
@@ -166,7 +166,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
             continue;
         };
         let r = &model.requirements[r];
-        let reach = if y.method == crate::yields::Method::FirstOrder {
+        let reach = if y.method == crate::propagate::Method::FirstOrder {
             speed(l.reach[0])
         } else {
             format!(
@@ -186,7 +186,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
         };
         let mut margin = l.margin.map_or("–".into(), |m| {
             let u = crate::requirement::unit(r, &tu);
-            if y.method == crate::yields::Method::FirstOrder {
+            if y.method == crate::propagate::Method::FirstOrder {
                 format!("{} {}", num(m[0]), esc(&u))
             } else {
                 format!("{} [{}, {}] {}", num(m[0]), num(m[1]), num(m[2]), esc(&u))
