@@ -15,12 +15,13 @@ use crate::modal::ModeClass;
 use crate::model::Case;
 use crate::montecarlo::{self, CaseShard, McOptions, McStat, MonteCarlo, TreeFold};
 use crate::output::Missing;
+use crate::output::{Output, Quantity};
 use crate::propagate::{Method, Propagation, Run, Study, Termination};
 use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
 use crate::sobol::{SobolIndex, SobolOptions, Target, sobol};
 use crate::sweep::Point;
 use crate::taylor::{Taylor, TaylorStats};
-use crate::tolerance::{KINK_SIGMAS, LocalModel, Output, Quantity, Spread, Stat};
+use crate::tolerance::{KINK_SIGMAS, LocalModel, Spread, Stat};
 use crate::yields::{self, YieldRow};
 
 use std::time::Instant;

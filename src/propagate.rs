@@ -20,11 +20,12 @@
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::Transfer;
+use crate::output::{Output, outputs};
 use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
-use crate::tolerance::{LocalModel, Output, Spread, add_hessians, local_model, outputs};
+use crate::tolerance::{LocalModel, Spread, add_hessians, local_model};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};

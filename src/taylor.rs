@@ -6,9 +6,10 @@
 //! its own result, or the reason it has none.
 
 use crate::output::Missing;
+use crate::output::Quantity;
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::tolerance::{
-    LocalModel, Quantity, Spread, Stat, discriminant, first_order, invariant, second_order,
+    LocalModel, Spread, Stat, discriminant, first_order, invariant, second_order,
 };
 
 /// First-order variance shares: each variable's share of the variance.

@@ -36,7 +36,7 @@ use crate::sensitivity::{Status, TransferAt, analytic};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 
-pub use crate::output::{Output, Quantity, outputs};
+use crate::output::{Output, Quantity, outputs};
 
 /// Value of an output at a point (modes in the point's order); `None` if not defined.
 pub fn value(pt: &Point, o: &Output, tf: Option<TransferAt>) -> Option<f64> {

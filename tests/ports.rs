@@ -211,7 +211,7 @@ fn the_tolerance_analysis_of_a_port_transfer_equals_the_coordinates() {
     // vectors, the quadrature through their values) for the collar port as for the collar's
     // coordinate; and the unit of |H| follows the ends.
     use modaltol::analyze::{AnalyzeOptions, analyze};
-    use modaltol::tolerance::Quantity;
+    use modaltol::output::Quantity;
     let by_port = Compiled::from_str(
         &governor_text().replace(
             "transfer = { input = \"slide\", output = \"slide\", order = 1 }",

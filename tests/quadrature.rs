@@ -14,10 +14,10 @@ use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, Row, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::Case;
+use modaltol::output::Quantity;
 use modaltol::propagate::Method;
 use modaltol::quadrature::{Event, QuadOptions};
 use modaltol::report::{outside_request, outside_request_lines};
-use modaltol::tolerance::Quantity;
 
 /// The swept pendulum's exact outputs at rod length `l` and speed `w` (the known answer of
 /// `tests/common/pendulum.rs`): the pair discriminant `4Ik − c²`, ω_d and |H(jΩ)|. The sweep

@@ -410,7 +410,7 @@ tolerances = {{ m = "{}%", L = "{}%", c = "{}%" }}
     let wd = a
         .outputs
         .iter()
-        .position(|o| o.quantity == modaltol::tolerance::Quantity::DampedFrequency)
+        .position(|o| o.quantity == modaltol::output::Quantity::DampedFrequency)
         .unwrap();
     let names = ["m", "L", "c"];
     for (k, e) in exact.iter().enumerate() {

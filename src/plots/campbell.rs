@@ -6,8 +6,8 @@ use super::draw::{Band, Line, Style, draw, palette};
 use super::{Display, Plot, series};
 use crate::analyze::{Analysis, Row};
 use crate::model::Model;
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 use plotters::prelude::*;
 
 /// A mode crossing an engine-order line: `ω_d(Ω) = order·Ω`.

@@ -35,8 +35,8 @@ pub use png::{fonts, png};
 
 use crate::analyze::{Analysis, Row};
 use crate::model::{Case, Model};
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 use bands::band;
 use campbell::campbell;
 use draw::COLORS;

@@ -6,8 +6,8 @@ use super::draw::{Line, draw, palette};
 use super::{Display, Plot, series};
 use crate::analyze::Analysis;
 use crate::model::Model;
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 
 /// Shares of the first-order variance of mode 1's ω_d in case `ci` against speed (`xlabel`), in
 /// per cent; `None` where there is nothing to draw.

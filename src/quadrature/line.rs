@@ -6,8 +6,9 @@ use super::NodeData;
 use super::control::OnLine;
 use super::roots::{root_in, roots_in};
 use super::rules::grid;
+use crate::output::{Output, Quantity};
 use crate::pair;
-use crate::tolerance::{Output, Quantity, sigma_of};
+use crate::tolerance::sigma_of;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Where the extrapolated tails end (normal mass outside: 2·10⁻¹⁹).

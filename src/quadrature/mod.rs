@@ -70,11 +70,12 @@ mod sums;
 mod surrogate;
 mod yields;
 
+use crate::output::{Output, Quantity};
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::sweep::Point;
-use crate::tolerance::{Output, Quantity, Spread, value};
+use crate::tolerance::{Spread, value};
 use control::Control;
 use directions::{design_jacobian, directions};
 use nalgebra::{DMatrix, DVector};
@@ -244,7 +245,7 @@ fn nominal_values(study: &Study) -> Vec<Vec<f64>> {
 
 /// The whole integration of one case to the requested relative `tolerance`.
 fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadResult {
-    // One ω_d output per mode (see `crate::tolerance::outputs`).
+    // One ω_d output per mode (see `crate::output::outputs`).
     let modes = study
         .outputs
         .iter()

@@ -3,8 +3,8 @@
 //! says plainly which they are, in `summary.json`, the report and on stderr.
 
 use crate::analyze::Analysis;
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 
 /// Quadrature rows of one case and output whose error estimates exceed the request.
 #[derive(Debug, Clone)]

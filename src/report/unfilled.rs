@@ -5,8 +5,8 @@
 
 use super::accuracy::{bounds, output_name, speed_range};
 use crate::analyze::Analysis;
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 
 /// Rows of one method for one output and case that have no value, for one reason.
 #[derive(Debug, Clone)]

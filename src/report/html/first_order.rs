@@ -3,8 +3,8 @@
 
 use super::esc;
 use crate::analyze::Analysis;
+use crate::output::Quantity;
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 use std::fmt::Write;
 
 /// Per case and output: the speeds where first order's σ is more than 10 % off the

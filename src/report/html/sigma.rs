@@ -5,16 +5,13 @@ use super::{esc, sig};
 use crate::analyze::{Analysis, Row};
 use crate::model::Model;
 use crate::montecarlo::McStat;
+use crate::output::{Output, Quantity};
 use crate::plots::{CriticalSpeed, Display};
 use crate::propagate::Method;
-use crate::tolerance::Quantity;
 use std::fmt::Write;
 
 /// The modes the summary covers: the first three.
 const MODES: usize = 3;
-
-/// An output: a quantity, and its mode where it has one.
-type Output = (Quantity, Option<usize>);
 
 /// A row of a case's table: the output, where (in words) and the speed (rad/s) of the rows it
 /// shows.
@@ -70,9 +67,12 @@ fn outputs(a: &Analysis) -> Vec<Output> {
         .filter(|r| r.method == Method::Analytic)
         .filter(|r| r.mode.is_none_or(|m| m < MODES))
         .filter(|r| r.quantity != Quantity::DampingRatio || r.mean != 0.0 || r.std > 0.0)
-        .map(|r| (r.quantity, r.mode))
+        .map(|r| Output {
+            quantity: r.quantity,
+            mode: r.mode,
+        })
         .collect();
-    outputs.sort_by_key(|o| (o.1, o.0 as u8));
+    outputs.sort_by_key(|o| (o.mode, o.quantity as u8));
     outputs.dedup();
     outputs
 }
@@ -131,7 +131,7 @@ impl<'a> Case<'a> {
     fn places(&self, outputs: &[Output], critical: &[CriticalSpeed], d: Display) -> Vec<Place> {
         let fs = d.speed.per_rad_per_second();
         let mut places: Vec<Place> = Vec::new();
-        for &(q, mode) in outputs {
+        for &Output { quantity: q, mode } in outputs {
             if let Some(r) = self
                 .answers(q, mode)
                 .into_iter()
