@@ -24,7 +24,7 @@ use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
-use crate::tolerance::{LocalModel, Output, Spread, add_hessians, local_model, outputs};
+use crate::tolerance::{LocalModel, Output, Spread, add_hessians, local_model};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -219,15 +219,9 @@ impl<'a> Study<'a> {
         }
         let second_order = start.elapsed().as_secs_f64();
         failures.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let modes = nominal
-            .iter()
-            .flatten()
-            .map(|p| p.modes.len())
-            .next()
-            .unwrap_or(0);
         Study {
             model,
-            outputs: outputs(modes, transfer.is_some()),
+            outputs: crate::output::of_model(model.model()),
             branches: branch_counts(&nominal),
             vars,
             speeds,
