@@ -3,6 +3,7 @@
 //! ([`crate::tolerance`]) both name them without depending on each other.
 
 use crate::modal::Smoothness;
+use crate::model::Model;
 
 /// Output kinds whose spread is propagated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,6 +50,15 @@ pub fn outputs(modes: usize, transfer: bool) -> Vec<Output> {
         });
     }
     out
+}
+
+/// The outputs of `model` at every speed: ω_d and ζ of each of its modes, one per degree of
+/// freedom (every point that solves has that many), then |H| where its `[analysis]` names a
+/// transfer function. The model's, not a point's: the analysis, its Monte Carlo and the shard
+/// files all count these, so a run whose nominal design fails at every speed still has rows
+/// (each saying why it is empty) and its shards merge.
+pub fn of_model(model: &Model) -> Vec<Output> {
+    outputs(model.dof(), model.analysis.transfer.is_some())
 }
 
 /// Why an output has no derivative, or a method no statistic, at a point: every empty cell of

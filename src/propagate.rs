@@ -20,7 +20,7 @@
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::Transfer;
-use crate::output::{Output, outputs};
+use crate::output::{self, Output};
 use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
@@ -251,15 +251,9 @@ impl<'a> Study<'a> {
         }
         let second_order = start.elapsed().as_secs_f64();
         failures.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let modes = nominal
-            .iter()
-            .flatten()
-            .map(|p| p.modes.len())
-            .next()
-            .unwrap_or(0);
         Study {
             model,
-            outputs: outputs(modes, transfer.is_some()),
+            outputs: output::of_model(model.model()),
             branches: branch_counts(&nominal),
             vars,
             speeds,

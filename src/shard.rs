@@ -31,9 +31,10 @@ use std::path::PathBuf;
 /// Largest shard file read (a shard holds a few blocks of moments per case).
 pub const MAX_BYTES: u64 = 1 << 30;
 
-/// The outputs per speed of the model's Monte Carlo (as `analyze` makes them).
+/// The outputs per speed of the model's Monte Carlo ([`crate::output::of_model`], as `analyze`
+/// makes them).
 pub fn output_count(m: &Model) -> usize {
-    crate::output::outputs(m.dof(), m.analysis.transfer.is_some()).len()
+    crate::output::of_model(m).len()
 }
 
 /// Format tag of shard files (2: aligned blocks, digest; 3: the fingerprint by section, the

@@ -133,3 +133,41 @@ fn bad_couplers_are_refused_at_their_place() {
         assert!(e.contains(expect), "{extra}: {e}");
     }
 }
+
+/// A solve that fails where the couplers' equations are redundant (a coefficient `−1e300` at
+/// speed 1, the gravity overflowing) is reported naming the coupler, as a cut joint would be:
+/// the equations' owners include the couplers (found by the pipeline fuzzer: a panic, the
+/// owners listing the cut joints only).
+#[test]
+fn a_failed_solve_names_a_redundant_coupler() {
+    let text = gears(MESH).replace("gravity = [0, 0, 0]", "gravity = [0, \"1e308*speed\", 0]")
+        + r#"
+[[bodies]]
+name = "rack"
+mass = 0.5
+inertia = [0.001, 0.001, 0.001]
+cm = ["r1 + r2", "-r2", 0]
+
+[[joints]]
+name = "slide"
+type = "prismatic"
+parent = "ground"
+child = "rack"
+axis = [1, 0, 0]
+stiffness = 100
+
+[[couplers]]
+name = "pinion"
+coordinates = ["shaft2", "slide"]
+coefficients = ["r2", "-speed*1e300"]
+"#;
+    let m = Compiled::from_str(&text, "gears.toml").unwrap_or_else(|e| panic!("{e}"));
+    let p = m.model().nominal();
+    let e = modaltol::sweep::point_at(&m, &p, 1.0, &Default::default())
+        .expect_err("the gravity overflows")
+        .to_string();
+    assert!(
+        e.contains("redundant cut joints or couplers: mesh duplicate"),
+        "{e}"
+    );
+}

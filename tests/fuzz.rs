@@ -229,3 +229,174 @@ proptest! {
         }
     }
 }
+
+/// A rod hinged to the ground on a torsional spring, pulled sideways by a dead load: its mass,
+/// length, damping and load made from the parameters `fields` through bounded functions
+/// (`atan`), so that any finite values give a valid, underdamped rod whose one mode depends
+/// smoothly on them; `parameters` the `[parameters]` table's lines.
+fn derived_rod(parameters: &str, fields: [&str; 4]) -> String {
+    let [m, l, c, f] = fields;
+    format!(
+        r#"
+name = "derived rod"
+gravity = [0, -9.80665, 0]
+[parameters]
+{parameters}
+[[bodies]]
+name = "rod"
+mass = "2 + atan({m})"
+inertia = ["(2 + atan({m}))*(0.5 + atan({l})^2)^2/12", 0, "(2 + atan({m}))*(0.5 + atan({l})^2)^2/12"]
+cm = [0, "-(0.5 + atan({l})^2)/2", 0]
+[[joints]]
+name = "hinge"
+type = "revolute"
+parent = "ground"
+child = "rod"
+at = [0, 0, 0]
+axis = [0, 0, 1]
+stiffness = 5
+damping = "0.1 + 0.1*atan({c})^2"
+[[loads]]
+name = "pull"
+type = "force"
+body = "rod"
+point = [0, "-(0.5 + atan({l})^2)", 0]
+force = ["0.5*atan({f})", 0, 0]
+"#
+    )
+}
+
+/// The rod's one mode at rest: `[λ₁ + λ₂, λ₁ λ₂, ω_d]` (the pair's invariants, smooth, and
+/// the damped frequency), or `None` where the point does not solve.
+fn rod_mode(model: &Compiled) -> Option<[f64; 3]> {
+    let p = model.model().nominal();
+    let q0 = initial_guess(model.model(), &p, 0.0).ok()?;
+    let pt = point(model, &p, 0.0, &q0, &Options::default()).ok()?;
+    let m = pt.modes.first()?;
+    let (a, b) = (m.root.lambda, m.partner.lambda);
+    Some([(a + b).re, (a * b).re, m.damped_frequency])
+}
+
+/// Whether derived parameter `i` reaches itself through `uses` (the derived parameters each
+/// uses).
+fn on_a_cycle(i: usize, uses: &[Vec<usize>]) -> bool {
+    let mut seen = vec![false; uses.len()];
+    let mut stack = uses[i].clone();
+    while let Some(j) = stack.pop() {
+        if j == i {
+            return true;
+        }
+        if !std::mem::replace(&mut seen[j], true) {
+            stack.extend(&uses[j]);
+        }
+    }
+    false
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(8),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Random graphs of derived parameters (DAGs and cycles, in any order of definition) over
+    /// three base parameters, driving a hinged rod: a graph with a cycle is refused at a
+    /// member, naming a cycle of the graph in the order each uses the next; an acyclic one
+    /// validates, `--wrt` a derived parameter is refused naming it as derived, and the exact
+    /// sensitivity of the rod's mode to a base parameter equals a central difference of the
+    /// model re-read with that parameter set (`--set`), to a few 1e-6.
+    #[test]
+    fn random_derived_parameter_graphs_validate_or_refuse_and_differentiate_exactly(
+        defs in prop::collection::vec((0usize..5, 0usize..9, 0usize..9), 1..7),
+        fields in [0usize..9, 0usize..9, 0usize..9, 0usize..9],
+        wrt in 0usize..9,
+    ) {
+        let base = [("a", 1.2), ("b", 0.8), ("g", 0.5)];
+        let n = defs.len();
+        // Names 0..3 are the base parameters, 3.. the derived ones (taken modulo the count).
+        let name = |k: usize| {
+            let k = k % (3 + n);
+            if k < 3 { base[k].0.to_string() } else { format!("d{}", k - 3) }
+        };
+        let mut uses = vec![Vec::new(); n];
+        let mut lines: Vec<String> = base.iter().map(|(p, v)| format!("{p} = {v}")).collect();
+        for (i, &(form, x, y)) in defs.iter().enumerate() {
+            for k in [x, y] {
+                if k % (3 + n) >= 3 {
+                    uses[i].push(k % (3 + n) - 3);
+                }
+            }
+            let (x, y) = (name(x), name(y));
+            let e = match form {
+                0 => format!("{x} + {y}"),
+                1 => format!("{x}*{y}"),
+                2 => format!("sqrt({x}*{x} + {y})"),
+                3 => format!("{x}/(1 + {y})"),
+                _ => format!("0.5*{x} + 0.1 + 0*{y}"),
+            };
+            lines.push(format!("d{i} = \"{e}\""));
+        }
+        let field_names = fields.map(name);
+        let text = derived_rod(&lines.join("\n"), field_names.each_ref().map(|s| s.as_str()));
+        let cyclic = (0..n).any(|i| on_a_cycle(i, &uses));
+        let model = match Compiled::from_str(&text, "graph.toml") {
+            Ok(m) => m,
+            Err(e) => {
+                let e = e.to_string();
+                prop_assert!(cyclic, "an acyclic graph refused: {e}\n{text}");
+                // "parameter 'x': … in a cycle (x → y → x)": each member uses the next.
+                let listed = e
+                    .split_once("in a cycle (")
+                    .and_then(|(_, r)| r.split_once(')'))
+                    .map(|(c, _)| c.split(" → ").map(str::to_string).collect::<Vec<_>>());
+                let Some(cycle) = listed else {
+                    return Err(TestCaseError::fail(format!("a cycle refused without naming it: {e}")));
+                };
+                prop_assert!(e.contains(&format!("parameter '{}'", cycle[0])), "{e}");
+                prop_assert!(cycle.len() >= 2 && cycle.first() == cycle.last(), "{e}");
+                let index = |s: &str| s.strip_prefix('d').and_then(|k| k.parse::<usize>().ok());
+                for w in cycle.windows(2) {
+                    let (Some(i), Some(j)) = (index(&w[0]), index(&w[1])) else {
+                        return Err(TestCaseError::fail(format!("a base parameter in a cycle: {e}")));
+                    };
+                    prop_assert!(uses[i].contains(&j), "{} does not use {}: {e}", w[0], w[1]);
+                }
+                return Ok(());
+            }
+        };
+        prop_assert!(!cyclic, "a cyclic graph accepted:\n{text}");
+        let wrt = name(wrt);
+        let vars = model.model().design_variables(Some(std::slice::from_ref(&wrt)));
+        if wrt.starts_with('d') {
+            let e = vars.expect_err("a derived parameter is no variable");
+            prop_assert!(e.contains(&format!("parameter '{wrt}' is derived")), "{e}");
+            return Ok(());
+        }
+        let var = vars.map_err(TestCaseError::fail)?[0];
+        let p = model.model().nominal();
+        let q0 = initial_guess(model.model(), &p, 0.0).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let pt = point(&model, &p, 0.0, &q0, &Options::default()).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let s = modaltol::sensitivity::analytic(&model, &p, &pt, &[var], None, &Default::default())
+            .map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let d = &s.variables[0].modes[0];
+        let exact = [d.d_sum, d.d_product, d.d_damped_frequency];
+        let value = base.iter().find(|(b, _)| *b == wrt).unwrap().1;
+        let h = 1e-4 * value;
+        let at = |v: f64| {
+            let m = Compiled::from_bytes_with(text.as_bytes(), "set.toml", &[(wrt.clone(), v)])
+                .expect("a base parameter set");
+            rod_mode(&m).expect("the rod solves")
+        };
+        let (plus, minus, nominal) = (at(value + h), at(value - h), rod_mode(&model).unwrap());
+        for k in 0..3 {
+            let fd = (plus[k] - minus[k]) / (2.0 * h);
+            let tol = 3e-6 * exact[k].abs().max(fd.abs()) + 1e-9 * nominal[k].abs() / value;
+            prop_assert!(
+                (exact[k] - fd).abs() <= tol,
+                "d/d{wrt} of output {k}: exact {} vs difference {fd}\n{text}",
+                exact[k]
+            );
+        }
+    }
+}

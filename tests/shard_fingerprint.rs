@@ -371,3 +371,54 @@ fn kept_values_that_do_not_fit_their_moments_are_refused() {
         assert!(e.contains("kept"), "{what}: {e}");
     }
 }
+
+/// A model whose nominal design fails at every speed (the pendulum with a hinge damping of
+/// 1e308: its matrices span more than double precision) still has its outputs, ω_d and ζ of
+/// its one mode and |H|: its two shards are verified and merge into exactly the whole run
+/// (found by the pipeline fuzzer: the Monte Carlo counted the outputs of the nominal points
+/// that solved, none, while the shard file and the merge counted the model's).
+#[test]
+fn a_model_failing_at_every_speed_shards_and_merges_as_one_run() {
+    let text = common::example_text("rotating_pendulum.toml")
+        .replace("c = 3.0 ", "c = 1e308 ")
+        .replace("samples = 3000", "samples = 16");
+    assert!(text.contains("c = 1e308"));
+    let model = Compiled::from_str(&text, "failing.toml").unwrap();
+    let cases = model.model().tolerance_cases(&[]).unwrap();
+    let range = SpeedRange {
+        from: 0.0,
+        to: 2.0,
+        step: 1.0,
+    };
+    let mc = McOptions {
+        samples: 16,
+        seed: 1,
+        sampling: model.model().analysis.sampling,
+    };
+    let opt = |split: Split| AnalyzeOptions {
+        speeds: range.speeds().collect(),
+        cases: cases.clone(),
+        quadrature: None,
+        monte_carlo: Some(mc),
+        split,
+        threads: Some(1),
+        ..Default::default()
+    };
+    let run = RunSettings::new(&range, &mc, None, 2);
+    let texts: Vec<(String, String)> = (0..2)
+        .map(|k| {
+            let a = analyze(&model, &opt(Split::Shard(k, 2)), &|_: &str, _, _| {});
+            let file = ShardFile::of_analysis(model.model(), &cases, &a, &run, k).unwrap();
+            (format!("shard {}", k + 1), file.to_json())
+        })
+        .collect();
+    let (_, shards) = modaltol::shard::verify(model.model(), &cases, texts)
+        .unwrap_or_else(|e| panic!("the shards are refused: {e}"));
+    let merged = analyze(&model, &opt(Split::Merged(shards)), &|_: &str, _, _| {});
+    let whole = analyze(&model, &opt(Split::Whole), &|_: &str, _, _| {});
+    assert_eq!(merged.outputs.len(), 3, "ω_d, ζ and |H|");
+    assert_eq!(merged.rows.len(), whole.rows.len());
+    for (m, w) in merged.rows.iter().zip(&whole.rows) {
+        assert_eq!(format!("{m:?}"), format!("{w:?}"));
+    }
+}

@@ -52,7 +52,7 @@ pub enum EquilibriumError {
         "the drive force on '{coordinate}' is not a finite number (it overflows double precision)"
     )]
     NotFiniteDrive { coordinate: String },
-    #[error("redundant cut joints: {} duplicate(s) the others here (the constraint Jacobian has rank {rank} for {equations} equations); remove it or them", names.join(", "))]
+    #[error("redundant cut joints or couplers: {} duplicate(s) the others here (the constraint Jacobian has rank {rank} for {equations} equations); remove it or them", names.join(", "))]
     RedundantConstraints {
         names: Vec<String>,
         rank: usize,

@@ -784,6 +784,17 @@ impl Model {
             .collect()
     }
 
+    /// The name of the cut joint or coupler each imposed constraint equation belongs to, in
+    /// the order `Φ` stacks them (each cut joint's kept equations, then one per coupler): what
+    /// a message about an equation names.
+    pub fn equation_owners(&self) -> Vec<&str> {
+        let cuts = self.constraints.iter().flat_map(|c| {
+            std::iter::repeat_n(c.name.as_str(), c.kind.equations() - c.dropped.len())
+        });
+        cuts.chain(self.couplers.iter().map(|c| c.name.as_str()))
+            .collect()
+    }
+
     /// Number of scalar constraint equations imposed (the redundant ones dropped).
     pub fn n_constraints(&self) -> usize {
         self.constraints

@@ -94,19 +94,13 @@ pub fn point_from(
     // On the model's route (the recorded program when there is one).
     let problem = model.problem(p, speed, q0, (opt.tier, workspace))?;
     let solved = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
-        // A failed solve with redundant cut joints is reported as such, naming them.
+        // A failed solve with redundant cut joints or couplers is reported as such, naming
+        // them.
         let redundant = problem.redundant_equations(q0);
         if redundant.is_empty() {
             return e;
         }
-        let owners: Vec<&str> = model
-            .model()
-            .constraints
-            .iter()
-            .flat_map(|c| {
-                std::iter::repeat_n(c.name.as_str(), c.kind.equations() - c.dropped.len())
-            })
-            .collect();
+        let owners = model.model().equation_owners();
         let mut names: Vec<String> = redundant.iter().map(|&k| owners[k].to_string()).collect();
         names.dedup();
         EquilibriumError::RedundantConstraints {
