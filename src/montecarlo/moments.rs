@@ -4,14 +4,31 @@
 use super::McStat;
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
+/// Values from this binary magnitude on (or below its reciprocal) are folded in scaled: the
+/// fourth power of a deviation of 2^256 is 2^1024, beyond `f64`.
+const SCALE_FROM: i32 = 128;
+
 /// One-pass central moments (Welford, extended to the fourth moment by Terriberry), with the
 /// counts of failed and class-changed samples; combinable (Pébay's pairwise formulas).
+///
+/// The moments are of the values times `2^−scale`, `scale` the binary exponent of the first
+/// value where that is at least [`SCALE_FROM`] in size (0 otherwise, so values of ordinary
+/// size are folded in as they are): an |H| or a frequency of 1e147 has a fourth central moment
+/// beyond `f64`, which its scaled values keep. Scaling by a power of two is exact, so a run
+/// whose values are scaled gives the statistics of the unscaled arithmetic where that does
+/// not overflow. Blocks of different scales combine at the larger.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Moments {
     n: usize,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    scale: i32,
+    #[serde(with = "any_number")]
     mean: f64,
+    #[serde(with = "any_number")]
     m2: f64,
+    #[serde(with = "any_number")]
     m3: f64,
+    #[serde(with = "any_number")]
     m4: f64,
     pub(super) failed: usize,
     class_changed: usize,
@@ -21,6 +38,60 @@ pub struct Moments {
     unstable: usize,
     #[serde(default)]
     other_branch: usize,
+}
+
+/// Any `f64` in a shard file as it was computed: a finite number as a JSON number, an infinite
+/// or NaN one as the text `"inf"`, `"-inf"` or `"NaN"` (JSON has no such numbers, and
+/// `serde_json` writes them as `null`, which no `f64` reads back). The moments of outputs
+/// whose deviations overflow (an |H| of 1e147 has a fourth central moment beyond `f64`) are
+/// infinite; a merge must read them as the run that wrote them had them, and give the same
+/// statistics as one run.
+mod any_number {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if x.is_finite() {
+            s.serialize_f64(*x)
+        } else if x.is_nan() {
+            s.serialize_str("NaN")
+        } else if *x > 0.0 {
+            s.serialize_str("inf")
+        } else {
+            s.serialize_str("-inf")
+        }
+    }
+
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Written {
+        Number(f64),
+        Text(String),
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        match Written::deserialize(d)? {
+            Written::Number(x) => Ok(x),
+            Written::Text(t) => match t.as_str() {
+                "inf" => Ok(f64::INFINITY),
+                "-inf" => Ok(f64::NEG_INFINITY),
+                "NaN" => Ok(f64::NAN),
+                _ => Err(D::Error::custom(format!(
+                    "expected a number, \"inf\", \"-inf\" or \"NaN\", found \"{t}\""
+                ))),
+            },
+        }
+    }
+}
+
+fn is_zero(k: &i32) -> bool {
+    *k == 0
+}
+
+/// `x · 2^k`, exact where the result is a normal number (in two factors, each representable,
+/// for `|k|` up to 2 · 1074).
+fn times_two_to(x: f64, k: i32) -> f64 {
+    let half = k / 2;
+    x * 2f64.powi(half) * 2f64.powi(k - half)
 }
 
 /// Moments of one chunk (or block of chunks) of samples: `[speed][output]`.
@@ -238,6 +309,9 @@ impl Moments {
         } else if self.n == 0 {
             *self = *b;
         } else {
+            let scale = self.scale.max(b.scale);
+            let b = &b.rescaled(scale);
+            *self = self.rescaled(scale);
             let (na, nb) = (self.n as f64, b.n as f64);
             let n = na + nb;
             let d = b.mean - self.mean;
@@ -263,7 +337,32 @@ impl Moments {
         (self.overdamped, self.unstable, self.other_branch) = events;
     }
 
+    /// The same moments at the scale `k ≥ self.scale`.
+    fn rescaled(&self, k: i32) -> Moments {
+        let f = k - self.scale;
+        if f == 0 {
+            return *self;
+        }
+        Moments {
+            scale: k,
+            mean: times_two_to(self.mean, -f),
+            m2: times_two_to(self.m2, -2 * f),
+            m3: times_two_to(self.m3, -3 * f),
+            m4: times_two_to(self.m4, -4 * f),
+            ..*self
+        }
+    }
+
     pub(super) fn add(&mut self, x: f64) {
+        if self.n == 0 {
+            let e = if x == 0.0 {
+                0
+            } else {
+                x.abs().log2().floor() as i32
+            };
+            self.scale = if e.abs() >= SCALE_FROM { e } else { 0 };
+        }
+        let x = times_two_to(x, -self.scale);
         let n1 = self.n as f64;
         self.n += 1;
         let n = self.n as f64;
@@ -277,7 +376,11 @@ impl Moments {
         self.m2 += t1;
     }
 
+    /// The statistics of the values folded in. Where the scaled moments themselves overflow
+    /// (values spanning more than `f64`'s range in one output), σ is that of `m2` and the
+    /// interval of σ, which needs `m4`, is NaN (none), never a number made of an overflow.
     pub(super) fn stat(&self) -> McStat {
+        let unscaled = |x: f64| times_two_to(x, self.scale);
         let n = self.n;
         let var = if n > 1 {
             self.m2 / (n - 1) as f64
@@ -295,18 +398,31 @@ impl Moments {
             } else {
                 3.0
             };
-            let se = ((kurt - (n as f64 - 3.0) / (n as f64 - 1.0)).max(0.0) / n as f64).sqrt();
+            let se = if kurt.is_finite() {
+                ((kurt - (n as f64 - 3.0) / (n as f64 - 1.0)).max(0.0) / n as f64).sqrt()
+            } else {
+                f64::NAN
+            };
             let z = Normal::standard().inverse_cdf(0.975);
-            let lo = std * (1.0 - z * se).max(0.0).sqrt();
-            let hi = std * (1.0 + z * se).sqrt();
-            ((self.mean - half, self.mean + half), (lo, hi))
+            let std_ci = if se.is_finite() {
+                (
+                    unscaled(std * (1.0 - z * se).max(0.0).sqrt()),
+                    unscaled(std * (1.0 + z * se).sqrt()),
+                )
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            (
+                (unscaled(self.mean - half), unscaled(self.mean + half)),
+                std_ci,
+            )
         } else {
             ((f64::NAN, f64::NAN), (f64::NAN, f64::NAN))
         };
         McStat {
             n,
-            mean: if n > 0 { self.mean } else { f64::NAN },
-            std,
+            mean: if n > 0 { unscaled(self.mean) } else { f64::NAN },
+            std: unscaled(std),
             mean_ci,
             std_ci,
             failed: self.failed,
@@ -316,6 +432,11 @@ impl Moments {
             other_branch: self.other_branch,
             quantiles: None,
         }
+    }
+
+    /// The binary scale of the moments (see [`Moments`]).
+    pub fn scale(&self) -> i32 {
+        self.scale
     }
 
     /// Values folded in.
@@ -344,7 +465,8 @@ impl Moments {
         ]
     }
 
-    /// Mean and the sums of the 2nd, 3rd and 4th powers of deviations.
+    /// Mean and the sums of the 2nd, 3rd and 4th powers of deviations, of the values times
+    /// `2^−scale` (see [`Moments`]).
     pub fn central(&self) -> [f64; 4] {
         [self.mean, self.m2, self.m3, self.m4]
     }
@@ -374,6 +496,69 @@ pub struct Events {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Values of any size give the statistics of the same values at ordinary size, scaled
+    /// exactly (bit for bit), with a σ interval; blocks of different scales combine.
+    #[test]
+    fn huge_and_tiny_values_give_the_statistics_of_ordinary_ones_scaled() {
+        let xs: Vec<f64> = (0..400)
+            .map(|i| 1.0 + 0.01 * ((i * 7919) % 1000) as f64 / 100.0)
+            .collect();
+        let stat_of = |k: i32| {
+            let mut m = Moments::default();
+            xs.iter().for_each(|&x| m.add(times_two_to(x, k)));
+            m.stat()
+        };
+        let plain = stat_of(0);
+        for k in [490, 1000, -600, -1000] {
+            let s = stat_of(k);
+            let back = |x: f64| times_two_to(x, -k);
+            assert_eq!(back(s.mean).to_bits(), plain.mean.to_bits(), "2^{k}");
+            assert_eq!(back(s.std).to_bits(), plain.std.to_bits(), "2^{k}");
+            assert_eq!(back(s.std_ci.0).to_bits(), plain.std_ci.0.to_bits(), "2^{k}");
+            assert_eq!(back(s.std_ci.1).to_bits(), plain.std_ci.1.to_bits(), "2^{k}");
+            assert_eq!(back(s.mean_ci.1).to_bits(), plain.mean_ci.1.to_bits(), "2^{k}");
+        }
+        // Unscaled, 2^490's fourth moments overflow: the σ interval is none, not [σ, σ].
+        let mut m = Moments::default();
+        m.add(0.0);
+        xs.iter().for_each(|&x| m.add(times_two_to(x, 490)));
+        let s = m.stat();
+        assert!(
+            s.std.is_finite() && s.std_ci.0.is_nan() && s.std_ci.1.is_nan(),
+            "{s:?}"
+        );
+        // A block of an ordinary value and one of a huge value combine at the larger scale.
+        let mut c = Moments::default();
+        c.add(1e300);
+        let mut d = Moments::default();
+        d.add(2.0);
+        d.combine(&c);
+        assert_eq!(d.scale, c.scale);
+        let e = d.stat();
+        assert!(
+            (e.mean - 5e299).abs() < 1e285 && (e.std - 1e300 / 2f64.sqrt()).abs() < 1e286,
+            "{e:?}"
+        );
+    }
+
+    /// Moments that overflowed read back as they were written (bit for bit where finite).
+    #[test]
+    fn non_finite_moments_survive_a_shard_file() {
+        let mut m = Moments::default();
+        for x in [0.0, 8.7e146, -3.1e146, 1.25e147] {
+            m.add(x);
+        }
+        assert!(!m.m4.is_finite() && m.mean.is_finite(), "{m:?}");
+        (m.m2, m.m3, m.m4) = (f64::NEG_INFINITY, f64::NAN, f64::INFINITY);
+        let text = serde_json::to_string(&m).unwrap();
+        let back: Moments = serde_json::from_str(&text).unwrap();
+        assert_eq!(back.mean.to_bits(), m.mean.to_bits());
+        assert!(back.m4 == f64::INFINITY);
+        assert!(back.m2 == f64::NEG_INFINITY);
+        assert!(back.m3.is_nan());
+        assert!(serde_json::from_str::<Moments>(&text.replace("\"NaN\"", "\"nan?\"")).is_err());
+    }
 
     #[test]
     fn streaming_moments_match_two_pass() {
