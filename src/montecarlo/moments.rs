@@ -515,9 +515,21 @@ mod tests {
             let back = |x: f64| times_two_to(x, -k);
             assert_eq!(back(s.mean).to_bits(), plain.mean.to_bits(), "2^{k}");
             assert_eq!(back(s.std).to_bits(), plain.std.to_bits(), "2^{k}");
-            assert_eq!(back(s.std_ci.0).to_bits(), plain.std_ci.0.to_bits(), "2^{k}");
-            assert_eq!(back(s.std_ci.1).to_bits(), plain.std_ci.1.to_bits(), "2^{k}");
-            assert_eq!(back(s.mean_ci.1).to_bits(), plain.mean_ci.1.to_bits(), "2^{k}");
+            assert_eq!(
+                back(s.std_ci.0).to_bits(),
+                plain.std_ci.0.to_bits(),
+                "2^{k}"
+            );
+            assert_eq!(
+                back(s.std_ci.1).to_bits(),
+                plain.std_ci.1.to_bits(),
+                "2^{k}"
+            );
+            assert_eq!(
+                back(s.mean_ci.1).to_bits(),
+                plain.mean_ci.1.to_bits(),
+                "2^{k}"
+            );
         }
         // Unscaled, 2^490's fourth moments overflow: the σ interval is none, not [σ, σ].
         let mut m = Moments::default();
