@@ -24,8 +24,9 @@
 //! 11. [`sweep`]: a point (equilibrium, linearisation, modes) and the continuation over speeds;
 //!     a point is the unit everything above consumes. [`scene`]: the mechanism placed at a
 //!     configuration, and its modes as motions of the bodies and ports (for drawing).
-//! 12. [`sensitivity`], [`hessian`], [`study`]: exact first and second derivatives through the
-//!     move of the equilibrium.
+//! 12. [`sensitivity`], [`hessian`]: exact first and second derivatives through the move of
+//!     the equilibrium; [`nominal_sweep`]: the nominal sweep with, at each speed, its transfer
+//!     function and sensitivities (the `sweep` command's table).
 //! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
 //!     [`requirement`]: a requirement's margin at a point (what a design must meet).
 //! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
@@ -70,6 +71,7 @@ pub mod mechanics;
 pub mod modal;
 pub mod model;
 pub mod montecarlo;
+pub mod nominal_sweep;
 pub mod output;
 pub mod pair;
 pub mod plots;
@@ -89,7 +91,6 @@ pub mod sensitivity;
 pub mod settings;
 pub mod shard;
 pub mod sobol;
-pub mod study;
 pub mod sweep;
 pub mod tape;
 pub mod taylor;

@@ -27,7 +27,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["pair", "modal", "output", "frf"], true),
     (&["sweep"], false),
     (&["scene"], false),
-    (&["sensitivity", "hessian", "study"], true),
+    (&["sensitivity", "hessian", "nominal_sweep"], true),
     (&["tolerance", "requirement"], false),
     (&["sampling"], false),
     (&["propagate"], false),

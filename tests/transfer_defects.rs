@@ -7,10 +7,10 @@ mod common;
 
 use modaltol::compiled::Compiled;
 use modaltol::model::Transfer;
+use modaltol::nominal_sweep::NominalSweep;
 use modaltol::program::Workspace;
 use modaltol::report::{self, SweepColumns};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
-use modaltol::study::SweepStudy;
 use modaltol::sweep::Options;
 
 /// Excitation frequencies (rad/s), or orders of the speed: ordinary, near the square root of
@@ -73,7 +73,7 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
                 wrt: wrt.clone(),
             };
             let tf = Transfer { order, ..t };
-            let mut study = SweepStudy::new(
+            let mut study = NominalSweep::new(
                 &m,
                 Options::default(),
                 Some(tf),
@@ -183,7 +183,7 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
             order: w / speed,
             ..t
         };
-        let mut study = SweepStudy::new(
+        let mut study = NominalSweep::new(
             &undamped,
             Options::default(),
             Some(tf),

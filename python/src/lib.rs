@@ -16,6 +16,7 @@ use modaltol::compiled::Compiled;
 use modaltol::files::{Inputs, ResultDir};
 use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
+use modaltol::nominal_sweep::NominalSweep;
 use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::program::{Tier, Workspace};
 use modaltol::report::{self, SweepColumns};
@@ -23,7 +24,6 @@ use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
-use modaltol::study::SweepStudy;
 use modaltol::sweep::{Options, initial_guess, point_at};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -585,7 +585,7 @@ impl NativeModel {
         let cancel = Cancel::new();
         let model = &*self.model;
         let rows = interruptible(py, &cancel, || {
-            let mut study = SweepStudy::new(model, opt, tf, cols.wrt.clone(), how);
+            let mut study = NominalSweep::new(model, opt, tf, cols.wrt.clone(), how);
             let mut rows = Vec::new();
             for &speed in &w {
                 if cancel.is_cancelled() {

@@ -5,8 +5,8 @@
 use super::{MODE_COLUMNS, failed_rows, mode_cells, opt, point_message};
 use crate::frf::NoTransfer;
 use crate::model::Model;
+use crate::nominal_sweep::SweepExtras;
 use crate::sensitivity::Status as SensStatus;
-use crate::study::SweepExtras;
 use crate::sweep::{Point, PointError};
 
 /// Optional column groups of the sweep CSV.

@@ -5,8 +5,8 @@ use anyhow::Result;
 use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
 use modaltol::model::SpeedRange;
+use modaltol::nominal_sweep::NominalSweep;
 use modaltol::report::{self, SweepColumns};
-use modaltol::study::SweepStudy;
 use modaltol::sweep::Options;
 use std::io::Write;
 
@@ -47,7 +47,7 @@ pub(crate) fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Can
         no_branch_switch: branch == BranchArg::AsGiven,
         ..Default::default()
     };
-    let mut study = SweepStudy::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
+    let mut study = NominalSweep::new(&m, opt, tf, cols.wrt.clone(), how(derivatives));
     let mut csv = csv::Writer::from_writer(Sink::to(&output, &Inputs::new(&[&model]))?);
     csv.write_record(report::sweep_header(m.model(), &cols))?;
     let n = range.len();

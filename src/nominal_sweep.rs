@@ -18,7 +18,7 @@ pub struct SweepExtras {
 
 /// A sweep at the nominal parameters (continuation from speed to speed, see [`Sweep`]) with
 /// its extras.
-pub struct SweepStudy<'a> {
+pub struct NominalSweep<'a> {
     model: &'a Compiled,
     sweep: Sweep<'a>,
     transfer: Option<Transfer>,
@@ -26,7 +26,7 @@ pub struct SweepStudy<'a> {
     derivatives: Derivatives,
 }
 
-impl<'a> SweepStudy<'a> {
+impl<'a> NominalSweep<'a> {
     /// A sweep of `model` with `options`; at each speed the transfer function `transfer`
     /// (excited at its order times the speed) and the sensitivities to the design variables
     /// `wrt` (none when empty), computed `derivatives`.
@@ -37,7 +37,7 @@ impl<'a> SweepStudy<'a> {
         wrt: Vec<usize>,
         derivatives: Derivatives,
     ) -> Self {
-        SweepStudy {
+        NominalSweep {
             sweep: Sweep::new(model, model.model().nominal(), options),
             model,
             transfer,
