@@ -20,11 +20,13 @@ use modaltol::nominal_sweep::NominalSweep;
 use modaltol::plots::{Display, FrequencyUnit};
 use modaltol::program::{Tier, Workspace};
 use modaltol::report::{self, SweepColumns};
-use modaltol::request::{Request, RequestError, Resolved, Setting, Speeds};
+use modaltol::request::{
+    PointRequest, PointRequestError, Request, RequestError, Resolved, Setting, Speeds,
+};
 use modaltol::sensitivity::{self, Derivatives, TransferAt};
 use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
-use modaltol::sweep::{Options, initial_guess, point_at};
+use modaltol::sweep::Options;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -312,10 +314,11 @@ impl NativeModel {
 
     /// The nominal point at `speed`.
     fn point(&self, speed: f64, opt: &Options) -> PyResult<modaltol::sweep::Point> {
-        settings::speed(speed).map_err(|e| bad(format!("speed {e}")))?;
-        let p = self.model.model().nominal();
-        initial_guess(self.m(), &p, speed).map_err(|e| bad(e.to_string()))?;
-        point_at(&self.model, &p, speed, opt)
+        let at = PointRequest::new(&self.model, speed).map_err(|e| match e {
+            PointRequestError::Speed(why) => bad(format!("speed {why}")),
+            PointRequestError::Start(why) => bad(why),
+        })?;
+        at.solve(&self.model, opt)
             .map_err(|e| SolveError::new_err(format!("speed {speed:?} rad/s failed: {e}")))
     }
 }

@@ -5,7 +5,7 @@ use crate::cli::*;
 use anyhow::Result;
 use modaltol::compiled::Compiled;
 use modaltol::model::{Model, Transfer};
-use modaltol::request::{RequestError, Setting};
+use modaltol::request::{PointRequest, PointRequestError, RequestError, Setting};
 use modaltol::sensitivity;
 use modaltol::settings::ThreadsError;
 use std::path::PathBuf;
@@ -15,6 +15,17 @@ pub(crate) const EMBEDDED_GOVERNOR: &str = include_str!("../../examples/governor
 
 pub(crate) fn load(path: &std::path::Path, set: &[(String, f64)]) -> Result<Compiled> {
     Compiled::from_file_with(path, set).map_err(|e| InputError(e.to_string()).into())
+}
+
+/// The point at `--speed` on `model`, checked ([`PointRequest`]): a refusal is bad input.
+pub(crate) fn point_request(model: &Compiled, speed: f64) -> Result<PointRequest> {
+    PointRequest::new(model, speed).map_err(|e| {
+        InputError(match e {
+            PointRequestError::Speed(why) => format!("--speed {why}"),
+            PointRequestError::Start(why) => why,
+        })
+        .into()
+    })
 }
 
 pub(crate) fn independent(

@@ -6,8 +6,7 @@ use modaltol::cancel::Cancel;
 use modaltol::drawing::{Drawing, html, svg};
 use modaltol::files::Inputs;
 use modaltol::program::Tier;
-use modaltol::settings;
-use modaltol::sweep::{Options, initial_guess, point_at};
+use modaltol::sweep::Options;
 use std::io::Write;
 
 /// `modaltol draw` (see its `--help`).
@@ -39,15 +38,15 @@ pub(crate) fn draw_command(args: DrawArgs, set: &[(String, f64)], cancel: &Cance
             .and_then(|r| r.speeds().next())
             .unwrap_or(0.0)
     });
-    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let request = point_request(&m, speed)?;
     let opt = Options {
         no_branch_switch: branch == BranchArg::AsGiven,
         tier: Tier::Few,
         ..Default::default()
     };
-    let p = m.model().nominal();
-    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point_at(&m, &p, speed, &opt)
+    let p = &request.parameters;
+    let pt = request
+        .solve(&m, &opt)
         .map_err(|e| Failed(format!("speed {speed:?} rad/s failed: {e}")))?;
     stop_if_cancelled(cancel, &Some(output.clone()))?;
     let mode = match mode {
@@ -61,7 +60,7 @@ pub(crate) fn draw_command(args: DrawArgs, set: &[(String, f64)], cancel: &Cance
             .into());
         }
     };
-    let d = Drawing::new(m.model(), &p, &pt).map_err(|e| Failed(e.to_string()))?;
+    let d = Drawing::new(m.model(), p, &pt).map_err(|e| Failed(e.to_string()))?;
     let text = if html_page {
         html(&d, mode)
     } else {

@@ -7,8 +7,7 @@ use modaltol::files::Inputs;
 use modaltol::model::SpeedRange;
 use modaltol::report;
 use modaltol::sensitivity;
-use modaltol::settings;
-use modaltol::sweep::{Options, initial_guess, point_at};
+use modaltol::sweep::Options;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -67,17 +66,17 @@ pub(crate) fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel)
             (tf, output.map(PathBuf::from).or(out))
         }
     };
-    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let request = point_request(&m, speed)?;
     let range = SpeedRange::parse(&freq).map_err(|e| InputError(format!("--freq: {e}")))?;
     let wrt = design_variables(m.model(), &wrt)?;
     let mut csv = csv::Writer::from_writer(Sink::to(&file, &Inputs::new(&[&model]))?);
-    let p = m.model().nominal();
-    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point_at(&m, &p, speed, &Options::single())
+    let p = &request.parameters;
+    let pt = request
+        .solve(&m, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     // Stops at the frequency after a signal.
     let frequencies = range.speeds().take_while(|_| !cancel.is_cancelled());
-    let rows = sensitivity::frequency_response(&m, &p, &pt, tf.input, tf.output, &wrt, frequencies)
+    let rows = sensitivity::frequency_response(&m, p, &pt, tf.input, tf.output, &wrt, frequencies)
         .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     stop_if_cancelled(cancel, &file)?;
     csv.write_record(report::frf_header(m.model(), &wrt))?;

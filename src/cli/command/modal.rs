@@ -6,8 +6,7 @@ use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
 use modaltol::program::Tier;
 use modaltol::report;
-use modaltol::settings;
-use modaltol::sweep::{Options, initial_guess, point_at};
+use modaltol::sweep::Options;
 use std::io::Write;
 
 /// `modaltol modal` (see its `--help`).
@@ -21,7 +20,7 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
         output,
     } = args;
     let m = load(&model, set)?;
-    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let request = point_request(&m, speed)?;
     let opt = Options {
         independent: independent(m.model(), &ind)?,
         no_branch_switch: branch == BranchArg::AsGiven,
@@ -29,21 +28,20 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
         ..Default::default()
     };
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
-    let p = m.model().nominal();
-    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let result = point_at(&m, &p, speed, &opt);
+    let p = &request.parameters;
+    let result = request.solve(&m, &opt);
     stop_if_cancelled(cancel, &output)?;
     match format {
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::modal_json(m.model(), &p, speed, &result))?
+            serde_json::to_string_pretty(&report::modal_json(m.model(), p, speed, &result))?
         )?,
         Format::Table => write!(w, "{}", report::modal_table(m.model(), speed, &result))?,
         Format::Csv => {
             let rows = match &result {
                 Ok(pt) => {
-                    report::modes_rows(m.model(), &p, pt).map_err(|e| Failed(e.to_string()))?
+                    report::modes_rows(m.model(), p, pt).map_err(|e| Failed(e.to_string()))?
                 }
                 Err(e) => report::modes_failed_rows(m.model(), speed, e),
             };

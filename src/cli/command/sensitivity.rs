@@ -7,8 +7,7 @@ use modaltol::files::Inputs;
 use modaltol::program::Workspace;
 use modaltol::report;
 use modaltol::sensitivity::{self, TransferAt};
-use modaltol::settings;
-use modaltol::sweep::{Options, initial_guess, point_at};
+use modaltol::sweep::Options;
 use std::io::Write;
 
 /// `modaltol sensitivity` (see its `--help`).
@@ -27,21 +26,21 @@ pub(crate) fn sensitivity_command(
         output,
     } = args;
     let m = load(&model, set)?;
-    settings::speed(speed).map_err(|e| InputError(format!("--speed {e}")))?;
+    let request = point_request(&m, speed)?;
     let wrt = design_variables(m.model(), &wrt)?;
     let tf = match tspec.as_deref() {
         Some(s) => Some(parse_transfer(m.model(), s)?),
         None => m.model().analysis.transfer,
     };
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
-    let p = m.model().nominal();
-    initial_guess(m.model(), &p, speed).map_err(|e| InputError(e.to_string()))?;
-    let pt = point_at(&m, &p, speed, &Options::single())
+    let p = &request.parameters;
+    let pt = request
+        .solve(&m, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let at = tf.map(|t| TransferAt::at_speed(&t, speed));
     let s = sensitivity::sensitivities(
         &m,
-        &p,
+        p,
         &pt,
         &wrt,
         at,

@@ -6,7 +6,12 @@
 //! a [`Request`]; [`Request::check`] applies the rules that need no model (before a model file is
 //! read, so that a bad flag is reported before a slow load), [`Checked::resolve`] the rest
 //! against the model. A refusal is a [`RequestError`] naming the setting ([`Setting`]); each
-//! front end writes that name its own way (`--samples`, `samples`).
+//! front end writes that name its own way (`--samples`, `samples`). One operating point's
+//! request is a [`PointRequest`].
+
+mod point;
+
+pub use point::{PointRequest, PointRequestError};
 
 use crate::analyze::{AnalyzeOptions, Split};
 use crate::cancel::Cancel;
