@@ -779,14 +779,12 @@ impl NativeModel {
         };
         let sampling = match sampling {
             None => None,
-            Some("random") => Some(Sampling::Random),
-            Some("lhs") => Some(Sampling::Lhs),
-            Some("sobol") => Some(Sampling::Sobol),
-            Some(s) => {
-                return Err(bad(format!(
-                    "sampling must be \"random\", \"lhs\" or \"sobol\", got {s:?}"
-                )));
-            }
+            Some(s) => Some(Sampling::named(s).ok_or_else(|| {
+                bad(format!(
+                    "sampling must be {}, got {s:?}",
+                    Sampling::names(true)
+                ))
+            })?),
         };
         let request = Request {
             speeds: match speeds {

@@ -329,6 +329,38 @@ pub enum Sampling {
     Sobol,
 }
 
+impl Sampling {
+    /// Every scheme, in the order they are listed to users.
+    pub const ALL: [Sampling; 3] = [Sampling::Random, Sampling::Lhs, Sampling::Sobol];
+
+    /// Name in the model file, on the command line and in Python (as serde writes it).
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampling::Random => "random",
+            Sampling::Lhs => "lhs",
+            Sampling::Sobol => "sobol",
+        }
+    }
+
+    /// The scheme named `name`, or `None`.
+    pub fn named(name: &str) -> Option<Sampling> {
+        Sampling::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// The names, for a message: `random, lhs or sobol` (`quoted`: `"random", "lhs" or
+    /// "sobol"`).
+    pub fn names(quoted: bool) -> String {
+        let names: Vec<String> = (Sampling::ALL.iter())
+            .map(|s| match quoted {
+                true => format!("{:?}", s.name()),
+                false => s.name().to_string(),
+            })
+            .collect();
+        let (last, rest) = names.split_last().expect("schemes");
+        format!("{} or {last}", rest.join(", "))
+    }
+}
+
 /// One end of a transfer function: where the excitation enters or the response is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Channel {
@@ -903,7 +935,33 @@ impl Model {
 
 #[cfg(test)]
 mod tests {
-    use super::SpeedRange;
+    use super::{Sampling, SpeedRange};
+
+    /// Each sampling scheme's name is the one serde writes (shard files, summaries) and reads
+    /// back as that scheme; an unknown name is none; a model file with one is refused naming
+    /// the schemes.
+    #[test]
+    fn sampling_names_are_one_spelling_everywhere() {
+        for s in Sampling::ALL {
+            assert_eq!(
+                serde_json::to_string(&s).unwrap(),
+                format!("{:?}", s.name())
+            );
+            assert_eq!(Sampling::named(s.name()), Some(s));
+        }
+        assert_eq!(Sampling::named("Sobol"), None);
+        assert_eq!(Sampling::names(false), "random, lhs or sobol");
+        assert_eq!(Sampling::names(true), "\"random\", \"lhs\" or \"sobol\"");
+        let text = include_str!("../../examples/rotating_pendulum.toml")
+            .replace("sampling = \"random\"", "sampling = \"halton\"");
+        let e = super::Model::from_str(&text, "p.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("analysis sampling 'halton': expected random, lhs or sobol"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn speeds_are_the_decimal_grid_points() {

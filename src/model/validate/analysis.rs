@@ -97,13 +97,14 @@ fn transfer(
 
 /// The sampling method by name.
 fn sampling(ctx: &Ctx, m: &Spanned<String>) -> R<Sampling> {
-    match m.get_ref().as_str() {
-        "random" => Ok(Sampling::Random),
-        "lhs" => Ok(Sampling::Lhs),
-        "sobol" => Ok(Sampling::Sobol),
-        x => Err(ctx.err(
+    let x = m.get_ref().as_str();
+    Sampling::named(x).ok_or_else(|| {
+        ctx.err(
             m.span(),
-            format!("analysis sampling '{x}': expected random, lhs or sobol"),
-        )),
-    }
+            format!(
+                "analysis sampling '{x}': expected {}",
+                Sampling::names(false)
+            ),
+        )
+    })
 }
