@@ -220,6 +220,11 @@ fn section_title(section: &str) -> &'static str {
 }
 
 impl ShardFile {
+    /// The file name of shard `k` (0-based) of `n`: `shard-K-of-N.json`, `K` from 1.
+    pub fn name(k: usize, n: usize) -> String {
+        format!("shard-{}-of-{n}.json", k + 1)
+    }
+
     /// Shard `k` (0-based) of `run.of` of the analysis `a` of `model` with `cases`, run with
     /// the settings `run`; `None` when the run was interrupted before all of the shard's
     /// chunks were done (a shard is complete or absent).

@@ -848,7 +848,7 @@ impl NativeModel {
             })?;
             let d = PyDict::new(py);
             d.set_item("shard", file.to_json())?;
-            d.set_item("name", format!("shard-{}-of-{n}.json", k + 1))?;
+            d.set_item("name", ShardFile::name(k, n))?;
             return Ok(d);
         }
         let used =

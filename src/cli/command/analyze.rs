@@ -85,7 +85,7 @@ pub(crate) fn analyze_command(
         Split::Shard(k, n) => {
             std::fs::create_dir_all(&output)
                 .with_context(|| format!("{}: cannot create the directory", output.display()))?;
-            let path = output.join(format!("shard-{}-of-{n}.json", k + 1));
+            let path = output.join(ShardFile::name(k, n));
             refuse_input(&inputs, &path)?;
             Destination::Shard(AtomicFile::create(&path)?, path)
         }
