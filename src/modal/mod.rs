@@ -378,12 +378,33 @@ fn normalize(v: DVector<C64>) -> DVector<C64> {
     };
     let w = v * phase;
     let n = w.norm();
-    if n > 0.0 { w / C64::new(n, 0.0) } else { w }
+    if n > 0.0 && n.is_finite() {
+        w / C64::new(n, 0.0)
+    } else if z.norm() > 0.0 {
+        // The squares under- or overflow (a vector of subnormal or huge components): scaled
+        // by its largest component first.
+        let w = w.map(|x| x / z.norm());
+        let n = w.norm();
+        w / C64::new(n, 0.0)
+    } else {
+        w
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A vector of subnormal or huge components is normalised to unit length (its squares
+    /// under- or overflow).
+    #[test]
+    fn vectors_of_any_scale_normalise_to_unit_length() {
+        for s in [1e-310, 1e-200, 1e300] {
+            let v = DVector::from_vec(vec![C64::new(3.0 * s, -s), C64::new(0.0, 2.0 * s)]);
+            let n = normalize(v);
+            assert!((n.norm() - 1.0).abs() < 1e-12, "{s}: {n}");
+        }
+    }
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

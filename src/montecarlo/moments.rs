@@ -12,8 +12,8 @@ const SCALE_FROM: i32 = 128;
 /// counts of failed and class-changed samples; combinable (Pébay's pairwise formulas).
 ///
 /// The moments are of the values times `2^−scale`, `scale` the binary exponent of the first
-/// value where that is at least 2^128 in size (0 otherwise, so values of ordinary
-/// size are folded in as they are): an |H| or a frequency of 1e147 has a fourth central moment
+/// value where that is at least 2^128 in size or below 2^−128 (0 otherwise, so values of
+/// ordinary size are folded in as they are): an |H| or a frequency of 1e147 has a fourth central moment
 /// beyond `f64`, which its scaled values keep. Scaling by a power of two is exact, so a run
 /// whose values are scaled gives the statistics of the unscaled arithmetic where that does
 /// not overflow. Blocks of different scales combine at the larger.

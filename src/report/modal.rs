@@ -13,14 +13,28 @@ use serde_json::{Value, json};
 use std::fmt::Write;
 
 /// A mode shape for display: scaled so that its largest component is 1 (real), the
-/// convention of modal test reports; a zero shape stays zero.
+/// convention of modal test reports; a zero shape stays zero. Where the largest component's
+/// square under- or overflows, the division goes through its modulus first (a complex
+/// division by it would give NaN).
 pub fn display_shape(shape: &[C64]) -> Vec<C64> {
     let big = shape
         .iter()
         .copied()
         .max_by(|a, b| a.norm().total_cmp(&b.norm()))
         .filter(|z| z.norm() > 0.0);
-    shape.iter().map(|&z| big.map_or(z, |b| z / b)).collect()
+    let divide = |z: C64, b: C64| {
+        let square = b.norm_sqr();
+        if square >= f64::MIN_POSITIVE && square.is_finite() {
+            z / b
+        } else {
+            let r = b.norm();
+            (z / r) * (b.conj() / r)
+        }
+    };
+    shape
+        .iter()
+        .map(|&z| big.map_or(z, |b| divide(z, b)))
+        .collect()
 }
 
 /// Header of the modes table (`modal --format csv`): the mode's frequencies, damping ratio,
@@ -349,5 +363,29 @@ fn write_shapes(s: &mut String, model: &Model, p: &Point) {
             );
         }
         let _ = writeln!(s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A shape of subnormal or huge components is displayed with its largest component 1,
+    /// never NaN (a complex division by a subnormal number is).
+    #[test]
+    fn shapes_of_any_scale_display_finite() {
+        // The first scale has one significant bit: its components' ratios are rounded.
+        for (k, s) in [5e-324, 1e-310, 1e-160, 1.0, 1e300].into_iter().enumerate() {
+            let shape = [C64::new(3.0 * s, -s), C64::new(0.0, 2.0 * s)];
+            let shown = display_shape(&shape);
+            assert!(
+                shown.iter().all(|z| z.re.is_finite() && z.im.is_finite()),
+                "{s}: {shown:?}"
+            );
+            assert!(
+                (shown[0] - C64::new(1.0, 0.0)).norm() < 1e-12 || k == 0,
+                "{s}: {shown:?}"
+            );
+        }
     }
 }
