@@ -25,19 +25,21 @@
 //! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
 //! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
 //! `modaltol analyze` (`… -- model n k` prints the model file).
-use modaltol::analyze::{AnalyzeOptions, Row, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
-use modaltol::montecarlo::{McOptions, McStat};
+use modaltol::montecarlo::McOptions;
 use modaltol::output::Quantity;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
-use modaltol::propagate::Method;
 use modaltol::quadrature::QuadOptions;
 use modaltol::sensitivity::analytic;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
+use modaltol::table::Method;
+use modaltol::table::Row;
+use modaltol::table::{Detail, McStat};
 use std::time::Instant;
 
 #[path = "common/chain.rs"]
@@ -192,7 +194,7 @@ fn family(what: &str, models: Vec<String>, speeds: Vec<f64>, args: &[String]) {
         };
         let a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
         let filled = |m: Method| {
-            let of: Vec<&Row> = a.rows.iter().filter(|r| r.method == m).collect();
+            let of: Vec<&Row> = a.rows.iter().filter(|r| r.method() == m).collect();
             let done = of.iter().filter(|r| r.std.is_finite()).count();
             format!("{done}/{}", of.len())
         };
@@ -269,18 +271,18 @@ fn accuracy(args: &[String]) {
         for r in a
             .rows
             .iter()
-            .filter(|r| r.method == method && r.std.is_finite())
+            .filter(|r| r.method() == method && r.std.is_finite())
         {
             let Some(mc) = a
                 .rows
                 .iter()
                 .find(|m| {
-                    m.method == Method::MonteCarlo
+                    m.method() == Method::MonteCarlo
                         && m.speed.to_bits() == r.speed.to_bits()
                         && m.quantity == r.quantity
                         && m.mode == r.mode
                 })
-                .and_then(|m| m.mc)
+                .and_then(|m| m.mc())
             else {
                 continue;
             };
@@ -294,7 +296,7 @@ fn accuracy(args: &[String]) {
             mean_in += usize::from(dm <= hm);
             std_in += usize::from(ds <= hs);
             worst = worst.max((r.std / mc.std - 1.0).abs());
-            if let Some((em, es)) = r.errors {
+            if let Some((em, es)) = r.errors() {
                 covered += usize::from(dm <= hm + em && ds <= hs + es);
             }
         }
@@ -340,10 +342,9 @@ fn reference_rows(path: &str) -> Vec<Row> {
                 quantity,
                 mode: r[col("mode")].parse::<usize>().ok().map(|m| m - 1),
                 case: 0,
-                method: Method::MonteCarlo,
                 mean,
                 std,
-                mc: Some(McStat {
+                detail: Detail::MonteCarlo(McStat {
                     n: num(&r, "samples") as usize,
                     mean,
                     std,
@@ -356,11 +357,6 @@ fn reference_rows(path: &str) -> Vec<Row> {
                     other_branch: 0,
                     quantiles: None,
                 }),
-                shares: None,
-                basis: None,
-                quantiles: None,
-                errors: None,
-                within_request: None,
                 missing: None,
             }
         })

@@ -2,7 +2,7 @@
 //! cost and still meet the requirements at a target yield, verified by the quadrature.
 //!
 //! **The search** uses the requirements' exact first-order margins at every speed of their
-//! ranges ([`crate::yields::linear_margin`]): with the variables independent and the tolerance
+//! ranges ([`crate::taylor::yields::linear_margin`]): with the variables independent and the tolerance
 //! `T_k` their ±3σ (normal; `±√3σ` uniform), the margin `j`'s σ is
 //! `σ_j² = Σ_k (g_jk s_k T_k)²`, `s_k = 1/3` or `1/√3`, and each margin must keep the
 //! reliability index `m₀_j / σ_j ≥ β` (Hasofer & Lind 1974; at the mean point, the classical
@@ -29,11 +29,11 @@ use crate::analyze::{AnalyzeOptions, analyze};
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::model::{Case, Cost, Distribution, Tolerance};
-use crate::propagate::Method;
 use crate::propagate::{Run, Study};
 use crate::quadrature::QuadOptions;
 use crate::requirement::covers;
-use crate::yields::linear_margin;
+use crate::table::Method;
+use crate::taylor::yields::linear_margin;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Rounds of search and verification at most.

@@ -1,89 +1,28 @@
 //! The main job: how the tolerance cases spread every mode's ω_d and ζ and the transfer
 //! magnitude across the speed range, by every analytic method and by Monte Carlo.
 //!
-//! The [`Study`]: one nominal sweep and, at each speed (in parallel), one [`LocalModel`] for
-//! the union of the cases' variables (derivatives do not depend on the tolerances, so cases
-//! share them). Then the propagation methods ([`crate::propagate`]) per case: the
-//! [`Quadrature`] (the whole pipeline integrated over the distribution, the answer the
-//! `analytic` row takes), the [`Taylor`] methods (first order, second order, invariant) and
-//! optionally the [`MonteCarlo`]. Wall times of the Taylor methods, the quadrature and the
-//! Monte Carlo are measured for the summary.
+//! The [`Study`]: one nominal sweep and, at each speed (in parallel), one local model for the
+//! union of the cases' variables (derivatives do not depend on the tolerances, so cases share
+//! them). Then the propagation methods ([`crate::propagate`]) per case: the [`Quadrature`] (the
+//! whole pipeline integrated over the distribution, the answer the `analytic` row takes), the
+//! [`Taylor`] methods (first order, second order, invariant), optionally the [`Sobol`] indices
+//! and the [`MonteCarlo`]. Each method's value writes its own rows ([`Tables`]); this module
+//! only runs them and times them for the summary.
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
-use crate::modal::ModeClass;
 use crate::model::Case;
-use crate::montecarlo::{self, CaseShard, McOptions, McStat, MonteCarlo, TreeFold};
-use crate::output::Missing;
-use crate::output::{Output, Quantity};
-use crate::propagate::{Method, Propagation, Run, Study, Termination};
-use crate::quadrature::{Event, QuadOptions, QuadResult, QuadStat, Quadrature};
-use crate::sobol::{SobolIndex, SobolOptions, Target, sobol};
+use crate::montecarlo::{CaseShard, McOptions, MonteCarlo, Split};
+use crate::output::Output;
+use crate::propagate::{Propagation, Run, Study, Tabulate, Termination};
+use crate::quadrature::{QuadOptions, Quadrature};
+use crate::sobol::{Sobol, SobolOptions};
 use crate::sweep::Point;
-use crate::taylor::{Taylor, TaylorStats};
-use crate::tolerance::{KINK_SIGMAS, LocalModel, Spread, Stat};
-use crate::yields::{self, YieldRow};
+use crate::table::{ProbabilityRow, Row, SobolIndex, Tables, YieldRow};
+use crate::taylor::Taylor;
+use crate::tolerance::Spread;
 
 use std::time::Instant;
-
-/// One line of the result: a statistic of one output at one speed by one method.
-#[derive(Debug, Clone)]
-pub struct Row {
-    pub speed: f64,
-    pub quantity: Quantity,
-    /// 0-based mode, `None` for the transfer magnitude.
-    pub mode: Option<usize>,
-    pub case: usize,
-    pub method: Method,
-    /// NaN where the method gives no answer (an output not differentiable there).
-    pub mean: f64,
-    pub std: f64,
-    pub mc: Option<McStat>,
-    /// First order: each variable's share of the variance.
-    pub shares: Option<Vec<f64>>,
-    /// For [`Method::Analytic`]: the method its mean and σ come from.
-    pub basis: Option<Method>,
-    /// The 5, 50 and 95 % quantiles (quadrature, Monte Carlo).
-    pub quantiles: Option<[f64; 3]>,
-    /// Error estimates of the mean and σ (quadrature).
-    pub errors: Option<(f64, f64)>,
-    /// Whether those error estimates meet the requested accuracy (quadrature: see
-    /// [`QuadStat::within_request`]).
-    pub within_request: Option<bool>,
-    /// Why the method gives no mean and σ here (`mean`, `std` are then NaN).
-    pub missing: Option<Missing>,
-}
-
-/// Probability of a change of character at one speed, by one method.
-#[derive(Debug, Clone)]
-pub struct ProbabilityRow {
-    pub speed: f64,
-    pub case: usize,
-    /// [`Method::Quadrature`] or [`Method::MonteCarlo`].
-    pub method: Method,
-    pub event: Event,
-    /// 0-based mode (overdamped only).
-    pub mode: Option<usize>,
-    pub probability: f64,
-    /// Quadrature: probability ± its error estimate (clamped to [0, 1]); Monte Carlo: the
-    /// 95 % Wilson score interval.
-    pub ci: (f64, f64),
-}
-
-/// How the Monte Carlo samples are split across runs.
-#[derive(Debug, Clone, Default)]
-pub enum Split {
-    /// All samples here.
-    #[default]
-    Whole,
-    /// Only the chunks of shard `k` (0-based) of `n`; no Monte Carlo rows, the blocks of chunk
-    /// moments and the values kept are returned in [`Analysis::shard_states`] for
-    /// [`Split::Merged`].
-    Shard(usize, usize),
-    /// The blocks of all shards, per case, in chunk order, and their values in sample order:
-    /// folded (and the quantiles taken) as a whole run would.
-    Merged(Vec<CaseShard>),
-}
 
 /// What to analyse.
 #[derive(Debug, Clone)]
@@ -178,52 +117,6 @@ impl Analysis {
             .and_then(|i| self.nominal[i].as_ref())
     }
 
-    /// The Sobol indices worth showing: every requirement's worst margin, and each output at
-    /// the speed where its analytic σ is largest; per case, margins first then outputs in
-    /// order, each target's variables by decreasing total index.
-    pub fn sobol_shown(&self) -> Vec<&(usize, SobolIndex)> {
-        // Per case and output: the speed index with the largest analytic σ.
-        let worst = |case: usize, o: usize| -> Option<usize> {
-            let out = self.outputs[o];
-            let mut best: Option<(usize, f64)> = None;
-            for r in &self.rows {
-                if r.case == case
-                    && r.method == Method::Analytic
-                    && r.quantity == out.quantity
-                    && r.mode == out.mode
-                    && r.std.is_finite()
-                    && best.is_none_or(|b| r.std > b.1)
-                {
-                    let i = self
-                        .speeds
-                        .iter()
-                        .position(|w| w.to_bits() == r.speed.to_bits())?;
-                    best = Some((i, r.std));
-                }
-            }
-            best.map(|b| b.0)
-        };
-        // Margins first, then outputs in order.
-        let key = |t: &Target| match *t {
-            Target::Margin(r) => (0, r),
-            Target::Output(_, o) => (1, o),
-        };
-        let mut shown: Vec<&(usize, SobolIndex)> = self
-            .sobol
-            .iter()
-            .filter(|(case, s)| match s.target {
-                Target::Margin(_) => true,
-                Target::Output(i, o) => worst(*case, o) == Some(i),
-            })
-            .collect();
-        shown.sort_by(|x, y| {
-            (x.0, key(&x.1.target))
-                .cmp(&(y.0, key(&y.1.target)))
-                .then(y.1.total.total_cmp(&x.1.total))
-        });
-        shown
-    }
-
     /// Did a stage stop early (a speed of the sweep, a case of the quadrature, Monte Carlo
     /// samples left out)?
     pub fn cancelled(&self) -> bool {
@@ -243,8 +136,8 @@ pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 /// Runs the analysis. Failed speeds are reported in `failures` and skipped; the run goes on.
 ///
 /// The stages, in order: the [`Study`] (nominal sweep and local models, shared by the cases);
-/// per case the [`Quadrature`]; per case the [`Taylor`] methods and the `analytic` rows; per
-/// case the [`MonteCarlo`] (whole, one shard, or the shards' blocks merged).
+/// per case the [`Quadrature`]; per case the [`Taylor`] methods; per case the [`Sobol`] indices;
+/// per case the [`MonteCarlo`] (whole, one shard, or the shards' blocks merged).
 pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> Analysis {
     let mut vars: Vec<usize> = opt
         .cases
@@ -254,11 +147,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
     vars.sort_unstable();
     vars.dedup();
     let pool = crate::threads::pool(opt.threads);
-    let stage = |name: &str| {
-        let name = name.to_string();
-        move |d: usize, n: usize| progress(&name, d, n)
-    };
-    let derivatives = stage("derivatives");
+    let derivatives = |d, n| progress("derivatives", d, n);
     let run = Run {
         cancel: &opt.cancel,
         pool: &pool,
@@ -271,91 +160,42 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .iter()
         .map(|c| Spread::new(model, c, &study.vars))
         .collect();
-    let taylor_seconds = t0.elapsed().as_secs_f64();
-    let tq = Instant::now();
-    let mut termination = study.termination;
-    let mut ended = |how: Termination| termination = termination.and(how);
-    let quad: Vec<Option<QuadResult>> = match opt.quadrature {
-        Some(options) => spreads
-            .iter()
-            .zip(&opt.cases)
-            .map(|(s, case)| {
-                let progress = stage(&format!("quadrature {}", case.name));
-                let estimate =
-                    Quadrature { options }.propagate(&study, s, &run.with_progress(&progress));
-                ended(estimate.termination);
-                estimate.value
-            })
-            .collect(),
-        None => vec![None; spreads.len()],
+    let study_seconds = t0.elapsed().as_secs_f64();
+    let mut stages = Stages {
+        study: &study,
+        spreads: &spreads,
+        cases: &opt.cases,
+        run: &run,
+        progress,
+        tables: Tables::default(),
+        termination: study.termination,
     };
-    let quadrature_seconds = opt.quadrature.map(|_| tq.elapsed().as_secs_f64());
-    let quadrature_rules = quad
-        .iter()
-        .flatten()
-        .map(|r| (r.rule.clone(), r.nodes))
-        .collect();
-    let t2 = Instant::now();
-    let mut rows = Vec::new();
-    let mut probabilities = Vec::new();
-    let mut yield_rows = Vec::new();
-    let has_requirements = !model.model().requirements.is_empty();
-    for (ci, s) in spreads.iter().enumerate() {
-        if has_requirements {
-            yield_rows.extend(yields::first_order_rows(&study, ci, s));
-            if let Some(q) = &quad[ci]
-                && let Some(y) = &q.yields
-            {
-                let m = model.model();
-                yield_rows.extend(yields::quadrature_rows(
-                    ci,
-                    y,
-                    &m.requirements,
-                    &study.speeds,
-                    q.nodes,
-                    m.allocation.target_yield,
-                ));
-            }
-        }
-        let taylor = Taylor.propagate(&study, s, &run);
-        ended(taylor.termination);
-        let taylor = taylor.value;
-        for (si, (lm, stats)) in study.locals.iter().zip(taylor).enumerate() {
-            let (Some(lm), Some(stats)) = (lm, stats) else {
-                continue;
-            };
-            let q = quad[ci].as_ref().map(|q| q.stats[si].as_slice());
-            rows.extend(analytic_rows(study.speeds[si], ci, lm, &stats, q));
-        }
-        if let Some(q) = &quad[ci] {
-            probabilities.extend(quadrature_probabilities(&study, ci, q));
-        }
+    let quadrature_seconds = opt
+        .quadrature
+        .map(|options| stages.each_case("quadrature", |_| Quadrature { options }));
+    let analytic_seconds = study_seconds + stages.each_case("taylor", |_| Taylor);
+    if let Some(options) = opt.sobol {
+        stages.each_case("sobol", |_| Sobol { options });
     }
-    let analytic_seconds = taylor_seconds + t2.elapsed().as_secs_f64();
-    let (mut sobol_rows, mut sobol_refused) = (Vec::new(), Vec::new());
-    if let Some(so) = opt.sobol {
-        for (ci, s) in spreads.iter().enumerate() {
-            if opt.cancel.is_cancelled() {
-                ended(Termination::Cancelled);
-                break;
-            }
-            let progress = stage(&format!("sobol {}", opt.cases[ci].name));
-            match sobol(&study, s, so, &run.with_progress(&progress)) {
-                Ok(rows) => sobol_rows.extend(rows.into_iter().map(|r| (ci, r))),
-                Err(e) => sobol_refused.push((ci, e.to_string())),
+    let mut shard_states = Vec::new();
+    let monte_carlo_seconds = opt.monte_carlo.map(|mc| {
+        let t = Instant::now();
+        for ci in 0..spreads.len() {
+            let method = MonteCarlo::of_case(mc, &opt.split, ci);
+            let value = stages.propagate(ci, "monte carlo", &method);
+            match value.into_shard() {
+                Ok(shard) => shard_states.push(shard),
+                Err(value) => stages.tabulate(ci, value),
             }
         }
-    }
-    let t1 = Instant::now();
-    let mc = opt
-        .monte_carlo
-        .map(|mc| monte_carlo(&study, &spreads, opt, mc, &run, &stage));
-    let monte_carlo_seconds = mc.as_ref().map(|_| t1.elapsed().as_secs_f64());
-    let mc = mc.unwrap_or_default();
-    ended(mc.termination);
-    rows.extend(mc.rows);
-    probabilities.extend(mc.probabilities);
-    yield_rows.extend(mc.yields);
+        t.elapsed().as_secs_f64()
+    });
+    let Stages {
+        mut tables,
+        termination,
+        ..
+    } = stages;
+    let rows = tables.finish();
     let Study {
         vars,
         speeds,
@@ -369,353 +209,60 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         vars,
         cases: opt.cases.clone(),
         rows,
-        probabilities,
-        yields: yield_rows,
-        sobol: sobol_rows,
-        sobol_refused,
+        probabilities: tables.probabilities,
+        yields: tables.yields,
+        sobol: tables.sobol,
+        sobol_refused: tables.sobol_refused,
         speeds,
         outputs,
         analytic_seconds,
         first_order_seconds,
         second_order_seconds,
         quadrature_seconds,
-        quadrature_rules,
+        quadrature_rules: tables.quadrature_rules,
         monte_carlo_seconds,
         failures,
         nominal,
-        samples_done: mc.samples_done,
-        inadmissible: mc.inadmissible,
-        shard_states: mc.shard_states,
+        samples_done: tables.samples_done,
+        inadmissible: tables.inadmissible,
+        shard_states,
         termination,
     }
 }
 
-/// The quadrature's probabilities of character of case `case`, at the speeds whose nominal
-/// point exists.
-fn quadrature_probabilities(study: &Study, case: usize, q: &QuadResult) -> Vec<ProbabilityRow> {
-    let mut out = Vec::new();
-    for (si, ps) in q.probabilities.iter().enumerate() {
-        if study.nominal[si].is_none() {
-            continue;
-        }
-        out.extend(ps.iter().map(|p| ProbabilityRow {
-            speed: study.speeds[si],
-            case,
-            method: Method::Quadrature,
-            event: p.event,
-            mode: p.mode,
-            probability: p.probability,
-            ci: (
-                (p.probability - p.error).max(0.0),
-                (p.probability + p.error).min(1.0),
-            ),
-        }));
-    }
-    out
-}
-
-/// What the Monte Carlo stage adds to an [`Analysis`].
-#[derive(Debug, Default)]
-struct MonteCarloPart {
+/// The methods' runs over the cases, and what they have written so far.
+struct Stages<'a> {
+    study: &'a Study<'a>,
+    spreads: &'a [Spread],
+    cases: &'a [Case],
+    run: &'a Run<'a>,
+    progress: Progress<'a>,
+    tables: Tables,
     termination: Termination,
-    rows: Vec<Row>,
-    probabilities: Vec<ProbabilityRow>,
-    yields: Vec<YieldRow>,
-    samples_done: Vec<usize>,
-    inadmissible: Vec<Vec<(String, usize, f64)>>,
-    shard_states: Vec<CaseShard>,
 }
 
-/// The Monte Carlo of every case as `opt.split` asks: all samples here, one shard's chunks
-/// (their blocks kept for the merge), or the shards' blocks folded as a whole run would.
-fn monte_carlo<S, F>(
-    study: &Study,
-    spreads: &[Spread],
-    opt: &AnalyzeOptions,
-    mc: McOptions,
-    run: &Run,
-    stage: &S,
-) -> MonteCarloPart
-where
-    S: Fn(&str) -> F,
-    F: Fn(usize, usize) + Sync,
-{
-    let mut part = MonteCarloPart::default();
-    let (speeds, outs) = (study.speeds.len(), study.outputs.len());
-    for (ci, s) in spreads.iter().enumerate() {
-        let progress = stage(&format!("monte carlo {}", opt.cases[ci].name));
-        let run = run.with_progress(&progress);
-        let (stats, done, counts, worst) = match &opt.split {
-            Split::Merged(cases) => {
-                let mut fold = TreeFold::default();
-                for b in &cases[ci].blocks {
-                    fold.push(b.clone());
-                }
-                let (mut stats, done) = montecarlo::statistics(&fold, speeds, outs, mc.samples);
-                let worst = cases[ci].kept.clone().map(|k| k.apply(&mut stats));
-                (stats, done, fold.total_yields(), worst)
-            }
-            Split::Shard(k, n) => {
-                let method = MonteCarlo::shard(mc, *k, *n);
-                let states = method.propagate(study, s, &run);
-                part.termination = part.termination.and(states.termination);
-                part.shard_states.push(CaseShard {
-                    blocks: states.value.fold.into_blocks(),
-                    kept: states.value.kept,
-                });
-                continue;
-            }
-            Split::Whole => {
-                if opt.cancel.is_cancelled() {
-                    part.termination = Termination::Cancelled;
-                    part.samples_done.push(0);
-                    continue;
-                }
-                let r = MonteCarlo::whole(mc).propagate(study, s, &run);
-                part.termination = part.termination.and(r.termination);
-                let counts = r.value.fold.total_yields();
-                (
-                    r.value.stats,
-                    r.value.samples,
-                    counts,
-                    r.value.worst_margins,
-                )
-            }
-        };
-        part.samples_done.push(done);
-        if let Some(y) = &counts {
-            let m = study.model.model();
-            part.yields.extend(yields::monte_carlo_rows(
-                ci,
-                y,
-                worst.as_deref(),
-                &m.requirements,
-                &study.speeds,
-                done,
-                m.allocation.target_yield,
-            ));
+impl Stages<'_> {
+    /// Runs the method `method(case)` on every case and writes its rows; the seconds taken.
+    fn each_case<P: Propagation>(&mut self, stage: &str, method: impl Fn(usize) -> P) -> f64 {
+        let t = Instant::now();
+        for ci in 0..self.spreads.len() {
+            let value = self.propagate(ci, stage, &method(ci));
+            self.tabulate(ci, value);
         }
-        part.inadmissible
-            .push(MonteCarlo::whole(mc).inadmissible(study, s, done, &run));
-        for (si, row) in stats.iter().enumerate() {
-            if study.nominal[si].is_none() || done < 2 {
-                continue;
-            }
-            part.probabilities.extend(monte_carlo_probabilities(
-                study.speeds[si],
-                ci,
-                &study.outputs,
-                row,
-            ));
-            part.rows.extend(monte_carlo_rows(study, si, ci, row));
-        }
+        t.elapsed().as_secs_f64()
     }
-    part
-}
 
-/// The Monte Carlo rows of case `case` at speed `si`; a row without a value says why.
-fn monte_carlo_rows(study: &Study, si: usize, case: usize, stats: &[McStat]) -> Vec<Row> {
-    let nominal = study.nominal[si].as_ref();
-    study
-        .outputs
-        .iter()
-        .zip(stats)
-        .map(|(o, st)| Row {
-            speed: study.speeds[si],
-            quantity: o.quantity,
-            mode: o.mode,
-            case,
-            method: Method::MonteCarlo,
-            mean: st.mean,
-            std: st.std,
-            mc: Some(*st),
-            shares: None,
-            basis: None,
-            quantiles: st.quantiles,
-            errors: None,
-            within_request: None,
-            missing: if !st.mean.is_finite() {
-                Some(nominal.map_or(Missing::NoValue, |pt| no_value(pt, o)))
-            } else {
-                (!st.std.is_finite()).then_some(Missing::OneSample)
-            },
-        })
-        .collect()
-}
-
-/// First-order, second-order, (for ω_d) invariant, quadrature and the `analytic` rows of one
-/// speed and case from the [`Taylor`] statistics `taylor` of the local model `lm`; a method
-/// that gives no value says why in its row.
-fn analytic_rows(
-    speed: f64,
-    case: usize,
-    lm: &LocalModel,
-    taylor: &[TaylorStats],
-    quad: Option<&[Option<QuadStat>]>,
-) -> Vec<Row> {
-    let mut rows = Vec::new();
-    let row = |o: &Output, method, stat: Result<Stat, Missing>, shares, basis| {
-        let (mean, std, missing) = match stat {
-            Ok(st) if st.mean.is_finite() && st.std.is_finite() => (st.mean, st.std, None),
-            // An overflow on the way (a Hessian of 10³⁰⁰'s): no value, and why.
-            Ok(_) => (f64::NAN, f64::NAN, Some(Missing::NotFinite)),
-            Err(e) => (f64::NAN, f64::NAN, Some(e)),
-        };
-        Row {
-            speed,
-            quantity: o.quantity,
-            mode: o.mode,
-            case,
-            method,
-            mean,
-            std,
-            mc: None,
-            shares,
-            basis,
-            quantiles: None,
-            errors: None,
-            within_request: None,
-            missing,
-        }
-    };
-    for (k, (o, t)) in lm.outputs.iter().zip(taylor).enumerate() {
-        let shares = t
-            .first_order
-            .as_ref()
-            .ok()
-            .map(|(_, shares)| shares.clone());
-        let fo = t.first_order.clone().map(|(st, _)| st);
-        rows.push(row(o, Method::FirstOrder, fo.clone(), shares, None));
-        let so = t.second_order.clone();
-        rows.push(row(o, Method::SecondOrder, so.clone(), None, None));
-        let mut choice = so
-            .map(|st| (Method::SecondOrder, st))
-            .or(fo.map(|st| (Method::FirstOrder, st)));
-        if let Some(inv) = &t.invariant {
-            rows.push(row(
-                o,
-                Method::Invariant,
-                inv.clone().map(|(st, _)| st),
-                None,
-                None,
-            ));
-            if let Ok((st, dst)) = inv
-                && (choice.is_err() || dst.mean.abs() < KINK_SIGMAS * dst.std)
-            {
-                choice = Ok((Method::Invariant, *st));
-            }
-        }
-        let q = quad.map(|q| {
-            q.get(k)
-                .copied()
-                .flatten()
-                .ok_or_else(|| quadrature_missing(lm, k))
-        });
-        if let Some(q) = &q {
-            let stat = q.clone().map(|q| Stat {
-                mean: q.mean,
-                std: q.std,
-            });
-            rows.push(Row {
-                quantiles: q.as_ref().ok().map(|q| q.quantiles),
-                errors: q.as_ref().ok().map(|q| (q.mean_error, q.std_error)),
-                within_request: q.as_ref().ok().map(|q| q.within_request),
-                ..row(o, Method::Quadrature, stat, None, None)
-            });
-        }
-        let answer = match q {
-            Some(Ok(q)) => Row {
-                quantiles: Some(q.quantiles),
-                errors: Some((q.mean_error, q.std_error)),
-                within_request: Some(q.within_request),
-                ..row(
-                    o,
-                    Method::Analytic,
-                    Ok(Stat {
-                        mean: q.mean,
-                        std: q.std,
-                    }),
-                    None,
-                    Some(Method::Quadrature),
-                )
-            },
-            _ => match choice {
-                Ok((m, st)) => row(o, Method::Analytic, Ok(st), None, Some(m)),
-                Err(e) => row(o, Method::Analytic, Err(e), None, None),
-            },
-        };
-        rows.push(answer);
+    /// `method`'s value for case `ci`, its progress reported as `stage` and the case's name.
+    fn propagate<P: Propagation>(&mut self, ci: usize, stage: &str, method: &P) -> P::Value {
+        let name = format!("{stage} {}", self.cases[ci].name);
+        let progress = |d, n| (self.progress)(&name, d, n);
+        let run = self.run.with_progress(&progress);
+        let estimate = method.propagate(self.study, &self.spreads[ci], &run);
+        self.termination = self.termination.and(estimate.termination);
+        estimate.value
     }
-    rows
-}
 
-/// Why a sampling method has no value for output `o` at a speed whose nominal point is `pt`:
-/// the output has none there either (the damping ratio of a rigid-body mode), or no sample
-/// gave one.
-fn no_value(pt: &Point, o: &Output) -> Missing {
-    match (
-        o.quantity,
-        o.mode.and_then(|m| pt.modes.get(m).map(|x| (m, x))),
-    ) {
-        (Quantity::DampingRatio, Some((mode, m))) if m.class == ModeClass::Rigid => {
-            Missing::RigidDamping { mode }
-        }
-        _ => Missing::NoValue,
+    fn tabulate(&mut self, ci: usize, value: impl Tabulate) {
+        value.tabulate(self.study, ci, &self.spreads[ci], &mut self.tables);
     }
-}
-
-/// Why the quadrature has no value for output `k`: the output has none at the nominal point
-/// either (the damping ratio of a rigid-body mode), or no node gave one.
-fn quadrature_missing(lm: &LocalModel, k: usize) -> Missing {
-    match (lm.outputs[k].quantity, lm.outputs[k].mode, &lm.grad[k]) {
-        (Quantity::DampingRatio, Some(_), Err(e @ Missing::RigidDamping { .. })) => e.clone(),
-        (Quantity::TransferMagnitude, _, Err(e @ Missing::TransferUnbounded)) => e.clone(),
-        _ => Missing::NoValue,
-    }
-}
-
-/// Monte Carlo probabilities of character at one speed from the event counts of its
-/// statistics, with 95 % Wilson score intervals.
-fn monte_carlo_probabilities(
-    speed: f64,
-    case: usize,
-    outs: &[Output],
-    stats: &[McStat],
-) -> Vec<ProbabilityRow> {
-    let mut v = Vec::new();
-    let mut push = |event, mode, count: usize, st: &McStat| {
-        let n = st.n + st.failed;
-        if n == 0 {
-            return;
-        }
-        let p = count as f64 / n as f64;
-        v.push(ProbabilityRow {
-            speed,
-            case,
-            method: Method::MonteCarlo,
-            event,
-            mode,
-            probability: p,
-            ci: wilson(count, n),
-        });
-    };
-    for (o, st) in outs.iter().zip(stats) {
-        if o.quantity == Quantity::DampedFrequency {
-            push(Event::Overdamped, o.mode, st.overdamped, st);
-        }
-    }
-    if let Some(st) = stats.first() {
-        push(Event::Unstable, None, st.unstable, st);
-        push(Event::OtherBranch, None, st.other_branch, st);
-    }
-    v
-}
-
-/// The 95 % Wilson score interval of `k` successes in `n` trials.
-pub fn wilson(k: usize, n: usize) -> (f64, f64) {
-    let z = 1.959_963_984_540_054;
-    let (n, p) = (n as f64, k as f64 / n as f64);
-    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
-    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
-    ((centre - half).max(0.0), (centre + half).min(1.0))
 }

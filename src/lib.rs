@@ -30,11 +30,13 @@
 //! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
 //!     [`requirement`]: a requirement's margin at a point (what a design must meet).
 //! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
-//! 15. [`propagate`]: the propagation layer: [`propagate::Study`], [`propagate::Run`] and the
-//!     [`propagate::Propagation`] trait.
-//! 16. The methods: [`taylor`] (first order, second order, invariant), [`quadrature`],
-//!     [`montecarlo`], and [`sobol`] (global sensitivity indices).
-//! 17. [`yields`]: the yield of a case's requirements by each method, as rows.
+//! 15. [`table`]: the rows of the result's tables (`tolerance.csv`, `probabilities.csv`,
+//!     `yield.csv`, `sobol.csv`), each method's own fields in one enum, put in order once.
+//! 16. [`propagate`]: the propagation layer: [`propagate::Study`], [`propagate::Run`], the
+//!     [`propagate::Propagation`] trait and [`propagate::Tabulate`] (a method's value writes
+//!     its own rows).
+//! 17. The methods: [`taylor`] (first order, second order, invariant, the first-order yield),
+//!     [`quadrature`], [`montecarlo`], and [`sobol`] (global sensitivity indices).
 //! 18. [`analyze`], [`allocate`] (tolerance allocation to a yield target), [`request`], [`shard`]: the main job and its rows, the analysis request
 //!     both front ends check the same way, and the job's split across runs.
 //! 19. [`plots`], [`drawing`] (the mechanism and its modes), [`report`], [`results`]: what is
@@ -92,8 +94,8 @@ pub mod settings;
 pub mod shard;
 pub mod sobol;
 pub mod sweep;
+pub mod table;
 pub mod tape;
 pub mod taylor;
 pub mod threads;
 pub mod tolerance;
-pub mod yields;

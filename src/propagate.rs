@@ -8,14 +8,15 @@
 //! study, one case's [`Spread`] and the [`Run`] control (cancellation, the worker threads,
 //! progress), it returns an [`Estimate`]: its statistics with the reason it stopped. The
 //! methods are [`crate::taylor::Taylor`] (first order, second order and the invariant method
-//! from the local models), [`crate::quadrature::Quadrature`] and
-//! [`crate::montecarlo::MonteCarlo`]; the last two place their points through
-//! [`crate::sampling`]. [`crate::analyze`] runs them per case and assembles the rows.
+//! from the local models), [`crate::quadrature::Quadrature`], [`crate::montecarlo::MonteCarlo`]
+//! and [`crate::sobol::Sobol`]; the last three place their points through
+//! [`crate::sampling`]. [`crate::analyze`] runs them per case.
 //!
-//! This is the seam a new method plugs into: one type, one `impl Propagation`, and its rows in
-//! `analyze`. (In the manner of OpenTURNS' and chaospy's algorithm objects: inputs in, a
-//! result and its termination out; a method's error estimates are part of its value, as the
-//! quadrature's are.)
+//! This is the seam a new method plugs into: one type, one `impl Propagation` and, for its
+//! value, one `impl Tabulate` that writes its rows ([`crate::table`]); `analyze` runs it per
+//! case. (In the manner of OpenTURNS' and chaospy's algorithm objects: inputs in, a result and
+//! its termination out; a method's error estimates are part of its value, as the quadrature's
+//! are.)
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
@@ -25,42 +26,12 @@ use crate::program::Workspace;
 use crate::sampling::branch_counts;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
+use crate::table::Tables;
 use crate::tolerance::{LocalModel, Spread, add_hessians, local_model};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
-
-/// Propagation methods, as named in the outputs. A yield is given by [`Method::FirstOrder`],
-/// [`Method::Quadrature`] and [`Method::MonteCarlo`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    FirstOrder,
-    SecondOrder,
-    /// ω_d from the pair invariants (see [`crate::tolerance`]).
-    Invariant,
-    MonteCarlo,
-    /// The whole pipeline integrated over the distribution ([`crate::quadrature`]).
-    Quadrature,
-    /// The answer to read: [`Method::Quadrature`] where it ran and gave a value; otherwise
-    /// the automatic choice among the Taylor methods (for ω_d the invariant method within
-    /// [`crate::tolerance::KINK_SIGMAS`] σ of a change of class, otherwise second order where
-    /// it exists, else first order). The row's `basis` says which.
-    Analytic,
-}
-
-impl Method {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Method::FirstOrder => "first_order",
-            Method::SecondOrder => "second_order",
-            Method::Invariant => "invariant",
-            Method::MonteCarlo => "monte_carlo",
-            Method::Quadrature => "quadrature",
-            Method::Analytic => "analytic",
-        }
-    }
-}
 
 /// The deterministic part of an analysis, shared by every method and case (see the module
 /// documentation).
@@ -145,11 +116,20 @@ pub struct Estimate<T> {
 
 /// A propagation method: the statistics of a study's outputs under one case's spread.
 pub trait Propagation {
-    /// The method's statistics.
-    type Value;
+    /// The method's statistics, which write their own rows.
+    type Value: Tabulate;
 
     /// Propagates `spread` (over [`Study::vars`]) through the study.
     fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<Self::Value>;
+}
+
+/// A method's value as rows of the result's tables: the method's own converter, next to the
+/// method (its rows, probabilities, yields, indices). The tables put every method's rows in
+/// their order ([`Tables::finish`]).
+pub trait Tabulate {
+    /// Writes the rows of case `case` (index into the analysis' cases, propagated with
+    /// `spread`) into `tables`.
+    fn tabulate(self, study: &Study, case: usize, spread: &Spread, tables: &mut Tables);
 }
 
 impl<'a> Study<'a> {

@@ -30,9 +30,9 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["sensitivity", "hessian", "nominal_sweep"], true),
     (&["tolerance", "requirement"], false),
     (&["sampling"], false),
+    (&["table"], false),
     (&["propagate"], false),
     (&["taylor", "quadrature", "montecarlo", "sobol"], false),
-    (&["yields"], false),
     (&["analyze", "allocate", "request", "shard"], true),
     (&["plots", "drawing", "report", "results"], true),
 ];

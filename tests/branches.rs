@@ -191,8 +191,9 @@ fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
     use modaltol::model::Sampling;
     use modaltol::montecarlo::McOptions;
     use modaltol::output::Quantity;
-    use modaltol::propagate::Method;
-    use modaltol::quadrature::{Event, QuadOptions};
+    use modaltol::quadrature::QuadOptions;
+    use modaltol::table::Event;
+    use modaltol::table::Method;
     let text = format!(
         "{}[[analysis.cases]]\nname = \"geometry\"\ntolerances = {{ m = \"3%\", L = \"2%\" }}\n",
         conical(1.0, 0.5, 0.01)
@@ -226,7 +227,7 @@ fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
                 .find(|r| {
                     r.speed == speed
                         && r.quantity == Quantity::DampedFrequency
-                        && r.method == Method::FirstOrder
+                        && r.method() == Method::FirstOrder
                         && r.mean > 1.0
                 })
                 .unwrap()
@@ -238,13 +239,13 @@ fn samples_on_the_cone_are_on_the_nominal_branch_and_stable() {
                         .find(|r| {
                             r.speed == speed
                                 && r.quantity == q
-                                && r.method == method
+                                && r.method() == method
                                 && r.mode == mode
                         })
                         .unwrap()
                 };
                 let (quad, mc) = (find(Method::Quadrature), find(Method::MonteCarlo));
-                let st = mc.mc.unwrap();
+                let st = mc.mc().unwrap();
                 assert!(
                     st.mean_ci.0 <= quad.mean && quad.mean <= st.mean_ci.1,
                     "{speeds:?} at {speed}: {quad:?} against {mc:?}"

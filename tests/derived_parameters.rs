@@ -96,7 +96,7 @@ fn a_derived_parameter_is_its_expression_written_in_place() {
     let mut l_matters = false;
     for (x, y) in a.rows.iter().zip(&b.rows) {
         assert!(x.mean.to_bits() == y.mean.to_bits() && x.std.to_bits() == y.std.to_bits());
-        if let Some(s) = &x.shares {
+        if let Some(s) = &x.shares() {
             l_matters |= s[l] > 0.1;
         }
     }

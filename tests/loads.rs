@@ -20,8 +20,8 @@ use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
 use modaltol::model::Case;
 use modaltol::output::Quantity;
-use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Sweep};
+use modaltol::table::Method;
 use num_dual::{Dual64, DualNum};
 
 const G: f64 = 9.80665;
@@ -240,7 +240,7 @@ value = 2.5
         .rows
         .iter()
         .find(|r| {
-            r.method == Method::FirstOrder
+            r.method() == Method::FirstOrder
                 && r.quantity == Quantity::DampedFrequency
                 && r.mode == Some(0)
         })

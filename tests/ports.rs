@@ -257,7 +257,7 @@ fn the_tolerance_analysis_of_a_port_transfer_equals_the_coordinates() {
     assert_eq!(a.len(), b.len());
     assert!(a.len() >= 9, "{}", a.len());
     for (x, y) in a.iter().zip(&b) {
-        assert_eq!((x.speed, x.method), (y.speed, y.method));
+        assert_eq!((x.speed, x.method()), (y.speed, y.method()));
         assert!(
             (x.mean - y.mean).abs() <= 1e-9 * y.mean.abs(),
             "{x:?} vs {y:?}"

@@ -11,13 +11,15 @@ mod common;
 use common::pendulum::G;
 
 use common::example;
-use modaltol::analyze::{Analysis, AnalyzeOptions, Row, analyze};
+use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::Case;
 use modaltol::output::Quantity;
-use modaltol::propagate::Method;
-use modaltol::quadrature::{Event, QuadOptions};
+use modaltol::quadrature::QuadOptions;
 use modaltol::report::{outside_request, outside_request_lines};
+use modaltol::table::Event;
+use modaltol::table::Method;
+use modaltol::table::Row;
 
 /// The swept pendulum's exact outputs at rod length `l` and speed `w` (the known answer of
 /// `tests/common/pendulum.rs`): the pair discriminant `4Ik − c²`, ω_d and |H(jΩ)|. The sweep
@@ -172,7 +174,7 @@ fn find(a: &Analysis, case: usize, speed: f64, q: Quantity, method: Method) -> &
             r.case == case
                 && r.speed.to_bits() == speed.to_bits()
                 && r.quantity == q
-                && r.method == method
+                && r.method() == method
                 && r.mode.unwrap_or(0) == 0
         })
         .unwrap_or_else(|| panic!("no {} {} row at {speed}", q.as_str(), method.as_str()))
@@ -212,13 +214,13 @@ fn pendulum_quadrature_matches_exact_moments_and_probabilities_at_every_speed() 
                     r.mean,
                     r.std
                 );
-                let (bm, bs) = r.errors.expect("error estimates");
+                let (bm, bs) = r.errors().expect("error estimates");
                 checked += 1;
                 covered += usize::from(em <= bm && es <= bs);
                 worst = (worst.0.max(em / std), worst.1.max(es / std));
                 // The answer to read is the quadrature.
                 let answer = find(&a, ci, w, q, Method::Analytic);
-                assert_eq!(answer.basis, Some(Method::Quadrature));
+                assert_eq!(answer.basis(), Some(Method::Quadrature));
                 assert_eq!(answer.mean.to_bits(), r.mean.to_bits());
             }
             assert!(checked > 100, "{checked} speeds checked");
@@ -386,7 +388,7 @@ fn agrees_with_reference(file: &str, speeds: Vec<f64>) -> Analysis {
             .iter()
             .find(|x| {
                 x.case == ci
-                    && x.method == Method::Quadrature
+                    && x.method() == Method::Quadrature
                     && (x.speed - r.speed).abs() < 1e-9
                     && x.quantity.as_str() == r.quantity
                     && x.mode == r.mode
@@ -397,7 +399,7 @@ fn agrees_with_reference(file: &str, speeds: Vec<f64>) -> Analysis {
                     r.case, r.speed, r.quantity
                 )
             });
-        let (em, es) = row.errors.unwrap();
+        let (em, es) = row.errors().unwrap();
         for (what, q, m, se, err) in [
             ("mean", row.mean, r.mean, r.mean_se, em),
             ("σ", row.std, r.std, r.std_se, es),
@@ -442,7 +444,7 @@ fn governor_quadrature_agrees_with_large_monte_carlo() {
         .rows
         .iter()
         .filter(|r| {
-            r.method == Method::Quadrature
+            r.method() == Method::Quadrature
                 && r.quantity == Quantity::TransferMagnitude
                 && r.case == 0
         })
@@ -480,13 +482,13 @@ fn thirteen_variables_give_honest_error_estimates_below_the_monte_carlo_cost() {
             .rows
             .iter()
             .find(|x| {
-                x.method == Method::Quadrature
+                x.method() == Method::Quadrature
                     && (x.speed - r.speed).abs() < 1e-9
                     && x.quantity.as_str() == r.quantity
                     && x.mode == r.mode
             })
             .unwrap();
-        let (em, es) = row.errors.unwrap();
+        let (em, es) = row.errors().unwrap();
         let (mean_half, std_half) = (z99 * r.mean_se, z99 * r.std_se);
         total += 2;
         covered += usize::from((row.mean - r.mean).abs() <= em + mean_half);
@@ -531,13 +533,13 @@ fn many_variables_agree_with_large_monte_carlo_at_a_tenth_of_its_cost() {
                 .rows
                 .iter()
                 .find(|x| {
-                    x.method == Method::Quadrature
+                    x.method() == Method::Quadrature
                         && x.speed.to_bits() == r.speed.to_bits()
                         && x.quantity.as_str() == r.quantity
                         && x.mode == r.mode
                 })
                 .unwrap();
-            let (em, es) = row.errors.unwrap();
+            let (em, es) = row.errors().unwrap();
             for (q, m, se, err) in [
                 (row.mean, r.mean, r.mean_se, em),
                 (row.std, r.std, r.std_se, es),
@@ -668,18 +670,18 @@ fn rows_outside_the_requested_accuracy_are_named() {
         let quad: Vec<&Row> = a
             .rows
             .iter()
-            .filter(|r| r.method == Method::Quadrature && r.errors.is_some())
+            .filter(|r| r.method() == Method::Quadrature && r.errors().is_some())
             .collect();
         assert!(!quad.is_empty());
         for r in &quad {
-            let (em, es) = r.errors.unwrap();
+            let (em, es) = r.errors().unwrap();
             let largest = quad
                 .iter()
                 .filter(|s| s.quantity == r.quantity && s.mode == r.mode)
                 .fold(0.0f64, |m, s| m.max(s.std));
             let target = tolerance * r.std.max(0.02 * largest);
             assert_eq!(
-                r.within_request,
+                r.within_request(),
                 Some(em <= target && es <= target),
                 "{tolerance}: {} at {}",
                 r.quantity.as_str(),
@@ -689,7 +691,7 @@ fn rows_outside_the_requested_accuracy_are_named() {
         let outside: usize = outside_request(&a).iter().map(|o| o.speeds.len()).sum();
         let flagged = quad
             .iter()
-            .filter(|r| r.within_request == Some(false))
+            .filter(|r| r.within_request() == Some(false))
             .count();
         assert_eq!(outside, flagged);
         let lines = outside_request_lines(&a);

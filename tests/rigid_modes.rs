@@ -11,9 +11,10 @@ use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
 use modaltol::output::Quantity;
-use modaltol::propagate::Method;
-use modaltol::quadrature::{Event, QuadOptions};
+use modaltol::quadrature::QuadOptions;
 use modaltol::sweep::{Options, Point, Sweep, initial_guess, point};
+use modaltol::table::Event;
+use modaltol::table::Method;
 
 const SHAFT: &str = "[[bodies]]\nname = \"shaft\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\n\
     cm = [0, 0.1, 0]\n[[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\n\
@@ -166,7 +167,7 @@ fn the_quadrature_and_the_monte_carlo_see_no_instability_in_a_rigid_body_mode() 
         let sampling = [Method::Quadrature, Method::MonteCarlo, Method::Analytic];
         for r in a.rows.iter().filter(|r| r.mode == Some(0)) {
             if r.quantity == modaltol::output::Quantity::DampingRatio
-                || !sampling.contains(&r.method)
+                || !sampling.contains(&r.method())
             {
                 assert!(r.mean.is_nan() && r.missing.is_some(), "{r:?}");
             } else {
@@ -199,7 +200,7 @@ fn a_node_without_a_transfer_value_keeps_its_modes() {
     let row = |speed: f64, q: Quantity, mode: Option<usize>, method: Method| {
         a.rows
             .iter()
-            .find(|r| r.speed == speed && r.quantity == q && r.mode == mode && r.method == method)
+            .find(|r| r.speed == speed && r.quantity == q && r.mode == mode && r.method() == method)
             .unwrap_or_else(|| panic!("no row {speed} {q:?} {mode:?} {method:?}"))
     };
     for method in [Method::Quadrature, Method::Analytic, Method::FirstOrder] {

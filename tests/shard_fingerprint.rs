@@ -5,10 +5,11 @@
 
 mod common;
 
-use modaltol::analyze::{AnalyzeOptions, Split, analyze};
+use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::{Model, SpeedRange};
 use modaltol::montecarlo::McOptions;
+use modaltol::montecarlo::Split;
 use modaltol::shard::{RunSettings, ShardFile, read_all};
 use std::path::{Path, PathBuf};
 use toml_edit::{DocumentMut, Item, TableLike};

@@ -16,9 +16,9 @@ use modaltol::allocate::{AllocateOptions, allocate};
 use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::montecarlo::McOptions;
-use modaltol::propagate::Method;
 use modaltol::quadrature::QuadOptions;
-use modaltol::yields::YieldRow;
+use modaltol::table::Method;
+use modaltol::table::YieldRow;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// σ of L: the example's 3 % case (±3σ).
@@ -419,7 +419,7 @@ tolerances = {{ m = "{}%", L = "{}%", c = "{}%" }}
             .iter()
             .map(|x| &x.1)
             .find(|s| {
-                s.target == modaltol::sobol::Target::Output(0, wd)
+                s.target == modaltol::table::Target::Output(0, wd)
                     && model.model().parameters[a.vars[s.variable]].name == names[k]
             })
             .unwrap();

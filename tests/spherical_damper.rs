@@ -335,7 +335,7 @@ fn the_first_order_spread_of_the_damping_ratio_equals_the_hand_derivations() {
     use modaltol::analyze::{AnalyzeOptions, analyze};
     use modaltol::model::Case;
     use modaltol::output::Quantity;
-    use modaltol::propagate::Method;
+    use modaltol::table::Method;
     let omega = 8.0;
     let theta = (rod().2 / (omega * omega)).acos();
     let text = cone(
@@ -371,7 +371,7 @@ fn the_first_order_spread_of_the_damping_ratio_equals_the_hand_derivations() {
         .rows
         .iter()
         .find(|r| {
-            r.method == Method::FirstOrder
+            r.method() == Method::FirstOrder
                 && r.quantity == Quantity::DampingRatio
                 && r.mode == Some(2)
         })

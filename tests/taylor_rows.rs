@@ -16,8 +16,8 @@ use modaltol::compiled::Compiled;
 use modaltol::modal::{Smoothness, smoothness};
 use modaltol::output::{Missing, Quantity};
 use modaltol::program::Workspace;
-use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Point, Sweep};
+use modaltol::table::Method;
 use modaltol::tolerance::{LocalModel, local_model, match_modes};
 use nalgebra::DMatrix;
 
@@ -346,7 +346,7 @@ fn the_blades_analysis_has_every_taylor_row_and_no_nan_in_its_report() {
     let rows: Vec<_> = a
         .rows
         .iter()
-        .filter(|r| taylor.contains(&r.method))
+        .filter(|r| taylor.contains(&r.method()))
         .collect();
     // Per case and speed: 40 outputs by first order, second order and analytic, 20 by the
     // invariant method.

@@ -8,14 +8,15 @@ use common::pendulum::G;
 use modaltol::program::Workspace;
 
 use common::example;
-use modaltol::analyze::{Analysis, AnalyzeOptions, Row, analyze};
+use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::model::{Case, Sampling};
 use modaltol::montecarlo::McOptions;
 use modaltol::output::Missing;
 use modaltol::output::Quantity;
-use modaltol::propagate::Method;
 use modaltol::sweep::{Options, Point, initial_guess, point};
+use modaltol::table::Method;
+use modaltol::table::Row;
 use modaltol::tolerance::{LocalModel, local_model, match_modes};
 use nalgebra::DMatrix;
 use num_dual::{Dual64, HyperDual64};
@@ -62,7 +63,7 @@ fn row(a: &Analysis, speed: f64, q: Quantity, method: Method) -> &Row {
         .find(|r| {
             (r.speed - speed).abs() < 1e-12
                 && r.quantity == q
-                && r.method == method
+                && r.method() == method
                 && r.mode.unwrap_or(0) == 0
         })
         .unwrap_or_else(|| panic!("no {} {} row at {speed}", q.as_str(), method.as_str()))
@@ -109,7 +110,7 @@ fn pendulum_first_order_spread_matches_closed_form() {
             h.eps.abs() * sigma_l
         );
         // Each variable's share of the variance: L is the only one.
-        assert!((fo.shares.as_ref().unwrap()[0] - 1.0).abs() < 1e-12);
+        assert!((fo.shares().as_ref().unwrap()[0] - 1.0).abs() < 1e-12);
     }
 }
 
@@ -355,7 +356,7 @@ fn a_transfer_zero_by_symmetry_has_zero_derivatives() {
 /// The second-order mean and σ inside the Monte Carlo 95 % intervals; with `first_too`, the
 /// first-order σ as well.
 fn agrees_with_monte_carlo(a: &Analysis, w: f64, q: Quantity, what: &str, first_too: bool) {
-    let mc = row(a, w, q, Method::MonteCarlo).mc.unwrap();
+    let mc = row(a, w, q, Method::MonteCarlo).mc().unwrap();
     assert_eq!(mc.failed, 0, "{what} Ω = {w}");
     let fo = row(a, w, q, Method::FirstOrder);
     let so = row(a, w, q, Method::SecondOrder);
@@ -451,7 +452,7 @@ fn second_order_converges_to_monte_carlo_as_the_tolerance_shrinks() {
         };
         let a = run(&model, c, &[w], 3000, None, Sampling::Lhs);
         let mc = row(&a, w, Quantity::TransferMagnitude, Method::MonteCarlo)
-            .mc
+            .mc()
             .unwrap();
         let so = row(&a, w, Quantity::TransferMagnitude, Method::SecondOrder).std;
         gaps.push((so - mc.std).abs() / mc.std);
@@ -484,7 +485,7 @@ fn second_order_repairs_the_stationary_transfer_at_resonance() {
             Sampling::Random,
         );
         let mc = row(&a, w, Quantity::TransferMagnitude, Method::MonteCarlo)
-            .mc
+            .mc()
             .unwrap();
         let fo = row(&a, w, Quantity::TransferMagnitude, Method::FirstOrder);
         let so = row(&a, w, Quantity::TransferMagnitude, Method::SecondOrder);
@@ -529,7 +530,7 @@ fn invariant_method_repairs_damped_frequency_at_class_changes() {
     );
     for w in speeds {
         let mc = row(&a, w, Quantity::DampedFrequency, Method::MonteCarlo)
-            .mc
+            .mc()
             .unwrap();
         assert!(
             mc.class_changed > 300,
@@ -556,7 +557,7 @@ fn invariant_method_repairs_damped_frequency_at_class_changes() {
         );
         // The automatic choice takes the invariant method here.
         let auto = row(&a, w, Quantity::DampedFrequency, Method::Analytic);
-        assert_eq!(auto.basis, Some(Method::Invariant), "Ω = {w}");
+        assert_eq!(auto.basis(), Some(Method::Invariant), "Ω = {w}");
         assert!(
             auto.mean.to_bits() == inv.mean.to_bits() && auto.std.to_bits() == inv.std.to_bits()
         );
@@ -580,7 +581,7 @@ fn analytic_choice_is_second_order_away_from_class_changes() {
             let auto = row(&a, w, q, Method::Analytic);
             let so = row(&a, w, q, Method::SecondOrder);
             assert_eq!(
-                auto.basis,
+                auto.basis(),
                 Some(Method::SecondOrder),
                 "Ω = {w} {}",
                 q.as_str()
@@ -615,7 +616,7 @@ fn monte_carlo_is_identical_for_any_thread_count() {
         let mc = |a: &Analysis| {
             a.rows
                 .iter()
-                .filter(|r| r.method == Method::MonteCarlo)
+                .filter(|r| r.method() == Method::MonteCarlo)
                 .map(|r| (r.mean.to_bits(), r.std.to_bits()))
                 .collect::<Vec<_>>()
         };
@@ -642,7 +643,7 @@ fn lhs_and_sobol_estimate_the_same_spread() {
         q,
         Method::MonteCarlo,
     )
-    .mc
+    .mc()
     .unwrap();
     for sampling in [Sampling::Lhs, Sampling::Sobol] {
         let mc = row(
@@ -651,7 +652,7 @@ fn lhs_and_sobol_estimate_the_same_spread() {
             q,
             Method::MonteCarlo,
         )
-        .mc
+        .mc()
         .unwrap();
         assert!(
             (mc.std - random.std).abs() <= 0.03 * random.std,
@@ -738,11 +739,11 @@ fn a_cancelled_latin_hypercube_run_tallies_the_inadmissible_designs_it_evaluated
     let rows: Vec<&Row> = a
         .rows
         .iter()
-        .filter(|r| r.method == Method::MonteCarlo)
+        .filter(|r| r.method() == Method::MonteCarlo)
         .collect();
     assert!(!rows.is_empty());
     for r in rows {
-        let mc = r.mc.unwrap();
+        let mc = r.mc().unwrap();
         assert_eq!(mc.n + mc.failed, done);
         assert_eq!(mc.failed, tallied, "{:?} mode {:?}", r.quantity, r.mode);
     }

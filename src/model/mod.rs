@@ -12,121 +12,19 @@ pub mod schema;
 mod symmetry;
 mod validate;
 
+mod analysis;
+mod requirements;
+mod site;
+
 pub use admissible::Defect;
+pub use analysis::{
+    Analysis, Case, Channel, Correlation, Distribution, Sampling, SpeedRange, Tolerance, Transfer,
+};
 pub use expr::{EvalError, Expr};
+pub use requirements::{Allocation, Cost, Requirement, RequirementKind, SeparationMargin};
+pub use site::{Field, FieldError, ModelError, Site};
 
-use std::fmt;
 use std::path::Path;
-
-/// Where a model item comes from: file, 1-based line and column, and a description.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Site {
-    pub file: String,
-    pub line: usize,
-    pub column: usize,
-    pub what: String,
-}
-
-impl fmt::Display for Site {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(
-            f,
-            "{} ({}:{}:{})",
-            self.what, self.file, self.line, self.column
-        )
-    }
-}
-
-/// An error in a model file, pointing at a line and column when it can.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub struct ModelError {
-    pub file: String,
-    /// 1-based line and column, when the error has a place in the file.
-    pub line: Option<usize>,
-    pub column: Option<usize>,
-    pub message: String,
-    /// The source line, for display under the message.
-    pub snippet: Option<String>,
-}
-
-impl fmt::Display for ModelError {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        match (self.line, self.column) {
-            (Some(l), Some(c)) => write!(f, "{}:{}:{}: {}", self.file, l, c, self.message)?,
-            _ => write!(f, "{}: {}", self.file, self.message)?,
-        }
-        if let (Some(s), Some(c)) = (&self.snippet, self.column) {
-            // A window of at most 160 characters around the column (hostile lines are long).
-            let from = c
-                .saturating_sub(80)
-                .min(s.chars().count().saturating_sub(1));
-            let shown: String = s.chars().skip(from).take(160).collect();
-            write!(
-                f,
-                "\n    | {shown}\n    | {}^",
-                " ".repeat(c.saturating_sub(1 + from))
-            )?;
-        }
-        Ok(())
-    }
-}
-
-/// A field of the model: an expression and where it was written (which is no part of what it
-/// means: left out of its serialisation).
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Field {
-    pub expr: Expr,
-    #[serde(skip)]
-    pub site: Site,
-}
-
-/// A field evaluation failed (at some parameter values and speed).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{site}: {error}")]
-pub struct FieldError {
-    pub site: Site,
-    pub error: EvalError,
-}
-
-impl Field {
-    /// Evaluates the field over `T`; errors name the field and its place in the file.
-    pub fn eval<T: crate::real::Real>(&self, p: &[T], speed: T) -> Result<T, FieldError> {
-        self.expr.eval(p, speed).map_err(|error| FieldError {
-            site: self.site.clone(),
-            error,
-        })
-    }
-}
-
-/// A tolerance on a design variable, as written (`"3%"` or an absolute value in the
-/// parameter's unit). By default it is read as ±3σ of a normal distribution.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub enum Tolerance {
-    /// Fraction of the nominal value (0.03 for "3%").
-    Relative(f64),
-    /// Absolute value in the parameter's unit.
-    Absolute(f64),
-}
-
-impl Tolerance {
-    /// The tolerance as an absolute half-width around `nominal`.
-    pub fn absolute(&self, nominal: f64) -> f64 {
-        match *self {
-            Tolerance::Relative(f) => f * nominal.abs(),
-            Tolerance::Absolute(a) => a,
-        }
-    }
-}
-
-/// Distribution of a toleranced variable.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Distribution {
-    /// Normal, tolerance = ±3σ.
-    Normal,
-    /// Uniform on ±tolerance.
-    Uniform,
-}
 
 /// A named model parameter (a candidate design variable).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -224,162 +122,6 @@ pub struct Constraint {
     pub dropped: Vec<usize>,
 }
 
-/// Inclusive range of speeds `from:to:step` (rad/s).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct SpeedRange {
-    pub from: f64,
-    pub to: f64,
-    pub step: f64,
-}
-
-impl SpeedRange {
-    /// Parses `FROM:TO:STEP` (rad/s); `TO` is included when it lies on the grid.
-    pub fn parse(s: &str) -> Result<SpeedRange, String> {
-        let parts: Vec<&str> = s.split(':').collect();
-        if parts.len() != 3 {
-            return Err(format!("'{s}' is not FROM:TO:STEP"));
-        }
-        let num = |x: &str, what: &str| -> Result<f64, String> {
-            let v: f64 = x
-                .trim()
-                .parse()
-                .map_err(|_| format!("{what} '{x}' in '{s}' is not a number"))?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(format!("{what} in '{s}' is not finite"))
-            }
-        };
-        let r = SpeedRange {
-            from: num(parts[0], "FROM")?,
-            to: num(parts[1], "TO")?,
-            step: num(parts[2], "STEP")?,
-        };
-        if r.step <= 0.0 {
-            return Err(format!("STEP in '{s}' must be positive"));
-        }
-        if r.to < r.from {
-            return Err(format!("TO is below FROM in '{s}'"));
-        }
-        if (r.to - r.from) / r.step > 1e9 {
-            return Err(format!("'{s}' has more than 10^9 points"));
-        }
-        Ok(r)
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        ((self.to - self.from) / self.step + 1e-9).floor() as usize + 1
-    }
-
-    /// Always false: a range has at least its first point.
-    pub fn is_empty(&self) -> bool {
-        false
-    }
-
-    /// The `i`-th speed, `from + i·step`, as the grid point it is: where `from` and `step`
-    /// are decimals of at most 15 places (`0:5:0.05`), the double nearest to the decimal
-    /// `from + i·step` (so that `1.9` prints as `1.9`, not `1.9000000000000001`), computed
-    /// exactly in integers and rounded once; else `from + i·step` (no accumulated rounding).
-    pub fn at(&self, i: usize) -> f64 {
-        self.at_on(self.decimal(), i)
-    }
-
-    /// [`SpeedRange::at`] with the grid's decimal form already found.
-    fn at_on(&self, decimal: Option<(f64, f64, f64)>, i: usize) -> f64 {
-        match decimal {
-            Some((f, s, scale)) => {
-                let n = f + i as f64 * s;
-                if n.abs() < 2f64.powi(53) {
-                    n / scale
-                } else {
-                    self.from + i as f64 * self.step
-                }
-            }
-            None => self.from + i as f64 * self.step,
-        }
-    }
-
-    /// `(from·10^k, step·10^k, 10^k)` with integers for the smallest `k ≤ 15` at which
-    /// `from` and `step` are decimals of `k` places, `None` where they are not.
-    fn decimal(&self) -> Option<(f64, f64, f64)> {
-        (0..=15).find_map(|k| {
-            let scale = 10f64.powi(k);
-            let exact = |x: f64| {
-                let n = (x * scale).round();
-                (n.abs() < 2f64.powi(53) && (n / scale).to_bits() == x.to_bits()).then_some(n)
-            };
-            Some((exact(self.from)?, exact(self.step)?, scale))
-        })
-    }
-
-    /// All speeds.
-    pub fn speeds(&self) -> impl Iterator<Item = f64> + '_ {
-        let decimal = self.decimal();
-        (0..self.len()).map(move |i| self.at_on(decimal, i))
-    }
-}
-
-/// Monte Carlo sampling schemes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Sampling {
-    Random,
-    Lhs,
-    Sobol,
-}
-
-impl Sampling {
-    /// Every scheme, in the order they are listed to users.
-    pub const ALL: [Sampling; 3] = [Sampling::Random, Sampling::Lhs, Sampling::Sobol];
-
-    /// Name in the model file, on the command line and in Python (as serde writes it).
-    pub fn name(self) -> &'static str {
-        match self {
-            Sampling::Random => "random",
-            Sampling::Lhs => "lhs",
-            Sampling::Sobol => "sobol",
-        }
-    }
-
-    /// The scheme named `name`, or `None`.
-    pub fn named(name: &str) -> Option<Sampling> {
-        Sampling::ALL.into_iter().find(|s| s.name() == name)
-    }
-
-    /// The names, for a message: `random, lhs or sobol` (`quoted`: `"random", "lhs" or
-    /// "sobol"`).
-    pub fn names(quoted: bool) -> String {
-        let names: Vec<String> = (Sampling::ALL.iter())
-            .map(|s| match quoted {
-                true => format!("{:?}", s.name()),
-                false => s.name().to_string(),
-            })
-            .collect();
-        let (last, rest) = names.split_last().expect("schemes");
-        format!("{} or {last}", rest.join(", "))
-    }
-}
-
-/// One end of a transfer function: where the excitation enters or the response is read.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub enum Channel {
-    /// A free joint coordinate: a generalised force on it in, its value out.
-    Coordinate(usize),
-    /// A [`Port`] (index into [`Model::ports`]): a force or torque in, a displacement or
-    /// rotation out.
-    Port(usize),
-}
-
-/// A transfer function `H(jω)` from `input` to `output` at the excitation frequency
-/// `order × speed`.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct Transfer {
-    pub input: Channel,
-    pub output: Channel,
-    pub order: f64,
-}
-
 /// A physical degree of freedom of a body where a transfer function may start or end: a
 /// point along a direction (a force in, the point's displacement along it out) or a direction
 /// alone (a torque about it in, the body's rotation about it out). The direction is carried
@@ -437,48 +179,6 @@ pub enum LoadKind {
     Coordinate { coordinate: usize, value: Field },
 }
 
-/// A correlation matrix between parameters (rows and columns in the order of `params`).
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Correlation {
-    pub params: Vec<usize>,
-    pub matrix: Vec<Vec<f64>>,
-}
-
-/// A named tolerance case: per-parameter tolerances and optional correlations.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Case {
-    pub name: String,
-    pub tolerances: Vec<(usize, Tolerance)>,
-    pub correlation: Option<Correlation>,
-}
-
-impl Case {
-    /// The case made of the tolerances declared on the parameters themselves.
-    pub fn from_parameters(model: &Model) -> Case {
-        Case {
-            name: "parameters".into(),
-            tolerances: model
-                .parameters
-                .iter()
-                .enumerate()
-                .filter_map(|(i, p)| p.tolerance.map(|t| (i, t)))
-                .collect(),
-            correlation: None,
-        }
-    }
-}
-
-/// The `[analysis]` table: what the model's author wants analysed by default.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Analysis {
-    pub speed: Option<SpeedRange>,
-    pub transfer: Option<Transfer>,
-    pub samples: usize,
-    pub seed: u64,
-    pub sampling: Sampling,
-    pub cases: Vec<Case>,
-}
-
 /// A validated mechanism. Immutable; numbers are expressions of the parameters and speed.
 ///
 /// Its serialisation is everything that can change a number computed from it (every body,
@@ -520,88 +220,18 @@ pub struct Model {
     pub allocation: Allocation,
 }
 
-/// A requirement on the modes of every design over an operating range (`[[requirements]]`):
-/// its margin at a speed is positive where it is met (see [`crate::requirement`]).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Requirement {
-    pub name: String,
-    pub kind: RequirementKind,
-    /// The operating range `[from, to]` (rad/s, inclusive); `None`: every speed analysed.
-    pub speeds: Option<(f64, f64)>,
-    /// 0-based mode; `None`: every mode (the worst one decides).
-    pub mode: Option<usize>,
-}
-
-/// What a requirement asks, with the unit of its margin.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub enum RequirementKind {
-    /// ω_d clear of every engine order `k·Ω` by the margin (rad/s).
-    Separation {
-        orders: Vec<f64>,
-        margin: SeparationMargin,
-    },
-    /// ω_d within `[min, max]` (either may be absent; rad/s).
-    Frequency { min: Option<f64>, max: Option<f64> },
-    /// ω_d outside `[low, high]` (rad/s).
-    Avoid { low: f64, high: f64 },
-    /// ζ at least `min` (dimensionless).
-    Damping { min: f64 },
-    /// The mode's roots complex: ζ below 1 (margin `1 − ζ`).
-    Underdamped,
-    /// No root with a positive real part (margin `−max Re λ`, 1/s).
-    Stable,
-    /// On the nominal design's equilibrium branch (pass or fail, no margin).
-    SameBranch,
-    /// |H| at most `max` (the transfer function's unit).
-    Transfer { max: f64 },
-}
-
-/// The separation a [`RequirementKind::Separation`] asks.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub enum SeparationMargin {
-    /// A fraction of the excitation frequency `k·Ω`, below and above (0.15 for "15%").
-    Fraction(f64),
-    /// API 684's margin from the amplification factor `AF = 1/(2ζ)`: none below AF 2.5, else
-    /// `min(16, 17(1 − 1/(AF − 1.5)))` % below and `min(26, 10 + 17(1 − 1/(AF − 1.5)))` %
-    /// above the excitation.
-    Api684,
-}
-
-/// Tolerance allocation's settings (`[allocation]`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Allocation {
-    /// The probability of meeting every requirement the allocated tolerances must reach.
-    pub target_yield: f64,
-    /// The tolerance case whose variables are allocated (`None`: the parameters' own).
-    pub case: Option<String>,
-    /// Per parameter (index): its cost model; parameters not listed cost `1/T`.
-    pub costs: Vec<(usize, Cost)>,
-}
-
-/// A cost–tolerance model `a + b / T^k`, `T` the tolerance in the parameter's unit (Chase &
-/// Greenwood 1988), with the largest tolerance allowed.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Cost {
-    pub a: f64,
-    pub b: f64,
-    pub k: f64,
-    pub max: Option<Tolerance>,
-}
-
-impl Cost {
-    /// The cost of tolerance `t`: `a + b / t^k`.
-    pub fn of(&self, t: f64) -> f64 {
-        self.a + self.b / t.powf(self.k)
-    }
-}
-
-impl Default for Cost {
-    fn default() -> Self {
-        Cost {
-            a: 0.0,
-            b: 1.0,
-            k: 1.0,
-            max: None,
+impl Case {
+    /// The case made of the tolerances declared on the parameters themselves.
+    pub fn from_parameters(model: &Model) -> Case {
+        Case {
+            name: "parameters".into(),
+            tolerances: model
+                .parameters
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| p.tolerance.map(|t| (i, t)))
+                .collect(),
+            correlation: None,
         }
     }
 }
@@ -934,60 +564,4 @@ impl Model {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::{Sampling, SpeedRange};
-
-    /// Each sampling scheme's name is the one serde writes (shard files, summaries) and reads
-    /// back as that scheme; an unknown name is none; a model file with one is refused naming
-    /// the schemes.
-    #[test]
-    fn sampling_names_are_one_spelling_everywhere() {
-        for s in Sampling::ALL {
-            assert_eq!(
-                serde_json::to_string(&s).unwrap(),
-                format!("{:?}", s.name())
-            );
-            assert_eq!(Sampling::named(s.name()), Some(s));
-        }
-        assert_eq!(Sampling::named("Sobol"), None);
-        assert_eq!(Sampling::names(false), "random, lhs or sobol");
-        assert_eq!(Sampling::names(true), "\"random\", \"lhs\" or \"sobol\"");
-        let text = include_str!("../../examples/rotating_pendulum.toml")
-            .replace("sampling = \"random\"", "sampling = \"halton\"");
-        let e = super::Model::from_str(&text, "p.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("analysis sampling 'halton': expected random, lhs or sobol"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn speeds_are_the_decimal_grid_points() {
-        let r = SpeedRange::parse("0:10:0.05").unwrap();
-        assert_eq!(r.len(), 201);
-        for (i, w) in r.speeds().enumerate() {
-            // The double nearest to the decimal i·0.05, so it prints with at most 2 places.
-            let decimal: f64 = format!("{}.{:02}", i / 20, (i % 20) * 5).parse().unwrap();
-            assert!(w.to_bits() == decimal.to_bits(), "{i}: {w} vs {decimal}");
-            assert!(w.to_string().split('.').nth(1).is_none_or(|d| d.len() <= 2));
-        }
-        let r = SpeedRange::parse("9.5:10:0.05").unwrap();
-        assert_eq!(r.at(7).to_string(), "9.85");
-        assert_eq!(
-            SpeedRange::parse("0:1:0.1").unwrap().at(3).to_string(),
-            "0.3"
-        );
-        let r = SpeedRange::parse("-1.25:1:0.25").unwrap();
-        assert_eq!(r.at(5).to_string(), "0");
-        // Not a short decimal: `from + i·step` as before.
-        let third = 1.0 / 3.0;
-        let r = SpeedRange {
-            from: 0.0,
-            to: 1.0,
-            step: third,
-        };
-        assert!(r.at(2).to_bits() == (2.0 * third).to_bits());
-    }
-}
+mod tests;

@@ -20,6 +20,7 @@
 
 mod moments;
 mod sampler;
+mod table;
 
 pub use moments::{Block, ChunkState, Events, Moments, TreeFold, YieldCounts, block_layout};
 pub use sampler::{Sampler, permute};
@@ -30,6 +31,7 @@ use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::requirement;
 use crate::sampling::sample_sweep;
+use crate::table::McStat;
 use crate::tolerance::{Spread, value};
 use rayon::prelude::*;
 
@@ -39,31 +41,6 @@ pub struct McOptions {
     pub samples: usize,
     pub seed: u64,
     pub sampling: Sampling,
-}
-
-/// Statistics of one output at one speed.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct McStat {
-    /// Samples that gave a value.
-    pub n: usize,
-    pub mean: f64,
-    pub std: f64,
-    pub mean_ci: (f64, f64),
-    pub std_ci: (f64, f64),
-    /// Samples where the point failed.
-    pub failed: usize,
-    /// Samples whose mode had another class than the nominal one.
-    pub class_changed: usize,
-    /// Samples whose output's mode was overdamped (ω_d and ζ rows; 0 for the transfer).
-    pub overdamped: usize,
-    /// Samples whose equilibrium was unstable.
-    pub unstable: usize,
-    /// Samples on another equilibrium branch than the nominal design (another number of
-    /// branch switches since the lowest speed).
-    pub other_branch: usize,
-    /// The 5, 50 and 95 % sample quantiles (linear interpolation between order statistics),
-    /// where the run kept the values (see [`MonteCarlo::quantiles`]).
-    pub quantiles: Option<[f64; 3]>,
 }
 
 /// Sample quantile of sorted values (linear interpolation between order statistics,
@@ -156,23 +133,66 @@ pub fn shard_chunks(samples: usize, k: usize, n: usize) -> std::ops::Range<usize
     (c * k / n)..(c * (k + 1) / n)
 }
 
+/// How the Monte Carlo samples are split across runs.
+#[derive(Debug, Clone, Default)]
+pub enum Split {
+    /// All samples here.
+    #[default]
+    Whole,
+    /// Only the chunks of shard `k` (0-based) of `n`: no rows, the blocks of chunk moments and
+    /// the values kept are the run's result ([`CaseShard`], for [`Split::Merged`]).
+    Shard(usize, usize),
+    /// The blocks of all shards, per case, in chunk order, and their values in sample order:
+    /// folded (and the quantiles taken) as a whole run would.
+    Merged(Vec<CaseShard>),
+}
+
 /// The Monte Carlo as a propagation method: the samples of `chunks` (samples
 /// `CHUNK·i .. CHUNK·(i+1)` of chunk `i`), each a whole sweep, their moments folded along the
-/// fixed tree (see the module documentation).
+/// fixed tree (see the module documentation); or the shards' blocks of such runs, merged.
 #[derive(Debug, Clone)]
 pub struct MonteCarlo {
     pub options: McOptions,
-    /// The chunks evaluated here: all of them, or one shard's.
+    /// The chunks evaluated here: all of them, or one shard's (none for a merge).
     pub chunks: std::ops::Range<usize>,
     /// Keep every value for the 5/50/95 % quantiles (unless more than [`MAX_KEPT_VALUES`]
     /// values would be kept).
     pub quantiles: bool,
-    /// A shard: the values kept go to the merge ([`McResult::kept`]) rather than into
-    /// quantiles here.
-    pub shard: bool,
+    /// A whole run, a shard (whose state goes to the merge: [`McRun::Shard`]) or the merge of
+    /// the shards' states.
+    pub part: Part,
+}
+
+/// Which part of a sharded run a [`MonteCarlo`] is.
+#[derive(Debug, Clone)]
+pub enum Part {
+    Whole,
+    Shard,
+    Merged(CaseShard),
 }
 
 /// What a [`MonteCarlo`] run gives.
+#[derive(Debug, Clone)]
+pub enum McRun {
+    /// A whole run cancelled before its first sample.
+    NotStarted,
+    /// A shard's blocks and kept values, for the merge.
+    Shard(CaseShard),
+    /// The statistics of a whole run or of the shards merged.
+    Done(McResult),
+}
+
+impl McRun {
+    /// A shard's state, or the run back where it is not a shard's.
+    pub fn into_shard(self) -> Result<CaseShard, McRun> {
+        match self {
+            McRun::Shard(s) => Ok(s),
+            other => Err(other),
+        }
+    }
+}
+
+/// The statistics of a whole Monte Carlo run (or of the shards merged).
 #[derive(Debug, Clone)]
 pub struct McResult {
     /// Each chunk's moments, in chunk order (folded).
@@ -185,8 +205,8 @@ pub struct McResult {
     /// Per requirement: every sample's worst margin over its range (`−∞` where it failed),
     /// sorted; where the run kept the values (see [`MonteCarlo::quantiles`]).
     pub worst_margins: Option<Vec<Vec<f64>>>,
-    /// The values kept, in sample order (a shard's, for the merge's quantiles).
-    pub kept: Option<Kept>,
+    /// The samples whose design is not admissible, by reason ([`MonteCarlo::inadmissible`]).
+    pub inadmissible: Vec<(String, usize, f64)>,
 }
 
 /// One tolerance case's share of a sharded run: its blocks of chunk moments in chunk order,
@@ -250,18 +270,37 @@ impl MonteCarlo {
             options,
             chunks: 0..chunks(options.samples),
             quantiles: true,
-            shard: false,
+            part: Part::Whole,
         }
     }
 
     /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), their values kept for the
-    /// merge's quantiles as a whole run keeps them ([`McResult::kept`]).
+    /// merge's quantiles as a whole run keeps them ([`CaseShard::kept`]).
     pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo {
         MonteCarlo {
             options,
             chunks: shard_chunks(options.samples, k, n),
             quantiles: true,
-            shard: true,
+            part: Part::Shard,
+        }
+    }
+
+    /// The shards' blocks and kept values of one case, folded as a whole run would.
+    pub fn merged(options: McOptions, shards: CaseShard) -> MonteCarlo {
+        MonteCarlo {
+            options,
+            chunks: 0..0,
+            quantiles: true,
+            part: Part::Merged(shards),
+        }
+    }
+
+    /// The run of case `case` (0-based) that `split` asks for.
+    pub fn of_case(options: McOptions, split: &Split, case: usize) -> MonteCarlo {
+        match split {
+            Split::Whole => MonteCarlo::whole(options),
+            Split::Shard(k, n) => MonteCarlo::shard(options, *k, *n),
+            Split::Merged(cases) => MonteCarlo::merged(options, cases[case].clone()),
         }
     }
 
@@ -390,29 +429,60 @@ impl MonteCarlo {
 }
 
 impl Propagation for MonteCarlo {
-    type Value = McResult;
+    type Value = McRun;
 
-    fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McResult> {
+    fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McRun> {
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
         let samples = self.options.samples;
-        let keep = self.quantiles && MonteCarlo::keeps(samples, speeds, outs);
-        let mut kept = Kept::default();
-        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut kept));
-        let (mut stats, done) = statistics(&fold, speeds, outs, samples);
-        // A whole run turns its values into quantiles; a shard hands them to the merge.
-        let (worst_margins, kept) = match (keep, self.shard) {
-            (true, false) => (Some(kept.apply(&mut stats)), None),
-            (true, true) => (None, Some(kept)),
-            (false, _) => (None, None),
-        };
-        Estimate {
-            value: McResult {
+        if let Part::Merged(shards) = &self.part {
+            let mut fold = TreeFold::default();
+            for b in &shards.blocks {
+                fold.push(b.clone());
+            }
+            let (mut stats, done) = statistics(&fold, speeds, outs, samples);
+            let worst_margins = shards.kept.clone().map(|k| k.apply(&mut stats));
+            let result = McResult {
+                inadmissible: self.inadmissible(study, spread, done, run),
                 fold,
                 stats,
                 samples: done,
                 worst_margins,
-                kept,
-            },
+            };
+            return Estimate {
+                value: McRun::Done(result),
+                termination: Termination::Completed,
+            };
+        }
+        let shard = matches!(self.part, Part::Shard);
+        if !shard && run.cancel.is_cancelled() {
+            return Estimate {
+                value: McRun::NotStarted,
+                termination: Termination::Cancelled,
+            };
+        }
+        let keep = self.quantiles && MonteCarlo::keeps(samples, speeds, outs);
+        let mut kept = Kept::default();
+        let (fold, termination) = self.run_chunks(study, spread, run, keep.then_some(&mut kept));
+        if shard {
+            let kept = keep.then_some(kept);
+            let blocks = fold.into_blocks();
+            return Estimate {
+                value: McRun::Shard(CaseShard { blocks, kept }),
+                termination,
+            };
+        }
+        // A whole run turns its values into quantiles.
+        let (mut stats, done) = statistics(&fold, speeds, outs, samples);
+        let worst_margins = keep.then(|| kept.apply(&mut stats));
+        let result = McResult {
+            inadmissible: self.inadmissible(study, spread, done, run),
+            fold,
+            stats,
+            samples: done,
+            worst_margins,
+        };
+        Estimate {
+            value: McRun::Done(result),
             termination,
         }
     }

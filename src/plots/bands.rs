@@ -7,7 +7,7 @@ use super::draw::{Band, Line, Style, draw};
 use super::{Output, Plot, method_color, scale, series, unit};
 use crate::analyze::Analysis;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
 use plotters::prelude::*;
 
 /// Mean ± σ of the output `o` against speed (`xlabel`); `None` where there is nothing to draw.

@@ -4,10 +4,11 @@
 
 use super::draw::{Band, Line, Style, draw, palette};
 use super::{Display, Plot, series};
-use crate::analyze::{Analysis, Row};
+use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
+use crate::table::Row;
 use plotters::prelude::*;
 
 /// A mode crossing an engine-order line: `ω_d(Ω) = order·Ω`.

@@ -32,11 +32,13 @@ pub use bands::first_order_off;
 pub use campbell::CriticalSpeed;
 pub use draw::{AXES_WIDTH, LEGEND_WIDTH, tick_label};
 pub use png::{fonts, png};
+pub use sobol::sobol_shown;
 
-use crate::analyze::{Analysis, Row};
+use crate::analyze::Analysis;
 use crate::model::{Case, Model};
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
+use crate::table::Row;
 use bands::band;
 use campbell::campbell;
 use draw::COLORS;
@@ -95,7 +97,7 @@ pub struct Display {
 fn series(a: &Analysis, case: usize, q: Quantity, mode: Option<usize>, m: Method) -> Vec<&Row> {
     a.rows
         .iter()
-        .filter(|r| r.case == case && r.quantity == q && r.mode == mode && r.method == m)
+        .filter(|r| r.case == case && r.quantity == q && r.mode == mode && r.method() == m)
         .collect()
 }
 

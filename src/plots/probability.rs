@@ -6,7 +6,7 @@ use super::draw::{Line, Style, draw, palette};
 use super::{Display, Plot};
 use crate::analyze::Analysis;
 use crate::model::Model;
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// Probabilities of character of one case against speed, quadrature and Monte Carlo (a colour
 /// per event, solid for the quadrature and dots for Monte Carlo); `None` when every
@@ -18,7 +18,7 @@ pub(super) fn probabilities(
     modes: usize,
     d: Display,
 ) -> Option<Plot> {
-    use crate::quadrature::Event;
+    use crate::table::Event;
     let mut events: Vec<(Event, Option<usize>)> =
         (0..modes).map(|m| (Event::Overdamped, Some(m))).collect();
     events.extend([(Event::Unstable, None), (Event::OtherBranch, None)]);

@@ -7,7 +7,7 @@ use super::{Display, Plot, series};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// Shares of the first-order variance of mode 1's ω_d in case `ci` against speed (`xlabel`), in
 /// per cent; `None` where there is nothing to draw.
@@ -36,12 +36,7 @@ pub(super) fn shares(
             Line::new(
                 model.parameters[b].name.clone(),
                 rows.iter()
-                    .map(|r| {
-                        (
-                            r.speed * xs,
-                            r.shares.as_ref().map_or(f64::NAN, |s| 100.0 * s[k]),
-                        )
-                    })
+                    .map(|r| (r.speed * xs, r.shares().map_or(f64::NAN, |s| 100.0 * s[k])))
                     .collect(),
                 palette(k),
             )

@@ -3,7 +3,7 @@
 
 use super::draw::{Line, Style, draw};
 use super::{Output, Plot, method_color, unit};
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// σ of the output `o` against speed (`xlabel`) by every method that has rows for it (Monte
 /// Carlo as dots, second order and the invariant dashed); `None` where there is nothing to

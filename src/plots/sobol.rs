@@ -7,17 +7,62 @@ use super::Plot;
 use super::draw::{Area, palette, panels, short};
 use crate::analyze::Analysis;
 use crate::model::Model;
-use crate::sobol::{SobolIndex, Target};
+use crate::table::{Method, SobolIndex, Target};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// At most this many targets per plot (the first of the table's order; all in `sobol.csv`).
 const MAX_TARGETS: usize = 6;
 
+/// The Sobol indices of `a` worth showing: every requirement's worst margin, and each output at
+/// the speed where its analytic σ is largest; per case, margins first then outputs in
+/// order, each target's variables by decreasing total index.
+pub fn sobol_shown(a: &Analysis) -> Vec<&(usize, SobolIndex)> {
+    // Per case and output: the speed index with the largest analytic σ.
+    let worst = |case: usize, o: usize| -> Option<usize> {
+        let out = a.outputs[o];
+        let mut best: Option<(usize, f64)> = None;
+        for r in &a.rows {
+            if r.case == case
+                && r.method() == Method::Analytic
+                && r.quantity == out.quantity
+                && r.mode == out.mode
+                && r.std.is_finite()
+                && best.is_none_or(|b| r.std > b.1)
+            {
+                let i = a
+                    .speeds
+                    .iter()
+                    .position(|w| w.to_bits() == r.speed.to_bits())?;
+                best = Some((i, r.std));
+            }
+        }
+        best.map(|b| b.0)
+    };
+    // Margins first, then outputs in order.
+    let key = |t: &Target| match *t {
+        Target::Margin(r) => (0, r),
+        Target::Output(_, o) => (1, o),
+    };
+    let mut shown: Vec<&(usize, SobolIndex)> = a
+        .sobol
+        .iter()
+        .filter(|(case, s)| match s.target {
+            Target::Margin(_) => true,
+            Target::Output(i, o) => worst(*case, o) == Some(i),
+        })
+        .collect();
+    shown.sort_by(|x, y| {
+        (x.0, key(&x.1.target))
+            .cmp(&(y.0, key(&y.1.target)))
+            .then(y.1.total.total_cmp(&x.1.total))
+    });
+    shown
+}
+
 /// The Sobol bars of case `case`; `None` where it has no indices.
 pub(super) fn sobol_bars(model: &Model, a: &Analysis, case: usize) -> Option<Plot> {
-    let shown: Vec<&SobolIndex> = a
-        .sobol_shown()
+    let shown: Vec<&SobolIndex> = sobol_shown(a)
         .into_iter()
         .filter(|x| x.0 == case)
         .map(|x| &x.1)

@@ -5,7 +5,7 @@ use super::draw::{Line, Style, draw, palette};
 use super::{Display, Plot};
 use crate::analyze::Analysis;
 use crate::model::Model;
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// The per-speed probability of each requirement of case `case`; `None` without requirements.
 pub(super) fn yield_curves(model: &Model, a: &Analysis, case: usize, d: Display) -> Option<Plot> {

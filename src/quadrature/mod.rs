@@ -68,6 +68,7 @@ mod roots;
 mod rules;
 mod sums;
 mod surrogate;
+mod table;
 mod yields;
 
 use crate::output::{Output, Quantity};
@@ -75,6 +76,7 @@ use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::sweep::Point;
+use crate::table::Event;
 use crate::tolerance::{Spread, value};
 use control::Control;
 use directions::{design_jacobian, directions};
@@ -115,27 +117,6 @@ pub struct QuadStat {
     /// relative to the larger of this σ and 2 % of the output's largest σ over the speeds)?
     /// Where not, the rule's finest grid was reached first: the row says so.
     pub within_request: bool,
-}
-
-/// A change of character whose probability is reported.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Event {
-    /// The mode's roots are real (and not unstable).
-    Overdamped,
-    /// The equilibrium is unstable (a root with positive real part).
-    Unstable,
-    /// The design is on another equilibrium branch than the nominal one at this speed.
-    OtherBranch,
-}
-
-impl Event {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Event::Overdamped => "overdamped",
-            Event::Unstable => "unstable",
-            Event::OtherBranch => "other_branch",
-        }
-    }
 }
 
 /// Probability of one event at one speed, with its error estimate.

@@ -4,7 +4,8 @@
 use super::control::Control;
 use super::line::{Context, Sums};
 use super::rules::{Rule, Stage, Transverse};
-use super::{Event, NodeData, Probability, QuadStat, Reference};
+use super::{NodeData, Probability, QuadStat, Reference};
+use crate::table::Event;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 

@@ -4,7 +4,7 @@
 
 use crate::analyze::Analysis;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// Quadrature rows of one case and output whose error estimates exceed the request.
 #[derive(Debug, Clone)]
@@ -22,7 +22,7 @@ pub struct Outside {
 pub fn outside_request(a: &Analysis) -> Vec<Outside> {
     let mut out: Vec<Outside> = Vec::new();
     for r in &a.rows {
-        if r.method != Method::Quadrature || r.within_request != Some(false) {
+        if r.method() != Method::Quadrature || r.within_request() != Some(false) {
             continue;
         }
         let same = |o: &Outside| o.case == r.case && o.quantity == r.quantity && o.mode == r.mode;
@@ -52,7 +52,7 @@ pub struct YieldOutside {
 pub fn yield_outside_request(a: &Analysis) -> Vec<YieldOutside> {
     let mut out: Vec<YieldOutside> = Vec::new();
     for y in &a.yields {
-        if y.method != crate::propagate::Method::Quadrature || y.within_request != Some(false) {
+        if y.method != crate::table::Method::Quadrature || y.within_request != Some(false) {
             continue;
         }
         match out

@@ -77,7 +77,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         s.dedup();
         s
     };
-    let mc_failed: usize = a.rows.iter().filter_map(|r| r.mc.map(|m| m.failed)).sum();
+    let mc_failed: usize = a.rows.iter().filter_map(|r| r.mc().map(|m| m.failed)).sum();
     json!({
         "model": model.name,
         "file": model.file,

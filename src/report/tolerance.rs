@@ -58,11 +58,11 @@ pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
                 r.quantity.as_str().to_string(),
                 r.mode.map_or(String::new(), |m| (m + 1).to_string()),
                 a.cases[r.case].name.clone(),
-                r.method.as_str().to_string(),
+                r.method().as_str().to_string(),
                 opt(Some(r.mean)),
                 opt(Some(r.std)),
             ];
-            match &r.mc {
+            match &r.mc() {
                 Some(m) => v.extend([
                     opt(Some(m.mean_ci.0)),
                     opt(Some(m.mean_ci.1)),
@@ -74,19 +74,19 @@ pub fn tolerance_rows(a: &Analysis, partial: bool) -> Vec<Vec<String>> {
                 ]),
                 None => v.extend(std::iter::repeat_n(String::new(), 7)),
             }
-            v.push(r.basis.map_or(String::new(), |m| m.as_str().to_string()));
-            match r.quantiles {
+            v.push(r.basis().map_or(String::new(), |m| m.as_str().to_string()));
+            match r.quantiles() {
                 Some(q) => v.extend(q.map(|x| opt(Some(x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), 3)),
             }
-            match r.errors {
+            match r.errors() {
                 Some((em, es)) => v.extend([opt(Some(em)), opt(Some(es))]),
                 None => v.extend(std::iter::repeat_n(String::new(), 2)),
             }
-            v.push(r.within_request.map_or(String::new(), |w| w.to_string()));
+            v.push(r.within_request().map_or(String::new(), |w| w.to_string()));
             v.push(partial.to_string());
             v.push(r.missing.as_ref().map_or(String::new(), |m| m.to_string()));
-            match &r.shares {
+            match &r.shares() {
                 Some(s) => v.extend(s.iter().map(|x| opt(Some(*x)))),
                 None => v.extend(std::iter::repeat_n(String::new(), a.vars.len())),
             }

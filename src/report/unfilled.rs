@@ -6,7 +6,7 @@
 use super::accuracy::{bounds, output_name, speed_range};
 use crate::analyze::Analysis;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
 
 /// Rows of one method for one output and case that have no value, for one reason.
 #[derive(Debug, Clone)]
@@ -28,7 +28,7 @@ pub fn unfilled(a: &Analysis) -> Vec<Unfilled> {
         let reason = m.to_string();
         let same = |u: &Unfilled| {
             u.case == r.case
-                && u.method == r.method
+                && u.method == r.method()
                 && u.quantity == r.quantity
                 && u.mode == r.mode
                 && u.reason == reason
@@ -37,7 +37,7 @@ pub fn unfilled(a: &Analysis) -> Vec<Unfilled> {
             Some(u) => u.speeds.push(r.speed),
             None => out.push(Unfilled {
                 case: r.case,
-                method: r.method,
+                method: r.method(),
                 quantity: r.quantity,
                 mode: r.mode,
                 reason,

@@ -4,9 +4,9 @@
 
 use crate::analyze::Analysis;
 use crate::model::{Model, Requirement, RequirementKind, SeparationMargin};
-use crate::propagate::Method;
 use crate::requirement::unit;
-use crate::yields::YieldRow;
+use crate::table::Method;
+use crate::table::YieldRow;
 use serde_json::{Value, json};
 
 /// Header of `yield.csv`.
@@ -310,7 +310,7 @@ pub const SOBOL_HEADER: [&str; 14] = [
 /// Rows of `sobol.csv`: per case, target (an output at a speed, or a requirement's worst
 /// margin: `margin:<name>`) and variable.
 pub fn sobol_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
-    use crate::sobol::Target;
+    use crate::table::Target;
     a.sobol
         .iter()
         .map(|(case, s)| {

@@ -13,10 +13,11 @@ mod point;
 
 pub use point::{PointRequest, PointRequestError};
 
-use crate::analyze::{AnalyzeOptions, Split};
+use crate::analyze::AnalyzeOptions;
 use crate::cancel::Cancel;
 use crate::model::{Model, Sampling, SpeedRange};
 use crate::montecarlo::McOptions;
+use crate::montecarlo::Split;
 use crate::quadrature::QuadOptions;
 use crate::settings::{self, ThreadsError};
 

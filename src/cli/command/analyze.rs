@@ -2,11 +2,12 @@
 
 use crate::cli::*;
 use anyhow::{Context, Result};
-use modaltol::analyze::{Split, analyze};
+use modaltol::analyze::analyze;
 use modaltol::cancel::Cancel;
 use modaltol::files::{AtomicFile, Inputs, ResultDir};
 use modaltol::model::Sampling;
 use modaltol::model::SpeedRange;
+use modaltol::montecarlo::Split;
 use modaltol::request::{Request, Resolved, Speeds};
 use modaltol::results::WriteOptions;
 use modaltol::settings;

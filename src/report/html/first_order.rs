@@ -4,7 +4,7 @@
 use super::esc;
 use crate::analyze::Analysis;
 use crate::output::Quantity;
-use crate::propagate::Method;
+use crate::table::Method;
 use std::fmt::Write;
 
 /// Per case and output: the speeds where first order's σ is more than 10 % off the
@@ -16,7 +16,7 @@ pub(super) fn first_order_table(a: &Analysis) -> String {
     let mut outputs: Vec<(Quantity, Option<usize>)> = a
         .rows
         .iter()
-        .filter(|r| r.method == Method::Quadrature && r.quantity != Quantity::DampingRatio)
+        .filter(|r| r.method() == Method::Quadrature && r.quantity != Quantity::DampingRatio)
         .map(|r| (r.quantity, r.mode))
         .collect();
     outputs.sort_by_key(|o| (o.0 as u8, o.1));
@@ -44,7 +44,7 @@ pub(super) fn first_order_table(a: &Analysis) -> String {
                 .rows
                 .iter()
                 .filter(|r| r.case == ci && r.quantity == q && r.mode == mode)
-                .filter(|r| r.method == Method::Quadrature && r.std > 0.0)
+                .filter(|r| r.method() == Method::Quadrature && r.std > 0.0)
                 .filter_map(|r| {
                     a.rows
                         .iter()
@@ -52,7 +52,7 @@ pub(super) fn first_order_table(a: &Analysis) -> String {
                             f.case == ci
                                 && f.quantity == q
                                 && f.mode == mode
-                                && f.method == Method::FirstOrder
+                                && f.method() == Method::FirstOrder
                                 && f.speed.to_bits() == r.speed.to_bits()
                         })
                         .map(|f| ((f.std - r.std).abs() / r.std, r.speed))

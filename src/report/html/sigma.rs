@@ -2,12 +2,13 @@
 //! and of |H| by every method at the speeds that matter, and how the methods agree there.
 
 use super::{esc, sig};
-use crate::analyze::{Analysis, Row};
+use crate::analyze::Analysis;
 use crate::model::Model;
-use crate::montecarlo::McStat;
 use crate::output::{Output, Quantity};
 use crate::plots::{CriticalSpeed, Display};
-use crate::propagate::Method;
+use crate::table::McStat;
+use crate::table::Method;
+use crate::table::Row;
 use std::fmt::Write;
 
 /// The modes the summary covers: the first three.
@@ -64,7 +65,7 @@ fn outputs(a: &Analysis) -> Vec<Output> {
     let mut outputs: Vec<Output> = a
         .rows
         .iter()
-        .filter(|r| r.method == Method::Analytic)
+        .filter(|r| r.method() == Method::Analytic)
         .filter(|r| r.mode.is_none_or(|m| m < MODES))
         .filter(|r| r.quantity != Quantity::DampingRatio || r.mean != 0.0 || r.std > 0.0)
         .map(|r| Output {
@@ -109,7 +110,7 @@ impl<'a> Case<'a> {
             r.case == ci
                 && r.quantity == q
                 && r.mode == mode
-                && r.method == m
+                && r.method() == m
                 && r.speed.to_bits() == w.to_bits()
         })
     }
@@ -121,7 +122,7 @@ impl<'a> Case<'a> {
             .rows
             .iter()
             .filter(|r| r.case == ci && r.quantity == q && r.mode == mode)
-            .filter(|r| r.method == Method::Analytic && r.std.is_finite())
+            .filter(|r| r.method() == Method::Analytic && r.std.is_finite())
             .collect()
     }
 
@@ -187,7 +188,7 @@ impl<'a> Case<'a> {
         let answer = get(Method::Analytic);
         let sa = answer.map(|r| r.std);
         let sf = get(Method::FirstOrder).map(|r| r.std);
-        let mc = get(Method::MonteCarlo).and_then(|r| r.mc);
+        let mc = get(Method::MonteCarlo).and_then(|r| r.mc());
         let vs = first_order_vs(sa, sf);
         let agrees = monte_carlo_agrees(sa, mc);
         let mc_text = mc.map_or("–".to_string(), |m| {

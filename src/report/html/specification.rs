@@ -24,7 +24,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
         target_text(target)
     );
     let tu = transfer_unit(model);
-    let mut rows: Vec<&crate::yields::YieldRow> =
+    let mut rows: Vec<&crate::table::YieldRow> =
         a.yields.iter().filter(|y| y.speed.is_none()).collect();
     rows.sort_by_key(|y| (y.requirement.map_or(0, |r| r + 1), y.case));
     for y in rows {
@@ -43,7 +43,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
                 String::new(),
             ),
         };
-        let verdict = if y.method == crate::propagate::Method::FirstOrder {
+        let verdict = if y.method == crate::table::Method::FirstOrder {
             if y.probability < target {
                 "no"
             } else {
@@ -84,7 +84,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
 /// and of every output at the speed where its σ by the analytic method is largest, largest
 /// total index first.
 pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
-    use crate::sobol::Target;
+    use crate::table::Target;
     for (case, why) in &a.sobol_refused {
         let _ = writeln!(
             h,
@@ -102,7 +102,7 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
 <p>First-order index S (the share of the variance a variable causes alone) and total index S<sub>T</sub> (with its interactions), 95 % jackknife intervals, pick-freeze Monte Carlo (Saltelli 2010); the derivative bound on S<sub>T</sub> from the exact gradients (Sobol &amp; Kucherenko 2009); the first-order variance share of the Taylor method beside it where the target is an output. Every speed and output in <code>sobol.csv</code>; here each requirement's worst margin and each output at the speed of its largest σ.</p>\
 <table><tr><th>case</th><th>target</th><th>variable</th><th>S</th><th>S<sub>T</sub></th><th>bound on S<sub>T</sub></th><th>first-order share</th></tr>"
     );
-    let shown = a.sobol_shown();
+    let shown = crate::plots::sobol_shown(a);
     for (case, s) in shown {
         let target = s
             .target
@@ -113,12 +113,12 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
                 .iter()
                 .find(|r| {
                     r.case == *case
-                        && r.method == crate::propagate::Method::FirstOrder
+                        && r.method() == crate::table::Method::FirstOrder
                         && r.speed.to_bits() == a.speeds[i].to_bits()
                         && r.quantity == a.outputs[o].quantity
                         && r.mode == a.outputs[o].mode
                 })
-                .and_then(|r| r.shares.as_ref())
+                .and_then(|r| r.shares())
                 .map(|sh| sig(sh[s.variable])),
             Target::Margin(_) => None,
         };
@@ -145,7 +145,7 @@ pub(super) fn sobol_table(h: &mut String, model: &Model, a: &Analysis) {
 /// speed up to which it holds from its range's start (with the ends from the interval), the
 /// worst margin met and the tightest requirement of its kind in words.
 pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
-    let mut rows: Vec<&crate::yields::YieldRow> =
+    let mut rows: Vec<&crate::table::YieldRow> =
         a.yields.iter().filter(|y| y.limit.is_some()).collect();
     if rows.is_empty() {
         return;
@@ -166,7 +166,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
             continue;
         };
         let r = &model.requirements[r];
-        let reach = if y.method == crate::propagate::Method::FirstOrder {
+        let reach = if y.method == crate::table::Method::FirstOrder {
             speed(l.reach[0])
         } else {
             format!(
@@ -186,7 +186,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
         };
         let mut margin = l.margin.map_or("–".into(), |m| {
             let u = crate::requirement::unit(r, &tu);
-            if y.method == crate::propagate::Method::FirstOrder {
+            if y.method == crate::table::Method::FirstOrder {
                 format!("{} {}", num(m[0]), esc(&u))
             } else {
                 format!("{} [{}, {}] {}", num(m[0]), num(m[1]), num(m[2]), esc(&u))

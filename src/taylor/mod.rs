@@ -5,6 +5,9 @@
 //! They share the local model and cost nothing beside it, so they are one object; each keeps
 //! its own result, or the reason it has none.
 
+mod table;
+pub mod yields;
+
 use crate::output::Missing;
 use crate::output::Quantity;
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
@@ -62,17 +65,24 @@ impl Taylor {
     }
 }
 
-impl Propagation for Taylor {
+/// What the Taylor methods give of one case.
+#[derive(Debug, Clone)]
+pub struct TaylorResult {
     /// Per speed (`None` without a local model), per output.
-    type Value = Vec<Option<Vec<TaylorStats>>>;
+    pub stats: Vec<Option<Vec<TaylorStats>>>,
+}
+
+impl Propagation for Taylor {
+    type Value = TaylorResult;
 
     fn propagate(&self, study: &Study, spread: &Spread, _run: &Run) -> Estimate<Self::Value> {
+        let stats = study
+            .locals
+            .iter()
+            .map(|lm| lm.as_ref().map(|lm| Taylor::at(lm, spread)))
+            .collect();
         Estimate {
-            value: study
-                .locals
-                .iter()
-                .map(|lm| lm.as_ref().map(|lm| Taylor::at(lm, spread)))
-                .collect(),
+            value: TaylorResult { stats },
             termination: Termination::Completed,
         }
     }

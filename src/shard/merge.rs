@@ -1,0 +1,182 @@
+//! Gathering the shards of one run, and the analysis that merges them.
+
+use super::file::{MAX_BYTES, ShardError, ShardFile, output_count};
+use super::fingerprint::{Fingerprint, RunSettings};
+use crate::analyze::AnalyzeOptions;
+use crate::model::{Case, Model, SpeedRange};
+use crate::montecarlo::Split;
+use crate::montecarlo::{CaseShard, Kept, McOptions};
+use crate::quadrature::QuadOptions;
+use std::path::PathBuf;
+
+/// The analysis that merges shards of the run `run` (their gathered `states`): `base`'s cases,
+/// threads and cancel token with the run's speeds, Monte Carlo and quadrature, folded as one
+/// run would. What `merge` runs, from the command line or Python; refused where the run's
+/// speeds are not a range of at most [`crate::settings::analysis_speeds`].
+pub fn merged_options(
+    run: &RunSettings,
+    states: Vec<CaseShard>,
+    base: AnalyzeOptions,
+) -> Result<(AnalyzeOptions, McOptions), String> {
+    let range = SpeedRange::parse(&run.speed)?;
+    crate::settings::analysis_speeds(range.len())?;
+    let mc = McOptions {
+        samples: run.samples,
+        seed: run.seed,
+        sampling: run.sampling,
+    };
+    let opt = AnalyzeOptions {
+        speeds: range.speeds().collect(),
+        // The quadrature of the run the shards belong to.
+        quadrature: run.quadrature.map(|tolerance| QuadOptions { tolerance }),
+        monte_carlo: Some(mc),
+        split: Split::Merged(states),
+        sobol: None,
+        ..base
+    };
+    Ok((opt, mc))
+}
+
+/// Checks that `files` (path, parsed shard) are shards `1..=N` of one run, each once, made from
+/// `fingerprint`, and returns the run's settings and, per case, all blocks in chunk order.
+pub fn gather(
+    files: Vec<(String, ShardFile)>,
+    fingerprint: &Fingerprint,
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+    let mut files = files;
+    files.sort_by_key(|(_, f)| f.shard);
+    let Some((first_path, first)) = files.first() else {
+        return Err(ShardError {
+            file: "merge".into(),
+            message: "needs at least one shard file".into(),
+        });
+    };
+    let run = first.run();
+    for (path, f) in &files {
+        if &f.fingerprint != fingerprint {
+            return Err(ShardError {
+                file: path.clone(),
+                message: format!(
+                    "made from another model, other tolerance cases or other settings: its {} \
+                     differ from the merge's",
+                    fingerprint.differences(&f.fingerprint).join(", ")
+                ),
+            });
+        }
+        if f.run() != run {
+            return Err(ShardError {
+                file: path.clone(),
+                message: format!(
+                    "shard {}/{} was run with other settings than {first_path} (shard {}/{})",
+                    f.shard, f.of, first.shard, first.of
+                ),
+            });
+        }
+    }
+    let got: Vec<usize> = files.iter().map(|(_, f)| f.shard).collect();
+    if got != (1..=run.of).collect::<Vec<_>>() {
+        return Err(ShardError {
+            file: "merge".into(),
+            message: format!("needs shards 1..={} once each, got {got:?}", run.of),
+        });
+    }
+    let cases = first.cases.len();
+    let keeps = !first.kept.is_empty();
+    let mut out: Vec<CaseShard> = (0..cases)
+        .map(|_| CaseShard {
+            blocks: Vec::new(),
+            kept: keeps.then(Kept::default),
+        })
+        .collect();
+    for (path, f) in files {
+        if f.kept.is_empty() == keeps {
+            return Err(ShardError {
+                file: path,
+                message: "kept values where the first shard has none, or none where it has".into(),
+            });
+        }
+        for (ci, k) in f.kept.iter().enumerate() {
+            let k = k.decode().map_err(|message| ShardError {
+                file: path.clone(),
+                message,
+            })?;
+            if let Some(all) = out[ci].kept.as_mut() {
+                all.extend(k);
+            }
+        }
+        for (ci, b) in f.cases.into_iter().enumerate() {
+            out[ci].blocks.extend(b);
+        }
+    }
+    Ok((run, out))
+}
+
+/// Reads and verifies the shard files `paths` of one run of `model` with `cases` and gathers
+/// them ([`verify`]).
+pub fn read_all(
+    model: &Model,
+    cases: &[Case],
+    paths: &[PathBuf],
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+    let mut texts = Vec::with_capacity(paths.len());
+    for path in paths {
+        let name = path.display().to_string();
+        let refuse = |message: String| ShardError {
+            file: name.clone(),
+            message,
+        };
+        let bytes = crate::files::read_bounded(path, MAX_BYTES)
+            .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
+        texts.push((name, text));
+    }
+    verify(model, cases, texts)
+}
+
+/// Parses and verifies shards given as `(name, text)` (the name says which in messages) of one
+/// run of `model` with `cases`, and gathers them ([`gather`]): what `merge` does with files,
+/// for shards that travelled as text (the Python package's executors). The run's settings are
+/// those of the lowest-numbered shard; every shard must have been computed from `model`,
+/// `cases` and those settings ([`Fingerprint`]).
+pub fn verify(
+    model: &Model,
+    cases: &[Case],
+    texts: Vec<(String, String)>,
+) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+    let mut files = Vec::with_capacity(texts.len());
+    for (name, text) in texts {
+        let f = ShardFile::parse(&text, &name)?;
+        files.push((name, f));
+    }
+    let Some((_, first)) = files.iter().min_by_key(|(_, f)| f.shard) else {
+        return Err(ShardError {
+            file: "merge".into(),
+            message: "needs at least one shard file".into(),
+        });
+    };
+    let fingerprint = Fingerprint::of(model, cases, &first.run());
+    for (name, f) in &files {
+        // The speeds analysed: the range's, with the requirements' range ends
+        // (`Model::judged_speeds`), as the run that wrote the shard had them.
+        let range = SpeedRange::parse(&f.speed)
+            .map_err(|e| e.to_string())
+            .and_then(|r| crate::settings::analysis_speeds(r.len()).map(|_| r))
+            .map_err(|e| ShardError {
+                file: name.clone(),
+                message: format!("speed '{}': {e}", f.speed),
+            })?;
+        let speeds = model
+            .judged_speeds(&range.speeds().collect::<Vec<_>>())
+            .len();
+        f.check(
+            name,
+            &fingerprint,
+            speeds,
+            output_count(model),
+            cases.len(),
+            model.requirements.len(),
+        )?;
+    }
+    gather(files, &fingerprint)
+}
