@@ -1,5 +1,6 @@
-"""Shared fixtures: the repository's examples and the command-line binary the package is
-compared with (``MODALTOL_BIN``, default ``target/release/modaltol``)."""
+"""Shared fixtures: the repository's examples (the pendulum and governor models loaded once
+per module) and the command-line binary the package is compared with (``MODALTOL_BIN``,
+default ``target/release/modaltol``)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,22 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+import modaltol
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
+PENDULUM = EXAMPLES / "rotating_pendulum.toml"
+GOVERNOR = EXAMPLES / "governor.toml"
+
+
+@pytest.fixture(scope="module")
+def pendulum() -> modaltol.Model:
+    return modaltol.load(PENDULUM)
+
+
+@pytest.fixture(scope="module")
+def governor() -> modaltol.Model:
+    return modaltol.load(GOVERNOR)
 
 
 @pytest.fixture(scope="session")

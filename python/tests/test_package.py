@@ -19,21 +19,7 @@ import pandas as pd
 import pytest
 
 import modaltol
-from conftest import EXAMPLES, assert_same_table, read_csv, run
-
-PENDULUM = EXAMPLES / "rotating_pendulum.toml"
-GOVERNOR = EXAMPLES / "governor.toml"
-
-
-@pytest.fixture(scope="module")
-def pendulum() -> modaltol.Model:
-    return modaltol.load(PENDULUM)
-
-
-@pytest.fixture(scope="module")
-def governor() -> modaltol.Model:
-    return modaltol.load(GOVERNOR)
-
+from conftest import EXAMPLES, GOVERNOR, PENDULUM, assert_same_table, read_csv, run
 
 def test_model_description(governor: modaltol.Model) -> None:
     assert governor.name == "governor"

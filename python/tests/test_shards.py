@@ -18,21 +18,7 @@ import pandas as pd
 import pytest
 
 import modaltol
-from conftest import EXAMPLES, assert_same_table, read_csv, run
-
-PENDULUM = EXAMPLES / "rotating_pendulum.toml"
-GOVERNOR = EXAMPLES / "governor.toml"
-
-
-@pytest.fixture(scope="module")
-def pendulum() -> modaltol.Model:
-    return modaltol.load(PENDULUM)
-
-
-@pytest.fixture(scope="module")
-def governor() -> modaltol.Model:
-    return modaltol.load(GOVERNOR)
-
+from conftest import EXAMPLES, GOVERNOR, PENDULUM, assert_same_table, read_csv, run
 
 def _files(directory: Path) -> dict[str, bytes]:
     return {n: (directory / n).read_bytes() for n in ("tolerance.csv", "probabilities.csv")}

@@ -388,6 +388,28 @@ impl MonteCarlo {
         (out, Termination::Completed)
     }
 
+    /// The statistics of the chunks `fold` (of a whole run, or the shards' merged), with the
+    /// quantiles of the values `kept` where the run kept them, and the inadmissible designs.
+    fn result(
+        &self,
+        study: &Study,
+        spread: &Spread,
+        run: &Run,
+        fold: TreeFold,
+        kept: Option<Kept>,
+    ) -> McResult {
+        let (speeds, outs) = (study.speeds.len(), study.outputs.len());
+        let (mut stats, done) = statistics(&fold, speeds, outs, self.options.samples);
+        let worst_margins = kept.map(|k| k.apply(&mut stats));
+        McResult {
+            inadmissible: self.inadmissible(study, spread, done, run),
+            fold,
+            stats,
+            samples: done,
+            worst_margins,
+        }
+    }
+
     /// The samples `0..samples` of `spread` whose design is not physically admissible
     /// ([`crate::model::Model::admissible`]), tallied by reason: `(reason, count, first
     /// offending value)`, most frequent first. They fail at every speed; this says why.
@@ -439,15 +461,7 @@ impl Propagation for MonteCarlo {
             for b in &shards.blocks {
                 fold.push(b.clone());
             }
-            let (mut stats, done) = statistics(&fold, speeds, outs, samples);
-            let worst_margins = shards.kept.clone().map(|k| k.apply(&mut stats));
-            let result = McResult {
-                inadmissible: self.inadmissible(study, spread, done, run),
-                fold,
-                stats,
-                samples: done,
-                worst_margins,
-            };
+            let result = self.result(study, spread, run, fold, shards.kept.clone());
             return Estimate {
                 value: McRun::Done(result),
                 termination: Termination::Completed,
@@ -471,16 +485,7 @@ impl Propagation for MonteCarlo {
                 termination,
             };
         }
-        // A whole run turns its values into quantiles.
-        let (mut stats, done) = statistics(&fold, speeds, outs, samples);
-        let worst_margins = keep.then(|| kept.apply(&mut stats));
-        let result = McResult {
-            inadmissible: self.inadmissible(study, spread, done, run),
-            fold,
-            stats,
-            samples: done,
-            worst_margins,
-        };
+        let result = self.result(study, spread, run, fold, keep.then_some(kept));
         Estimate {
             value: McRun::Done(result),
             termination,
