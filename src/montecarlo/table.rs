@@ -11,8 +11,7 @@ use crate::propagate::{Study, Tabulate};
 use crate::requirement::{covers, has_margin, reaches};
 use crate::sweep::Point;
 use crate::table::{
-    Detail, Event, Limit, McStat, Method, ProbabilityRow, Row, Tables, YieldRow, cpk, reach,
-    wilson, wilson_unguarded,
+    Detail, Event, Limit, McStat, Method, ProbabilityRow, Row, Tables, YieldRow, cpk, reach, wilson,
 };
 use crate::tolerance::Spread;
 
@@ -116,7 +115,7 @@ fn probabilities(
             event,
             mode,
             probability: p,
-            ci: wilson_unguarded(count, n),
+            ci: wilson(count, n),
         });
     };
     for (o, st) in outs.iter().zip(stats) {
@@ -272,5 +271,29 @@ mod tests {
             lo == f64::NEG_INFINITY && hi.is_finite() && hi > 2.0,
             "{lo} {hi}"
         );
+    }
+
+    /// The probabilities' intervals end exactly at 0 where no sample had the event and at 1
+    /// where every one had it (the Wilson formula rounded to 2.8e-17 and 0.9999999999999999
+    /// for 203 of the counts 0 and n below 400, as `probabilities.csv` used to show).
+    #[test]
+    fn probabilities_of_no_and_of_every_sample_have_exact_interval_ends() {
+        let out = [Output {
+            quantity: Quantity::DampedFrequency,
+            mode: Some(0),
+        }];
+        for n in [7, 9, 10, 12, 399] {
+            let st = McStat {
+                n,
+                overdamped: 0,
+                unstable: n,
+                ..McStat::default()
+            };
+            let rows = probabilities(1.0, 0, &out, &[st]);
+            let of = |e: Event| rows.iter().find(|r| r.event == e).expect("a row").ci;
+            assert_eq!(of(Event::Overdamped).0.to_bits(), 0f64.to_bits(), "n = {n}");
+            assert_eq!(of(Event::Unstable).1.to_bits(), 1f64.to_bits(), "n = {n}");
+            assert!(of(Event::Overdamped).1 > 0.0 && of(Event::Unstable).0 < 1.0);
+        }
     }
 }

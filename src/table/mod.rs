@@ -16,10 +16,10 @@ mod sobol;
 mod yield_row;
 
 pub use method::Method;
-pub use probability::{Event, ProbabilityRow, wilson_unguarded};
+pub use probability::{Event, ProbabilityRow, wilson};
 pub use row::{Detail, McStat, QuadDetail, Row};
 pub use sobol::{SobolIndex, Target};
-pub use yield_row::{Limit, YieldRow, cpk, reach, wilson};
+pub use yield_row::{Limit, YieldRow, cpk, reach};
 
 /// Where a row goes: the Monte Carlo's rows after the others (it is the last stage), then by
 /// case, speed, output and method.

@@ -1,5 +1,6 @@
 //! A line of `probabilities.csv`: the probability of a change of character (an overdamped
-//! mode, an unstable equilibrium, another branch) at one speed by one method.
+//! mode, an unstable equilibrium, another branch) at one speed by one method, and the Wilson
+//! interval of a probability counted in samples (here and in the yield).
 
 use super::method::Method;
 
@@ -40,12 +41,41 @@ impl Event {
     }
 }
 
-/// The 95 % Wilson score interval of `k` successes in `n > 0` trials, as the probabilities
-/// have computed it (without [`super::yield_row::wilson`]'s exact ends).
-pub fn wilson_unguarded(k: usize, n: usize) -> (f64, f64) {
+/// The 95 % Wilson score interval of `k` successes in `n` trials.
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
     let z = 1.959_963_984_540_054;
-    let (n, p) = (n as f64, k as f64 / n as f64);
-    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
-    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
-    ((centre - half).max(0.0), (centre + half).min(1.0))
+    let (none, all) = (k == 0, k == n);
+    let (k, n) = (k as f64, n as f64);
+    let p = k / n;
+    let d = 1.0 + z * z / n;
+    let c = (p + z * z / (2.0 * n)) / d;
+    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
+    // At k = 0 and k = n the ends are 0 and 1 exactly (rounding would leave 10⁻¹⁹).
+    (
+        if none { 0.0 } else { (c - h).max(0.0) },
+        if all { 1.0 } else { (c + h).min(1.0) },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_interval_matches_its_closed_form() {
+        // 81 of 100: the textbook interval [0.7222, 0.8749].
+        let (lo, hi) = wilson(81, 100);
+        assert!(
+            (lo - 0.722_2).abs() < 1e-4 && (hi - 0.874_9).abs() < 1e-4,
+            "{lo} {hi}"
+        );
+        // All pass: the upper end is 1, the lower end n/(n + z²); none pass: the lower end 0.
+        let (lo, hi) = wilson(50, 50);
+        assert!(hi.to_bits() == 1f64.to_bits());
+        assert!(wilson(0, 50).0.to_bits() == 0f64.to_bits());
+        assert!((lo - 50.0 / (50.0 + 1.959_963_984_540_054f64.powi(2))).abs() < 1e-12);
+    }
 }

@@ -118,25 +118,6 @@ pub fn reach(prefix: &[(f64, f64, (f64, f64))], target: f64) -> [Option<f64>; 3]
     ]
 }
 
-/// The 95 % Wilson score interval of `k` successes in `n` trials.
-pub fn wilson(k: usize, n: usize) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, 1.0);
-    }
-    let z = 1.959_963_984_540_054;
-    let (none, all) = (k == 0, k == n);
-    let (k, n) = (k as f64, n as f64);
-    let p = k / n;
-    let d = 1.0 + z * z / n;
-    let c = (p + z * z / (2.0 * n)) / d;
-    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
-    // At k = 0 and k = n the ends are 0 and 1 exactly (rounding would leave 10⁻¹⁹).
-    (
-        if none { 0.0 } else { (c - h).max(0.0) },
-        if all { 1.0 } else { (c + h).min(1.0) },
-    )
-}
-
 /// The capability index `μ/(3σ)` of a margin whose lower specification limit is 0 (where
 /// σ > 0).
 pub fn cpk(mean: f64, std: f64) -> Option<f64> {
@@ -166,20 +147,5 @@ mod tests {
         assert_eq!(bits(lo), Some(2f64.to_bits()));
         assert_eq!(bits(hi), Some(3f64.to_bits()));
         assert_eq!(reach(&rows, 0.999)[0], None);
-    }
-
-    #[test]
-    fn wilson_interval_matches_its_closed_form() {
-        // 81 of 100: the textbook interval [0.7222, 0.8749].
-        let (lo, hi) = wilson(81, 100);
-        assert!(
-            (lo - 0.722_2).abs() < 1e-4 && (hi - 0.874_9).abs() < 1e-4,
-            "{lo} {hi}"
-        );
-        // All pass: the upper end is 1, the lower end n/(n + z²); none pass: the lower end 0.
-        let (lo, hi) = wilson(50, 50);
-        assert!(hi.to_bits() == 1f64.to_bits());
-        assert!(wilson(0, 50).0.to_bits() == 0f64.to_bits());
-        assert!((lo - 50.0 / (50.0 + 1.959_963_984_540_054f64.powi(2))).abs() < 1e-12);
     }
 }
