@@ -151,7 +151,7 @@ pub enum Split {
 /// `CHUNK·i .. CHUNK·(i+1)` of chunk `i`), each a whole sweep, their moments folded along the
 /// fixed tree (see the module documentation); or the shards' blocks of such runs, merged.
 #[derive(Debug, Clone)]
-pub struct MonteCarlo {
+pub struct MonteCarlo<'a> {
     pub options: McOptions,
     /// The chunks evaluated here: all of them, or one shard's (none for a merge).
     pub chunks: std::ops::Range<usize>,
@@ -160,15 +160,16 @@ pub struct MonteCarlo {
     pub quantiles: bool,
     /// A whole run, a shard (whose state goes to the merge: [`McRun::Shard`]) or the merge of
     /// the shards' states.
-    pub part: Part,
+    pub part: Part<'a>,
 }
 
 /// Which part of a sharded run a [`MonteCarlo`] is.
 #[derive(Debug, Clone)]
-pub enum Part {
+pub enum Part<'a> {
     Whole,
     Shard,
-    Merged(CaseShard),
+    /// The shards' state of the case, borrowed from the run's [`Split::Merged`].
+    Merged(&'a CaseShard),
 }
 
 /// What a [`MonteCarlo`] run gives.
@@ -263,9 +264,9 @@ impl Kept {
     }
 }
 
-impl MonteCarlo {
+impl<'a> MonteCarlo<'a> {
     /// All samples of `options`.
-    pub fn whole(options: McOptions) -> MonteCarlo {
+    pub fn whole(options: McOptions) -> MonteCarlo<'a> {
         MonteCarlo {
             options,
             chunks: 0..chunks(options.samples),
@@ -276,7 +277,7 @@ impl MonteCarlo {
 
     /// The chunks of shard `k` (0-based) of `n` ([`shard_chunks`]), their values kept for the
     /// merge's quantiles as a whole run keeps them ([`CaseShard::kept`]).
-    pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo {
+    pub fn shard(options: McOptions, k: usize, n: usize) -> MonteCarlo<'a> {
         MonteCarlo {
             options,
             chunks: shard_chunks(options.samples, k, n),
@@ -286,7 +287,7 @@ impl MonteCarlo {
     }
 
     /// The shards' blocks and kept values of one case, folded as a whole run would.
-    pub fn merged(options: McOptions, shards: CaseShard) -> MonteCarlo {
+    pub fn merged(options: McOptions, shards: &'a CaseShard) -> MonteCarlo<'a> {
         MonteCarlo {
             options,
             chunks: 0..0,
@@ -296,11 +297,11 @@ impl MonteCarlo {
     }
 
     /// The run of case `case` (0-based) that `split` asks for.
-    pub fn of_case(options: McOptions, split: &Split, case: usize) -> MonteCarlo {
+    pub fn of_case(options: McOptions, split: &'a Split, case: usize) -> MonteCarlo<'a> {
         match split {
             Split::Whole => MonteCarlo::whole(options),
             Split::Shard(k, n) => MonteCarlo::shard(options, *k, *n),
-            Split::Merged(cases) => MonteCarlo::merged(options, cases[case].clone()),
+            Split::Merged(cases) => MonteCarlo::merged(options, &cases[case]),
         }
     }
 
@@ -450,13 +451,13 @@ impl MonteCarlo {
     }
 }
 
-impl Propagation for MonteCarlo {
+impl Propagation for MonteCarlo<'_> {
     type Value = McRun;
 
     fn propagate(&self, study: &Study, spread: &Spread, run: &Run) -> Estimate<McRun> {
         let (speeds, outs) = (study.speeds.len(), study.outputs.len());
         let samples = self.options.samples;
-        if let Part::Merged(shards) = &self.part {
+        if let Part::Merged(shards) = self.part {
             let mut fold = TreeFold::default();
             for b in &shards.blocks {
                 fold.push(b.clone());
