@@ -28,10 +28,10 @@
 use crate::analyze::{AnalyzeOptions, analyze};
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
+use crate::margins::covers;
 use crate::model::{Case, Cost, Distribution, Tolerance};
 use crate::propagate::{Run, Study};
 use crate::quadrature::QuadOptions;
-use crate::requirement::covers;
 use crate::table::Method;
 use crate::taylor::yields::linear_margin;
 use statrs::distribution::{ContinuousCDF, Normal};

@@ -9,7 +9,8 @@
 //! 1. Foundations: [`real`] (the scalar trait the mechanics is generic over), [`linalg`],
 //!    [`schur`], [`rigid`], [`dual4`], [`jet`] (Taylor numbers part by part), [`implicit`] (the
 //!    derivatives of an implicit solution), [`settings`], [`threads`], [`cancel`], [`files`].
-//! 2. Element types: [`joints`], [`cuts`], [`forces`] (each kind one file plus one list).
+//! 2. Element types: [`joints`], [`cuts`], [`forces`], and the [`requirements`] a design
+//!    must meet (each kind one file plus one list, declared by [`kinds`]).
 //! 3. [`model`]: the file format, validated once into a [`model::Model`].
 //! 4. [`mechanics`]: kinematics, equations of motion and constraints over any [`real::Real`].
 //! 5. [`linearize`]: M̂, Ĉ, K̂ in minimal coordinates (constraint stiffness included).
@@ -28,7 +29,7 @@
 //!     the equilibrium; [`nominal_sweep`]: the nominal sweep with, at each speed, its transfer
 //!     function and sensitivities (the `sweep` command's table).
 //! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
-//!     [`requirement`]: a requirement's margin at a point (what a design must meet).
+//!     [`margins`]: the requirements' margins at a point.
 //! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
 //! 15. [`table`]: the rows of the result's tables (`tolerance.csv`, `probabilities.csv`,
 //!     `yield.csv`, `sobol.csv`), each method's own fields in one enum, put in order once.
@@ -67,8 +68,10 @@ pub mod hessian;
 pub mod implicit;
 pub mod jet;
 pub mod joints;
+pub mod kinds;
 pub mod linalg;
 pub mod linearize;
+pub mod margins;
 pub mod mechanics;
 pub mod modal;
 pub mod model;
@@ -83,7 +86,7 @@ pub mod quadrature;
 pub mod real;
 pub mod report;
 pub mod request;
-pub mod requirement;
+pub mod requirements;
 pub mod results;
 pub mod rigid;
 pub mod sampling;

@@ -12,11 +12,11 @@ const LAYERS: &[(&[&str], bool)] = &[
     (
         &[
             "real", "linalg", "schur", "threads", "cancel", "files", "dual4", "jet", "implicit",
-            "rigid", "settings",
+            "rigid", "settings", "kinds",
         ],
         true,
     ),
-    (&["joints", "cuts", "forces"], true),
+    (&["joints", "cuts", "forces", "requirements"], true),
     (&["model"], false),
     (&["mechanics"], false),
     (&["linearize"], false),
@@ -28,7 +28,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["sweep"], false),
     (&["scene"], false),
     (&["sensitivity", "hessian", "nominal_sweep"], true),
-    (&["tolerance", "requirement"], false),
+    (&["tolerance", "margins"], false),
     (&["sampling"], false),
     (&["table"], false),
     (&["propagate"], false),

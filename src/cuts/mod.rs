@@ -5,13 +5,14 @@
 //! A cut joint joins a point `point1` of `body1` and a point `point2` of `body2` (either may be
 //! ground), given in the reference configuration, with the geometry fields its type uses.
 //! Adding a cut-joint type is one file here implementing [`CutType`] and one line in
-//! `cut_types!` (below); the model parser reads the type's name and fields from that trait.
+//! the list `kinds!` (below); the model parser reads the type's name and fields from that trait.
 
 pub mod distance;
 pub mod point;
 pub mod revolute;
 
 use crate::joints::Use;
+use crate::kinds::kinds;
 use crate::real::{Real, V3};
 use crate::rigid::Pose;
 
@@ -50,71 +51,20 @@ pub trait CutType {
     fn equations<T: Real>(g: &Geometry<V3<T>, T>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>);
 }
 
-/// Declares the cut-joint types: the enum [`Kind`] and its dispatch to each type's [`CutType`].
-macro_rules! cut_types {
-    ($($variant:ident => $ty:path),* $(,)?) => {
-        /// The cut-joint types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-        pub enum Kind {
-            $($variant),*
-        }
-
-        impl Kind {
-            /// Every type, in the order they are listed to users.
-            pub const ALL: &[Kind] = &[$(Kind::$variant),*];
-
-            /// Name in the model file.
-            pub fn name(self) -> &'static str {
-                match self {
-                    $(Kind::$variant => <$ty as CutType>::NAME),*
-                }
-            }
-
-            /// Number of scalar equations.
-            pub fn equations(self) -> usize {
-                match self {
-                    $(Kind::$variant => <$ty as CutType>::EQUATIONS),*
-                }
-            }
-
-            /// Use of `[point2, axis, axis2, length]`.
-            pub fn uses(self) -> [Use; 4] {
-                match self {
-                    $(Kind::$variant => [
-                        <$ty as CutType>::POINT2,
-                        <$ty as CutType>::AXIS,
-                        <$ty as CutType>::AXIS2,
-                        <$ty as CutType>::LENGTH,
-                    ]),*
-                }
-            }
-
-            /// See [`CutType::DISTINCT_POINTS`].
-            pub fn distinct_points(self) -> bool {
-                match self {
-                    $(Kind::$variant => <$ty as CutType>::DISTINCT_POINTS),*
-                }
-            }
-
-            /// See [`CutType::equations`].
-            #[inline]
-            pub fn values<T: Real>(
-                self,
-                g: &Geometry<V3<T>, T>,
-                x1: &Pose<T>,
-                x2: &Pose<T>,
-                out: &mut Vec<T>,
-            ) {
-                match self {
-                    $(Kind::$variant => <$ty as CutType>::equations(g, x1, x2, out)),*
-                }
-            }
-        }
-    };
-}
-
-cut_types! {
-    Distance => distance::Distance,
-    Point => point::Point,
-    Revolute => revolute::Revolute,
+kinds! {
+    /// The cut-joint types a model may use.
+    pub enum Kind: CutType {
+        Distance => distance::Distance,
+        Point => point::Point,
+        Revolute => revolute::Revolute,
+    }
+    /// Number of scalar equations.
+    fn equations() -> usize = EQUATIONS;
+    /// Use of `[point2, axis, axis2, length]`.
+    fn uses() -> [Use; 4] = [POINT2, AXIS, AXIS2, LENGTH];
+    /// See [`CutType::DISTINCT_POINTS`].
+    fn distinct_points() -> bool = DISTINCT_POINTS;
+    /// See [`CutType::equations`].
+    fn values<T: Real>(g: &Geometry<V3<T>, T>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>)
+        = equations(g, x1, x2, out);
 }

@@ -26,6 +26,7 @@ pub mod spherical;
 pub mod spring_damper;
 
 use crate::joints::{Unit, Use};
+use crate::kinds::kinds;
 use crate::real::{Real, V3};
 use crate::rigid::Pose;
 
@@ -83,79 +84,23 @@ pub trait ForceType {
     fn deformation<T: Real>(g: &Geometry<V3<T>>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>);
 }
 
-/// Declares the force-element types: the enum [`Kind`] and its dispatch to each type's
-/// [`ForceType`].
-macro_rules! force_types {
-    ($($variant:ident => $ty:path),* $(,)?) => {
-        /// The force-element types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-        pub enum Kind {
-            $($variant),*
-        }
-
-        impl Kind {
-            /// Every type, in the order they are listed to users.
-            pub const ALL: &[Kind] = &[$(Kind::$variant),*];
-
-            /// Name in the model file.
-            pub fn name(self) -> &'static str {
-                match self {
-                    $(Kind::$variant => <$ty as ForceType>::NAME),*
-                }
-            }
-
-            /// See [`ForceType::COMPONENTS`].
-            pub fn components(self) -> &'static [ComponentSpec] {
-                match self {
-                    $(Kind::$variant => <$ty as ForceType>::COMPONENTS),*
-                }
-            }
-
-            /// Use of `[point1, point2, axis]`.
-            pub fn uses(self) -> [Use; 3] {
-                match self {
-                    $(Kind::$variant => [
-                        <$ty as ForceType>::POINT1,
-                        <$ty as ForceType>::POINT2,
-                        <$ty as ForceType>::AXIS,
-                    ]),*
-                }
-            }
-
-            /// See [`ForceType::DISTINCT_POINTS`].
-            pub fn distinct_points(self) -> bool {
-                match self {
-                    $(Kind::$variant => <$ty as ForceType>::DISTINCT_POINTS),*
-                }
-            }
-
-            /// See [`ForceType::DAMPS`].
-            pub fn damps(self) -> Damps {
-                match self {
-                    $(Kind::$variant => <$ty as ForceType>::DAMPS),*
-                }
-            }
-
-            /// See [`ForceType::deformation`].
-            #[inline]
-            pub fn deformation<T: Real>(
-                self,
-                g: &Geometry<V3<T>>,
-                x1: &Pose<T>,
-                x2: &Pose<T>,
-                out: &mut Vec<T>,
-            ) {
-                match self {
-                    $(Kind::$variant => <$ty as ForceType>::deformation(g, x1, x2, out)),*
-                }
-            }
-        }
-    };
-}
-
-force_types! {
-    SpringDamper => spring_damper::SpringDamper,
-    Rotational => rotational::Rotational,
-    Bushing => bushing::Bushing,
-    Spherical => spherical::Spherical,
+kinds! {
+    /// The force-element types a model may use.
+    pub enum Kind: ForceType {
+        SpringDamper => spring_damper::SpringDamper,
+        Rotational => rotational::Rotational,
+        Bushing => bushing::Bushing,
+        Spherical => spherical::Spherical,
+    }
+    /// See [`ForceType::COMPONENTS`].
+    fn components() -> &'static [ComponentSpec] = COMPONENTS;
+    /// Use of `[point1, point2, axis]`.
+    fn uses() -> [Use; 3] = [POINT1, POINT2, AXIS];
+    /// See [`ForceType::DISTINCT_POINTS`].
+    fn distinct_points() -> bool = DISTINCT_POINTS;
+    /// See [`ForceType::DAMPS`].
+    fn damps() -> Damps = DAMPS;
+    /// See [`ForceType::deformation`].
+    fn deformation<T: Real>(g: &Geometry<V3<T>>, x1: &Pose<T>, x2: &Pose<T>, out: &mut Vec<T>)
+        = deformation(g, x1, x2, out);
 }

@@ -10,7 +10,7 @@
 //! ([`crate::mechanics::kinematics`]).
 //!
 //! Adding a joint type is one file here implementing [`JointType`] and one line in
-//! `joint_types!` (below); the model parser reads the type's name, coordinates and geometry fields
+//! the list `kinds!` (below); the model parser reads the type's name, coordinates and geometry fields
 //! from that trait and needs no change unless the type brings new fields.
 
 pub mod cylindrical;
@@ -22,6 +22,7 @@ pub mod revolute;
 pub mod spherical;
 pub mod universal;
 
+use crate::kinds::kinds;
 use crate::real::{Real, V3};
 use crate::rigid::Pose;
 
@@ -98,64 +99,24 @@ pub trait JointType {
     fn relative<T: Real>(g: &Geometry<V3<T>>, q: &[T]) -> Pose<T>;
 }
 
-/// Declares the joint types: the enum [`Kind`] and its dispatch to each type's [`JointType`].
-macro_rules! joint_types {
-    ($($variant:ident => $ty:path),* $(,)?) => {
-        /// The joint types a model may use.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-        pub enum Kind {
-            $($variant),*
-        }
-
-        impl Kind {
-            /// Every type, in the order they are listed to users.
-            pub const ALL: &[Kind] = &[$(Kind::$variant),*];
-
-            /// Name in the model file.
-            pub fn name(self) -> &'static str {
-                match self {
-                    $(Kind::$variant => <$ty as JointType>::NAME),*
-                }
-            }
-
-            /// Coordinates of a joint of this type.
-            pub fn coordinates(self) -> &'static [CoordinateSpec] {
-                match self {
-                    $(Kind::$variant => <$ty as JointType>::COORDINATES),*
-                }
-            }
-
-            /// Use of `[at, axis, axis2]`.
-            pub fn uses(self) -> [Use; 3] {
-                match self {
-                    $(Kind::$variant => [
-                        <$ty as JointType>::AT,
-                        <$ty as JointType>::AXIS,
-                        <$ty as JointType>::AXIS2,
-                    ]),*
-                }
-            }
-
-            /// See [`JointType::relative`].
-            #[inline]
-            pub fn relative<T: Real>(self, g: &Geometry<V3<T>>, q: &[T]) -> Pose<T> {
-                match self {
-                    $(Kind::$variant => <$ty as JointType>::relative(g, q)),*
-                }
-            }
-        }
-    };
-}
-
-joint_types! {
-    Revolute => revolute::Revolute,
-    Prismatic => prismatic::Prismatic,
-    Fixed => fixed::Fixed,
-    Universal => universal::Universal,
-    Cylindrical => cylindrical::Cylindrical,
-    Spherical => spherical::Spherical,
-    Planar => planar::Planar,
-    Free => free::Free,
+kinds! {
+    /// The joint types a model may use.
+    pub enum Kind: JointType {
+        Revolute => revolute::Revolute,
+        Prismatic => prismatic::Prismatic,
+        Fixed => fixed::Fixed,
+        Universal => universal::Universal,
+        Cylindrical => cylindrical::Cylindrical,
+        Spherical => spherical::Spherical,
+        Planar => planar::Planar,
+        Free => free::Free,
+    }
+    /// Coordinates of a joint of this type.
+    fn coordinates() -> &'static [CoordinateSpec] = COORDINATES;
+    /// Use of `[at, axis, axis2]`.
+    fn uses() -> [Use; 3] = [AT, AXIS, AXIS2];
+    /// See [`JointType::relative`].
+    fn relative<T: Real>(g: &Geometry<V3<T>>, q: &[T]) -> Pose<T> = relative(g, q);
 }
 
 impl Kind {

@@ -1,7 +1,7 @@
 //! The speeds at which requirements are judged.
 //!
 //! A requirement over an operating range `[a, b]` is judged at the analysed speeds inside it
-//! ([`crate::requirement`]). Judged at a grid alone, a range that falls between two grid
+//! ([`crate::margins`]). Judged at a grid alone, a range that falls between two grid
 //! points would hold no speed and be met vacuously, and a range whose ends are not grid points
 //! would be judged short of them. So the speeds an analysis sweeps are the grid asked for with
 //! every requirement's range ends added ([`Model::judged_speeds`]): a range is then judged at its
@@ -86,7 +86,8 @@ impl Model {
 
 #[cfg(test)]
 mod tests {
-    use crate::model::{Model, Requirement, RequirementKind};
+    use crate::model::{Model, Requirement};
+    use crate::requirements::{Kind, stable::Stable};
 
     fn with_ranges(ranges: &[Option<(f64, f64)>]) -> Model {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -97,7 +98,7 @@ mod tests {
             .enumerate()
             .map(|(k, &speeds)| Requirement {
                 name: format!("r{k}"),
-                kind: RequirementKind::Stable,
+                kind: Kind::Stable(Stable),
                 speeds,
                 mode: None,
             })

@@ -21,7 +21,7 @@ pub use analysis::{
     Analysis, Case, Channel, Correlation, Distribution, Sampling, SpeedRange, Tolerance, Transfer,
 };
 pub use expr::{EvalError, Expr};
-pub use requirements::{Allocation, Cost, Requirement, RequirementKind, SeparationMargin};
+pub use requirements::{Allocation, Cost, Requirement};
 pub use site::{Field, FieldError, ModelError, Site};
 
 use std::path::Path;

@@ -25,11 +25,11 @@ mod table;
 pub use moments::{Block, ChunkState, Events, Moments, TreeFold, YieldCounts, block_layout};
 pub use sampler::{Sampler, permute};
 
+use crate::margins;
 use crate::modal::ModeClass;
 use crate::model::Sampling;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
-use crate::requirement;
 use crate::sampling::sample_sweep;
 use crate::table::McStat;
 use crate::tolerance::{Spread, value};
@@ -83,16 +83,9 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
         |i, pts| {
             let tf = study.transfer_at(i);
             let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            requirement::margins_at(
-                reqs,
-                study.speeds[i],
-                at,
-                tf,
-                requirement::reaches,
-                |r, m| {
-                    margins[i * reqs.len() + r] = m;
-                },
-            );
+            margins::margins_at(reqs, study.speeds[i], at, tf, margins::reaches, |r, m| {
+                margins[i * reqs.len() + r] = m;
+            });
             let Some((nom, pt, switches)) = pts else {
                 out.extend(std::iter::repeat_n(
                     (f64::NAN, Events::default()),
@@ -330,11 +323,11 @@ impl<'a> MonteCarlo<'a> {
         let mut out = TreeFold::default();
         let mut done = 0;
         let reqs = &study.model.model().requirements;
-        let has_margin: Vec<bool> = reqs.iter().map(requirement::has_margin).collect();
+        let has_margin: Vec<bool> = reqs.iter().map(margins::has_margin).collect();
         let covered: Vec<bool> = study
             .speeds
             .iter()
-            .flat_map(|&w| reqs.iter().map(move |r| requirement::covers(r, w)))
+            .flat_map(|&w| reqs.iter().map(move |r| margins::covers(r, w)))
             .collect();
         let mut worst = vec![f64::INFINITY; reqs.len()];
         if let Some(k) = kept.as_deref_mut() {

@@ -4,11 +4,11 @@
 //! distribution-free quantile intervals).
 
 use super::{McRun, YieldCounts};
+use crate::margins::{covers, has_margin, reaches};
 use crate::modal::ModeClass;
 use crate::model::Requirement;
 use crate::output::{Missing, Output, Quantity};
 use crate::propagate::{Study, Tabulate};
-use crate::requirement::{covers, has_margin, reaches};
 use crate::sweep::Point;
 use crate::table::{
     Detail, Event, Limit, McStat, Method, ProbabilityRow, Row, Tables, YieldRow, cpk, reach, wilson,

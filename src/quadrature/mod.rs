@@ -328,12 +328,12 @@ fn nominal_margins(study: &Study, requirements: &[crate::model::Requirement]) ->
     let mut worst = vec![f64::INFINITY; requirements.len()];
     for (i, pt) in study.nominal.iter().enumerate() {
         let at = pt.as_ref().map(|pt| (pt, true));
-        crate::requirement::margins_at(
+        crate::margins::margins_at(
             requirements,
             study.speeds[i],
             at,
             study.transfer_at(i),
-            crate::requirement::covers,
+            crate::margins::covers,
             |r, m| {
                 worst[r] = worst[r].min(m);
             },

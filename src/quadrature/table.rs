@@ -3,10 +3,10 @@
 //! target.
 
 use super::{MarginStat, QuadResult, QuadYield};
+use crate::margins::{has_margin, reaches};
 use crate::model::Requirement;
 use crate::output::{Missing, Quantity};
 use crate::propagate::{Study, Tabulate};
-use crate::requirement::{has_margin, reaches};
 use crate::table::{
     Detail, Limit, Method, ProbabilityRow, QuadDetail, Row, Tables, YieldRow, cpk, reach,
 };

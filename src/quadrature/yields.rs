@@ -26,8 +26,8 @@ use super::rules::{Rule, Stage, TENSOR_ORDERS, Transverse};
 use super::sums::{ErrorParts, across};
 use super::surrogate::{VirtualRule, interpolate};
 use super::{NodeData, Reference};
+use crate::margins::{State, covers, has_margin, margin, reaches};
 use crate::model::Requirement;
-use crate::requirement::{State, covers, has_margin, margin, reaches};
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal};
 

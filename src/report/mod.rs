@@ -44,8 +44,8 @@ pub use sweep::{SweepColumns, sweep_header, sweep_rows};
 pub use tolerance::{PROBABILITY_HEADER, probability_rows, tolerance_header, tolerance_rows};
 pub use unfilled::{Unfilled, inadmissible_warnings, unfilled, unfilled_lines};
 pub use yields::{
-    LIMITS_HEADER, SOBOL_HEADER, YIELD_HEADER, describe, kind_name, limit_rows, sobol_rows,
-    tightest, verdict, yield_rows, yield_summary,
+    LIMITS_HEADER, SOBOL_HEADER, YIELD_HEADER, describe, limit_rows, sobol_rows, tightest, verdict,
+    yield_rows, yield_summary,
 };
 
 use crate::modal::Mode;

@@ -3,8 +3,8 @@
 //! pass or fail, its worst margin and capability index).
 
 use crate::analyze::Analysis;
-use crate::model::{Model, Requirement, RequirementKind, SeparationMargin};
-use crate::requirement::unit;
+use crate::margins::unit;
+use crate::model::{Model, Requirement};
 use crate::table::Method;
 use crate::table::YieldRow;
 use serde_json::{Value, json};
@@ -32,57 +32,19 @@ pub const YIELD_HEADER: [&str; 19] = [
     "within_request",
 ];
 
-/// The requirement's kind as written in the model file.
-pub fn kind_name(r: &Requirement) -> &'static str {
-    match r.kind {
-        RequirementKind::Separation { .. } => "separation",
-        RequirementKind::Frequency { .. } => "frequency",
-        RequirementKind::Avoid { .. } => "avoid",
-        RequirementKind::Damping { .. } => "damping",
-        RequirementKind::Underdamped => "underdamped",
-        RequirementKind::Stable => "stable",
-        RequirementKind::SameBranch => "branch",
-        RequirementKind::Transfer { .. } => "transfer",
-    }
-}
-
 /// The requirement in words (for the report).
 pub fn describe(r: &Requirement) -> String {
-    let mode = r
-        .mode
-        .map_or("every mode".to_string(), |m| format!("mode {}", m + 1));
-    let what = match &r.kind {
-        RequirementKind::Separation { orders, margin } => format!(
-            "{mode}: ω_d clear of {} × Ω by {}",
-            orders
-                .iter()
-                .map(|o| o.to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            match margin {
-                SeparationMargin::Fraction(f) => format!("{} %", f * 100.0),
-                SeparationMargin::Api684 => "API 684's margin".into(),
-            }
-        ),
-        RequirementKind::Frequency { min, max } => match (min, max) {
-            (Some(a), Some(b)) => format!("{mode}: {a} ≤ ω_d ≤ {b} rad/s"),
-            (Some(a), None) => format!("{mode}: ω_d ≥ {a} rad/s"),
-            (None, Some(b)) => format!("{mode}: ω_d ≤ {b} rad/s"),
-            (None, None) => mode,
-        },
-        RequirementKind::Avoid { low, high } => {
-            format!("{mode}: ω_d outside [{low}, {high}] rad/s")
-        }
-        RequirementKind::Damping { min } => format!("{mode}: ζ ≥ {min}"),
-        RequirementKind::Underdamped => format!("{mode}: not overdamped"),
-        RequirementKind::Stable => "no unstable root".into(),
-        RequirementKind::SameBranch => "on the nominal equilibrium branch".into(),
-        RequirementKind::Transfer { max } => format!("|H| ≤ {max}"),
-    };
+    let what = r.kind.describe(&modes_read(r));
     match r.speeds {
         Some((a, b)) => format!("{what}, for {a} ≤ Ω ≤ {b} rad/s"),
         None => format!("{what}, at every speed"),
     }
+}
+
+/// The mode(s) a requirement reads, in words.
+fn modes_read(r: &Requirement) -> String {
+    r.mode
+        .map_or("every mode".to_string(), |m| format!("mode {}", m + 1))
 }
 
 /// Does a probability with interval `ci` meet `target`: `yes` where the interval is above
@@ -133,7 +95,7 @@ pub fn yield_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                 a.cases[y.case].name.clone(),
                 y.method.as_str().to_string(),
                 r.map_or("all".to_string(), |r| r.name.clone()),
-                r.map_or(String::new(), |r| kind_name(r).to_string()),
+                r.map_or(String::new(), |r| r.kind.name().to_string()),
                 r.and_then(|r| r.mode)
                     .map_or(String::new(), |m| (m + 1).to_string()),
                 range(|s| s.0),
@@ -175,7 +137,7 @@ pub fn yield_summary(model: &Model, a: &Analysis) -> Value {
     json!({
         "target_yield": target,
         "requirements": model.requirements.iter().map(|r| json!({
-            "name": r.name, "kind": kind_name(r), "mode": r.mode.map(|m| m + 1),
+            "name": r.name, "kind": r.kind.name(), "mode": r.mode.map(|m| m + 1),
             "speeds": r.speeds.map(|s| [s.0, s.1]), "description": describe(r)})).collect::<Vec<_>>(),
         "results": a.yields.iter().filter(|y| y.speed.is_none()).map(|y: &YieldRow| json!({
             "case": a.cases[y.case].name, "method": y.method.as_str(),
@@ -220,34 +182,7 @@ pub fn tightest(r: &Requirement, q: f64, transfer_unit: &str) -> String {
     if q == f64::NEG_INFINITY {
         return "none: more than 1 − target of the designs fail without a margin".into();
     }
-    let mode = r
-        .mode
-        .map_or("every mode".to_string(), |m| format!("mode {}", m + 1));
-    let g = |x: f64| format!("{:.6}", x);
-    match &r.kind {
-        RequirementKind::Separation { .. } => format!(
-            "{mode}: ω_d clear of the required separation by {} rad/s",
-            g(q)
-        ),
-        RequirementKind::Frequency { min, max } => match (min, max) {
-            (Some(a), Some(b)) => format!("{mode}: {} ≤ ω_d ≤ {} rad/s", g(a + q), g(b - q)),
-            (Some(a), None) => format!("{mode}: ω_d ≥ {} rad/s", g(a + q)),
-            (None, Some(b)) => format!("{mode}: ω_d ≤ {} rad/s", g(b - q)),
-            (None, None) => String::new(),
-        },
-        RequirementKind::Avoid { low, high } => {
-            format!(
-                "{mode}: ω_d outside [{}, {}] rad/s",
-                g(low - q),
-                g(high + q)
-            )
-        }
-        RequirementKind::Damping { min } => format!("{mode}: ζ ≥ {}", g(min + q)),
-        RequirementKind::Underdamped => format!("{mode}: ζ ≤ {}", g(1.0 - q)),
-        RequirementKind::Stable => format!("every root's real part ≤ {} 1/s", g(-q)),
-        RequirementKind::SameBranch => String::new(),
-        RequirementKind::Transfer { max } => format!("|H| ≤ {} {transfer_unit}", g(max - q)),
-    }
+    r.kind.tightest(&modes_read(r), q, transfer_unit)
 }
 
 /// Rows of `limits.csv`: per case, method and requirement, what the design with the case's
@@ -271,7 +206,7 @@ pub fn limit_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                 a.cases[y.case].name.clone(),
                 y.method.as_str().to_string(),
                 r.name.clone(),
-                kind_name(r).to_string(),
+                r.kind.name().to_string(),
                 target.to_string(),
                 speed(r.speeds.map(|s| s.0)),
                 speed(r.speeds.map(|s| s.1)),

@@ -37,7 +37,7 @@
 use crate::model::Distribution;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Tabulate, Termination};
-use crate::requirement;
+use crate::margins;
 use crate::sampling::{DesignMap, sample_sweep};
 use crate::table::{SobolIndex, Tables, Target};
 use crate::tolerance::{Spread, local_model, value};
@@ -167,7 +167,7 @@ fn indices(
     let mut out = Vec::new();
     for (t, &target) in targets.iter().enumerate() {
         if let Target::Margin(r) = target
-            && !requirement::has_margin(&reqs[r])
+            && !margins::has_margin(&reqs[r])
         {
             continue;
         }
@@ -220,12 +220,12 @@ fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -
         |i, pts| {
             let tf = study.transfer_at(i);
             let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            requirement::margins_at(
+            margins::margins_at(
                 reqs,
                 study.speeds[i],
                 at,
                 tf,
-                requirement::covers,
+                margins::covers,
                 |r, m| {
                     v[base + r] = v[base + r].min(m);
                 },

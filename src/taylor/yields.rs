@@ -7,12 +7,14 @@
 //! at the nominal design (stability, where no mode is close to it, has a first-order margin
 //! only through its growth rate, which the local model does not carry).
 
-use crate::model::{Requirement, RequirementKind};
+use crate::margins::{carriers, covers, mode_margin, mode_margin_gradient, reaches};
+use crate::model::Requirement;
 use crate::output::{Output, Quantity};
 use crate::propagate::Study;
-use crate::requirement::{carriers, covers, mode_margin, mode_margin_gradient, reaches};
+use crate::requirements::{Reading, Reads};
 use crate::table::{Limit, Method, YieldRow, cpk, reach};
 use crate::tolerance::Spread;
+use num_dual::Dual64;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// A requirement's first-order margin at speed `i`: its nominal value and its gradient over
@@ -28,14 +30,20 @@ pub fn linear_margin(study: &Study, req: &Requirement, i: usize) -> Option<(f64,
             .iter()
             .position(|o| *o == Output { quantity: q, mode })
     };
-    match req.kind {
-        RequirementKind::SameBranch | RequirementKind::Stable => None,
-        RequirementKind::Transfer { max } => {
+    match req.kind.reads() {
+        Reads::Branch | Reads::Growth => None,
+        Reads::Transfer => {
             let k = index(Quantity::TransferMagnitude, None)?;
             let g = lm.grad[k].as_ref().ok()?;
-            Some((max - lm.value[k], g.iter().map(|x| -x).collect()))
+            let h = lm.value[k];
+            let m0 = req.kind.margin(speed, Reading::Transfer(h));
+            let dh = req
+                .kind
+                .margin(speed, Reading::Transfer(Dual64::new(h, 1.0)))
+                .eps;
+            Some((m0, g.iter().map(|x| dh * x).collect()))
         }
-        _ => {
+        Reads::Mode => {
             let c = carriers(pt, None);
             let modes = pt.modes.len();
             let of = |m: usize| mode_margin(req, speed, c[2 * m], c[2 * m + 1]);

@@ -6,17 +6,12 @@ use super::names::check_name;
 use super::parameters::tolerance;
 use super::{Ctx, R};
 use crate::model::schema::{AllocationSchema, RequirementSchema};
-use crate::model::{
-    Allocation, Case, Cost, Parameter, Requirement, RequirementKind, SeparationMargin,
-};
+use crate::model::{Allocation, Case, Cost, Parameter, Requirement};
+use crate::requirements::{Fields, Kind, Reads};
 use toml::Spanned;
 
 /// What the outputs call every requirement together (`yield.csv`, `summary.json`).
 const ALL: &str = "all";
-
-/// The kinds of requirement, as written.
-const KINDS: &str =
-    "separation, frequency, avoid, damping, underdamped, stable, branch or transfer";
 
 /// The requirements in file order; `modes` is the number of modes of the mechanism, and a
 /// `transfer` requirement needs the `[analysis] transfer` (`transfer`) it reads.
@@ -53,11 +48,12 @@ pub(super) fn requirements(
         }
         let what = format!("requirement '{name}'");
         let kind = kind(ctx, r, &what)?;
-        if matches!(kind, RequirementKind::Transfer { .. }) && !transfer {
+        if kind.reads() == Reads::Transfer && !transfer {
             return Err(ctx.err(
                 r.kind.span(),
                 format!(
-                    "{what}: a 'transfer' requirement needs [analysis] transfer (the |H| it bounds)"
+                    "{what}: a '{}' requirement needs [analysis] transfer (the |H| it bounds)",
+                    kind.name()
                 ),
             ));
         }
@@ -73,12 +69,7 @@ pub(super) fn requirements(
                 }
             },
         };
-        let per_mode = !matches!(
-            kind,
-            RequirementKind::Stable
-                | RequirementKind::SameBranch
-                | RequirementKind::Transfer { .. }
-        );
+        let per_mode = kind.reads() == Reads::Mode;
         let mode = match &r.mode {
             None => None,
             Some(m) if !per_mode => {
@@ -111,33 +102,34 @@ pub(super) fn requirements(
     Ok(out)
 }
 
-/// The requirement's kind and its fields; a field the kind does not use is an error.
-fn kind(ctx: &Ctx, r: &RequirementSchema, what: &str) -> R<RequirementKind> {
-    let k = r.kind.get_ref().as_str();
-    let used: &[&str] = match k {
-        "separation" => &["orders", "margin"],
-        "frequency" => &["min", "max"],
-        "avoid" => &["band"],
-        "damping" => &["min"],
-        "transfer" => &["max"],
-        "underdamped" | "stable" | "branch" => &[],
-        _ => {
-            return Err(ctx.err(
-                r.kind.span(),
-                format!("{what}: unknown kind '{k}': expected {KINDS}"),
-            ));
-        }
+/// The requirement's kind and its settings, read by the kind ([`crate::requirements`]); a
+/// field the kind does not take is an error.
+fn kind(ctx: &Ctx, r: &RequirementSchema, what: &str) -> R<Kind> {
+    let fields = Fields {
+        what,
+        kind: &r.kind,
+        orders: r.orders.as_ref(),
+        margin: r.margin.as_ref(),
+        band: r.band.as_ref(),
+        min: r.min.as_ref(),
+        max: r.max.as_ref(),
     };
-    let given = [
-        ("orders", r.orders.as_ref().map(|x| x.span())),
-        ("margin", r.margin.as_ref().map(|x| x.span())),
-        ("band", r.band.as_ref().map(|x| x.span())),
-        ("min", r.min.as_ref().map(|x| x.span())),
-        ("max", r.max.as_ref().map(|x| x.span())),
-    ];
-    for (field, span) in given {
+    let k = r.kind.get_ref().as_str();
+    let Some(index) = Kind::NAMES.iter().position(|n| *n == k) else {
+        let (last, rest) = Kind::NAMES
+            .split_last()
+            .expect("requirement kinds are listed");
+        return Err(ctx.err(
+            r.kind.span(),
+            format!(
+                "{what}: unknown kind '{k}': expected {} or {last}",
+                rest.join(", ")
+            ),
+        ));
+    };
+    for (field, span) in fields.given() {
         if let Some(span) = span
-            && !used.contains(&field)
+            && !Kind::FIELDS[index].contains(&field)
         {
             return Err(ctx.err(
                 span,
@@ -145,100 +137,11 @@ fn kind(ctx: &Ctx, r: &RequirementSchema, what: &str) -> R<RequirementKind> {
             ));
         }
     }
-    let missing = |field: &str| {
-        ctx.err(
-            r.kind.span(),
-            format!("{what}: a '{k}' requirement needs '{field}'"),
-        )
-    };
-    let finite = |v: &Spanned<f64>, field: &str, positive: bool| -> R<f64> {
-        let x = *v.get_ref();
-        if !x.is_finite() || (positive && x <= 0.0) {
-            let need = if positive { "finite and > 0" } else { "finite" };
-            return Err(ctx.err(v.span(), format!("{what}: {field} must be {need}")));
-        }
-        Ok(x)
-    };
-    Ok(match k {
-        "separation" => {
-            let orders = r.orders.as_ref().ok_or_else(|| missing("orders"))?;
-            if orders.get_ref().is_empty()
-                || orders.get_ref().iter().any(|o| !o.is_finite() || *o <= 0.0)
-            {
-                return Err(ctx.err(
-                    orders.span(),
-                    format!("{what}: orders must be a non-empty list of numbers > 0"),
-                ));
-            }
-            let m = r.margin.as_ref().ok_or_else(|| missing("margin"))?;
-            let text = m.get_ref().trim();
-            let margin = if text.eq_ignore_ascii_case("api684") {
-                SeparationMargin::Api684
-            } else {
-                match text.strip_suffix('%').map(|p| p.trim().parse::<f64>()) {
-                    Some(Ok(p)) if p.is_finite() && (0.0..100.0).contains(&p) => {
-                        SeparationMargin::Fraction(p / 100.0)
-                    }
-                    _ => {
-                        return Err(ctx.err(
-                            m.span(),
-                            format!("{what}: margin must be \"P%\" (0 ≤ P < 100) or \"api684\""),
-                        ));
-                    }
-                }
-            };
-            RequirementKind::Separation {
-                orders: orders.get_ref().clone(),
-                margin,
-            }
-        }
-        "frequency" => {
-            let min = r
-                .min
-                .as_ref()
-                .map(|v| finite(v, "min", false))
-                .transpose()?;
-            let max = r
-                .max
-                .as_ref()
-                .map(|v| finite(v, "max", false))
-                .transpose()?;
-            match (min, max) {
-                (None, None) => return Err(missing("min' or 'max")),
-                (Some(a), Some(b)) if a > b => {
-                    return Err(ctx.err(
-                        r.kind.span(),
-                        format!("{what}: min ({a}) is above max ({b})"),
-                    ));
-                }
-                _ => {}
-            }
-            RequirementKind::Frequency { min, max }
-        }
-        "avoid" => {
-            let band = r.band.as_ref().ok_or_else(|| missing("band"))?;
-            match band.get_ref().as_slice() {
-                &[low, high] if low.is_finite() && high.is_finite() && low < high => {
-                    RequirementKind::Avoid { low, high }
-                }
-                _ => {
-                    return Err(ctx.err(
-                        band.span(),
-                        format!("{what}: band must be [low, high] in rad/s, low < high"),
-                    ));
-                }
-            }
-        }
-        "damping" => RequirementKind::Damping {
-            min: finite(r.min.as_ref().ok_or_else(|| missing("min"))?, "min", false)?,
-        },
-        "transfer" => RequirementKind::Transfer {
-            max: finite(r.max.as_ref().ok_or_else(|| missing("max"))?, "max", true)?,
-        },
-        "underdamped" => RequirementKind::Underdamped,
-        "stable" => RequirementKind::Stable,
-        _ => RequirementKind::SameBranch,
-    })
+    match Kind::read(k, &fields) {
+        Some(Ok(kind)) => Ok(kind),
+        Some(Err(e)) => Err(ctx.err(e.span, e.message)),
+        None => unreachable!("'{k}' is a kind's name"),
+    }
 }
 
 /// The `[allocation]` table (defaults where absent: a yield of 0.9973, the parameters' own

@@ -34,7 +34,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
                 (
                     r.name.clone(),
                     crate::report::describe(r),
-                    crate::requirement::unit(r, &tu),
+                    crate::margins::unit(r, &tu),
                 )
             }
             None => (
@@ -185,7 +185,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
             }
         };
         let mut margin = l.margin.map_or("–".into(), |m| {
-            let u = crate::requirement::unit(r, &tu);
+            let u = crate::margins::unit(r, &tu);
             if y.method == crate::table::Method::FirstOrder {
                 format!("{} {}", num(m[0]), esc(&u))
             } else {

@@ -1,30 +1,22 @@
-//! A requirement's margin at one speed of one design: positive where the design meets it.
+//! The requirements' margins at one speed of one design: positive where the design meets it.
 //!
-//! Requirements ([`crate::model::Requirement`], `[[requirements]]` in the model file) are read
-//! from what every propagation method already has at a point: the pair invariants `s, p` of
-//! every mode (the quadrature's carriers, [`carriers`]), |H|, and whether the design is on the
-//! nominal design's branch. Each kind's margin has a unit (rad/s for frequencies, 1 for ζ, 1/s
-//! for stability, the transfer function's for |H|) and is continuous where the quantity it
-//! reads is, so that its zero, the boundary between designs that pass and designs that fail,
-//! can be located along a quadrature line by bisection. A requirement over an operating range
-//! is met by a design when its margin is ≥ 0 at every analysed speed of the range; a point that
-//! failed, or a quantity without a value (|H| at an undamped resonance), fails it.
+//! Requirements ([`crate::model::Requirement`], `[[requirements]]` in the model file, one kind
+//! per file in [`crate::requirements`]) are read from what every propagation method already has
+//! at a point: the pair invariants `s, p` of every mode (the quadrature's carriers,
+//! [`carriers`]), |H|, and whether the design is on the nominal design's branch. Each kind's
+//! margin has a unit and is continuous where the quantity it reads is, so that its zero, the
+//! boundary between designs that pass and designs that fail, can be located along a quadrature
+//! line by bisection. A requirement over an operating range is met by a design when its margin
+//! is ≥ 0 at every analysed speed of the range; a point that failed, or a quantity without a
+//! value (|H| at an undamped resonance), fails it.
 //!
-//! The separation margins follow API 684 (*Rotordynamic Tutorial*, 2nd ed., 2005, §2.8): a
-//! mode's frequency must lie below the excitation `k·Ω` by `SM_below` or above it by
-//! `SM_above`. With a fixed margin both are that fraction. With `api684` they follow from the
-//! amplification factor, here `AF = 1/(2ζ)` (the half-power estimate `ω_n/(ω₂ − ω₁)` of a
-//! single mode): no margin below AF 2.5, else `SM_below = min(16, 17(1 − 1/(AF − 1.5)))` % and
-//! `SM_above = min(26, 10 + 17(1 − 1/(AF − 1.5)))` %. The frequency compared is ω_d (the
-//! frequency of the response peak for light damping, the only case where the margin applies).
-//!
-//! Per-mode margins are written once over any scalar ([`Real`]), so that the first-order
-//! method differentiates them exactly ([`mode_margin_gradient`]).
+//! A per-mode kind's margin is written once over any scalar ([`Real`](crate::real::Real)), so
+//! that the first-order method differentiates it exactly ([`mode_margin_gradient`]).
 
+use crate::model::Requirement;
 use crate::model::judged::same_speed;
-use crate::model::{Requirement, RequirementKind, SeparationMargin};
 use crate::pair;
-use crate::real::Real;
+use crate::requirements::{Reading, Reads};
 use crate::sensitivity::TransferAt;
 use crate::sweep::Point;
 use num_dual::Dual64;
@@ -111,20 +103,12 @@ pub fn reaches(req: &Requirement, speed: f64) -> bool {
 /// Does the requirement have a margin with a distribution (every kind but the branch, which is
 /// pass or fail)?
 pub fn has_margin(req: &Requirement) -> bool {
-    req.kind != RequirementKind::SameBranch
+    req.kind.reads() != Reads::Branch
 }
 
 /// The requirement's unit of margin, for the outputs (`transfer` names |H|'s unit).
 pub fn unit(req: &Requirement, transfer: &str) -> String {
-    match req.kind {
-        RequirementKind::Separation { .. }
-        | RequirementKind::Frequency { .. }
-        | RequirementKind::Avoid { .. } => "rad/s".into(),
-        RequirementKind::Damping { .. } | RequirementKind::Underdamped => "1".into(),
-        RequirementKind::Stable => "1/s".into(),
-        RequirementKind::SameBranch => String::new(),
-        RequirementKind::Transfer { .. } => transfer.into(),
-    }
+    req.kind.unit().symbol(transfer)
 }
 
 /// The margin of `req` at `state` (≥ 0: met). `−∞` where the design fails it without a value
@@ -132,19 +116,18 @@ pub fn unit(req: &Requirement, transfer: &str) -> String {
 /// failed.
 pub fn margin(req: &Requirement, st: &State) -> f64 {
     let c = st.carriers;
-    let m = match req.kind {
-        RequirementKind::SameBranch => {
-            if st.same_branch {
-                1.0
-            } else {
-                -1.0
-            }
+    let m = match req.kind.reads() {
+        Reads::Branch => req.kind.margin(st.speed, Reading::Branch(st.same_branch)),
+        Reads::Growth => {
+            let g = (0..st.modes)
+                .map(|m| growth(c[2 * m], c[2 * m + 1]))
+                .fold(f64::NEG_INFINITY, f64::max);
+            req.kind.margin(st.speed, Reading::Growth(g))
         }
-        RequirementKind::Stable => -(0..st.modes)
-            .map(|m| growth(c[2 * m], c[2 * m + 1]))
-            .fold(f64::NEG_INFINITY, f64::max),
-        RequirementKind::Transfer { max } => max - c[2 * st.modes],
-        _ => {
+        Reads::Transfer => req
+            .kind
+            .margin(st.speed, Reading::Transfer(c[2 * st.modes])),
+        Reads::Mode => {
             let of = |m: usize| mode_margin(req, st.speed, c[2 * m], c[2 * m + 1]);
             match req.mode {
                 Some(m) => of(m),
@@ -173,92 +156,45 @@ fn growth(s: f64, p: f64) -> f64 {
 
 /// The margin of a per-mode requirement from the mode's invariants `s, p` at `speed`.
 pub fn mode_margin(req: &Requirement, speed: f64, s: f64, p: f64) -> f64 {
-    let wd = pair::damped_frequency(s, p);
-    let zeta = pair::damping_ratio(s, p);
-    if req.kind == RequirementKind::Underdamped && p <= 0.0 {
-        // Real roots whatever `s`: not underdamped, and ζ does not say it.
-        return f64::NEG_INFINITY;
-    }
-    output_margin(req, speed, wd, zeta)
-}
-
-/// The margin of a per-mode requirement from the mode's ω_d and ζ, over any scalar.
-pub fn output_margin<S: Real>(req: &Requirement, speed: f64, wd: S, zeta: S) -> S {
-    match &req.kind {
-        RequirementKind::Separation { orders, margin } => {
-            let (below, above) = match margin {
-                SeparationMargin::Fraction(f) => (S::from(*f), S::from(*f)),
-                SeparationMargin::Api684 => api684(zeta),
-            };
-            orders
-                .iter()
-                .map(|&k| {
-                    let e = k * speed;
-                    let under = (S::one() - below) * e - wd;
-                    let over = wd - (S::one() + above) * e;
-                    if under.re() >= over.re() { under } else { over }
-                })
-                .reduce(|a, b| if b.re() < a.re() { b } else { a })
-                .unwrap_or(S::from(f64::INFINITY))
-        }
-        RequirementKind::Frequency { min, max } => {
-            let lo = min.map(|a| wd - a);
-            let hi = max.map(|b| S::from(b) - wd);
-            match (lo, hi) {
-                (Some(a), Some(b)) => {
-                    if a.re() <= b.re() {
-                        a
-                    } else {
-                        b
-                    }
-                }
-                (Some(a), None) => a,
-                (None, Some(b)) => b,
-                (None, None) => S::from(f64::INFINITY),
-            }
-        }
-        RequirementKind::Avoid { low, high } => {
-            let under = S::from(*low) - wd;
-            let over = wd - *high;
-            if under.re() >= over.re() { under } else { over }
-        }
-        RequirementKind::Damping { min } => zeta - *min,
-        RequirementKind::Underdamped => S::one() - zeta.abs(),
-        _ => S::from(f64::NAN),
-    }
-}
-
-/// API 684's separation margins `(below, above)` as fractions, from `AF = 1/(2ζ)`.
-fn api684<S: Real>(zeta: S) -> (S, S) {
-    if zeta.re() >= 0.2 {
-        // AF ≤ 2.5: no separation required.
-        return (S::zero(), S::zero());
-    }
-    if zeta.re().is_nan() || zeta.re() <= 0.0 {
-        // Undamped or unstable: the largest margins.
-        return (S::from(0.16), S::from(0.26));
-    }
-    let af = (zeta * 2.0).recip();
-    let g = (S::one() - (af - 1.5).recip()) * 0.17;
-    let below = if g.re() < 0.16 { g } else { S::from(0.16) };
-    let up = g + 0.10;
-    let above = if up.re() < 0.26 { up } else { S::from(0.26) };
-    (below, above)
+    let reading = Reading::Mode {
+        wd: pair::damped_frequency(s, p),
+        zeta: pair::damping_ratio(s, p),
+        real_pair: p <= 0.0,
+    };
+    req.kind.margin(speed, reading)
 }
 
 /// The derivatives of a per-mode requirement's margin with respect to the mode's ω_d and ζ at
 /// `(wd, zeta)`, exact (dual numbers); NaN where the margin has none.
 pub fn mode_margin_gradient(req: &Requirement, speed: f64, wd: f64, zeta: f64) -> (f64, f64) {
-    let d_wd = output_margin(req, speed, Dual64::new(wd, 1.0), Dual64::from(zeta)).eps;
-    let d_zeta = output_margin(req, speed, Dual64::from(wd), Dual64::new(zeta, 1.0)).eps;
+    let at = |wd, zeta| Reading::Mode {
+        wd,
+        zeta,
+        real_pair: false,
+    };
+    let d_wd = req
+        .kind
+        .margin(speed, at(Dual64::new(wd, 1.0), Dual64::from(zeta)))
+        .eps;
+    let d_zeta = req
+        .kind
+        .margin(speed, at(Dual64::from(wd), Dual64::new(zeta, 1.0)))
+        .eps;
     (d_wd, d_zeta)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::requirements::Kind;
+    use crate::requirements::avoid::Avoid;
+    use crate::requirements::damping::Damping;
+    use crate::requirements::frequency::Frequency;
+    use crate::requirements::separation::{Separation, SeparationMargin};
+    use crate::requirements::stable::Stable;
+    use crate::requirements::underdamped::Underdamped;
 
-    fn req(kind: RequirementKind) -> Requirement {
+    fn req(kind: Kind) -> Requirement {
         Requirement {
             name: "r".into(),
             kind,
@@ -275,10 +211,10 @@ mod tests {
     #[test]
     fn separation_margins_follow_api_684() {
         // AF = 1/(2ζ) = 5 at ζ = 0.1: 17(1 − 1/3.5) = 12.14 % below, 22.14 % above.
-        let r = req(RequirementKind::Separation {
+        let r = req(Kind::Separation(Separation {
             orders: vec![1.0],
             margin: SeparationMargin::Api684,
-        });
+        }));
         let (s, p) = pair_of(10.0, 0.1);
         let wd = pair::damped_frequency(s, p);
         let g = 0.17 * (1.0 - 1.0 / 3.5);
@@ -301,31 +237,38 @@ mod tests {
     #[test]
     fn gradients_match_finite_differences() {
         let kinds = [
-            RequirementKind::Separation {
+            Kind::Separation(Separation {
                 orders: vec![1.0, 2.0],
                 margin: SeparationMargin::Api684,
-            },
-            RequirementKind::Separation {
+            }),
+            Kind::Separation(Separation {
                 orders: vec![1.0],
                 margin: SeparationMargin::Fraction(0.15),
-            },
-            RequirementKind::Frequency {
+            }),
+            Kind::Frequency(Frequency {
                 min: Some(3.0),
                 max: Some(20.0),
-            },
-            RequirementKind::Avoid {
+            }),
+            Kind::Avoid(Avoid {
                 low: 8.0,
                 high: 12.0,
-            },
-            RequirementKind::Damping { min: 0.02 },
-            RequirementKind::Underdamped,
+            }),
+            Kind::Damping(Damping { min: 0.02 }),
+            Kind::Underdamped(Underdamped),
         ];
         for kind in kinds {
             let r = req(kind);
             for &(speed, wd, zeta) in &[(9.0, 7.3, 0.08), (4.0, 15.0, 0.12), (12.0, 9.1, 0.05)] {
                 let (gw, gz) = mode_margin_gradient(&r, speed, wd, zeta);
                 let h = 1e-6;
-                let f = |w: f64, z: f64| output_margin(&r, speed, w, z);
+                let f = |wd: f64, zeta: f64| {
+                    let at = Reading::Mode {
+                        wd,
+                        zeta,
+                        real_pair: false,
+                    };
+                    r.kind.margin(speed, at)
+                };
                 let fw = (f(wd + h, zeta) - f(wd - h, zeta)) / (2.0 * h);
                 let fz = (f(wd, zeta + h) - f(wd, zeta - h)) / (2.0 * h);
                 assert!((gw - fw).abs() < 1e-6, "{:?}: {gw} vs {fw}", r.kind);
@@ -336,7 +279,7 @@ mod tests {
 
     #[test]
     fn stability_and_underdamping_margins_change_sign_at_their_boundaries() {
-        let stable = req(RequirementKind::Stable);
+        let stable = req(Kind::Stable(Stable));
         fn st(c: &[f64]) -> State<'_> {
             State {
                 speed: 1.0,
@@ -351,7 +294,7 @@ mod tests {
         assert!(margin(&stable, &st(&[-1.0, -4.0, 0.0])) < 0.0);
         // A rigid-body mode (a zero root) is not unstable.
         assert!(margin(&stable, &st(&[-1.0, 0.0, 0.0])) >= 0.0);
-        let under = req(RequirementKind::Underdamped);
+        let under = req(Kind::Underdamped(Underdamped));
         let (s, p) = pair_of(2.0, 0.99);
         assert!(mode_margin(&under, 1.0, s, p) > 0.0);
         let (s, p) = pair_of(2.0, 1.01);
