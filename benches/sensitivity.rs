@@ -3,8 +3,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use modaltol::compiled::Compiled;
-use modaltol::program::Workspace;
-use modaltol::sensitivity::{TransferAt, analytic};
+use modaltol::sensitivity::{DesignPoint, TransferAt};
 use modaltol::sweep::{Options, initial_guess, point};
 use std::hint::black_box;
 
@@ -37,7 +36,10 @@ fn bench(c: &mut Criterion) {
         });
         c.bench_function(&format!("{name}/sensitivities_all_variables"), |b| {
             b.iter(|| {
-                analytic(&model, &p, &pt, black_box(&wrt), tf, &Workspace::default()).unwrap()
+                DesignPoint::new(&model, &p, &pt)
+                    .with_transfer(tf)
+                    .analytic(black_box(&wrt))
+                    .unwrap()
             })
         });
     }

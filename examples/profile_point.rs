@@ -2,8 +2,7 @@
 //! sensitivities at that point) for `perf record`.
 //! `cargo run --release --example profile_point -- examples/governor.toml 1.595 [sens]`.
 use modaltol::compiled::Compiled;
-use modaltol::program::Workspace;
-use modaltol::sensitivity::{TransferAt, analytic};
+use modaltol::sensitivity::{DesignPoint, TransferAt};
 use modaltol::sweep::{Options, initial_guess, point};
 
 fn main() {
@@ -24,7 +23,9 @@ fn main() {
     let mut n = 0;
     for _ in 0..3000 {
         if sens {
-            n += analytic(&model, &p, &pt, &wrt, tf, &Workspace::default())
+            n += DesignPoint::new(&model, &p, &pt)
+                .with_transfer(tf)
+                .analytic(&wrt)
                 .unwrap()
                 .variables
                 .len();

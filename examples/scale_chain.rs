@@ -27,7 +27,6 @@
 //! `modaltol analyze` (`… -- model n k` prints the model file).
 use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::{Compiled, Route};
-use modaltol::hessian::hessians;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
@@ -35,7 +34,7 @@ use modaltol::output::Quantity;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
 use modaltol::quadrature::QuadOptions;
-use modaltol::sensitivity::analytic;
+use modaltol::sensitivity::DesignPoint;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use modaltol::table::Method;
 use modaltol::table::Row;
@@ -91,7 +90,7 @@ fn measure(n: usize) -> [f64; 5] {
     let wrt = model.model().toleranced();
     let sens = best(&mut || {
         let t = Instant::now();
-        analytic(&model, &p, &pt, &wrt, None, &Workspace::default()).unwrap();
+        DesignPoint::new(&model, &p, &pt).analytic(&wrt).unwrap();
         t.elapsed().as_secs_f64()
     });
     [cold, swept, sens, cold_peak, peak_mb()]
@@ -488,7 +487,9 @@ fn main() {
         let best = (0..3)
             .map(|_| {
                 let t = Instant::now();
-                hessians(&model, &p, &pt, &wrt, &outs, None, &Workspace::default()).unwrap();
+                DesignPoint::new(&model, &p, &pt)
+                    .hessians(&wrt, &outs)
+                    .unwrap();
                 t.elapsed().as_secs_f64()
             })
             .fold(f64::INFINITY, f64::min);
@@ -526,10 +527,16 @@ fn main() {
                 .fold(f64::INFINITY, f64::min)
         };
         let g = best(&mut || {
-            analytic(&model, &p, &pt, &wrt, None, &ws).unwrap();
+            DesignPoint::new(&model, &p, &pt)
+                .with_workspace(&ws)
+                .analytic(&wrt)
+                .unwrap();
         });
         let h = best(&mut || {
-            hessians(&model, &p, &pt, &wrt, &outs, None, &ws).unwrap();
+            DesignPoint::new(&model, &p, &pt)
+                .with_workspace(&ws)
+                .hessians(&wrt, &outs)
+                .unwrap();
         });
         println!(
             "{n} segments, {} variables: gradients {:.2} ms, gradients and Hessians {:.2} ms",

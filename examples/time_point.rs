@@ -7,10 +7,9 @@
 //! `cargo run --release --example time_point -- [examples/governor.toml]`.
 use modaltol::compiled::Compiled;
 use modaltol::equilibrium::Start;
-use modaltol::hessian::hessians;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
-use modaltol::sensitivity::{TransferAt, analytic};
+use modaltol::sensitivity::{DesignPoint, TransferAt};
 use modaltol::sweep::{Options, initial_guess, point, point_from};
 use std::hint::black_box;
 use std::time::Instant;
@@ -77,8 +76,11 @@ fn main() {
         .transfer
         .map(|t| TransferAt::at_speed(&t, speed));
     let wrt = model.model().toleranced();
+    let at = DesignPoint::new(&model, &p, &pt)
+        .with_transfer(tf)
+        .with_workspace(&workspace);
     let sens = best(2000, || {
-        black_box(analytic(&model, &p, &pt, &wrt, tf, &workspace).unwrap());
+        black_box(at.analytic(&wrt).unwrap());
     });
     println!(
         "exact evaluation {:.2} µs, residual {:.2} µs, modal point {:.2} µs, sensitivities \
@@ -93,7 +95,7 @@ fn main() {
     // Gradients and Hessians of every output (the second-order method's passes).
     let outs = outputs(pt.modes.len(), tf.is_some());
     let second = best(100, || {
-        black_box(hessians(&model, &p, &pt, &wrt, &outs, tf, &workspace).unwrap());
+        black_box(at.hessians(&wrt, &outs).unwrap());
     });
     println!(
         "gradients and Hessians ({} variables) {:.2} µs",

@@ -4,7 +4,7 @@
 use crate::compiled::Compiled;
 use crate::frf::{Complex, NoTransfer, transfer_defect};
 use crate::model::Transfer;
-use crate::sensitivity::{Derivatives, Sensitivity, TransferAt, nominal_transfer, sensitivities};
+use crate::sensitivity::{Derivatives, DesignPoint, Sensitivity, TransferAt, nominal_transfer};
 use crate::sweep::{Options, Point, PointError, Sweep};
 
 /// Transfer function and sensitivities at one speed, for the optional sweep columns.
@@ -59,7 +59,10 @@ impl<'a> NominalSweep<'a> {
             if !self.wrt.is_empty() {
                 let p = self.model.model().nominal();
                 let (wrt, how, workspace) = (&self.wrt, self.derivatives, self.sweep.workspace());
-                match sensitivities(self.model, &p, pt, wrt, t, how, workspace) {
+                let at = DesignPoint::new(self.model, &p, pt)
+                    .with_transfer(t)
+                    .with_workspace(workspace);
+                match at.sensitivities(wrt, how) {
                     Ok(s) => extras.sensitivity = Some(s),
                     Err(e) => result = Err(e),
                 }

@@ -24,10 +24,11 @@ use crate::model::Transfer;
 use crate::output::{self, Output};
 use crate::program::Workspace;
 use crate::sampling::branch_counts;
+use crate::sensitivity::DesignPoint;
 use crate::sensitivity::TransferAt;
 use crate::sweep::{Options, Point, Sweep};
 use crate::table::Tables;
-use crate::tolerance::{LocalModel, Spread, add_hessians, local_model};
+use crate::tolerance::{LocalModel, Spread};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -178,10 +179,11 @@ impl<'a> Study<'a> {
                             scope.spawn(move |_| {
                                 let lock = || memory.lock().unwrap_or_else(|e| e.into_inner());
                                 let workspace = lock().pop().unwrap_or_default();
-                                let tf = transfer.as_ref();
-                                let lm =
-                                    local_model(model, p, &pt_local, vars, tf, false, &workspace)
-                                        .map_err(|e| format!("derivatives: {e}"));
+                                let lm = DesignPoint::new(model, p, &pt_local)
+                                    .with_model_transfer(transfer.as_ref())
+                                    .with_workspace(&workspace)
+                                    .local_model(vars, false)
+                                    .map_err(|e| format!("derivatives: {e}"));
                                 lock().push(workspace);
                                 *slot.lock().expect("unpoisoned") = Some(lm);
                                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -219,7 +221,10 @@ impl<'a> Study<'a> {
                     if let (Some(lm), Some(pt)) = (lm, pt)
                         && !run.cancel.is_cancelled()
                     {
-                        add_hessians(model, &p, pt, lm, transfer.as_ref(), workspace);
+                        DesignPoint::new(model, &p, pt)
+                            .with_model_transfer(transfer.as_ref())
+                            .with_workspace(workspace)
+                            .add_hessians(lm);
                     }
                     let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                     (run.progress)(d, total);

@@ -26,13 +26,11 @@
 //! of quadratic forms in normal variables).
 
 use crate::compiled::Compiled;
-use crate::hessian::hessians;
 use crate::modal::{Smoothness, smoothness};
-use crate::model::{Case, Distribution, Transfer};
+use crate::model::{Case, Distribution};
 use crate::output::Missing;
 use crate::pair;
-use crate::program::Workspace;
-use crate::sensitivity::{Status, TransferAt, analytic};
+use crate::sensitivity::{DesignPoint, Status, TransferAt};
 use crate::sweep::{Point, PointError};
 use nalgebra::DMatrix;
 
@@ -82,88 +80,6 @@ type FirstOrder = (
     Vec<(f64, Result<Vec<f64>, Missing>)>,
 );
 
-fn first(
-    model: &Compiled,
-    p: &[f64],
-    pt: &Point,
-    vars: &[usize],
-    outs: &[Output],
-    tf: Option<TransferAt>,
-    workspace: &Workspace,
-) -> Result<FirstOrder, PointError> {
-    let s = analytic(model, p, pt, vars, tf, workspace)?;
-    let smooth = smoothness(&pt.modes);
-    let finite = |g: Vec<f64>| {
-        if g.iter().all(|x| x.is_finite()) {
-            Ok(g)
-        } else {
-            Err(Missing::NotFinite)
-        }
-    };
-    let mut values = Vec::with_capacity(outs.len());
-    let mut grads = Vec::with_capacity(outs.len());
-    for o in outs {
-        values.push(value(pt, o, tf).unwrap_or(f64::NAN));
-        let g: Result<Vec<f64>, Missing> = s
-            .variables
-            .iter()
-            .map(|v| match (o.quantity, o.mode) {
-                (Quantity::TransferMagnitude, _) => {
-                    v.d_transfer_magnitude
-                        .ok_or(if s.transfer_magnitude.is_some() {
-                            Missing::TransferZero
-                        } else {
-                            Missing::TransferUnbounded
-                        })
-                }
-                (q, Some(m)) => {
-                    let ms = &v.modes[m];
-                    if smooth[m] == Smoothness::Rigid && q == Quantity::DampingRatio {
-                        Err(Missing::RigidDamping { mode: m })
-                    } else if ms.status == Status::Ok {
-                        Ok(if q == Quantity::DampedFrequency {
-                            ms.d_damped_frequency
-                        } else {
-                            ms.d_damping_ratio
-                        })
-                    } else {
-                        Err(Missing::Mode {
-                            mode: m,
-                            why: smooth[m],
-                        })
-                    }
-                }
-                _ => Err(Missing::NoValue),
-            })
-            .collect::<Result<Vec<f64>, Missing>>()
-            .and_then(finite);
-        grads.push(g);
-    }
-    let discs = pt
-        .modes
-        .iter()
-        .zip(discriminants(pt))
-        .enumerate()
-        .map(|(k, (m, d))| {
-            let sum = (m.root.lambda + m.partner.lambda).re;
-            let g: Vec<f64> = s
-                .variables
-                .iter()
-                .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
-                .collect();
-            let g = match smooth[k] {
-                Smoothness::Rigid | Smoothness::Repeated { .. } => Err(Missing::Mode {
-                    mode: k,
-                    why: smooth[k],
-                }),
-                _ => finite(g),
-            };
-            (d, g)
-        })
-        .collect();
-    Ok((values, grads, discs))
-}
-
 /// Reorders the modes of `q` to match the shapes of `reference` (most similar first).
 pub fn match_modes(reference: &Point, mut q: Point) -> Point {
     if q.modes.len() != reference.modes.len() {
@@ -175,85 +91,147 @@ pub fn match_modes(reference: &Point, mut q: Point) -> Point {
     q
 }
 
-/// Builds the local model at `pt` for design variables `vars`; with `hessian`, also the exact
-/// Hessians (hyper-dual numbers, see [`crate::hessian`]).
-pub fn local_model(
-    model: &Compiled,
-    p: &[f64],
-    pt: &Point,
-    vars: &[usize],
-    transfer: Option<&Transfer>,
-    hessian: bool,
-    workspace: &Workspace,
-) -> Result<LocalModel, PointError> {
-    let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
-    let outs = outputs(pt.modes.len(), tf.is_some());
-    if !hessian {
-        let (value, grad, disc0) = first(model, p, pt, vars, &outs, tf, workspace)?;
-        return Ok(LocalModel {
+impl DesignPoint<'_> {
+    /// The local model at the point for design variables `vars`; with `hessian`, also the exact
+    /// Hessians (hyper-dual numbers, see [`crate::hessian`]).
+    pub fn local_model(&self, vars: &[usize], hessian: bool) -> Result<LocalModel, PointError> {
+        let (pt, tf) = (self.point, self.transfer);
+        let outs = outputs(pt.modes.len(), tf.is_some());
+        if !hessian {
+            let (value, grad, disc0) = self.first(vars, &outs)?;
+            return Ok(LocalModel {
+                vars: vars.to_vec(),
+                hess: grad
+                    .iter()
+                    .map(|g| g.clone().and(Err(Missing::NotComputed)))
+                    .collect(),
+                outputs: outs,
+                value,
+                grad,
+                disc: disc0
+                    .into_iter()
+                    .map(|(v, g)| {
+                        let h = g.clone().and(Err(Missing::NotComputed));
+                        (v, g, h)
+                    })
+                    .collect(),
+            });
+        }
+        // Gradients and Hessians together from the second-order passes.
+        let h = self.hessians(vars, &outs)?;
+        let value = outs
+            .iter()
+            .map(|o| value(pt, o, tf).unwrap_or(f64::NAN))
+            .collect();
+        Ok(LocalModel {
             vars: vars.to_vec(),
-            hess: grad
-                .iter()
-                .map(|g| g.clone().and(Err(Missing::NotComputed)))
-                .collect(),
             outputs: outs,
             value,
-            grad,
-            disc: disc0
+            grad: h.gradients,
+            hess: h.outputs,
+            disc: discriminants(pt)
                 .into_iter()
-                .map(|(v, g)| {
-                    let h = g.clone().and(Err(Missing::NotComputed));
-                    (v, g, h)
-                })
+                .zip(h.discriminant_gradients)
+                .zip(h.discriminant)
+                .map(|((v, g), h)| (v, g, h))
                 .collect(),
-        });
+        })
     }
-    // Gradients and Hessians together from the second-order passes.
-    let h = hessians(model, p, pt, vars, &outs, tf, workspace)?;
-    let value = outs
-        .iter()
-        .map(|o| value(pt, o, tf).unwrap_or(f64::NAN))
-        .collect();
-    Ok(LocalModel {
-        vars: vars.to_vec(),
-        outputs: outs,
-        value,
-        grad: h.gradients,
-        hess: h.outputs,
-        disc: discriminants(pt)
-            .into_iter()
-            .zip(h.discriminant_gradients)
-            .zip(h.discriminant)
-            .map(|((v, g), h)| (v, g, h))
-            .collect(),
-    })
-}
 
-/// Adds the exact Hessians (and the gradients of the same passes' discriminants' Hessians)
-/// to a first-order local model `lm` of the point `pt` ([`local_model`] without them): the
-/// second-order stage of a study. Where the second-order passes fail, every Hessian says why
-/// and the first-order model stays.
-pub fn add_hessians(
-    model: &Compiled,
-    p: &[f64],
-    pt: &Point,
-    lm: &mut LocalModel,
-    transfer: Option<&Transfer>,
-    workspace: &Workspace,
-) {
-    let tf = transfer.map(|t| TransferAt::at_speed(t, pt.speed));
-    match hessians(model, p, pt, &lm.vars, &lm.outputs, tf, workspace) {
-        Ok(h) => {
-            lm.hess = h.outputs;
-            for (d, h) in lm.disc.iter_mut().zip(h.discriminant) {
-                d.2 = h;
+    /// Adds the exact Hessians (and the gradients of the same passes' discriminants' Hessians)
+    /// to a first-order local model `lm` of the point ([`DesignPoint::local_model`] without them): the
+    /// second-order stage of a study. Where the second-order passes fail, every Hessian says why
+    /// and the first-order model stays.
+    pub fn add_hessians(&self, lm: &mut LocalModel) {
+        match self.hessians(&lm.vars, &lm.outputs) {
+            Ok(h) => {
+                lm.hess = h.outputs;
+                for (d, h) in lm.disc.iter_mut().zip(h.discriminant) {
+                    d.2 = h;
+                }
+            }
+            Err(e) => {
+                let why = Missing::Failed(format!("second-order derivatives: {e}"));
+                lm.hess.iter_mut().for_each(|h| *h = Err(why.clone()));
+                lm.disc.iter_mut().for_each(|d| d.2 = Err(why.clone()));
             }
         }
-        Err(e) => {
-            let why = Missing::Failed(format!("second-order derivatives: {e}"));
-            lm.hess.iter_mut().for_each(|h| *h = Err(why.clone()));
-            lm.disc.iter_mut().for_each(|d| d.2 = Err(why.clone()));
+    }
+
+    /// Values and exact gradients of `outs`, and each mode's discriminant with its gradient.
+    fn first(&self, vars: &[usize], outs: &[Output]) -> Result<FirstOrder, PointError> {
+        let (pt, tf) = (self.point, self.transfer);
+        let s = self.analytic(vars)?;
+        let smooth = smoothness(&pt.modes);
+        let finite = |g: Vec<f64>| {
+            if g.iter().all(|x| x.is_finite()) {
+                Ok(g)
+            } else {
+                Err(Missing::NotFinite)
+            }
+        };
+        let mut values = Vec::with_capacity(outs.len());
+        let mut grads = Vec::with_capacity(outs.len());
+        for o in outs {
+            values.push(value(pt, o, tf).unwrap_or(f64::NAN));
+            let g: Result<Vec<f64>, Missing> = s
+                .variables
+                .iter()
+                .map(|v| match (o.quantity, o.mode) {
+                    (Quantity::TransferMagnitude, _) => {
+                        v.d_transfer_magnitude
+                            .ok_or(if s.transfer_magnitude.is_some() {
+                                Missing::TransferZero
+                            } else {
+                                Missing::TransferUnbounded
+                            })
+                    }
+                    (q, Some(m)) => {
+                        let ms = &v.modes[m];
+                        if smooth[m] == Smoothness::Rigid && q == Quantity::DampingRatio {
+                            Err(Missing::RigidDamping { mode: m })
+                        } else if ms.status == Status::Ok {
+                            Ok(if q == Quantity::DampedFrequency {
+                                ms.d_damped_frequency
+                            } else {
+                                ms.d_damping_ratio
+                            })
+                        } else {
+                            Err(Missing::Mode {
+                                mode: m,
+                                why: smooth[m],
+                            })
+                        }
+                    }
+                    _ => Err(Missing::NoValue),
+                })
+                .collect::<Result<Vec<f64>, Missing>>()
+                .and_then(finite);
+            grads.push(g);
         }
+        let discs = pt
+            .modes
+            .iter()
+            .zip(discriminants(pt))
+            .enumerate()
+            .map(|(k, (m, d))| {
+                let sum = (m.root.lambda + m.partner.lambda).re;
+                let g: Vec<f64> = s
+                    .variables
+                    .iter()
+                    .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
+                    .collect();
+                let g = match smooth[k] {
+                    Smoothness::Rigid | Smoothness::Repeated { .. } => Err(Missing::Mode {
+                        mode: k,
+                        why: smooth[k],
+                    }),
+                    _ => finite(g),
+                };
+                (d, g)
+            })
+            .collect();
+        Ok((values, grads, discs))
     }
 }
 

@@ -11,7 +11,6 @@ mod common;
 use common::solve;
 use modaltol::compiled::Compiled;
 use modaltol::modal::{C64, ModeClass, similarity};
-use modaltol::program::Workspace;
 
 /// Uniform blade: length 1 m, μ = 2 kg/m, EI = 50 N·m², spinning about z, flapping along z.
 pub fn blade(n: usize) -> String {
@@ -235,14 +234,17 @@ fn an_overdamped_long_chain_pairs_each_modes_two_real_roots() {
 /// those of a `Dual64` pass of its own.
 #[test]
 fn a_big_program_shares_its_sensitivity_pass_to_the_bit() {
-    use modaltol::sensitivity::dual_linearizations;
+    use modaltol::sensitivity::DesignPoint;
     let model = Compiled::from_str(&blade(40), "blade40.toml").unwrap();
     let p = model.model().nominal();
     let pt = solve(&model, 5.0, false);
     let wrt = [0, 1, 2];
-    let together = dual_linearizations(&model, &p, &pt, &wrt, &Workspace::default()).unwrap();
+    let together = DesignPoint::new(&model, &p, &pt)
+        .dual_linearizations(&wrt)
+        .unwrap();
     for (shared, &b) in together.iter().zip(&wrt) {
-        let alone = dual_linearizations(&model, &p, &pt, &[b], &Workspace::default())
+        let alone = DesignPoint::new(&model, &p, &pt)
+            .dual_linearizations(&[b])
             .unwrap()
             .remove(0);
         assert!(

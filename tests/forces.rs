@@ -17,8 +17,7 @@ mod common;
 use common::{roots, same_roots, solve};
 use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
-use modaltol::program::Workspace;
-use modaltol::sensitivity::analytic;
+use modaltol::sensitivity::DesignPoint;
 
 /// Equal roots on both routes at each speed, and equal values of the named coordinates.
 fn equivalent(a: &Compiled, b: &Compiled, speeds: &[f64], coordinates: &[&str]) {
@@ -268,15 +267,9 @@ fn a_body_held_by_a_bushing_has_six_uncoupled_oscillators() {
     // ∂ω_d/∂k of the x mode, exactly: ω_d = √(k/m − (c/2m)²).
     let pt = solve(&m, 0.0, false);
     let p = m.model().nominal();
-    let s = analytic(
-        &m,
-        &p,
-        &pt,
-        &[m.model().parameter("k").unwrap()],
-        None,
-        &Workspace::default(),
-    )
-    .unwrap();
+    let s = DesignPoint::new(&m, &p, &pt)
+        .analytic(&[m.model().parameter("k").unwrap()])
+        .unwrap();
     let wd = (500.0 / 3.0 - (0.5f64 / 6.0).powi(2)).sqrt();
     let x_mode = pt
         .modes

@@ -377,7 +377,7 @@ proptest! {
         let p = model.model().nominal();
         let q0 = initial_guess(model.model(), &p, 0.0).map_err(|e| TestCaseError::fail(e.to_string()))?;
         let pt = point(&model, &p, 0.0, &q0, &Options::default()).map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let s = modaltol::sensitivity::analytic(&model, &p, &pt, &[var], None, &Default::default())
+        let s = modaltol::sensitivity::DesignPoint::new(&model, &p, &pt).analytic(&[var])
             .map_err(|e| TestCaseError::fail(e.to_string()))?;
         let d = &s.variables[0].modes[0];
         let exact = [d.d_sum, d.d_product, d.d_damped_frequency];

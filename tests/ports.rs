@@ -16,8 +16,7 @@ use modaltol::mechanics::System;
 use modaltol::mechanics::kinematics::poses;
 use modaltol::mechanics::ports::port_vectors;
 use modaltol::model::Channel;
-use modaltol::program::Workspace;
-use modaltol::sensitivity::{TransferAt, analytic, nominal_transfer};
+use modaltol::sensitivity::{DesignPoint, TransferAt, nominal_transfer};
 
 fn governor_with_ports() -> Compiled {
     Compiled::from_str(&governor_text(), "governor_ports.toml").unwrap_or_else(|e| panic!("{e}"))
@@ -127,8 +126,14 @@ fn same_transfer(model: &Compiled, a: (Channel, Channel), b: (Channel, Channel))
                     "{ha:?} vs {hb:?} at {speed} rad/s, ω = {omega}"
                 );
                 let (sa, sb) = (
-                    analytic(model, &p, &pt, &wrt, Some(ta), &Workspace::default()).unwrap(),
-                    analytic(model, &p, &pt, &wrt, Some(tb), &Workspace::default()).unwrap(),
+                    DesignPoint::new(model, &p, &pt)
+                        .with_transfer(Some(ta))
+                        .analytic(&wrt)
+                        .unwrap(),
+                    DesignPoint::new(model, &p, &pt)
+                        .with_transfer(Some(tb))
+                        .analytic(&wrt)
+                        .unwrap(),
                 );
                 for (x, y) in sa.variables.iter().zip(&sb.variables) {
                     let (dx, dy) = (

@@ -554,7 +554,7 @@ fn governor_with_a_kinked_spring() -> Compiled {
 
 #[test]
 fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_route_serves() {
-    use modaltol::sensitivity::{analytic, finite_difference};
+    use modaltol::sensitivity::DesignPoint;
     let model = governor_with_a_kinked_spring();
     let p = model.model().nominal();
     let speed = 2.0;
@@ -583,8 +583,10 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
         .next_back()
         .unwrap();
     let wrt = model.model().toleranced();
-    let a = analytic(&model, &p1, &pt, &wrt, None, &Workspace::default()).unwrap();
-    let f = finite_difference(&model, &p1, &pt, &wrt, None).unwrap();
+    let a = DesignPoint::new(&model, &p1, &pt).analytic(&wrt).unwrap();
+    let f = DesignPoint::new(&model, &p1, &pt)
+        .finite_difference(&wrt)
+        .unwrap();
     for (x, y) in a.variables.iter().zip(&f.variables) {
         let (dx, dy) = (x.modes[0].d_damped_frequency, y.modes[0].d_damped_frequency);
         assert!((dx - dy).abs() < 1e-4 * (1.0 + dy.abs()), "{dx} vs {dy}");

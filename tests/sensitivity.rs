@@ -4,11 +4,10 @@
 mod common;
 
 use common::pendulum::G;
-use modaltol::program::Workspace;
 
 use common::example;
 use modaltol::sensitivity::{
-    Status, TransferAt, analytic, eigenvalue_derivative, finite_difference, nominal_transfer,
+    DesignPoint, Status, TransferAt, eigenvalue_derivative, nominal_transfer,
 };
 use modaltol::sweep::{Options, Sweep, point};
 use num_dual::Dual64;
@@ -36,15 +35,10 @@ fn pendulum_sensitivities_match_closed_form() {
     for s in 0..=600 {
         let w = s as f64 * 0.01;
         let pt = sweep.step(w).unwrap();
-        let sens = analytic(
-            &model,
-            &model.model().nominal(),
-            &pt,
-            &[l],
-            Some(TransferAt::at_speed(&tf, w)),
-            &Workspace::default(),
-        )
-        .unwrap();
+        let sens = DesignPoint::new(&model, &model.model().nominal(), &pt)
+            .with_transfer(Some(TransferAt::at_speed(&tf, w)))
+            .analytic(&[l])
+            .unwrap();
         let (wd, h, disc) = pendulum_closed_form(Dual64::new(1.0, 1.0), w);
         let v = &sens.variables[0];
         let mode = &v.modes[0];
@@ -78,15 +72,10 @@ fn pendulum_sensitivities_match_closed_form() {
     // synchronous resonance √(3g/4L), nor anywhere on the swung-out branch.
     for w in [resonance, 4.2, 5.0, 6.0] {
         let pt = common::at(&model, w, &Options::default());
-        let sens = analytic(
-            &model,
-            &model.model().nominal(),
-            &pt,
-            &[l],
-            Some(TransferAt::at_speed(&tf, w)),
-            &Workspace::default(),
-        )
-        .unwrap();
+        let sens = DesignPoint::new(&model, &model.model().nominal(), &pt)
+            .with_transfer(Some(TransferAt::at_speed(&tf, w)))
+            .analytic(&[l])
+            .unwrap();
         let dh = sens.variables[0].d_transfer_magnitude.unwrap();
         assert!(dh.abs() < 1e-12, "Ω = {w}: d|H|/dL = {dh}");
     }
@@ -99,15 +88,9 @@ fn overdamped_roots_coalescing_are_flagged_not_differentiated() {
     // Critical damping on the hanging branch: Ω² = 3g/2L − c²/(4I²).
     let w = (1.5 * G - 2.25f64).sqrt();
     let pt = common::at(&model, w, &Options::default());
-    let sens = analytic(
-        &model,
-        &model.model().nominal(),
-        &pt,
-        &[l],
-        None,
-        &Workspace::default(),
-    )
-    .unwrap();
+    let sens = DesignPoint::new(&model, &model.model().nominal(), &pt)
+        .analytic(&[l])
+        .unwrap();
     assert_eq!(sens.variables[0].modes[0].status, Status::NotDifferentiable);
 }
 
@@ -133,8 +116,14 @@ fn automatic_and_finite_differences_agree_for_every_example() {
             let w = from + (to - from) * s as f64 / 19.0;
             let pt = sweep.step(w).unwrap();
             let t = Some(TransferAt::at_speed(&tf, w));
-            let a = analytic(&model, &p, &pt, &wrt, t, &Workspace::default()).unwrap();
-            let f = finite_difference(&model, &p, &pt, &wrt, t).unwrap();
+            let a = DesignPoint::new(&model, &p, &pt)
+                .with_transfer(t)
+                .analytic(&wrt)
+                .unwrap();
+            let f = DesignPoint::new(&model, &p, &pt)
+                .with_transfer(t)
+                .finite_difference(&wrt)
+                .unwrap();
             let hmag = a.transfer_magnitude.unwrap();
             for (va, vf) in a.variables.iter().zip(&f.variables) {
                 let b = p[va.param].abs();
@@ -217,8 +206,10 @@ fn gyroscopic_example_needs_the_left_eigenvector() {
     let p = model.model().nominal();
     let wrt = model.model().toleranced();
     let pt = common::at(&model, 4.0, &Options::default());
-    let f = finite_difference(&model, &p, &pt, &wrt, None).unwrap();
-    let a = analytic(&model, &p, &pt, &wrt, None, &Workspace::default()).unwrap();
+    let f = DesignPoint::new(&model, &p, &pt)
+        .finite_difference(&wrt)
+        .unwrap();
+    let a = DesignPoint::new(&model, &p, &pt).analytic(&wrt).unwrap();
     let mut worst_symmetric = 0.0f64;
     for (k, &b) in wrt.iter().enumerate() {
         // Re-derive M̂', Ĉ', K̂' by central differences to feed both formulas.
@@ -278,7 +269,6 @@ fn gyroscopic_example_needs_the_left_eigenvector() {
 /// of four, the governor's three toleranced ones in one group of three).
 #[test]
 fn variables_sharing_a_pass_get_the_bits_of_passes_of_their_own() {
-    use modaltol::sensitivity::dual_linearizations;
     for file in [
         "governor.toml",
         "spinning_universal_pendulum.toml",
@@ -289,11 +279,13 @@ fn variables_sharing_a_pass_get_the_bits_of_passes_of_their_own() {
         let pt = common::at(&model, 1.3, &Options::default());
         let all: Vec<usize> = (0..p.len()).rev().collect();
         for wrt in [all, model.model().toleranced()] {
-            let together =
-                dual_linearizations(&model, &p, &pt, &wrt, &Workspace::default()).unwrap();
+            let together = DesignPoint::new(&model, &p, &pt)
+                .dual_linearizations(&wrt)
+                .unwrap();
             assert_eq!(together.len(), wrt.len());
             for (shared, &b) in together.iter().zip(&wrt) {
-                let alone = dual_linearizations(&model, &p, &pt, &[b], &Workspace::default())
+                let alone = DesignPoint::new(&model, &p, &pt)
+                    .dual_linearizations(&[b])
                     .unwrap()
                     .remove(0);
                 assert_eq!(shared.param, b);

@@ -15,10 +15,10 @@ use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::Compiled;
 use modaltol::modal::{Smoothness, smoothness};
 use modaltol::output::{Missing, Quantity};
-use modaltol::program::Workspace;
+use modaltol::sensitivity::DesignPoint;
 use modaltol::sweep::{Options, Point, Sweep};
 use modaltol::table::Method;
-use modaltol::tolerance::{LocalModel, local_model, match_modes};
+use modaltol::tolerance::{LocalModel, match_modes};
 use nalgebra::DMatrix;
 
 /// The model text with every mass, inertia, spring, damper and preload multiplied by `factor`
@@ -86,7 +86,9 @@ fn local_models(
             if let Some((r, _)) = reference {
                 pt = match_modes(&r[i], pt);
             }
-            let lm = local_model(model, &p, &pt, &vars, tf, true, &Workspace::default())
+            let lm = DesignPoint::new(model, &p, &pt)
+                .with_model_transfer(tf)
+                .local_model(&vars, true)
                 .expect("derivatives");
             (pt, lm)
         })
@@ -270,16 +272,9 @@ fn a_chain_with_two_dozen_toleranced_variables_has_every_derivative_and_each_mat
             let mut pp = p.clone();
             pp[b] += s * step;
             let q = modaltol::sweep::point(&model, &pp, pt.speed, &pt.equilibrium.q, &opt).unwrap();
-            local_model(
-                &model,
-                &pp,
-                &match_modes(&pt, q),
-                &vars,
-                None,
-                false,
-                &Workspace::default(),
-            )
-            .unwrap()
+            DesignPoint::new(&model, &pp, &match_modes(&pt, q))
+                .local_model(&vars, false)
+                .unwrap()
         };
         let (up, down) = (side(1.0), side(-1.0));
         (0..outs)
@@ -396,16 +391,9 @@ fn a_row_without_a_value_carries_its_reason() {
         let pt = Sweep::new(model, p.clone(), Options::default())
             .step(0.0)
             .unwrap();
-        let lm = local_model(
-            model,
-            &p,
-            &pt,
-            &model.model().toleranced(),
-            None,
-            true,
-            &Workspace::default(),
-        )
-        .unwrap();
+        let lm = DesignPoint::new(model, &p, &pt)
+            .local_model(&model.model().toleranced(), true)
+            .unwrap();
         (pt, lm)
     };
     // m = k = 1, c = 2: λ = −1 twice, ζ = c/(2√(km)) = 1, dζ/dm = −ζ/(2m).

@@ -5,7 +5,6 @@ mod chain;
 mod common;
 
 use common::pendulum::G;
-use modaltol::program::Workspace;
 
 use common::example;
 use modaltol::analyze::{Analysis, AnalyzeOptions, analyze};
@@ -14,10 +13,11 @@ use modaltol::model::{Case, Sampling};
 use modaltol::montecarlo::McOptions;
 use modaltol::output::Missing;
 use modaltol::output::Quantity;
+use modaltol::sensitivity::DesignPoint;
 use modaltol::sweep::{Options, Point, initial_guess, point};
 use modaltol::table::Method;
 use modaltol::table::Row;
-use modaltol::tolerance::{LocalModel, local_model, match_modes};
+use modaltol::tolerance::{LocalModel, match_modes};
 use nalgebra::DMatrix;
 use num_dual::{Dual64, HyperDual64};
 
@@ -123,7 +123,10 @@ fn pendulum_hessians_match_closed_form() {
     let vars = model.model().toleranced();
     let tf = model.model().analysis.transfer.as_ref();
     let check = |w: f64, pt: &Point| {
-        let lm = local_model(&model, &p, pt, &vars, tf, true, &Workspace::default()).unwrap();
+        let lm = DesignPoint::new(&model, &p, pt)
+            .with_model_transfer(tf)
+            .local_model(&vars, true)
+            .unwrap();
         let (wd, h) = closed_form(HyperDual64::new(1.0, 1.0, 1.0, 0.0), w);
         let hwd = lm.hess[0].as_ref().unwrap()[(0, 0)];
         assert!(
@@ -155,7 +158,10 @@ fn pendulum_hessians_match_closed_form() {
 /// code at re-solved perturbed points).
 fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize]) -> LocalModel {
     let tf = model.model().analysis.transfer.as_ref();
-    let mut lm = local_model(model, p, pt, vars, tf, false, &Workspace::default()).unwrap();
+    let mut lm = DesignPoint::new(model, p, pt)
+        .with_model_transfer(tf)
+        .local_model(vars, false)
+        .unwrap();
     let nv = vars.len();
     let opt = Options {
         independent: Some(pt.linear.independent.clone()),
@@ -175,7 +181,10 @@ fn differenced_hessians(model: &Compiled, p: &[f64], pt: &Point, vars: &[usize])
                 pt,
                 point(model, &pp, pt.speed, &pt.equilibrium.q, &opt).unwrap(),
             );
-            local_model(model, &pp, &q, vars, tf, false, &Workspace::default()).unwrap()
+            DesignPoint::new(model, &pp, &q)
+                .with_model_transfer(tf)
+                .local_model(vars, false)
+                .unwrap()
         };
         let (up, down) = (side(1.0), side(-1.0));
         let column = |slot: &mut Result<DMatrix<f64>, Missing>,
@@ -222,7 +231,10 @@ fn check_hessians(file: &str, model: &Compiled, speeds: &[f64]) -> usize {
     let b_min2 = vars.iter().fold(f64::INFINITY, |s, &v| s.min(p[v] * p[v]));
     for &w in speeds {
         let pt = point(model, &p, w, &q0, &Options::default()).unwrap();
-        let exact = local_model(model, &p, &pt, &vars, tf, true, &Workspace::default()).unwrap();
+        let exact = DesignPoint::new(model, &p, &pt)
+            .with_model_transfer(tf)
+            .local_model(&vars, true)
+            .unwrap();
         let fd = differenced_hessians(model, &p, &pt, &vars);
         // Gradients from the second-order passes equal the first-order sensitivities
         // (eigenvalue-derivative formula with left vectors).
@@ -341,7 +353,10 @@ fn a_transfer_zero_by_symmetry_has_zero_derivatives() {
     .unwrap();
     let k = pt.modes.len() * 2; // |H| follows ω_d and ζ of every mode
     for hessian in [false, true] {
-        let lm = local_model(&model, &p, &pt, &vars, tf, hessian, &Workspace::default()).unwrap();
+        let lm = DesignPoint::new(&model, &p, &pt)
+            .with_model_transfer(tf)
+            .local_model(&vars, hessian)
+            .unwrap();
         assert_eq!(lm.value[k], 0.0);
         assert!(
             lm.grad[k].as_ref().unwrap().iter().all(|&g| g == 0.0),

@@ -8,9 +8,8 @@ mod common;
 use modaltol::compiled::Compiled;
 use modaltol::model::Transfer;
 use modaltol::nominal_sweep::NominalSweep;
-use modaltol::program::Workspace;
 use modaltol::report::{self, SweepColumns};
-use modaltol::sensitivity::{self, Derivatives, TransferAt};
+use modaltol::sensitivity::{Derivatives, DesignPoint, TransferAt};
 use modaltol::sweep::Options;
 
 /// Excitation frequencies (rad/s), or orders of the speed: ordinary, near the square root of
@@ -88,15 +87,10 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
             }
             // The sensitivity table at the same excitation.
             let at = TransferAt::at_speed(&tf, speed);
-            if let Ok(s) = sensitivity::sensitivities(
-                &m,
-                &m.model().nominal(),
-                &pt,
-                &wrt,
-                Some(at),
-                Derivatives::Exact,
-                &Workspace::default(),
-            ) {
+            if let Ok(s) = DesignPoint::new(&m, &m.model().nominal(), &pt)
+                .with_transfer(Some(at))
+                .sensitivities(&wrt, Derivatives::Exact)
+            {
                 let why = report::transfer_defect_at(&pt, Some(&at));
                 let header: Vec<String> = report::SENSITIVITY_HEADER
                     .iter()
@@ -115,16 +109,9 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
             }
         }
         // Frequency-response rows over the same frequencies.
-        let rows = sensitivity::frequency_response(
-            &m,
-            &m.model().nominal(),
-            &pt,
-            t.input,
-            t.output,
-            &wrt,
-            excitations.iter().copied(),
-        )
-        .unwrap();
+        let rows = DesignPoint::new(&m, &m.model().nominal(), &pt)
+            .frequency_response((t.input, t.output), &wrt, excitations.iter().copied())
+            .unwrap();
         let header = report::frf_header(m.model(), &wrt);
         for row in report::frf_rows(&pt.linear, &rows) {
             resonances += check_row(&header, &row, "magnitude", &format!("{name}: frf")) as usize;
@@ -160,16 +147,9 @@ fn a_resonance_is_one_whatever_the_rounding_of_its_frequency() {
         down = down.next_down();
         near.extend([up, down]);
     }
-    let rows = sensitivity::frequency_response(
-        &undamped,
-        &undamped.model().nominal(),
-        &pt,
-        t.input,
-        t.output,
-        &wrt,
-        near.iter().copied(),
-    )
-    .unwrap();
+    let rows = DesignPoint::new(&undamped, &undamped.model().nominal(), &pt)
+        .frequency_response((t.input, t.output), &wrt, near.iter().copied())
+        .unwrap();
     let header = report::frf_header(undamped.model(), &wrt);
     for row in report::frf_rows(&pt.linear, &rows) {
         assert!(

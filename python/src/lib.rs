@@ -18,12 +18,12 @@ use modaltol::model::{Model, Sampling, SpeedRange, Transfer};
 use modaltol::montecarlo::McOptions;
 use modaltol::nominal_sweep::NominalSweep;
 use modaltol::plots::{Display, FrequencyUnit};
-use modaltol::program::{Tier, Workspace};
+use modaltol::program::Tier;
 use modaltol::report::{self, SweepColumns};
 use modaltol::request::{
     PointRequest, PointRequestError, Request, RequestError, Resolved, Setting, Speeds,
 };
-use modaltol::sensitivity::{self, Derivatives, TransferAt};
+use modaltol::sensitivity::{Derivatives, DesignPoint, TransferAt};
 use modaltol::settings::{self, ThreadsError};
 use modaltol::shard::{RunSettings, ShardFile};
 use modaltol::sweep::Options;
@@ -679,16 +679,12 @@ impl NativeModel {
             let pt = self.point(speed, &Options::single())?;
             let p = self.model.model().nominal();
             let at = tf.map(|t| TransferAt::at_speed(&t, speed));
-            let s = sensitivity::sensitivities(
-                &self.model,
-                &p,
-                &pt,
-                &wrt,
-                at,
-                how,
-                &Workspace::default(),
-            )
-            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
+            let s = DesignPoint::new(&self.model, &p, &pt)
+                .with_transfer(at)
+                .sensitivities(&wrt, how)
+                .map_err(|e| {
+                    SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}"))
+                })?;
             let why = report::transfer_defect_at(&pt, at.as_ref());
             Ok(report::sensitivity_rows(self.m(), &pt, &s, why))
         })?;
@@ -725,16 +721,11 @@ impl NativeModel {
             let p = self.model.model().nominal();
             // Stops at the frequency after a Ctrl-C (`interruptible` then raises).
             let freqs = freqs.into_iter().take_while(|_| !cancel.is_cancelled());
-            let r = sensitivity::frequency_response(
-                &self.model,
-                &p,
-                &pt,
-                tf.input,
-                tf.output,
-                &wrt,
-                freqs,
-            )
-            .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
+            let r = DesignPoint::new(&self.model, &p, &pt)
+                .frequency_response((tf.input, tf.output), &wrt, freqs)
+                .map_err(|e| {
+                    SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}"))
+                })?;
             Ok(report::frf_rows(&pt.linear, &r))
         })??;
         table(py, &header, &rows)

@@ -51,7 +51,7 @@ use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
 use crate::program::{Tier, Workspace};
-use crate::sensitivity::TransferAt;
+use crate::sensitivity::{DesignPoint, TransferAt};
 use crate::sweep::{Point, PointError};
 use nalgebra::{Complex, DMatrix};
 use num_dual::{Dual2_64, HyperDual64};
@@ -396,131 +396,128 @@ fn put(
     }
 }
 
-/// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
-/// discriminant with respect to the parameters `vars`, at the nominal point `pt` of parameters
-/// `p` (see the module documentation for the passes).
-pub fn hessians(
-    model: &Compiled,
-    p: &[f64],
-    pt: &Point,
-    vars: &[usize],
-    outs: &[Output],
-    tf: Option<TransferAt>,
-    workspace: &Workspace,
-) -> Result<Hessians, PointError> {
-    let nv = vars.len();
-    let nm = pt.modes.len();
-    // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
-    // cost the chord steps accuracy); the caller's workspace for every pass.
-    let x = Expansion {
-        model,
-        lu: pt.equilibrium.factor(),
-        pt,
-        workspace,
-    };
-    let smooth = smoothness(&pt.modes);
-    let shared = (smooth.as_slice(), outs, tf);
-    // The linearisation over jets is needed beyond the roots for |H| and for one degree of
-    // freedom's invariants.
-    let whole = tf.is_some() || pt.linear.m.nrows() == 1;
-    // Per variable: the matrices' first and second derivatives along it, and the whole
-    // linearisation where more than the roots reads it (kept only then: at 160 variables of an
-    // 80-segment chain the linearisations would be most of the memory).
-    let mut singles: Vec<Linearization<Dual2_64>> = Vec::new();
-    let mut derivatives: Vec<[DMatrix<f64>; 6]> = Vec::with_capacity(nv);
-    for a in 0..nv {
-        let s = x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
-            f64::from(u8::from(a == b && k == 0))
-        }))?;
-        derivatives.push([
-            part(&s.m, 0),
-            part(&s.c, 0),
-            part(&s.k, 0),
-            part(&s.m, 1),
-            part(&s.c, 1),
-            part(&s.k, 1),
-        ]);
-        if whole {
-            singles.push(s);
-        }
-    }
-    let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
-    let along: Vec<Along<'_>> = derivatives
-        .iter()
-        .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
-        .collect();
-    let roots = root_terms(pt, &smooth, &along);
-    let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
-    let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
-    let mut hess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
-    let mut dhess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); nm];
-    // The two roots of mode `i` as jets, their parts given by `parts(terms)`.
-    type Parts = (C64, Vec<C64>);
-    let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| {
-        let (r, q) = roots[i].as_ref().map_err(Clone::clone)?;
-        let first: Parts = (r.lambda(), parts(r));
-        let second: Parts = match q {
-            Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
-            Partner::Own(q) => (q.lambda(), parts(q)),
+impl DesignPoint<'_> {
+    /// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
+    /// discriminant with respect to the parameters `vars`, at the design point (see the module documentation for the passes).
+    pub fn hessians(&self, vars: &[usize], outs: &[Output]) -> Result<Hessians, PointError> {
+        let (model, p, pt, tf) = (self.model, self.p, self.point, self.transfer);
+        let lent = self.workspace();
+        let workspace: &Workspace = &lent;
+        let nv = vars.len();
+        let nm = pt.modes.len();
+        // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
+        // cost the chord steps accuracy); the caller's workspace for every pass.
+        let x = Expansion {
+            model,
+            lu: pt.equilibrium.factor(),
+            pt,
+            workspace,
         };
-        Ok::<_, Missing>((first, second))
-    };
-    for a in 0..nv {
-        let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then(|| &singles[a]), |i| {
-            pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
-                .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
-        });
-        for (jets, g, h) in [(&o, &mut grad, &mut hess), (&d, &mut dgrad, &mut dhess)] {
-            for (k, v) in jets.iter().enumerate() {
-                let (first, second) = (v.clone().map(|x| x.v1), v.clone().map(|x| x.v2));
-                put(Some(&mut g[k]), &mut h[k], (a, a), first, second);
+        let smooth = smoothness(&pt.modes);
+        let shared = (smooth.as_slice(), outs, tf);
+        // The linearisation over jets is needed beyond the roots for |H| and for one degree of
+        // freedom's invariants.
+        let whole = tf.is_some() || pt.linear.m.nrows() == 1;
+        // Per variable: the matrices' first and second derivatives along it, and the whole
+        // linearisation where more than the roots reads it (kept only then: at 160 variables of an
+        // 80-segment chain the linearisations would be most of the memory).
+        let mut singles: Vec<Linearization<Dual2_64>> = Vec::new();
+        let mut derivatives: Vec<[DMatrix<f64>; 6]> = Vec::with_capacity(nv);
+        for a in 0..nv {
+            let s = x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
+                f64::from(u8::from(a == b && k == 0))
+            }))?;
+            derivatives.push([
+                part(&s.m, 0),
+                part(&s.c, 0),
+                part(&s.k, 0),
+                part(&s.m, 1),
+                part(&s.c, 1),
+                part(&s.k, 1),
+            ]);
+            if whole {
+                singles.push(s);
             }
         }
-        for b in a + 1..nv {
-            // The matrices' mixed derivatives: their own pass where they may not vanish.
-            let mixed: Option<Linearization<Hd>> = if mixed_rows[a] && mixed_rows[b] {
-                Some(x.linearization(&seed::<Hd>(p, vars, |c, k| match k {
-                    0 => f64::from(u8::from(c == a)),
-                    1 => f64::from(u8::from(c == b)),
-                    _ => 0.0,
-                }))?)
-            } else {
-                None
+        let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
+        let along: Vec<Along<'_>> = derivatives
+            .iter()
+            .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
+            .collect();
+        let roots = root_terms(pt, &smooth, &along);
+        let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
+        let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
+        let mut hess: Vec<Result<DMatrix<f64>, Missing>> =
+            vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
+        let mut dhess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); nm];
+        // The two roots of mode `i` as jets, their parts given by `parts(terms)`.
+        type Parts = (C64, Vec<C64>);
+        let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| {
+            let (r, q) = roots[i].as_ref().map_err(Clone::clone)?;
+            let first: Parts = (r.lambda(), parts(r));
+            let second: Parts = match q {
+                Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
+                Partner::Own(q) => (q.lambda(), parts(q)),
             };
-            let second = mixed
-                .as_ref()
-                .map(|l| [part(&l.m, 2), part(&l.c, 2), part(&l.k, 2)]);
-            let second = second.as_ref().map(|s| (&s[0], &s[1], &s[2]));
-            let lin = whole.then(|| {
-                let joined = singles[a].zip(&singles[b], |u, v| Hd::new(u.re, u.v1, v.v1, 0.0));
-                match &mixed {
-                    Some(m) => joined.zip(m, |u, v| Hd::new(u.re, u.eps1, u.eps2, v.eps1eps2)),
-                    None => joined,
-                }
+            Ok::<_, Missing>((first, second))
+        };
+        for a in 0..nv {
+            let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then(|| &singles[a]), |i| {
+                pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
+                    .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
             });
-            let (o, d) = outputs_at::<Hd>(pt, shared, lin.as_ref(), |i| {
-                pair_of(i, &|t| {
-                    vec![t.first[a], t.first[b], t.mixed((a, b), second)]
-                })
-                .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
-            });
-            for (jets, h) in [(&o, &mut hess), (&d, &mut dhess)] {
+            for (jets, g, h) in [(&o, &mut grad, &mut hess), (&d, &mut dgrad, &mut dhess)] {
                 for (k, v) in jets.iter().enumerate() {
-                    put(
-                        None,
-                        &mut h[k],
-                        (a, b),
-                        Ok(0.0),
-                        v.clone().map(|x| x.eps1eps2),
-                    );
+                    let (first, second) = (v.clone().map(|x| x.v1), v.clone().map(|x| x.v2));
+                    put(Some(&mut g[k]), &mut h[k], (a, a), first, second);
+                }
+            }
+            for b in a + 1..nv {
+                // The matrices' mixed derivatives: their own pass where they may not vanish.
+                let mixed: Option<Linearization<Hd>> = if mixed_rows[a] && mixed_rows[b] {
+                    Some(x.linearization(&seed::<Hd>(p, vars, |c, k| match k {
+                        0 => f64::from(u8::from(c == a)),
+                        1 => f64::from(u8::from(c == b)),
+                        _ => 0.0,
+                    }))?)
+                } else {
+                    None
+                };
+                let second = mixed
+                    .as_ref()
+                    .map(|l| [part(&l.m, 2), part(&l.c, 2), part(&l.k, 2)]);
+                let second = second.as_ref().map(|s| (&s[0], &s[1], &s[2]));
+                let lin = whole.then(|| {
+                    let joined = singles[a].zip(&singles[b], |u, v| Hd::new(u.re, u.v1, v.v1, 0.0));
+                    match &mixed {
+                        Some(m) => joined.zip(m, |u, v| Hd::new(u.re, u.eps1, u.eps2, v.eps1eps2)),
+                        None => joined,
+                    }
+                });
+                let (o, d) = outputs_at::<Hd>(pt, shared, lin.as_ref(), |i| {
+                    pair_of(i, &|t| {
+                        vec![t.first[a], t.first[b], t.mixed((a, b), second)]
+                    })
+                    .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
+                });
+                for (jets, h) in [(&o, &mut hess), (&d, &mut dhess)] {
+                    for (k, v) in jets.iter().enumerate() {
+                        put(
+                            None,
+                            &mut h[k],
+                            (a, b),
+                            Ok(0.0),
+                            v.clone().map(|x| x.eps1eps2),
+                        );
+                    }
                 }
             }
         }
+        Ok(Hessians {
+            gradients: grad,
+            outputs: hess,
+            discriminant_gradients: dgrad,
+            discriminant: dhess,
+        })
     }
-    Ok(Hessians {
-        gradients: grad,
-        outputs: hess,
-        discriminant_gradients: dgrad,
-        discriminant: dhess,
-    })
 }

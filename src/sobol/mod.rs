@@ -34,13 +34,14 @@
 //! Variables enter as independent standard normals through the Monte Carlo's map (uniform
 //! variables through `Φ`), so a design of `A` is the design a Monte Carlo would sweep there.
 
+use crate::margins;
 use crate::model::Distribution;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Tabulate, Termination};
-use crate::margins;
 use crate::sampling::{DesignMap, sample_sweep};
+use crate::sensitivity::DesignPoint;
 use crate::table::{SobolIndex, Tables, Target};
-use crate::tolerance::{Spread, local_model, value};
+use crate::tolerance::{Spread, value};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -220,16 +221,9 @@ fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -
         |i, pts| {
             let tf = study.transfer_at(i);
             let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            margins::margins_at(
-                reqs,
-                study.speeds[i],
-                at,
-                tf,
-                margins::covers,
-                |r, m| {
-                    v[base + r] = v[base + r].min(m);
-                },
-            );
+            margins::margins_at(reqs, study.speeds[i], at, tf, margins::covers, |r, m| {
+                v[base + r] = v[base + r].min(m);
+            });
             if let Some((_, pt, _)) = pts {
                 for (o, out) in outs.iter().enumerate() {
                     v[i * outs.len() + o] = value(pt, out, tf).unwrap_or(f64::NAN);
@@ -405,15 +399,11 @@ fn derivative_bounds(
                         (tier, ws),
                         |i, pts| {
                             let Some((_, pt, _)) = pts else { return };
-                            let Ok(lm) = local_model(
-                                study.model,
-                                &p,
-                                pt,
-                                &study.vars,
-                                transfer.as_ref(),
-                                false,
-                                ws2,
-                            ) else {
+                            let Ok(lm) = DesignPoint::new(study.model, &p, pt)
+                                .with_model_transfer(transfer.as_ref())
+                                .with_workspace(ws2)
+                                .local_model(&study.vars, false)
+                            else {
                                 return;
                             };
                             for o in 0..outs.min(lm.value.len()) {

@@ -6,7 +6,7 @@ use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
 use modaltol::model::SpeedRange;
 use modaltol::report;
-use modaltol::sensitivity;
+use modaltol::sensitivity::DesignPoint;
 use modaltol::sweep::Options;
 use std::io::Write;
 use std::path::PathBuf;
@@ -76,7 +76,8 @@ pub(crate) fn frf_command(args: FrfArgs, set: &[(String, f64)], cancel: &Cancel)
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     // Stops at the frequency after a signal.
     let frequencies = range.speeds().take_while(|_| !cancel.is_cancelled());
-    let rows = sensitivity::frequency_response(&m, p, &pt, tf.input, tf.output, &wrt, frequencies)
+    let rows = DesignPoint::new(&m, p, &pt)
+        .frequency_response((tf.input, tf.output), &wrt, frequencies)
         .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     stop_if_cancelled(cancel, &file)?;
     csv.write_record(report::frf_header(m.model(), &wrt))?;

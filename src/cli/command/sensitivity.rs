@@ -4,9 +4,8 @@ use crate::cli::*;
 use anyhow::{Context, Result};
 use modaltol::cancel::Cancel;
 use modaltol::files::Inputs;
-use modaltol::program::Workspace;
 use modaltol::report;
-use modaltol::sensitivity::{self, TransferAt};
+use modaltol::sensitivity::{DesignPoint, TransferAt};
 use modaltol::sweep::Options;
 use std::io::Write;
 
@@ -38,16 +37,10 @@ pub(crate) fn sensitivity_command(
         .solve(&m, &Options::single())
         .with_context(|| format!("speed {speed:?} rad/s"))?;
     let at = tf.map(|t| TransferAt::at_speed(&t, speed));
-    let s = sensitivity::sensitivities(
-        &m,
-        p,
-        &pt,
-        &wrt,
-        at,
-        how(derivatives),
-        &Workspace::default(),
-    )
-    .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
+    let s = DesignPoint::new(&m, p, &pt)
+        .with_transfer(at)
+        .sensitivities(&wrt, how(derivatives))
+        .with_context(|| format!("sensitivities at {speed:?} rad/s"))?;
     let why = report::transfer_defect_at(&pt, at.as_ref());
     stop_if_cancelled(cancel, &output)?;
     let method = if derivatives == Derivatives::Ad {
