@@ -15,7 +15,7 @@
 
 use crate::model::Requirement;
 use crate::model::judged::same_speed;
-use crate::pair;
+use crate::pair::{self, Carriers};
 use crate::requirements::{Reading, Reads};
 use crate::sensitivity::TransferAt;
 use crate::sweep::Point;
@@ -30,8 +30,7 @@ pub struct State<'a> {
     /// The speed, rad/s.
     pub speed: f64,
     /// `s, p` of every mode, then |H| (NaN where it has no value): see [`carriers`].
-    pub carriers: &'a [f64],
-    pub modes: usize,
+    pub carriers: Carriers<'a>,
     /// Is the design on the nominal design's equilibrium branch here?
     pub same_branch: bool,
 }
@@ -39,20 +38,23 @@ pub struct State<'a> {
 /// The carriers of a point: `s = λ₁ + λ₂` and `p = λ₁λ₂` of every mode, then |H| at `tf`
 /// (0 without a transfer function, NaN where |H| has no value).
 pub fn carriers(pt: &Point, tf: Option<TransferAt>) -> Vec<f64> {
-    let mut c = Vec::with_capacity(2 * pt.modes.len() + 1);
-    for mode in &pt.modes {
-        let (a, b) = (mode.root.lambda, mode.partner.lambda);
-        c.push((a + b).re);
-        c.push((a * b).re);
-    }
-    c.push(match tf {
+    let mut c = vec![0.0; Carriers::width(pt.modes.len())];
+    write_carriers(pt, tf, &mut c);
+    c
+}
+
+/// Writes the carriers of a point into `out` (of [`Carriers::width`] values): see
+/// [`carriers`].
+pub fn write_carriers(pt: &Point, tf: Option<TransferAt>, out: &mut [f64]) {
+    let h = match tf {
         Some(t) => crate::sensitivity::nominal_transfer(pt, &t)
             .map(|h| h.magnitude())
             .filter(|h| h.is_finite())
             .unwrap_or(f64::NAN),
         None => 0.0,
-    });
-    c
+    };
+    let roots = pt.modes.iter().map(|m| (m.root.lambda, m.partner.lambda));
+    Carriers::write(roots, h, out);
 }
 
 /// Every requirement's margin at one speed of one design, given to `put(requirement, margin)`
@@ -77,8 +79,7 @@ pub fn margins_at(
             let c = carriers(pt, tf);
             let state = State {
                 speed,
-                carriers: &c,
-                modes: pt.modes.len(),
+                carriers: Carriers::new(&c),
                 same_branch,
             };
             covering().for_each(|(k, r)| put(k, margin(r, &state)));
@@ -119,20 +120,22 @@ pub fn margin(req: &Requirement, st: &State) -> f64 {
     let m = match req.kind.reads() {
         Reads::Branch => req.kind.margin(st.speed, Reading::Branch(st.same_branch)),
         Reads::Growth => {
-            let g = (0..st.modes)
-                .map(|m| growth(c[2 * m], c[2 * m + 1]))
+            let g = c
+                .pairs()
+                .map(|(s, p)| growth(s, p))
                 .fold(f64::NEG_INFINITY, f64::max);
             req.kind.margin(st.speed, Reading::Growth(g))
         }
-        Reads::Transfer => req
-            .kind
-            .margin(st.speed, Reading::Transfer(c[2 * st.modes])),
+        Reads::Transfer => req.kind.margin(st.speed, Reading::Transfer(c.transfer())),
         Reads::Mode => {
-            let of = |m: usize| mode_margin(req, st.speed, c[2 * m], c[2 * m + 1]);
+            let of = |m: usize| {
+                let (s, p) = c.pair(m);
+                mode_margin(req, st.speed, s, p)
+            };
             match req.mode {
                 Some(m) => of(m),
                 // The worst mode where the quantity has a value (a rigid-body mode has no ζ).
-                None => (0..st.modes)
+                None => (0..c.modes())
                     .map(of)
                     .filter(|v| !v.is_nan())
                     .fold(f64::NAN, |a, b| if a.is_nan() { b } else { a.min(b) }),
@@ -283,8 +286,7 @@ mod tests {
         fn st(c: &[f64]) -> State<'_> {
             State {
                 speed: 1.0,
-                carriers: c,
-                modes: 1,
+                carriers: Carriers::new(c),
                 same_branch: true,
             }
         }

@@ -11,8 +11,75 @@
 //! `D > 0` for an underdamped pair (`λ = s/2 ± j√D`), `D ≤ 0` for an overdamped one. The
 //! invariants are smooth where the roots are not (at a coalescence), which is why the
 //! quadrature interpolates them and the Taylor methods differentiate them.
+//!
+//! A design's state at one speed, as the quadrature interpolates it and the requirements read
+//! it, is its carriers: `s, p` of every mode, then |H| ([`Carriers`]).
 
 use crate::real::Real;
+use nalgebra::Complex;
+
+/// A design's carriers at one speed, `[s₀, p₀, s₁, p₁, …, |H|]`: each mode's pair invariants
+/// `s = λ₁ + λ₂` and `p = λ₁λ₂`, then |H| (0 without a transfer function, NaN where |H| has no
+/// value): what the quadrature interpolates between nodes and the requirements read. The one
+/// place their layout is known; every reader goes through this view.
+#[derive(Debug, Clone, Copy)]
+pub struct Carriers<'a>(&'a [f64]);
+
+impl<'a> Carriers<'a> {
+    /// The number of carriers of a design with `modes` modes.
+    pub const fn width(modes: usize) -> usize {
+        2 * modes + 1
+    }
+
+    /// The view of `c` (of [`Carriers::width`] values).
+    pub fn new(c: &'a [f64]) -> Self {
+        debug_assert!(c.len() % 2 == 1, "carriers are two per mode and |H|");
+        Carriers(c)
+    }
+
+    /// The number of modes.
+    pub fn modes(self) -> usize {
+        self.0.len() / 2
+    }
+
+    /// `s = λ₁ + λ₂` and `p = λ₁λ₂` of mode `m`.
+    pub fn pair(self, m: usize) -> (f64, f64) {
+        (self.0[2 * m], self.0[2 * m + 1])
+    }
+
+    /// `p = λ₁λ₂` of mode `m`.
+    pub fn product(self, m: usize) -> f64 {
+        self.0[2 * m + 1]
+    }
+
+    /// |H| (0 without a transfer function, NaN where it has no value).
+    pub fn transfer(self) -> f64 {
+        self.0[self.0.len() - 1]
+    }
+
+    /// The pairs `(s, p)` of every mode, in order.
+    pub fn pairs(self) -> impl Iterator<Item = (f64, f64)> + 'a {
+        self.0[..self.0.len() - 1]
+            .chunks_exact(2)
+            .map(|c| (c[0], c[1]))
+    }
+
+    /// Writes into `out` (of [`Carriers::width`] values) the carriers of the modes whose roots
+    /// are `roots` (each mode's root and its partner) and of |H| `transfer`.
+    pub fn write(
+        roots: impl Iterator<Item = (Complex<f64>, Complex<f64>)>,
+        transfer: f64,
+        out: &mut [f64],
+    ) {
+        let mut n = 0;
+        for (m, (a, b)) in roots.enumerate() {
+            out[2 * m] = (a + b).re;
+            out[2 * m + 1] = (a * b).re;
+            n = m + 1;
+        }
+        out[2 * n] = transfer;
+    }
+}
 
 /// `ω_n = √|p|`.
 pub fn natural_frequency<S: Real>(p: S) -> S {

@@ -30,9 +30,8 @@ use crate::modal::ModeClass;
 use crate::model::Sampling;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
-use crate::sampling::sample_sweep;
 use crate::table::McStat;
-use crate::tolerance::{Spread, value};
+use crate::tolerance::Spread;
 use rayon::prelude::*;
 
 /// Monte Carlo settings.
@@ -74,41 +73,33 @@ fn run_sample(study: &Study, p: Vec<f64>, run: (Tier, &Workspace)) -> SampleResu
     let reqs = &study.model.model().requirements;
     let mut margins = vec![f64::INFINITY; study.speeds.len() * reqs.len()];
     let mut out = Vec::with_capacity(study.speeds.len() * outs.len());
-    sample_sweep(
-        study.model,
-        p,
-        &study.speeds,
-        &study.nominal,
-        run,
-        |i, pts| {
-            let tf = study.transfer_at(i);
-            let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            margins::margins_at(reqs, study.speeds[i], at, tf, margins::reaches, |r, m| {
-                margins[i * reqs.len() + r] = m;
-            });
-            let Some((nom, pt, switches)) = pts else {
-                out.extend(std::iter::repeat_n(
-                    (f64::NAN, Events::default()),
-                    outs.len(),
-                ));
-                return;
+    study.sweep_design(p, run, |i, at| {
+        study.margins(i, at, margins::reaches, |r, m| {
+            margins[i * reqs.len() + r] = m;
+        });
+        let Some(at) = at else {
+            out.extend(std::iter::repeat_n(
+                (f64::NAN, Events::default()),
+                outs.len(),
+            ));
+            return;
+        };
+        let (nom, pt) = (at.nominal, at.point);
+        let unstable = !pt.stable();
+        let other_branch = !at.same_branch;
+        out.extend(outs.iter().map(|o| {
+            let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
+            let events = Events {
+                class_changed: o
+                    .mode
+                    .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
+                overdamped: class == Some(ModeClass::Overdamped),
+                unstable,
+                other_branch,
             };
-            let unstable = !pt.stable();
-            let other_branch = switches != study.branches[i];
-            out.extend(outs.iter().map(|o| {
-                let class = o.mode.and_then(|m| pt.modes.get(m)).map(|x| x.class);
-                let events = Events {
-                    class_changed: o
-                        .mode
-                        .is_some_and(|m| class != nom.modes.get(m).map(|x| x.class)),
-                    overdamped: class == Some(ModeClass::Overdamped),
-                    unstable,
-                    other_branch,
-                };
-                (value(pt, o, tf).unwrap_or(f64::NAN), events)
-            }));
-        },
-    );
+            (at.value(o), events)
+        }));
+    });
     (out, margins)
 }
 

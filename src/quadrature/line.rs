@@ -7,7 +7,7 @@ use super::control::OnLine;
 use super::roots::{root_in, roots_in};
 use super::rules::grid;
 use crate::output::{Output, Quantity};
-use crate::pair;
+use crate::pair::{self, Carriers};
 use crate::tolerance::sigma_of;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -249,14 +249,14 @@ impl Context<'_> {
             .map(|m| {
                 [left, right]
                     .iter()
-                    .all(|st| st.rows.iter().all(|r| r[2 * m + 1] == 0.0))
+                    .all(|st| st.rows.iter().all(|r| Carriers::new(r).product(m) == 0.0))
             })
             .collect();
         let mut g = |st: &Stencil, t: f64| {
             st.eval(t, &mut c);
             (0..self.modes)
                 .filter(|&m| !rigid[m])
-                .map(|m| c[2 * m + 1])
+                .map(|m| Carriers::new(&c).product(m))
                 .product::<f64>()
         };
         let roots: Vec<f64> = [left, right]
@@ -292,7 +292,7 @@ impl Context<'_> {
             for f in 0..3 {
                 let mut h = |t: f64| {
                     st.eval(t, &mut c);
-                    let (s, p) = (c[2 * m], c[2 * m + 1]);
+                    let (s, p) = Carriers::new(&c).pair(m);
                     match f {
                         0 => pair::discriminant(s, p),
                         1 => p,
@@ -313,7 +313,8 @@ impl Context<'_> {
             .map(|m| {
                 st.rows
                     .iter()
-                    .any(|r| growth(r[2 * m], r[2 * m + 1]) > 0.0 || r[2 * m + 1] < 0.0)
+                    .map(|r| Carriers::new(r).pair(m))
+                    .any(|(s, p)| growth(s, p) > 0.0 || p < 0.0)
             })
             .collect();
         for seg in cuts.windows(2) {
@@ -324,14 +325,16 @@ impl Context<'_> {
             let len = x1 - x0;
             // Character on the sub-piece (constant there): from its midpoint.
             st.eval(0.5 * (x0 + x1), &mut c);
-            let unstable = (0..modes).any(|m| {
-                may_be_unstable[m] && (growth(c[2 * m], c[2 * m + 1]) > 0.0 || c[2 * m + 1] < 0.0)
-            });
+            let at = Carriers::new(&c);
+            let unstable = at
+                .pairs()
+                .zip(&may_be_unstable)
+                .any(|((s, p), &may)| may && (growth(s, p) > 0.0 || p < 0.0));
             // Overdamped: two real roots of one sign, both negative (`p > 0`); a rigid-body
             // mode (a zero root, `p = 0` exactly) is neither overdamped nor unstable.
             let overdamped: Vec<bool> = (0..modes)
                 .map(|m| {
-                    let (s, p) = (c[2 * m], c[2 * m + 1]);
+                    let (s, p) = at.pair(m);
                     pair::discriminant(s, p) <= 0.0 && p > 0.0 && growth(s, p) <= 0.0
                 })
                 .collect();
@@ -366,7 +369,7 @@ impl Context<'_> {
                 }
                 st.eval(t, &mut c);
                 for (o, out) in self.outs.iter().enumerate() {
-                    let v = carrier_value(out, &c, modes);
+                    let v = carrier_value(out, Carriers::new(&c));
                     let q = control[o].map_or(0.0, |e| e.at(t));
                     if !v.is_finite() {
                         sums.s1[o] -= wt * q;
@@ -397,13 +400,19 @@ fn growth(s: f64, p: f64) -> f64 {
 }
 
 /// An output from the carriers: ω_d = √max(0, p − s²/4), ζ = −s/(2√|p|), |H| (not below 0).
-fn carrier_value(o: &Output, c: &[f64], modes: usize) -> f64 {
+fn carrier_value(o: &Output, c: Carriers) -> f64 {
     match (o.quantity, o.mode) {
-        (Quantity::DampedFrequency, Some(m)) => pair::damped_frequency(c[2 * m], c[2 * m + 1]),
-        (Quantity::DampingRatio, Some(m)) => pair::damping_ratio(c[2 * m], c[2 * m + 1]),
+        (Quantity::DampedFrequency, Some(m)) => {
+            let (s, p) = c.pair(m);
+            pair::damped_frequency(s, p)
+        }
+        (Quantity::DampingRatio, Some(m)) => {
+            let (s, p) = c.pair(m);
+            pair::damping_ratio(s, p)
+        }
         // `f64::max` would turn a node's missing |H| (NaN: a resonance there) into 0.
-        (Quantity::TransferMagnitude, _) if c[2 * modes].is_nan() => f64::NAN,
-        (Quantity::TransferMagnitude, _) => c[2 * modes].max(0.0),
+        (Quantity::TransferMagnitude, _) if c.transfer().is_nan() => f64::NAN,
+        (Quantity::TransferMagnitude, _) => c.transfer().max(0.0),
         _ => f64::NAN,
     }
 }

@@ -72,9 +72,10 @@ mod table;
 mod yields;
 
 use crate::output::{Output, Quantity};
+use crate::pair::Carriers;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
-use crate::sampling::{DesignMap, sample_sweep};
+use crate::sampling::DesignMap;
 use crate::sweep::Point;
 use crate::table::Event;
 use crate::tolerance::{Spread, value};
@@ -247,7 +248,7 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
         outs: &study.outputs,
         modes,
     };
-    let mut store = NodeData::new(rule, 2 * modes + 1, study.speeds.len());
+    let mut store = NodeData::new(rule, Carriers::width(modes), study.speeds.len());
     let mut count = Count {
         swept: 0,
         budget: rule.budget(),
@@ -362,7 +363,6 @@ struct Nodes<'a> {
     control: Option<Control<'a>>,
     /// Carriers per speed: `s, p` of every mode, then |H|.
     width: usize,
-    modes: usize,
 }
 
 impl<'a> Nodes<'a> {
@@ -393,8 +393,7 @@ impl<'a> Nodes<'a> {
             basis,
             rule,
             control,
-            width: 2 * modes + 1,
-            modes,
+            width: Carriers::width(modes),
         }
     }
 
@@ -406,43 +405,26 @@ impl<'a> Nodes<'a> {
         self.map.parameters(z.as_slice(), &u)
     }
 
-    /// Sweeps the design `params` across the speeds as a sample is ([`sample_sweep`]) and
+    /// Sweeps the design `params` across the speeds as a sample is ([`Study::sweep_design`]) and
     /// keeps its carriers and branch counts.
     fn sweep(&self, params: Vec<f64>, run: (Tier, &Workspace)) -> Sweep {
-        let (study, width, modes) = (self.study, self.width, self.modes);
+        let (study, width) = (self.study, self.width);
         let speeds = &study.speeds;
         let mut branch = vec![None; speeds.len()];
         let mut carriers = vec![f64::NAN; speeds.len() * width];
-        sample_sweep(
-            study.model,
-            params,
-            speeds,
-            &study.nominal,
-            run,
-            |i, pts| {
-                let Some((_, pt, switches)) = pts else { return };
-                let c = &mut carriers[i * width..(i + 1) * width];
-                for (m, mode) in pt.modes.iter().enumerate() {
-                    let (a, b) = (mode.root.lambda, mode.partner.lambda);
-                    c[2 * m] = (a + b).re;
-                    c[2 * m + 1] = (a * b).re;
-                }
-                if let Some(tf) = study.transfer_at(i) {
-                    let o = Output {
-                        quantity: Quantity::TransferMagnitude,
-                        mode: None,
-                    };
-                    c[2 * modes] = value(pt, &o, Some(tf)).unwrap_or(f64::NAN);
-                } else {
-                    c[2 * modes] = 0.0;
-                }
-                // The node holds where its modes do: an |H| without a value (a resonance at this
-                // node) leaves |H| alone without one, not the modes' outputs.
-                if c[..2 * modes].iter().all(|v| v.is_finite()) {
-                    branch[i] = Some(switches as u32);
-                }
-            },
-        );
+        study.sweep_design(params, run, |i, at| {
+            let Some(at) = at else { return };
+            let c = &mut carriers[i * width..(i + 1) * width];
+            at.write_carriers(c);
+            // The node holds where its modes do: an |H| without a value (a resonance at this
+            // node) leaves |H| alone without one, not the modes' outputs.
+            if Carriers::new(c)
+                .pairs()
+                .all(|(s, p)| s.is_finite() && p.is_finite())
+            {
+                branch[i] = Some(at.switches as u32);
+            }
+        });
         Sweep { branch, carriers }
     }
 

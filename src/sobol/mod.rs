@@ -38,10 +38,10 @@ use crate::margins;
 use crate::model::Distribution;
 use crate::program::{Tier, Workspace};
 use crate::propagate::{Estimate, Propagation, Run, Study, Tabulate, Termination};
-use crate::sampling::{DesignMap, sample_sweep};
+use crate::sampling::DesignMap;
 use crate::sensitivity::DesignPoint;
 use crate::table::{SobolIndex, Tables, Target};
-use crate::tolerance::{Spread, value};
+use crate::tolerance::Spread;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -206,31 +206,21 @@ fn indices(
 /// requirement's worst margin over its range (NaN where the design fails it without one).
 fn evaluate(study: &Study, p: Vec<f64>, run: (Tier, &Workspace), width: usize) -> Vec<f64> {
     let outs = &study.outputs;
-    let reqs = &study.model.model().requirements;
     let base = study.speeds.len() * outs.len();
     let mut v = vec![f64::NAN; width];
     for x in &mut v[base..] {
         *x = f64::INFINITY;
     }
-    sample_sweep(
-        study.model,
-        p,
-        &study.speeds,
-        &study.nominal,
-        run,
-        |i, pts| {
-            let tf = study.transfer_at(i);
-            let at = pts.map(|(_, pt, switches)| (pt, switches == study.branches[i]));
-            margins::margins_at(reqs, study.speeds[i], at, tf, margins::covers, |r, m| {
-                v[base + r] = v[base + r].min(m);
-            });
-            if let Some((_, pt, _)) = pts {
-                for (o, out) in outs.iter().enumerate() {
-                    v[i * outs.len() + o] = value(pt, out, tf).unwrap_or(f64::NAN);
-                }
+    study.sweep_design(p, run, |i, at| {
+        study.margins(i, at, margins::covers, |r, m| {
+            v[base + r] = v[base + r].min(m);
+        });
+        if let Some(at) = at {
+            for (o, out) in outs.iter().enumerate() {
+                v[i * outs.len() + o] = at.value(out);
             }
-        },
-    );
+        }
+    });
     for x in &mut v[base..] {
         if !x.is_finite() {
             *x = f64::NAN;
@@ -378,7 +368,6 @@ fn derivative_bounds(
     };
     let speeds = study.speeds.len();
     let outs = study.outputs.len();
-    let transfer = study.transfer;
     // Per node: per speed and output, the value and the gradient over the study's variables.
     type NodeGrad = Vec<Option<(f64, Vec<f64>)>>;
     let per_node: Vec<NodeGrad> = run.pool.install(|| {
@@ -391,30 +380,23 @@ fn derivative_bounds(
                     let p = map.parameters(z, &u);
                     let mut out: NodeGrad = vec![None; speeds * outs];
                     let tier = Tier::for_points(speeds);
-                    sample_sweep(
-                        study.model,
-                        p.clone(),
-                        &study.speeds,
-                        &study.nominal,
-                        (tier, ws),
-                        |i, pts| {
-                            let Some((_, pt, _)) = pts else { return };
-                            let Ok(lm) = DesignPoint::new(study.model, &p, pt)
-                                .with_model_transfer(transfer.as_ref())
-                                .with_workspace(ws2)
-                                .local_model(&study.vars, false)
-                            else {
-                                return;
-                            };
-                            for o in 0..outs.min(lm.value.len()) {
-                                if let Ok(g) = &lm.grad[o]
-                                    && lm.value[o].is_finite()
-                                {
-                                    out[i * outs + o] = Some((lm.value[o], g.clone()));
-                                }
+                    study.sweep_design(p.clone(), (tier, ws), |i, at| {
+                        let Some(at) = at else { return };
+                        let Ok(lm) = DesignPoint::new(study.model, &p, at.point)
+                            .with_transfer(at.transfer)
+                            .with_workspace(ws2)
+                            .local_model(&study.vars, false)
+                        else {
+                            return;
+                        };
+                        for o in 0..outs.min(lm.value.len()) {
+                            if let Ok(g) = &lm.grad[o]
+                                && lm.value[o].is_finite()
+                            {
+                                out[i * outs + o] = Some((lm.value[o], g.clone()));
                             }
-                        },
-                    );
+                        }
+                    });
                     out
                 },
             )

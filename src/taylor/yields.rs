@@ -10,6 +10,7 @@
 use crate::margins::{carriers, covers, mode_margin, mode_margin_gradient, reaches};
 use crate::model::Requirement;
 use crate::output::{Output, Quantity};
+use crate::pair::Carriers;
 use crate::propagate::Study;
 use crate::requirements::{Reading, Reads};
 use crate::table::{Limit, Method, YieldRow, cpk, reach};
@@ -45,8 +46,12 @@ pub fn linear_margin(study: &Study, req: &Requirement, i: usize) -> Option<(f64,
         }
         Reads::Mode => {
             let c = carriers(pt, None);
-            let modes = pt.modes.len();
-            let of = |m: usize| mode_margin(req, speed, c[2 * m], c[2 * m + 1]);
+            let c = Carriers::new(&c);
+            let modes = c.modes();
+            let of = |m: usize| {
+                let (s, p) = c.pair(m);
+                mode_margin(req, speed, s, p)
+            };
             // The mode asked, or the worst at the nominal design.
             let m = match req.mode {
                 Some(m) => m,

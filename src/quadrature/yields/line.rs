@@ -5,6 +5,7 @@
 use super::tally::{Layout, Tally};
 use super::{Requirements, STEP};
 use crate::margins::{State, covers, has_margin, margin, reaches};
+use crate::pair::Carriers;
 use crate::quadrature::line::{Context, GL_W, GL_X, Stencil, density, normal_mass};
 
 /// The pieces of one line at every speed, and the requirements' margins at a point of it.
@@ -36,8 +37,7 @@ impl LineView<'_> {
         st.eval(t, c);
         Some(State {
             speed: self.reqs.speeds[i],
-            carriers: c,
-            modes: ctx.modes,
+            carriers: Carriers::new(c),
             same_branch: st.branch == ctx.branch,
         })
     }

@@ -10,13 +10,18 @@
 //! methods are [`crate::taylor::Taylor`] (first order, second order and the invariant method
 //! from the local models), [`crate::quadrature::Quadrature`], [`crate::montecarlo::MonteCarlo`]
 //! and [`crate::sobol::Sobol`]; the last three place their points through
-//! [`crate::sampling`]. [`crate::analyze`] runs them per case.
+//! [`crate::sampling`], each design swept by [`Study::sweep_design`]. [`crate::analyze`] runs
+//! them per case.
 //!
 //! This is the seam a new method plugs into: one type, one `impl Propagation` and, for its
 //! value, one `impl Tabulate` that writes its rows ([`crate::table`]); `analyze` runs it per
 //! case. (In the manner of OpenTURNS' and chaospy's algorithm objects: inputs in, a result and
 //! its termination out; a method's error estimates are part of its value, as the quadrature's
 //! are.)
+
+mod design;
+
+pub use design::DesignAt;
 
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
