@@ -22,6 +22,7 @@
 //! probability's error estimate there: every `q` whose probability is within the error of `Y`.
 
 mod line;
+mod stage;
 mod tally;
 mod target;
 
@@ -30,8 +31,9 @@ use super::sums::ErrorParts;
 use super::{NodeData, Reference};
 use crate::margins::{covers, reaches};
 use crate::model::Requirement;
+use stage::Source;
 use statrs::distribution::{ContinuousCDF, Normal};
-use tally::{Layout, Source, Tally};
+use tally::{Layout, Tally};
 use target::{Root, find_roots};
 
 /// Longest sub-interval of a line (in standard deviations) across which a margin's sign is
