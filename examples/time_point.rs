@@ -10,7 +10,7 @@ use modaltol::equilibrium::Start;
 use modaltol::output::outputs;
 use modaltol::program::{Tier, Workspace};
 use modaltol::sensitivity::{DesignPoint, TransferAt};
-use modaltol::sweep::{Options, initial_guess, point, point_from};
+use modaltol::sweep::{Options, Solver, initial_guess, point};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -56,15 +56,13 @@ fn main() {
             }),
             best(5000, || {
                 let start = Start::default();
-                let pt = point_from(
-                    &model,
-                    &p,
-                    speed,
-                    black_box(&q),
-                    start,
-                    &options,
-                    &workspace,
-                );
+                let solver = Solver {
+                    model: &model,
+                    p: &p,
+                    opt: &options,
+                    workspace: &workspace,
+                };
+                let pt = solver.point_from(speed, black_box(&q), start);
                 black_box(pt.unwrap());
             }),
         ]

@@ -137,18 +137,27 @@ pub fn choose_independent(
         .collect())
 }
 
-/// Linearises at `(q, q̇ = qd, q̈ = 0, λ)`. `l` is the system lifted to `Dual<T>`;
+/// The steady motion a linearisation is taken about: the coordinates `q`, their rates `q̇`
+/// (the driven coordinates' speeds; zero for the others) and the multipliers `λ`
+/// (`q̈ = 0`).
+#[derive(Debug, Clone, Copy)]
+pub struct SteadyState<'a, T> {
+    pub q: &'a [T],
+    pub qd: &'a [T],
+    pub lambda: &'a [T],
+}
+
+/// Linearises at `at`. `l` is the system lifted to `Dual<T>`, `free` its free coordinates;
 /// `independent` are coordinate indices from [`choose_independent`]. `stiffness`, when given,
 /// is `∂(r_R + Φ_Rᵀλ)/∂q_R` already known (Newton's last Jacobian) and is not recomputed.
 pub fn linearize<T: Real>(
     l: &Lifted<D1<T>>,
     free: &[usize],
-    q: &[T],
-    qd: &[T],
-    lambda: &[T],
+    at: SteadyState<'_, T>,
     independent: &[usize],
     stiffness: Option<&DMatrix<T>>,
 ) -> Result<Linearization<T>, LinearizeError> {
+    let SteadyState { q, qd, lambda } = at;
     let n = q.len();
     let nf = free.len();
     let lam: Vec<D1<T>> = lambda.iter().map(|&v| lift1(v)).collect();
@@ -182,18 +191,17 @@ pub fn linearize<T: Real>(
     let vr: Vec<T> = free.iter().map(|&i| qd[i]).collect();
     let (_, c_full) = jacobian(&vr, |x| rows_v(&put(&qd1, x), &qdd1));
     let phi_r = DMatrix::from_fn(l.base.m, nf, |k, c| j.phi_q[(k, free[c])].re);
-    reduce(free, independent, &phi_r, m_full, c_full, k_full)
+    reduce(free, independent, &phi_r, [m_full, c_full, k_full])
 }
 
-/// The reduced matrices from the full ones: `R` from `Φ_R` (`m × n_R`) and the independent
-/// coordinates, then `M̂ = Rᵀ M R` and likewise `Ĉ`, `K̂`.
+/// The reduced matrices from the full ones `[M, C, K]` (over the free coordinates `free`): `R`
+/// from `Φ_R` (`m × n_R`) and the independent coordinates, then `M̂ = Rᵀ M R` and likewise
+/// `Ĉ`, `K̂`.
 pub fn reduce<T: Real>(
     free: &[usize],
     independent: &[usize],
     phi_r: &DMatrix<T>,
-    m_full: DMatrix<T>,
-    c_full: DMatrix<T>,
-    k_full: DMatrix<T>,
+    [m_full, c_full, k_full]: [DMatrix<T>; 3],
 ) -> Result<Linearization<T>, LinearizeError> {
     let nf = free.len();
     // Basis of the null space of Φ_R.

@@ -57,36 +57,6 @@ pub fn write_carriers(pt: &Point, tf: Option<TransferAt>, out: &mut [f64]) {
     Carriers::write(roots, h, out);
 }
 
-/// Every requirement's margin at one speed of one design, given to `put(requirement, margin)`
-/// for the requirements `within(requirement, speed)` ([`covers`], or [`reaches`] where the
-/// speeds beyond the range matter too): from the design's point there and whether it is on the
-/// nominal branch, or `−∞` where the point failed (`None`).
-pub fn margins_at(
-    reqs: &[Requirement],
-    speed: f64,
-    at: Option<(&Point, bool)>,
-    tf: Option<TransferAt>,
-    within: fn(&Requirement, f64) -> bool,
-    mut put: impl FnMut(usize, f64),
-) {
-    let covering = || reqs.iter().enumerate().filter(|(_, r)| within(r, speed));
-    match at {
-        None => covering().for_each(|(k, _)| put(k, f64::NEG_INFINITY)),
-        Some((pt, same_branch)) => {
-            if covering().next().is_none() {
-                return;
-            }
-            let c = carriers(pt, tf);
-            let state = State {
-                speed,
-                carriers: Carriers::new(&c),
-                same_branch,
-            };
-            covering().for_each(|(k, r)| put(k, margin(r, &state)));
-        }
-    }
-}
-
 /// Is `speed` in the requirement's operating range (its ends to within [`same_speed`])?
 pub fn covers(req: &Requirement, speed: f64) -> bool {
     req.speeds.is_none_or(|(a, b)| {

@@ -9,10 +9,13 @@ use crate::analyze::Analysis;
 use crate::compiled::Compiled;
 use crate::drawing::{self, Drawing};
 use crate::files::{FileError, ResultDir};
+use crate::model::Model;
 use crate::montecarlo::McOptions;
 use crate::plots::{self, Display};
 use crate::report;
 use rayon::prelude::*;
+use resvg::usvg::fontdb::Database;
+use std::sync::Arc;
 
 /// Is `name` one that [`write()`] may put in a result directory (its tables, report, summary,
 /// plots and manifest)? An input of that name there would be replaced.
@@ -82,33 +85,7 @@ pub fn write(
         allocation,
     } = o;
     let partial = a.cancelled() || mc.is_some_and(|mc| a.interrupted(mc.samples));
-    dir.write(
-        "tolerance.csv",
-        &csv_bytes(
-            &report::tolerance_header(m.model(), a),
-            &report::tolerance_rows(a, partial),
-        ),
-    )?;
-    dir.write(
-        "probabilities.csv",
-        &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
-    )?;
-    if !m.model().requirements.is_empty() {
-        dir.write(
-            "yield.csv",
-            &csv_bytes(&report::YIELD_HEADER, &report::yield_rows(m.model(), a)),
-        )?;
-        dir.write(
-            "limits.csv",
-            &csv_bytes(&report::LIMITS_HEADER, &report::limit_rows(m.model(), a)),
-        )?;
-    }
-    if !a.sobol.is_empty() {
-        dir.write(
-            "sobol.csv",
-            &csv_bytes(&report::SOBOL_HEADER, &report::sobol_rows(m.model(), a)),
-        )?;
-    }
+    write_tables(m.model(), a, partial, &mut dir)?;
     let (plots, critical) = plots::plots(m.model(), a, display);
     let fonts = plots::fonts();
     // Rendered on the run's threads (a big model's hundreds of plots took longer to render than
@@ -132,25 +109,7 @@ pub fn write(
             Err(e) => missing_png.push((p.stem.clone(), e)),
         }
     }
-    // The mechanism at the middle of the speeds, its first modes, and the 3-D page.
-    let drawing = a
-        .middle_point()
-        .and_then(|pt| Drawing::new(m.model(), &m.model().nominal(), pt).ok());
-    if let Some(d) = &drawing {
-        dir.write("mechanism.html", drawing::html(d, None).as_bytes())?;
-        let views = std::iter::once(("mechanism".to_string(), drawing::svg(d, None))).chain(
-            (0..d.modes.len().min(report::MODES_DRAWN))
-                .map(|k| (format!("mode_{}", k + 1), drawing::svg(d, Some(k)))),
-        );
-        // As every plot: SVG, and PNG beside it.
-        for (stem, svg) in views {
-            dir.write(&format!("{stem}.svg"), svg.as_bytes())?;
-            match plots::png(&svg, &fonts) {
-                Ok(png) => dir.write(&format!("{stem}.png"), &png)?,
-                Err(e) => missing_png.push((stem, e)),
-            }
-        }
-    }
+    let drawing = write_drawings(m.model(), a, &fonts, &mut dir, &mut missing_png)?;
     dir.write(
         "report.html",
         report::report_html(
@@ -158,9 +117,9 @@ pub fn write(
             a,
             &plots.iter().collect::<Vec<_>>(),
             &critical,
-            mc,
-            display,
             report::Extra {
+                mc,
+                display,
                 allocation,
                 drawing: drawing.as_ref(),
             },
@@ -180,4 +139,72 @@ pub fn write(
         place,
         missing_png,
     })
+}
+
+/// The tables: `tolerance.csv` (`partial`: of a run cut short), `probabilities.csv`, and where
+/// the model has them `yield.csv`, `limits.csv` and `sobol.csv`.
+fn write_tables(
+    model: &Model,
+    a: &Analysis,
+    partial: bool,
+    dir: &mut ResultDir,
+) -> Result<(), FileError> {
+    dir.write(
+        "tolerance.csv",
+        &csv_bytes(
+            &report::tolerance_header(model, a),
+            &report::tolerance_rows(a, partial),
+        ),
+    )?;
+    dir.write(
+        "probabilities.csv",
+        &csv_bytes(&report::PROBABILITY_HEADER, &report::probability_rows(a)),
+    )?;
+    if !model.requirements.is_empty() {
+        dir.write(
+            "yield.csv",
+            &csv_bytes(&report::YIELD_HEADER, &report::yield_rows(model, a)),
+        )?;
+        dir.write(
+            "limits.csv",
+            &csv_bytes(&report::LIMITS_HEADER, &report::limit_rows(model, a)),
+        )?;
+    }
+    if !a.sobol.is_empty() {
+        dir.write(
+            "sobol.csv",
+            &csv_bytes(&report::SOBOL_HEADER, &report::sobol_rows(model, a)),
+        )?;
+    }
+    Ok(())
+}
+
+/// The mechanism at the middle of the speeds, its first modes, and the 3-D page, each drawing
+/// as every plot (SVG, and PNG beside it: a PNG that does not render is added to `missing_png`);
+/// the drawing, where the point draws.
+fn write_drawings(
+    model: &Model,
+    a: &Analysis,
+    fonts: &Arc<Database>,
+    dir: &mut ResultDir,
+    missing_png: &mut Vec<(String, String)>,
+) -> Result<Option<Drawing>, FileError> {
+    let drawing = a
+        .middle_point()
+        .and_then(|pt| Drawing::new(model, &model.nominal(), pt).ok());
+    if let Some(d) = &drawing {
+        dir.write("mechanism.html", drawing::html(d, None).as_bytes())?;
+        let views = std::iter::once(("mechanism".to_string(), drawing::svg(d, None))).chain(
+            (0..d.modes.len().min(report::MODES_DRAWN))
+                .map(|k| (format!("mode_{}", k + 1), drawing::svg(d, Some(k)))),
+        );
+        for (stem, svg) in views {
+            dir.write(&format!("{stem}.svg"), svg.as_bytes())?;
+            match plots::png(&svg, fonts) {
+                Ok(png) => dir.write(&format!("{stem}.png"), &png)?,
+                Err(e) => missing_png.push((stem, e)),
+            }
+        }
+    }
+    Ok(drawing)
 }

@@ -21,7 +21,7 @@ use modaltol::mechanics::kinematics::poses;
 use modaltol::mechanics::ports::port_vectors;
 use modaltol::modal::C64;
 use modaltol::rigid::Pose;
-use modaltol::scene::{Scene, mode_frames, physical_shape};
+use modaltol::scene::{Posed, Scene, mode_frames, physical_shape};
 use modaltol::sweep::Options;
 
 /// The value of attribute `name` in the tag `tag`.
@@ -253,8 +253,14 @@ fn an_animation_frame_is_the_mechanism_posed_along_the_shape_to_second_order() {
                     .collect(),
                 ..mode.clone()
             };
-            let exact = mode_frames(model, &sys, q, &pt.linear.free, &v, a, n);
-            let exact_small = mode_frames(model, &sys, q, &pt.linear.free, &v, a / 10.0, n);
+            let at = Posed {
+                model,
+                sys: &sys,
+                q,
+                free: &pt.linear.free,
+            };
+            let exact = mode_frames(at, &v, a, n);
+            let exact_small = mode_frames(at, &v, a / 10.0, n);
             for k in 0..n {
                 let phase = std::f64::consts::TAU * k as f64 / n as f64;
                 let (big, little) = (

@@ -7,7 +7,7 @@ use common::example;
 use modaltol::compiled::{Compiled, Route};
 use modaltol::equations::Direct;
 use modaltol::equations::Equations;
-use modaltol::linearize::{choose_independent, linearize};
+use modaltol::linearize::{SteadyState, choose_independent, linearize};
 use modaltol::mechanics::System;
 use modaltol::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use modaltol::program::{Tier, Workspace};
@@ -439,7 +439,12 @@ fn the_program_reproduces_the_direct_route_on_every_example() {
             } else {
                 choose_independent(&phi_r, &free, None).unwrap()
             };
-            let l = linearize(direct.dual(), &free, &q, &qd, &lambda, &independent, None).unwrap();
+            let at = SteadyState {
+                q: &q,
+                qd: &qd,
+                lambda: &lambda,
+            };
+            let l = linearize(direct.dual(), &free, at, &independent, None).unwrap();
             for (a, b) in lin.damping.iter().zip(l.c_full.iter()) {
                 assert!(close(*a, *b, l.c_full.amax()), "{name}: C {a} vs {b}");
             }

@@ -276,15 +276,7 @@ fn pendulum_plots_are_readable_and_complete() {
         .unwrap();
     assert!(h.svg.contains("|H| (rad/(N·m))"), "no unit on |H|");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(
-        m.model(),
-        &a,
-        &refs,
-        &critical,
-        None,
-        Display::default(),
-        Default::default(),
-    );
+    let html = report::report_html(m.model(), &a, &refs, &critical, Default::default());
     assert!(html.contains("paper, pendulum"));
     assert!(html.contains("Summary: σ where it matters"));
     assert!(html.contains("largest σ"));
@@ -332,7 +324,16 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     }
     assert!(c.svg.contains("critical speeds"), "crossings not marked");
     let refs: Vec<&Plot> = plots.iter().collect();
-    let html = report::report_html(m.model(), &a, &refs, &critical, None, d, Default::default());
+    let html = report::report_html(
+        m.model(),
+        &a,
+        &refs,
+        &critical,
+        report::Extra {
+            display: d,
+            ..Default::default()
+        },
+    );
     assert!(
         !html.contains("paper,"),
         "paper rows in another model's report"

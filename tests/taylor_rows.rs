@@ -358,15 +358,7 @@ fn the_blades_analysis_has_every_taylor_row_and_no_nan_in_its_report() {
     }
     let summary = modaltol::report::summary_json(model.model(), &a, None, 1);
     assert_eq!(summary["unfilled"], serde_json::json!([]));
-    let html = modaltol::report::report_html(
-        model.model(),
-        &a,
-        &[],
-        &[],
-        None,
-        Default::default(),
-        Default::default(),
-    );
+    let html = modaltol::report::report_html(model.model(), &a, &[], &[], Default::default());
     assert!(!html.contains("NaN"), "the report prints NaN");
 }
 

@@ -92,15 +92,21 @@ fn an_infinite_transfer_function_says_resonance_or_overflow_in_every_row() {
                 .sensitivities(&wrt, Derivatives::Exact)
             {
                 let why = report::transfer_defect_at(&pt, Some(&at));
+                let shown = report::SensitivityReport {
+                    model: m.model(),
+                    point: &pt,
+                    sensitivity: &s,
+                    no_transfer: why,
+                };
                 let header: Vec<String> = report::SENSITIVITY_HEADER
                     .iter()
                     .map(|h| h.to_string())
                     .collect();
-                for row in report::sensitivity_rows(m.model(), &pt, &s, why) {
+                for row in shown.rows() {
                     let what = format!("{name}: sensitivity, order {order:e}");
                     check_row(&header, &row, "transfer_magnitude", &what);
                 }
-                let json = report::sensitivity_json(m.model(), speed, "ad", &pt, &s, why);
+                let json = shown.json(speed, "ad");
                 assert_eq!(
                     json["transfer_magnitude"].is_null(),
                     json["transfer_message"].is_string(),

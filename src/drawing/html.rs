@@ -84,57 +84,10 @@ fn decimals(size: f64) -> usize {
 /// The page of drawing `d`, opening on mode `mode` (0-based; the equilibrium where `None`).
 /// `#mode=K` in the address (1-based, 0: the equilibrium) chooses the mode as well.
 pub fn html(d: &Drawing, mode: Option<usize>) -> String {
-    let mut x = Vec::new();
-    let scene = d.scene.map(&mut |v| {
-        x.extend_from_slice(v);
-        x.len() / 3 - 1
-    });
-    let anchor = (d.anchors.iter())
-        .map(|a| {
-            a.body.map_or(0, |b| {
-                if a.direction {
-                    -(b as i64 + 1)
-                } else {
-                    b as i64 + 1
-                }
-            })
-        })
-        .collect();
     let shown = animated(d.scene.bodies.len(), d.modes.len(), mode);
-    let parts: Vec<[Vec<f64>; 2]> = (shown.iter())
-        .map(|&k| {
-            let flat = |part: fn(&crate::modal::C64) -> f64| {
-                (d.modes[k].motion.iter())
-                    .flat_map(|[dx, w]| dx.iter().chain(w).map(part))
-                    .collect()
-            };
-            [flat(|z| z.re), flat(|z| z.im)]
-        })
-        .collect();
-    let length = decimals(d.size);
-    let page = Page {
-        size: d.size,
-        scene,
-        x: Rounded {
-            values: &x,
-            decimals: length,
-        },
-        anchor,
-        modes: (shown.iter().zip(&parts))
-            .map(|(&k, [re, im])| PageMode {
-                number: k + 1,
-                label: &d.modes[k].label,
-                re: Rounded {
-                    values: re,
-                    decimals: length.max(6),
-                },
-                im: Rounded {
-                    values: im,
-                    decimals: length.max(6),
-                },
-            })
-            .collect(),
-    };
+    let mut x = Vec::new();
+    let parts = mode_parts(d, &shown);
+    let page = page(d, &shown, &parts, &mut x);
     let data = serde_json::to_string(&page)
         .unwrap_or_else(|_| "null".into())
         .replace("</", "<\\/");
@@ -188,4 +141,68 @@ body {{ font-family: sans-serif; margin: 16px; color: #222; }}
         svg = svg(d, None),
         script = include_str!("viewer.js"),
     )
+}
+
+/// The real and imaginary parts of each `shown` mode's motion, flattened as the page reads them.
+fn mode_parts(d: &Drawing, shown: &[usize]) -> Vec<[Vec<f64>; 2]> {
+    (shown.iter())
+        .map(|&k| {
+            let flat = |part: fn(&crate::modal::C64) -> f64| {
+                (d.modes[k].motion.iter())
+                    .flat_map(|[dx, w]| dx.iter().chain(w).map(part))
+                    .collect()
+            };
+            [flat(|z| z.re), flat(|z| z.im)]
+        })
+        .collect()
+}
+
+/// The page's data: the scene with its points numbered into `x` (three coordinates each), each
+/// point's anchor (`b + 1` for a point of body `b`, `−(b + 1)` for a direction, 0 on the
+/// ground) and the `shown` modes with their motions' `parts` ([`mode_parts`]).
+fn page<'a>(
+    d: &'a Drawing,
+    shown: &[usize],
+    parts: &'a [[Vec<f64>; 2]],
+    x: &'a mut Vec<f64>,
+) -> Page<'a> {
+    let scene = d.scene.map(&mut |v| {
+        x.extend_from_slice(v);
+        x.len() / 3 - 1
+    });
+    let anchor = (d.anchors.iter())
+        .map(|a| {
+            a.body.map_or(0, |b| {
+                if a.direction {
+                    -(b as i64 + 1)
+                } else {
+                    b as i64 + 1
+                }
+            })
+        })
+        .collect();
+    let length = decimals(d.size);
+    Page {
+        size: d.size,
+        scene,
+        x: Rounded {
+            values: x,
+            decimals: length,
+        },
+        anchor,
+        modes: (shown.iter().zip(parts))
+            .map(|(&k, [re, im])| PageMode {
+                number: k + 1,
+                label: &d.modes[k].label,
+                re: Rounded {
+                    values: re,
+                    decimals: length.max(6),
+                },
+                im: Rounded {
+                    values: im,
+                    decimals: length.max(6),
+                },
+            })
+            .collect(),
+    }
 }

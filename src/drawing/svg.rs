@@ -1,6 +1,6 @@
 //! The three orthographic views as SVG (see the module documentation of [`super`]).
 
-use super::{Drawing, esc};
+use super::{Drawing, ModeMotion, esc};
 use crate::scene::{P3, Scene};
 use std::fmt::Write;
 
@@ -77,24 +77,7 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let mode = mode.and_then(|k| d.modes.get(k));
-    let title = format!("{} at {} rad/s", d.model, d.speed);
-    let _ = writeln!(
-        s,
-        r#"<text x="8" y="18" font-size="14" font-weight="bold">{}</text>"#,
-        esc(&title)
-    );
-    let subtitle = match mode {
-        Some(m) => format!(
-            "{}: equilibrium grey, extremes blue (φ = 0) and red (φ = π), quarter periods dashed",
-            m.label
-        ),
-        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; ports: orange arrows. Units: m".into(),
-    };
-    let _ = writeln!(
-        s,
-        r##"<text x="8" y="34" fill="#555">{}</text>"##,
-        esc(&subtitle)
-    );
+    heading(&mut s, d, mode);
     // The mode at its quarter periods (φ = 0, π/2, π, 3π/2), to first order as the page
     // animates it.
     let quarters: Vec<Scene> = mode.map_or_else(Vec::new, |m| {
@@ -108,13 +91,7 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
         .iter()
         .flat_map(|view| {
             let span = |axis: &P3| {
-                let (lo, hi) = scenes
-                    .iter()
-                    .flat_map(|sc| sc.points())
-                    .map(|x| dot(axis, &x))
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                        (lo.min(v), hi.max(v))
-                    });
+                let (lo, hi) = range(&scenes, axis);
                 hi - lo
             };
             [span(&view.h), span(&view.v)]
@@ -123,13 +100,7 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
     let scale = (PANEL - 2.0 * MARGIN) / if extent > 0.0 { extent } else { d.size };
     for (k, view) in VIEWS.iter().enumerate() {
         let centre = |axis: &P3| {
-            let (lo, hi) = scenes
-                .iter()
-                .flat_map(|sc| sc.points())
-                .map(|x| dot(axis, &x))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                });
+            let (lo, hi) = range(&scenes, axis);
             if lo.is_finite() { (lo + hi) / 2.0 } else { 0.0 }
         };
         let x0 = k as f64 * PANEL;
@@ -180,6 +151,40 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
     }
     let _ = writeln!(s, "</svg>");
     s
+}
+
+/// The drawing's title, and what its colours mean (with `mode`'s label where it is drawn).
+fn heading(s: &mut String, d: &Drawing, mode: Option<&ModeMotion>) {
+    let title = format!("{} at {} rad/s", d.model, d.speed);
+    let _ = writeln!(
+        s,
+        r#"<text x="8" y="18" font-size="14" font-weight="bold">{}</text>"#,
+        esc(&title)
+    );
+    let subtitle = match mode {
+        Some(m) => format!(
+            "{}: equilibrium grey, extremes blue (φ = 0) and red (φ = π), quarter periods dashed",
+            m.label
+        ),
+        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; ports: orange arrows. Units: m".into(),
+    };
+    let _ = writeln!(
+        s,
+        r##"<text x="8" y="34" fill="#555">{}</text>"##,
+        esc(&subtitle)
+    );
+}
+
+/// The smallest and largest coordinate along `axis` of any point of `scenes` (`+∞, −∞` where
+/// they have none).
+fn range(scenes: &[&Scene], axis: &P3) -> (f64, f64) {
+    scenes
+        .iter()
+        .flat_map(|sc| sc.points())
+        .map(|x| dot(axis, &x))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
 }
 
 /// How a scene is drawn.
@@ -259,6 +264,15 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
         return;
     };
     let axis_len = 0.06 * size * pr.s;
+    elements(s, pr, sc);
+    cuts(s, pr, sc);
+    joints(s, pr, sc, axis_len, labels);
+    bodies(s, pr, sc, labels);
+    ports(s, pr, sc, axis_len, labels);
+}
+
+/// The force elements: dashed green lines between their ends.
+fn elements(s: &mut String, pr: &Projection, sc: &Scene) {
     for e in &sc.elements {
         let (a, b) = (pr.at(&e.ends[0]), pr.at(&e.ends[1]));
         let _ = writeln!(
@@ -271,6 +285,10 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
             b.1
         );
     }
+}
+
+/// The cut joints: a dotted line between their ends, crossed circles at the first.
+fn cuts(s: &mut String, pr: &Projection, sc: &Scene) {
     for c in &sc.cuts {
         let (a, b) = (pr.at(&c.ends[0]), pr.at(&c.ends[1]));
         line(
@@ -289,6 +307,11 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
             a.1 - 3.5
         );
     }
+}
+
+/// The joints: circles with their axes (red), a ring around a driven one, named where
+/// `labels`.
+fn joints(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: bool) {
     for j in &sc.joints {
         let p = pr.at(&j.at);
         for a in &j.axes {
@@ -326,6 +349,10 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
             );
         }
     }
+}
+
+/// The bodies' centres of mass, named where `labels`.
+fn bodies(s: &mut String, pr: &Projection, sc: &Scene, labels: bool) {
     for b in &sc.bodies {
         let (x, y) = pr.at(&b.cm);
         let _ = writeln!(
@@ -343,6 +370,10 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
             );
         }
     }
+}
+
+/// The ports: orange arrows along their directions, named where `labels`.
+fn ports(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: bool) {
     for p in &sc.ports {
         let a = pr.at(&p.at);
         let (dx, dy) = (

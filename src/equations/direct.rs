@@ -3,7 +3,7 @@
 //! has no valid recording.
 
 use super::{Equations, Evaluation, Fit};
-use crate::linearize::{Linearization, LinearizeError, linearize};
+use crate::linearize::{Linearization, LinearizeError, SteadyState, linearize};
 use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use crate::real::{D1, Real, lift1};
@@ -138,14 +138,11 @@ impl<S: Real> Equations<S> for Direct<S> {
         independent: &[usize],
         stiffness: Option<&DMatrix<S>>,
     ) -> Result<Linearization<S>, LinearizeError> {
-        linearize(
-            self.dual(),
-            &self.free,
+        let at = SteadyState {
             q,
-            &self.qd,
+            qd: &self.qd,
             lambda,
-            independent,
-            stiffness,
-        )
+        };
+        linearize(self.dual(), &self.free, at, independent, stiffness)
     }
 }

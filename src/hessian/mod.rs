@@ -81,7 +81,53 @@ struct Expansion<'a> {
     workspace: &'a Workspace,
 }
 
+impl Hessians {
+    /// Zero gradients and Hessians in `nv` variables of `outs` outputs and `nm` modes'
+    /// discriminants.
+    fn zeros(nv: usize, outs: usize, nm: usize) -> Hessians {
+        Hessians {
+            gradients: vec![Ok(vec![0.0; nv]); outs],
+            outputs: vec![Ok(DMatrix::zeros(nv, nv)); outs],
+            discriminant_gradients: vec![Ok(vec![0.0; nv]); nm],
+            discriminant: vec![Ok(DMatrix::zeros(nv, nv)); nm],
+        }
+    }
+}
+
+/// The derivatives of `M̂`, `Ĉ` and `K̂` along one variable: first (`M, C, K`) then second.
+type AlongOne = [DMatrix<f64>; 6];
+
 impl Expansion<'_> {
+    /// Per variable of `vars`: the matrices' first and second derivatives along it, and the
+    /// whole linearisation where more than the roots reads it (`whole`; kept only then: at 160
+    /// variables of an 80-segment chain the linearisations would be most of the memory).
+    fn along_each(
+        &self,
+        p: &[f64],
+        vars: &[usize],
+        whole: bool,
+    ) -> Result<(Vec<AlongOne>, Vec<Linearization<Dual2_64>>), PointError> {
+        let mut singles = Vec::new();
+        let mut derivatives = Vec::with_capacity(vars.len());
+        for a in 0..vars.len() {
+            let s = self.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
+                f64::from(u8::from(a == b && k == 0))
+            }))?;
+            derivatives.push([
+                part(&s.m, 0),
+                part(&s.c, 0),
+                part(&s.k, 0),
+                part(&s.m, 1),
+                part(&s.c, 1),
+                part(&s.k, 1),
+            ]);
+            if whole {
+                singles.push(s);
+            }
+        }
+        Ok((derivatives, singles))
+    }
+
     /// The linearisation (ports included) at the parameters `seeded`: the equilibrium expanded
     /// by two chord steps with Newton's Jacobian on `[q_R; λ]`, then the generic linearisation
     /// over the jets, which carries the move of the equilibrium and of the independent basis.
@@ -396,6 +442,24 @@ fn put(
     }
 }
 
+/// A root and its parts.
+type Parts = (C64, Vec<C64>);
+
+/// The two roots of a mode with the terms `roots` (see [`root_terms`]), their parts given by
+/// `parts(terms)` (the partner's the conjugates where it is the root's conjugate).
+fn pair(
+    roots: &Result<(RootTerms, Partner), Missing>,
+    parts: &dyn Fn(&RootTerms) -> Vec<C64>,
+) -> Result<(Parts, Parts), Missing> {
+    let (r, q) = roots.as_ref().map_err(Clone::clone)?;
+    let first: Parts = (r.lambda(), parts(r));
+    let second: Parts = match q {
+        Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
+        Partner::Own(q) => (q.lambda(), parts(q)),
+    };
+    Ok((first, second))
+}
+
 impl DesignPoint<'_> {
     /// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
     /// discriminant with respect to the parameters `vars`, at the design point (see the module documentation for the passes).
@@ -418,49 +482,20 @@ impl DesignPoint<'_> {
         // The linearisation over jets is needed beyond the roots for |H| and for one degree of
         // freedom's invariants.
         let whole = tf.is_some() || pt.linear.m.nrows() == 1;
-        // Per variable: the matrices' first and second derivatives along it, and the whole
-        // linearisation where more than the roots reads it (kept only then: at 160 variables of an
-        // 80-segment chain the linearisations would be most of the memory).
-        let mut singles: Vec<Linearization<Dual2_64>> = Vec::new();
-        let mut derivatives: Vec<[DMatrix<f64>; 6]> = Vec::with_capacity(nv);
-        for a in 0..nv {
-            let s = x.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
-                f64::from(u8::from(a == b && k == 0))
-            }))?;
-            derivatives.push([
-                part(&s.m, 0),
-                part(&s.c, 0),
-                part(&s.k, 0),
-                part(&s.m, 1),
-                part(&s.c, 1),
-                part(&s.k, 1),
-            ]);
-            if whole {
-                singles.push(s);
-            }
-        }
+        let (derivatives, singles) = x.along_each(p, vars, whole)?;
         let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
         let along: Vec<Along<'_>> = derivatives
             .iter()
             .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
             .collect();
         let roots = root_terms(pt, &smooth, &along);
-        let mut grad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); outs.len()];
-        let mut dgrad: Vec<Result<Vec<f64>, Missing>> = vec![Ok(vec![0.0; nv]); nm];
-        let mut hess: Vec<Result<DMatrix<f64>, Missing>> =
-            vec![Ok(DMatrix::zeros(nv, nv)); outs.len()];
-        let mut dhess: Vec<Result<DMatrix<f64>, Missing>> = vec![Ok(DMatrix::zeros(nv, nv)); nm];
-        // The two roots of mode `i` as jets, their parts given by `parts(terms)`.
-        type Parts = (C64, Vec<C64>);
-        let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| {
-            let (r, q) = roots[i].as_ref().map_err(Clone::clone)?;
-            let first: Parts = (r.lambda(), parts(r));
-            let second: Parts = match q {
-                Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
-                Partner::Own(q) => (q.lambda(), parts(q)),
-            };
-            Ok::<_, Missing>((first, second))
-        };
+        let Hessians {
+            gradients: mut grad,
+            outputs: mut hess,
+            discriminant_gradients: mut dgrad,
+            discriminant: mut dhess,
+        } = Hessians::zeros(nv, outs.len(), nm);
+        let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| pair(&roots[i], parts);
         for a in 0..nv {
             let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then(|| &singles[a]), |i| {
                 pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])

@@ -6,7 +6,6 @@
 use super::{McRun, YieldCounts};
 use crate::margins::{covers, has_margin, reaches};
 use crate::modal::ModeClass;
-use crate::model::Requirement;
 use crate::output::{Missing, Output, Quantity};
 use crate::propagate::{Study, Tabulate};
 use crate::sweep::Point;
@@ -29,16 +28,10 @@ impl Tabulate for McRun {
         let done = r.samples;
         tables.samples_done.push(done);
         if let Some(y) = &r.fold.total_yields() {
-            let m = study.model.model();
-            tables.yields.extend(yield_rows(
-                case,
-                y,
-                r.worst_margins.as_deref(),
-                &m.requirements,
-                &study.speeds,
-                done,
-                m.allocation.target_yield,
-            ));
+            let worst = r.worst_margins.as_deref();
+            tables
+                .yields
+                .extend(yield_rows(study, case, y, worst, done));
         }
         tables.inadmissible.push(r.inadmissible);
         for (si, stats) in r.stats.iter().enumerate() {
@@ -132,16 +125,17 @@ fn probabilities(
 
 /// The Monte Carlo's rows of case `case` from the counts of `n` samples and, where the run
 /// kept them, every sample's worst margins (sorted, per requirement), with what the design
-/// meets at `target`.
+/// meets at the model's target yield.
 fn yield_rows(
+    study: &Study,
     case: usize,
     y: &YieldCounts,
     worst: Option<&[Vec<f64>]>,
-    reqs: &[Requirement],
-    speeds: &[f64],
     n: usize,
-    target: f64,
 ) -> Vec<YieldRow> {
+    let m = study.model.model();
+    let (reqs, speeds) = (&m.requirements, &study.speeds);
+    let target = m.allocation.target_yield;
     let p = |k: usize| if n > 0 { k as f64 / n as f64 } else { f64::NAN };
     let mut out = vec![YieldRow {
         case,

@@ -107,7 +107,7 @@ impl<S: Real> Linear<S> {
         let m = self.jacobian.nrows() - nf;
         let phi_r = DMatrix::from_fn(m, nf, |k, j| self.jacobian[(j, nf + k)]);
         let k = self.jacobian.view((0, 0), (nf, nf)).into_owned();
-        reduce(free, independent, &phi_r, self.mass, self.damping, k)
+        reduce(free, independent, &phi_r, [self.mass, self.damping, k])
     }
 }
 

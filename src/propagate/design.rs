@@ -4,14 +4,15 @@
 //! output's value, the carriers) and the requirements' margins there ([`Study::margins`]).
 
 use super::Study;
+use crate::equilibrium::Settings;
 use crate::margins::{self, write_carriers};
 use crate::model::Requirement;
 use crate::output::Output;
+use crate::pair::Carriers;
 use crate::program::{Tier, Workspace};
-use crate::sampling::sample_sweep;
 use crate::sensitivity::TransferAt;
-use crate::sweep::Point;
-use crate::tolerance::value;
+use crate::sweep::{Options, Point, Sweep};
+use crate::tolerance::{match_modes, value};
 
 /// One design at one speed of a study, where its point solved (see [`Study::sweep_design`]).
 #[derive(Clone, Copy)]
@@ -41,18 +42,51 @@ impl DesignAt<'_> {
 }
 
 impl Study<'_> {
-    /// Sweeps the design `p` across the study's speeds as a sample does
-    /// ([`sample_sweep`]: from the nominal point, speed to speed, its modes matched to the
-    /// nominal ones): `visit(i, design)` per speed, `None` where the design or the nominal point
-    /// failed there. The recorded program's passes run at the caller's tier in its workspace.
+    /// Sweeps the design `p` across the study's speeds as a Monte Carlo sample, a quadrature
+    /// node and a row of a Sobol design do: warm-started from the nominal point at the first
+    /// speed, continued from speed to speed (so that it follows the branch a sweep from the
+    /// lowest speed follows), its modes matched to the nominal ones by shape. `visit(i, design)`
+    /// gets the design at each speed, `None` where the design or the nominal point failed there
+    /// or the design has another number of modes. The recorded program's passes run at `tier`,
+    /// chosen by the caller for all its sweeps ([`Tier::for_points`]), in the caller's
+    /// `workspace` (one per worker thread).
     pub fn sweep_design(
         &self,
         p: Vec<f64>,
-        run: (Tier, &Workspace),
+        (tier, workspace): (Tier, &Workspace),
         mut visit: impl FnMut(usize, Option<&DesignAt>),
     ) {
-        sample_sweep(self.model, p, &self.speeds, &self.nominal, run, |i, pts| {
-            let at = pts.map(|(nominal, point, switches)| DesignAt {
+        // Samples do not report drive forces.
+        let options = Options {
+            newton: Settings {
+                drive_force: false,
+                ..Settings::default()
+            },
+            tier,
+            ..Options::default()
+        };
+        // A design that cannot exist (a negative mass, an indefinite inertia) fails at every
+        // speed.
+        if self.model.model().admissible(&p).is_err() {
+            for i in 0..self.speeds.len() {
+                visit(i, None);
+            }
+            return;
+        }
+        let mut sweep = Sweep::in_workspace(self.model, p, options, workspace);
+        let mut started = false;
+        let mut switches = 0;
+        for (i, (&w, nom)) in self.speeds.iter().zip(&self.nominal).enumerate() {
+            let pt = nom.as_ref().and_then(|nom| {
+                if !started {
+                    sweep.warm_start(nom);
+                }
+                let pt = sweep.step(w).ok()?;
+                started = true;
+                switches += usize::from(pt.new_branch);
+                (pt.modes.len() == nom.modes.len()).then(|| (nom, match_modes(nom, pt)))
+            });
+            let at = pt.as_ref().map(|(nominal, point)| DesignAt {
                 nominal,
                 point,
                 switches,
@@ -60,7 +94,7 @@ impl Study<'_> {
                 transfer: self.transfer_at(i),
             });
             visit(i, at.as_ref());
-        });
+        }
     }
 
     /// Every requirement's margin at speed `i` of the design `at` (`None` where it failed
@@ -71,15 +105,24 @@ impl Study<'_> {
         i: usize,
         at: Option<&DesignAt>,
         within: fn(&Requirement, f64) -> bool,
-        put: impl FnMut(usize, f64),
+        mut put: impl FnMut(usize, f64),
     ) {
-        margins::margins_at(
-            &self.model.model().requirements,
-            self.speeds[i],
-            at.map(|d| (d.point, d.same_branch)),
-            self.transfer_at(i),
-            within,
-            put,
-        );
+        let speed = self.speeds[i];
+        let reqs = &self.model.model().requirements;
+        let covering = || reqs.iter().enumerate().filter(|(_, r)| within(r, speed));
+        let Some(at) = at else {
+            covering().for_each(|(k, _)| put(k, f64::NEG_INFINITY));
+            return;
+        };
+        if covering().next().is_none() {
+            return;
+        }
+        let c = margins::carriers(at.point, at.transfer);
+        let state = margins::State {
+            speed,
+            carriers: Carriers::new(&c),
+            same_branch: at.same_branch,
+        };
+        covering().for_each(|(k, r)| put(k, margins::margin(r, &state)));
     }
 }

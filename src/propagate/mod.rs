@@ -152,6 +152,78 @@ impl<'a> Study<'a> {
     pub fn build(model: &'a Compiled, vars: Vec<usize>, speeds: Vec<f64>, run: &Run) -> Self {
         // Every requirement judged over its range: its ends among the speeds.
         let speeds = model.model().judged_speeds(&speeds);
+        let start = Instant::now();
+        let first = FirstStage::run(model, &vars, &speeds, run);
+        let first_order = start.elapsed().as_secs_f64();
+        let mut study = Study {
+            model,
+            outputs: output::of_model(model.model()),
+            branches: branch_counts(&first.nominal),
+            vars,
+            speeds,
+            nominal: first.nominal,
+            locals: first.locals,
+            transfer: model.model().analysis.transfer,
+            termination: first.termination,
+            failures: first.failures,
+            seconds: (first_order, 0.0),
+        };
+        let start = Instant::now();
+        study.add_hessians(run);
+        if run.cancel.is_cancelled() {
+            study.termination = Termination::Cancelled;
+        }
+        study.seconds.1 = start.elapsed().as_secs_f64();
+        study.failures.sort_by(|a, b| a.0.total_cmp(&b.0));
+        study
+    }
+
+    /// The second stage of [`Study::build`]: the exact Hessians added to each local model, point
+    /// by point in parallel (progress counted on from the first stage's).
+    fn add_hessians(&mut self, run: &Run) {
+        let (model, transfer) = (self.model, self.transfer);
+        let p = model.model().nominal();
+        let n = self.speeds.len();
+        let (done, total) = (AtomicUsize::new(n), 2 * n);
+        let nominal = &self.nominal;
+        run.pool.install(|| {
+            self.locals.par_iter_mut().zip(nominal).for_each_init(
+                Workspace::default,
+                |workspace, (lm, pt)| {
+                    if let (Some(lm), Some(pt)) = (lm, pt)
+                        && !run.cancel.is_cancelled()
+                    {
+                        DesignPoint::new(model, &p, pt)
+                            .with_model_transfer(transfer.as_ref())
+                            .with_workspace(workspace)
+                            .add_hessians(lm);
+                    }
+                    let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    (run.progress)(d, total);
+                },
+            )
+        });
+    }
+
+    /// The transfer function at speed `i` (excited at its order times the speed).
+    pub fn transfer_at(&self, i: usize) -> Option<TransferAt> {
+        self.transfer
+            .as_ref()
+            .map(|t| TransferAt::at_speed(t, self.speeds[i]))
+    }
+}
+
+/// The first stage of [`Study::build`]: the nominal sweep, and at each point its values and
+/// exact gradients (handed to the other workers as soon as the point is solved).
+struct FirstStage {
+    nominal: Vec<Option<Point>>,
+    locals: Vec<Option<LocalModel>>,
+    failures: Vec<(f64, String)>,
+    termination: Termination,
+}
+
+impl FirstStage {
+    fn run(model: &Compiled, vars: &[usize], speeds: &[f64], run: &Run) -> FirstStage {
         let transfer = model.model().analysis.transfer;
         let p = model.model().nominal();
         let n = speeds.len();
@@ -164,7 +236,6 @@ impl<'a> Study<'a> {
         // The local models' working memory: one workspace per task running at once, taken
         // from and given back to this list.
         let memory: Mutex<Vec<Workspace>> = Mutex::new(Vec::new());
-        let start = Instant::now();
         // Progress counts both stages: the gradients, then the Hessians, of every speed.
         let total = 2 * n;
         run.pool.install(|| {
@@ -179,8 +250,8 @@ impl<'a> Study<'a> {
                     }
                     match sweep.step(w) {
                         Ok(pt) => {
-                            let (slot, done, pt_local, p, vars, memory) =
-                                (&slots[i], &done, pt.clone(), &p, &vars, &memory);
+                            let (slot, done, pt_local, p, memory) =
+                                (&slots[i], &done, pt.clone(), &p, &memory);
                             scope.spawn(move |_| {
                                 let lock = || memory.lock().unwrap_or_else(|e| e.into_inner());
                                 let workspace = lock().pop().unwrap_or_default();
@@ -204,11 +275,10 @@ impl<'a> Study<'a> {
                 }
             })
         });
-        let first_order = start.elapsed().as_secs_f64();
-        let mut locals: Vec<Option<LocalModel>> = slots
+        let locals: Vec<Option<LocalModel>> = slots
             .into_iter()
             .map(|m| m.into_inner().expect("unpoisoned"))
-            .zip(&speeds)
+            .zip(speeds)
             .map(|(lm, &w)| match lm? {
                 Ok(lm) => Some(lm),
                 Err(e) => {
@@ -217,49 +287,11 @@ impl<'a> Study<'a> {
                 }
             })
             .collect();
-        let start = Instant::now();
-        done.store(n, Ordering::Relaxed);
-        run.pool.install(|| {
-            locals.par_iter_mut().zip(&nominal).for_each_init(
-                Workspace::default,
-                |workspace, (lm, pt)| {
-                    if let (Some(lm), Some(pt)) = (lm, pt)
-                        && !run.cancel.is_cancelled()
-                    {
-                        DesignPoint::new(model, &p, pt)
-                            .with_model_transfer(transfer.as_ref())
-                            .with_workspace(workspace)
-                            .add_hessians(lm);
-                    }
-                    let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    (run.progress)(d, total);
-                },
-            )
-        });
-        if run.cancel.is_cancelled() {
-            termination = Termination::Cancelled;
-        }
-        let second_order = start.elapsed().as_secs_f64();
-        failures.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Study {
-            model,
-            outputs: output::of_model(model.model()),
-            branches: branch_counts(&nominal),
-            vars,
-            speeds,
+        FirstStage {
             nominal,
             locals,
-            transfer,
-            termination,
             failures,
-            seconds: (first_order, second_order),
+            termination,
         }
-    }
-
-    /// The transfer function at speed `i` (excited at its order times the speed).
-    pub fn transfer_at(&self, i: usize) -> Option<TransferAt> {
-        self.transfer
-            .as_ref()
-            .map(|t| TransferAt::at_speed(t, self.speeds[i]))
     }
 }

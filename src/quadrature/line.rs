@@ -143,7 +143,7 @@ impl Context<'_> {
         let mut sums = Sums::new(self.outs.len(), self.modes);
         for (a, b, st) in self.pieces(li, stride) {
             match st {
-                Some(st) => self.piece(&st, a, b, &mut sums, &mut atoms, control),
+                Some(st) => self.piece(&st, (a, b), &mut sums, &mut atoms, control),
                 None => undefined(a, b, &mut sums, control),
             }
         }
@@ -275,8 +275,7 @@ impl Context<'_> {
     fn piece(
         &self,
         st: &Stencil,
-        a: f64,
-        b: f64,
+        (a, b): (f64, f64),
         sums: &mut Sums,
         atoms: &mut Option<Atoms>,
         control: &[Option<OnLine>],
@@ -285,24 +284,7 @@ impl Context<'_> {
             return;
         }
         let mut c = vec![0.0; self.store.width];
-        // Breakpoints (and whether ω_d has a square-root edge there): sign changes of D, p
-        // and s of every mode.
-        let mut cuts = vec![(a, false), (b, false)];
-        for m in 0..self.modes {
-            for f in 0..3 {
-                let mut h = |t: f64| {
-                    st.eval(t, &mut c);
-                    let (s, p) = Carriers::new(&c).pair(m);
-                    match f {
-                        0 => pair::discriminant(s, p),
-                        1 => p,
-                        _ => growth(s, p),
-                    }
-                };
-                cuts.extend(roots_in(&mut h, a, b).into_iter().map(|r| (r, f == 0)));
-            }
-        }
-        cuts.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let cuts = self.breakpoints(st, a, b);
         let other = st.branch != self.branch;
         let modes = self.modes;
         // A mode can be unstable between nodes only where one of the stencil's nodes says so:
@@ -386,6 +368,29 @@ impl Context<'_> {
                 }
             }
         }
+    }
+
+    /// Where `st` is cut on `[a, b]`, with the ends (and whether ω_d has a square-root edge
+    /// there): the sign changes of D, p and s of every mode, in order.
+    fn breakpoints(&self, st: &Stencil, a: f64, b: f64) -> Vec<(f64, bool)> {
+        let mut c = vec![0.0; self.store.width];
+        let mut cuts = vec![(a, false), (b, false)];
+        for m in 0..self.modes {
+            for f in 0..3 {
+                let mut h = |t: f64| {
+                    st.eval(t, &mut c);
+                    let (s, p) = Carriers::new(&c).pair(m);
+                    match f {
+                        0 => pair::discriminant(s, p),
+                        1 => p,
+                        _ => growth(s, p),
+                    }
+                };
+                cuts.extend(roots_in(&mut h, a, b).into_iter().map(|r| (r, f == 0)));
+            }
+        }
+        cuts.sort_by(|x, y| x.0.total_cmp(&y.0));
+        cuts
     }
 }
 

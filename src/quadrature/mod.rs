@@ -33,7 +33,7 @@
 //! 4. Along each line, nodes `t` on a uniform grid over `[−6, 6]`, refined by halving where
 //!    the along-line error is what misses the requested accuracy. **Every node is a sample**: its design
 //!    is swept from the lowest speed with the Monte Carlo's own continuation
-//!    ([`crate::sampling::sample_sweep`]), so it sits on the branch a sweep follows.
+//!    ([`crate::propagate::Study::sweep_design`]), so it sits on the branch a sweep follows.
 //! 5. At each speed, per line: the nodes are grouped into runs on the same branch; between
 //!    nodes the smooth carriers are interpolated by cubics within a run (the pair invariants
 //!    `s = λ₁+λ₂`, `p = λ₁λ₂` of every mode and |H|); where the branch changes between two
@@ -74,7 +74,7 @@ mod yields;
 use crate::output::{Output, Quantity};
 use crate::pair::Carriers;
 use crate::program::{Tier, Workspace};
-use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
+use crate::propagate::{DesignAt, Estimate, Propagation, Run, Study, Termination};
 use crate::sampling::DesignMap;
 use crate::sweep::Point;
 use crate::table::Event;
@@ -87,7 +87,7 @@ use rules::{Levels, Line, Rule, Stage, Transverse, design, grid};
 use statrs::distribution::{ContinuousCDF, Normal};
 use sums::{evaluate, next_stage, within};
 pub use yields::{AtTarget, MarginStat, QuadYield};
-use yields::{Requirements, at_target, evaluate_yield};
+use yields::{Requirements, evaluate_yield, final_yield};
 
 /// Settings of the quadrature.
 #[derive(Debug, Clone, Copy)]
@@ -299,12 +299,8 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
             moments: true,
             ..reqs
         };
-        let (mut y, _) = run
-            .pool
-            .install(|| evaluate_yield(&store, rule, stage, &nominal, &reqs));
         run.pool
-            .install(|| at_target(&store, rule, stage, &nominal, &reqs, &mut y));
-        y
+            .install(|| final_yield(&store, rule, stage, &nominal, &reqs))
     });
     let met = within(&result.stats, tolerance);
     for (row, within) in result.stats.iter_mut().zip(met) {
@@ -328,17 +324,16 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
 fn nominal_margins(study: &Study, requirements: &[crate::model::Requirement]) -> Vec<f64> {
     let mut worst = vec![f64::INFINITY; requirements.len()];
     for (i, pt) in study.nominal.iter().enumerate() {
-        let at = pt.as_ref().map(|pt| (pt, true));
-        crate::margins::margins_at(
-            requirements,
-            study.speeds[i],
-            at,
-            study.transfer_at(i),
-            crate::margins::covers,
-            |r, m| {
-                worst[r] = worst[r].min(m);
-            },
-        );
+        let at = pt.as_ref().map(|pt| DesignAt {
+            nominal: pt,
+            point: pt,
+            switches: study.branches[i],
+            same_branch: true,
+            transfer: study.transfer_at(i),
+        });
+        study.margins(i, at.as_ref(), crate::margins::covers, |r, m| {
+            worst[r] = worst[r].min(m);
+        });
     }
     worst
         .into_iter()

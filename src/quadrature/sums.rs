@@ -42,136 +42,24 @@ pub(super) fn evaluate(
     nominal: &Reference,
     control: Option<&Control>,
 ) -> Evaluation {
-    let (lines, transverse) = (&rule.lines, rule.transverse);
-    let (first_level, last_level) = (rule.levels.first, rule.levels.last);
-    let stride = 1 << (last_level - stage.level);
-    let coarse = stride << 1;
-    let (nominal_values, branches, outs, modes) = (
-        nominal.values,
-        nominal.branches,
-        nominal.outs,
-        nominal.modes,
-    );
-    let check_stride = 1 << (last_level - first_level);
     let per_speed: Vec<_> = (0..store.speeds)
         .into_par_iter()
         .map(|i| {
-            let shift: Vec<f64> = nominal_values[i]
+            let shift: Vec<f64> = nominal.values[i]
                 .iter()
                 .map(|v| if v.is_finite() { *v } else { 0.0 })
                 .collect();
             let ctx = Context {
                 store,
                 speed: i,
-                outs,
-                modes,
+                outs: nominal.outs,
+                modes: nominal.modes,
                 shift: &shift,
-                branch: branches[i] as u32,
+                branch: nominal.branches[i] as u32,
             };
-            let mut fine = Sums::new(outs.len(), modes);
-            let mut rough = Sums::new(outs.len(), modes);
-            let mut check = Sums::new(outs.len(), modes);
-            let mut main_at_check = Sums::new(outs.len(), modes);
-            let replicates = match transverse {
-                Transverse::Scrambled { replicates } => replicates,
-                _ => 1,
-            };
-            let mut reps = vec![Sums::new(outs.len(), modes); replicates];
-            let mut atoms: Vec<Vec<(f64, f64)>> = vec![Vec::new(); outs.len()];
-            let none = vec![None; outs.len()];
-            for (li, line) in lines.iter().enumerate() {
-                if !rule.uses(line, stage) {
-                    continue;
-                }
-                let on_line = control.map(|c| c.on_line(i, li, outs.len()));
-                let cv = on_line.as_deref().unwrap_or(&none);
-                let weight = rule.weight(line, stage);
-                if rule.checks(line, stage) {
-                    let s = ctx.line(li, check_stride, cv, None);
-                    check.add_scaled(&s, weight);
-                    continue;
-                }
-                let s = ctx.line(li, stride, cv, Some((&mut atoms, weight)));
-                fine.add_scaled(&s, weight);
-                reps[line.replicate].add_scaled(&s, weight * replicates as f64);
-                rough.add_scaled(&ctx.line(li, coarse, cv, None), weight);
-                if transverse == Transverse::Tensor {
-                    main_at_check.add_scaled(&ctx.line(li, check_stride, cv, None), weight);
-                }
-            }
-            // Transverse error of a statistic computed from sums.
-            let transverse_error = |f: &dyn Fn(&Sums) -> Option<f64>| -> f64 {
-                across(transverse, (&main_at_check, &check), &reps, f)
-            };
-            let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
-            let (stats, parts): (Vec<_>, Vec<_>) = (0..outs.len())
-                .map(|o| {
-                    let Some((mean, std)) = fine.moments(o, shift[o]) else {
-                        return (None, None);
-                    };
-                    let (rm, rs) = rough.moments(o, shift[o]).unwrap_or((f64::NAN, f64::NAN));
-                    let floor = EVAL_PRECISION * (mean.abs() + std);
-                    let along = (
-                        finite(2.0 * (mean - rm).abs() + floor),
-                        finite(2.0 * (std - rs).abs() + floor),
-                    );
-                    let across = (
-                        finite(transverse_error(&|s: &Sums| {
-                            s.moments(o, shift[o]).map(|m| m.0)
-                        })),
-                        finite(transverse_error(&|s: &Sums| {
-                            s.moments(o, shift[o]).map(|m| m.1)
-                        })),
-                    );
-                    let mut q = quantiles(&mut atoms[o]);
-                    if control.is_some() {
-                        q = rescaled(q, &atoms[o], mean, std);
-                    }
-                    let stat = QuadStat {
-                        mean,
-                        std,
-                        quantiles: q,
-                        mean_error: along.0 + across.0,
-                        std_error: along.1 + across.1,
-                        // Decided once the refinement stops ([`within`]).
-                        within_request: false,
-                    };
-                    let parts = ErrorParts {
-                        along: along.0.max(along.1),
-                        across: across.0.max(across.1),
-                    };
-                    (Some(stat), Some(parts))
-                })
-                .unzip();
-            let (probabilities, probability_parts) = if fine.mass > 0.0 {
-                (0..modes + 2)
-                    .map(|e| {
-                        let p = fine.probability(e);
-                        let part = ErrorParts {
-                            along: 2.0 * (p - rough.probability(e)).abs(),
-                            across: transverse_error(&|s: &Sums| Some(s.probability(e))),
-                        };
-                        let err = part.along + part.across;
-                        let probability = Probability {
-                            event: match e {
-                                e if e < modes => Event::Overdamped,
-                                e if e == modes => Event::Unstable,
-                                _ => Event::OtherBranch,
-                            },
-                            mode: (e < modes).then_some(e),
-                            probability: p,
-                            error: if err.is_finite() { err } else { 1.0 },
-                        };
-                        let part = ErrorParts {
-                            along: finite(part.along),
-                            across: finite(part.across),
-                        };
-                        (probability, part)
-                    })
-                    .unzip()
-            } else {
-                (Vec::new(), Vec::new())
-            };
+            let mut sums = SpeedSums::new(&ctx, rule, stage, control);
+            let (stats, parts) = sums.statistics(&shift, control.is_some());
+            let (probabilities, probability_parts) = sums.probabilities(nominal.modes);
             (stats, parts, probabilities, probability_parts)
         })
         .collect();
@@ -188,6 +76,161 @@ pub(super) fn evaluate(
         out.probability_parts.push(probability_parts);
     }
     out
+}
+
+/// The sums of one speed over the lines a stage uses: on the stage's nodes (`fine`, with the
+/// outputs' atoms for the quantiles), on every other one (`rough`), per replicate of a
+/// scrambled rule (`reps`), and for the tensor rule's transverse check the lines of the order
+/// below (`check`) and the rule in use (`main_at_check`) on the coarsest grid.
+struct SpeedSums {
+    transverse: Transverse,
+    fine: Sums,
+    rough: Sums,
+    check: Sums,
+    main_at_check: Sums,
+    reps: Vec<Sums>,
+    atoms: Vec<Vec<(f64, f64)>>,
+}
+
+impl SpeedSums {
+    fn new(ctx: &Context, rule: &Rule, stage: Stage, control: Option<&Control>) -> SpeedSums {
+        let (first_level, last_level) = (rule.levels.first, rule.levels.last);
+        let stride = 1 << (last_level - stage.level);
+        let coarse = stride << 1;
+        let check_stride = 1 << (last_level - first_level);
+        let (outs, modes) = (ctx.outs.len(), ctx.modes);
+        let transverse = rule.transverse;
+        let replicates = match transverse {
+            Transverse::Scrambled { replicates } => replicates,
+            _ => 1,
+        };
+        let mut sums = SpeedSums {
+            transverse,
+            fine: Sums::new(outs, modes),
+            rough: Sums::new(outs, modes),
+            check: Sums::new(outs, modes),
+            main_at_check: Sums::new(outs, modes),
+            reps: vec![Sums::new(outs, modes); replicates],
+            atoms: vec![Vec::new(); outs],
+        };
+        let none = vec![None; outs];
+        for (li, line) in rule.lines.iter().enumerate() {
+            if !rule.uses(line, stage) {
+                continue;
+            }
+            let on_line = control.map(|c| c.on_line(ctx.speed, li, outs));
+            let cv = on_line.as_deref().unwrap_or(&none);
+            let weight = rule.weight(line, stage);
+            if rule.checks(line, stage) {
+                let s = ctx.line(li, check_stride, cv, None);
+                sums.check.add_scaled(&s, weight);
+                continue;
+            }
+            let s = ctx.line(li, stride, cv, Some((&mut sums.atoms, weight)));
+            sums.fine.add_scaled(&s, weight);
+            sums.reps[line.replicate].add_scaled(&s, weight * replicates as f64);
+            sums.rough
+                .add_scaled(&ctx.line(li, coarse, cv, None), weight);
+            if transverse == Transverse::Tensor {
+                let s = ctx.line(li, check_stride, cv, None);
+                sums.main_at_check.add_scaled(&s, weight);
+            }
+        }
+        sums
+    }
+
+    /// Transverse error of a statistic computed from sums.
+    fn transverse_error(&self, f: &dyn Fn(&Sums) -> Option<f64>) -> f64 {
+        across(
+            self.transverse,
+            (&self.main_at_check, &self.check),
+            &self.reps,
+            f,
+        )
+    }
+
+    /// Each output's moments and quantiles with their error estimates (`shift` the nominal
+    /// values the sums are taken about; the quantiles rescaled to the moments where the sums
+    /// are of `controlled` outputs).
+    fn statistics(
+        &mut self,
+        shift: &[f64],
+        controlled: bool,
+    ) -> (Vec<Option<QuadStat>>, Vec<Option<ErrorParts>>) {
+        let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
+        (0..shift.len())
+            .map(|o| {
+                let Some((mean, std)) = self.fine.moments(o, shift[o]) else {
+                    return (None, None);
+                };
+                let (rm, rs) = (self.rough)
+                    .moments(o, shift[o])
+                    .unwrap_or((f64::NAN, f64::NAN));
+                let floor = EVAL_PRECISION * (mean.abs() + std);
+                let along = (
+                    finite(2.0 * (mean - rm).abs() + floor),
+                    finite(2.0 * (std - rs).abs() + floor),
+                );
+                let across = (
+                    finite(self.transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.0))),
+                    finite(self.transverse_error(&|s: &Sums| s.moments(o, shift[o]).map(|m| m.1))),
+                );
+                let mut q = quantiles(&mut self.atoms[o]);
+                if controlled {
+                    q = rescaled(q, &self.atoms[o], mean, std);
+                }
+                let stat = QuadStat {
+                    mean,
+                    std,
+                    quantiles: q,
+                    mean_error: along.0 + across.0,
+                    std_error: along.1 + across.1,
+                    // Decided once the refinement stops ([`within`]).
+                    within_request: false,
+                };
+                let parts = ErrorParts {
+                    along: along.0.max(along.1),
+                    across: across.0.max(across.1),
+                };
+                (Some(stat), Some(parts))
+            })
+            .unzip()
+    }
+
+    /// The probability of each event (each of the `modes` overdamped, unstable, on another
+    /// branch) with its error estimate; none where no design has a point here.
+    fn probabilities(&self, modes: usize) -> (Vec<Probability>, Vec<ErrorParts>) {
+        let has_mass = self.fine.mass > 0.0;
+        if !has_mass {
+            return (Vec::new(), Vec::new());
+        }
+        let finite = |e: f64| if e.is_finite() { e } else { f64::INFINITY };
+        (0..modes + 2)
+            .map(|e| {
+                let p = self.fine.probability(e);
+                let part = ErrorParts {
+                    along: 2.0 * (p - self.rough.probability(e)).abs(),
+                    across: self.transverse_error(&|s: &Sums| Some(s.probability(e))),
+                };
+                let err = part.along + part.across;
+                let probability = Probability {
+                    event: match e {
+                        e if e < modes => Event::Overdamped,
+                        e if e == modes => Event::Unstable,
+                        _ => Event::OtherBranch,
+                    },
+                    mode: (e < modes).then_some(e),
+                    probability: p,
+                    error: if err.is_finite() { err } else { 1.0 },
+                };
+                let part = ErrorParts {
+                    along: finite(part.along),
+                    across: finite(part.across),
+                };
+                (probability, part)
+            })
+            .unzip()
+    }
 }
 
 /// The transverse part of the error estimate of a statistic `f` of a rule's sums: none for one

@@ -23,7 +23,7 @@
 //! lines), and the error estimate (the surrogate of the rule of the order below, and the
 //! finer rule against its half) says what that costs.
 
-use super::rules::{Line, Rule};
+use super::rules::{Line, Rule, TENSOR_ORDERS};
 use super::{NodeData, Sweep};
 use crate::linalg::gauss_hermite;
 
@@ -82,17 +82,17 @@ fn lagrange(nodes: &[f64], y: f64) -> Vec<f64> {
 }
 
 /// The virtual lines at `virt`'s points, interpolated across the lines of `rule` of tensor rank
-/// `rank` (the Gauss–Hermite rule of `order` points per dimension) at the nodes of the finest
-/// grid taken every `stride`: a [`NodeData`] whose lines are the virtual ones, the other nodes
-/// left unswept.
+/// `rank` (the Gauss–Hermite rule of [`TENSOR_ORDERS`]`[rank]` points per dimension) at the
+/// nodes of the finest grid taken every `stride`: a [`NodeData`] whose lines are the virtual
+/// ones, the other nodes left unswept.
 pub(super) fn interpolate(
     store: &NodeData,
     rule: &Rule,
     rank: usize,
-    order: usize,
     stride: usize,
     virt: &VirtualRule,
 ) -> NodeData {
+    let order = TENSOR_ORDERS[rank];
     let real: Vec<(usize, &Line)> = rule
         .lines
         .iter()

@@ -4,7 +4,6 @@
 
 use super::{MarginStat, QuadResult, QuadYield};
 use crate::margins::{has_margin, reaches};
-use crate::model::Requirement;
 use crate::output::{Missing, Quantity};
 use crate::propagate::{Study, Tabulate};
 use crate::table::{
@@ -20,15 +19,7 @@ impl Tabulate for Option<QuadResult> {
         };
         tables.quadrature_rules.push((q.rule.clone(), q.nodes));
         if let Some(y) = &q.yields {
-            let m = study.model.model();
-            tables.yields.extend(yield_rows(
-                case,
-                y,
-                &m.requirements,
-                &study.speeds,
-                q.nodes,
-                m.allocation.target_yield,
-            ));
+            tables.yields.extend(yield_rows(study, case, y, q.nodes));
         }
         for (si, lm) in study.locals.iter().enumerate() {
             let Some(lm) = lm else {
@@ -82,16 +73,12 @@ fn missing(lm: &LocalModel, k: usize) -> Missing {
     }
 }
 
-/// The quadrature's rows of case `case` (`nodes` swept), with what the design meets at
-/// `target`.
-fn yield_rows(
-    case: usize,
-    y: &QuadYield,
-    reqs: &[Requirement],
-    speeds: &[f64],
-    nodes: usize,
-    target: f64,
-) -> Vec<YieldRow> {
+/// The quadrature's rows of case `case` (`nodes` swept), with what the design meets at the
+/// model's target yield.
+fn yield_rows(study: &Study, case: usize, y: &QuadYield, nodes: usize) -> Vec<YieldRow> {
+    let m = study.model.model();
+    let (reqs, speeds) = (&m.requirements, &study.speeds);
+    let target = m.allocation.target_yield;
     let ci = |(p, e): (f64, f64)| ((p - e).max(0.0), (p + e).min(1.0));
     // Within the request: the probability's error (absolute), and the worst margin's mean and
     // σ errors relative to its σ.

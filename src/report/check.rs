@@ -15,17 +15,9 @@ pub fn check_summary(model: &Model) -> String {
     }
     let body = |b: Option<usize>| b.map_or("ground".to_string(), |i| model.bodies[i].name.clone());
     let _ = writeln!(s, "  joints ({}):", model.joints.len());
-    // Columns as wide as the longest name, so that long names do not push them out of line.
-    let wide = |names: &mut dyn Iterator<Item = &str>, least: usize| {
-        names
-            .map(|n| n.chars().count())
-            .max()
-            .unwrap_or(0)
-            .max(least)
-    };
-    let jw = wide(&mut model.joints.iter().map(|j| j.name.as_str()), 12);
-    let kw = wide(&mut model.joints.iter().map(|j| j.kind.name()), 10);
-    let pw = wide(&mut model.parameters.iter().map(|p| p.name.as_str()), 14);
+    let jw = wide(model.joints.iter().map(|j| j.name.as_str()), 12);
+    let kw = wide(model.joints.iter().map(|j| j.kind.name()), 10);
+    let pw = wide(model.parameters.iter().map(|p| p.name.as_str()), 14);
     for j in &model.joints {
         let kind = j.kind.name();
         let drive = if j.drive.is_some() { ", driven" } else { "" };
@@ -46,6 +38,40 @@ pub fn check_summary(model: &Model) -> String {
         model.free().len()
     );
     let _ = writeln!(s, "  force elements: {}", model.forces.len());
+    loads(&mut s, model);
+    constraints(&mut s, model);
+    let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
+    parameters(&mut s, model, pw);
+    if !model.analysis.cases.is_empty() {
+        let names: Vec<&str> = model
+            .analysis
+            .cases
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
+        let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
+    }
+    for (case, at, defect) in model.tolerance_limits() {
+        let _ = writeln!(
+            s,
+            "  warning: case '{case}' reaches a physical limit within its tolerances: at {at}, {defect}; Monte Carlo samples beyond it count as failed"
+        );
+    }
+    s
+}
+
+/// Columns as wide as the longest name (at least `least`), so that long names do not push
+/// them out of line.
+fn wide<'a>(names: impl Iterator<Item = &'a str>, least: usize) -> usize {
+    names
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(least)
+}
+
+/// The applied loads, where there are any.
+fn loads(s: &mut String, model: &Model) {
     if !model.loads.is_empty() {
         let _ = writeln!(s, "  loads ({}):", model.loads.len());
         for l in &model.loads {
@@ -68,6 +94,10 @@ pub fn check_summary(model: &Model) -> String {
             let _ = writeln!(s, "    {}: {what}", l.name);
         }
     }
+}
+
+/// The cut joints (with their equations dropped as redundant) and the couplers.
+fn constraints(s: &mut String, model: &Model) {
     let _ = writeln!(
         s,
         "  constraints: {} ({} equations)",
@@ -101,7 +131,10 @@ pub fn check_summary(model: &Model) -> String {
             model.coordinates[c.coordinates[1]].name
         );
     }
-    let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
+}
+
+/// The parameters with their tolerances (names in a column `pw` wide), and the derived ones.
+fn parameters(s: &mut String, model: &Model, pw: usize) {
     let _ = writeln!(s, "  parameters ({}):", model.parameters.len());
     for p in &model.parameters {
         let tol = match p.tolerance {
@@ -112,7 +145,7 @@ pub fn check_summary(model: &Model) -> String {
         let _ = writeln!(s, "    {:<pw$} {}{tol}", p.name, p.value);
     }
     if !model.derived.is_empty() {
-        let dw = wide(&mut model.derived.iter().map(|d| d.name.as_str()), 14);
+        let dw = wide(model.derived.iter().map(|d| d.name.as_str()), 14);
         let _ = writeln!(
             s,
             "  derived parameters ({}, not design variables):",
@@ -122,20 +155,4 @@ pub fn check_summary(model: &Model) -> String {
             let _ = writeln!(s, "    {:<dw$} {} = {}", d.name, d.value, d.text);
         }
     }
-    if !model.analysis.cases.is_empty() {
-        let names: Vec<&str> = model
-            .analysis
-            .cases
-            .iter()
-            .map(|c| c.name.as_str())
-            .collect();
-        let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
-    }
-    for (case, at, defect) in model.tolerance_limits() {
-        let _ = writeln!(
-            s,
-            "  warning: case '{case}' reaches a physical limit within its tolerances: at {at}, {defect}; Monte Carlo samples beyond it count as failed"
-        );
-    }
-    s
 }

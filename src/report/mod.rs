@@ -35,10 +35,7 @@ pub use modal::{
     body_shapes, display_shape, modal_json, modal_table, modes_failed_rows, modes_header,
     modes_rows,
 };
-pub use sensitivity::{
-    SENSITIVITY_HEADER, elasticity, sensitivity_json, sensitivity_rows, sensitivity_table,
-    transfer_defect_at,
-};
+pub use sensitivity::{SENSITIVITY_HEADER, SensitivityReport, elasticity, transfer_defect_at};
 pub use summary::{paper_timings, summary_json};
 pub use sweep::{SweepColumns, sweep_header, sweep_rows};
 pub use tolerance::{PROBABILITY_HEADER, probability_rows, tolerance_header, tolerance_rows};

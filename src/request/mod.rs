@@ -7,10 +7,12 @@
 //! read, so that a bad flag is reported before a slow load), [`Checked::resolve`] the rest
 //! against the model. A refusal is a [`RequestError`] naming the setting ([`Setting`]); each
 //! front end writes that name its own way (`--samples`, `samples`). One operating point's
-//! request is a [`PointRequest`].
+//! request is a [`PointRequest`], an allocation's an [`AllocateRequest`].
 
+mod allocate;
 mod point;
 
+pub use allocate::AllocateRequest;
 pub use point::{PointRequest, PointRequestError};
 
 use crate::analyze::AnalyzeOptions;
@@ -196,33 +198,7 @@ impl Checked {
     /// the quadrature). `cancel` is the run's cancellation.
     pub fn resolve(self, model: &Model, cancel: Cancel) -> Result<Resolved, RequestError> {
         let Checked(request) = self;
-        let from_model = matches!(request.speeds, Speeds::Model);
-        let (speeds, range) = match request.speeds {
-            Speeds::Model => {
-                let r = model.analysis.speed.ok_or(RequestError::NoSpeeds)?;
-                settings::analysis_speeds(r.len()).map_err(RequestError::ModelSpeeds)?;
-                (r.speeds().collect(), Some(r))
-            }
-            Speeds::Range(r) => {
-                settings::analysis_speeds(r.len()).map_err(RequestError::Speeds)?;
-                (r.speeds().collect(), Some(r))
-            }
-            Speeds::Values(v) => {
-                let v = settings::values(v).map_err(RequestError::Speeds)?;
-                settings::analysis_speeds(v.len()).map_err(RequestError::Speeds)?;
-                (v, None)
-            }
-        };
-        // Every requirement judged over its range (refused where the speeds cannot: see
-        // `Model::check_requirement_speeds`), its ends among the speeds.
-        model.check_requirement_speeds(&speeds).map_err(|e| {
-            if from_model {
-                RequestError::ModelSpeeds(e)
-            } else {
-                RequestError::Speeds(e)
-            }
-        })?;
-        let speeds = model.judged_speeds(&speeds);
+        let (speeds, range) = judged_speeds(request.speeds, model)?;
         let cases = model
             .tolerance_cases(&request.cases)
             .map_err(|e| RequestError::Cases(e.to_string()))?;
@@ -266,6 +242,40 @@ impl Checked {
             target_yield: request.target_yield,
         })
     }
+}
+
+/// The speeds asked for (at most [`settings::MAX_ANALYSIS_SPEEDS`]), every requirement judged
+/// over its range (refused where the speeds cannot: see `Model::check_requirement_speeds`) with
+/// its ends added ([`Model::judged_speeds`]); with the range asked for, where one was.
+fn judged_speeds(
+    speeds: Speeds,
+    model: &Model,
+) -> Result<(Vec<f64>, Option<SpeedRange>), RequestError> {
+    let from_model = matches!(speeds, Speeds::Model);
+    let (speeds, range) = match speeds {
+        Speeds::Model => {
+            let r = model.analysis.speed.ok_or(RequestError::NoSpeeds)?;
+            settings::analysis_speeds(r.len()).map_err(RequestError::ModelSpeeds)?;
+            (r.speeds().collect(), Some(r))
+        }
+        Speeds::Range(r) => {
+            settings::analysis_speeds(r.len()).map_err(RequestError::Speeds)?;
+            (r.speeds().collect(), Some(r))
+        }
+        Speeds::Values(v) => {
+            let v = settings::values(v).map_err(RequestError::Speeds)?;
+            settings::analysis_speeds(v.len()).map_err(RequestError::Speeds)?;
+            (v, None)
+        }
+    };
+    model.check_requirement_speeds(&speeds).map_err(|e| {
+        if from_model {
+            RequestError::ModelSpeeds(e)
+        } else {
+            RequestError::Speeds(e)
+        }
+    })?;
+    Ok((model.judged_speeds(&speeds), range))
 }
 
 #[cfg(test)]

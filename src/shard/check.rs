@@ -4,19 +4,32 @@ use super::file::{ShardError, ShardFile};
 use super::fingerprint::Fingerprint;
 use crate::montecarlo::{self, Moments, MonteCarlo};
 
+/// What every shard of a run holds: so many speeds, outputs per speed, tolerance cases and
+/// requirements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    pub speeds: usize,
+    pub outputs: usize,
+    pub cases: usize,
+    pub requirements: usize,
+}
+
 impl ShardFile {
     /// Checks that the shard was computed from what `fingerprint` describes (naming what
-    /// differs otherwise), and that every block and count is what shard `shard` of `of` must
-    /// hold: `speeds` speeds, `outputs` outputs per speed, `cases` tolerance cases.
+    /// differs otherwise), and that every block and count is what shard `shard` of `of` of a
+    /// run of `layout` must hold.
     pub fn check(
         &self,
         file: &str,
         fingerprint: &Fingerprint,
-        speeds: usize,
-        outputs: usize,
-        cases: usize,
-        requirements: usize,
+        expected: Layout,
     ) -> Result<(), ShardError> {
+        let Layout {
+            speeds,
+            outputs,
+            cases,
+            ..
+        } = expected;
         let err = |message: String| ShardError {
             file: file.to_string(),
             message,
@@ -88,20 +101,19 @@ impl ShardFile {
                 }
             }
         }
-        self.check_kept(speeds, outputs, cases, requirements)
-            .map_err(err)
+        self.check_kept(expected).map_err(err)
     }
 
     /// The kept values: one set per case where the run keeps them (none otherwise), each
     /// value finite, as many per output as its blocks count values, and per requirement one
     /// worst margin per sample.
-    fn check_kept(
-        &self,
-        speeds: usize,
-        outputs: usize,
-        cases: usize,
-        requirements: usize,
-    ) -> Result<(), String> {
+    fn check_kept(&self, layout: Layout) -> Result<(), String> {
+        let Layout {
+            speeds,
+            outputs,
+            cases,
+            requirements,
+        } = layout;
         let want = if MonteCarlo::keeps(self.samples, speeds, outputs) {
             cases
         } else {

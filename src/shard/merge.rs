@@ -1,5 +1,6 @@
 //! Gathering the shards of one run, and the analysis that merges them.
 
+use super::check::Layout;
 use super::file::{MAX_BYTES, ShardError, ShardFile, output_count};
 use super::fingerprint::{Fingerprint, RunSettings};
 use crate::analyze::AnalyzeOptions;
@@ -169,14 +170,13 @@ pub fn verify(
         let speeds = model
             .judged_speeds(&range.speeds().collect::<Vec<_>>())
             .len();
-        f.check(
-            name,
-            &fingerprint,
+        let layout = Layout {
             speeds,
-            output_count(model),
-            cases.len(),
-            model.requirements.len(),
-        )?;
+            outputs: output_count(model),
+            cases: cases.len(),
+            requirements: model.requirements.len(),
+        };
+        f.check(name, &fingerprint, layout)?;
     }
     gather(files, &fingerprint)
 }

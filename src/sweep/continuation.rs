@@ -2,7 +2,7 @@
 //! and tracking of the modes by their shapes.
 
 use super::point::{BranchKind, Origin, Point, PointError};
-use super::solve::point_from;
+use super::solve::Solver;
 use super::{Options, initial_guess};
 use crate::compiled::Compiled;
 use crate::equilibrium::{EquilibriumError, Start};
@@ -137,125 +137,9 @@ impl<'a> Sweep<'a> {
     /// extrapolation of their Jacobians for chord steps; then the last solution with its
     /// Jacobian; then the model's initial guess.
     pub fn step(&mut self, speed: f64) -> Result<Point, PointError> {
-        // The extrapolated start first.
-        let mut predicted: Option<Guess> = None;
-        let nodes: Vec<&Solved> = self.history.iter().collect();
-        if nodes.len() >= 2 {
-            let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
-                let weights = extrapolation(speed, nodes)?;
-                let mut out = vec![0.0; field(nodes[0]).len()];
-                for (w, s) in weights.iter().zip(nodes) {
-                    for (o, v) in out.iter_mut().zip(field(s)) {
-                        *o += w * v;
-                    }
-                }
-                Some(out)
-            };
-            let diff = |a: &[f64], b: &[f64]| {
-                a.iter()
-                    .zip(b)
-                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-            };
-            // Each higher order where its correction to the one below is small against that
-            // one's own correction (a smooth branch); not past the first that is not (say
-            // just past a bifurcation, where the branch has a kink).
-            let mut order = 0;
-            let mut q: Option<Vec<f64>> = None;
-            let mut correction = f64::INFINITY;
-            for k in 1..nodes.len() {
-                let Some(next) = predict(&nodes[..=k], |s| &s.q) else {
-                    break;
-                };
-                let c = diff(&next, q.as_deref().unwrap_or(&nodes[0].q));
-                if k > 1 && c > 0.1 * correction {
-                    break;
-                }
-                (order, q, correction) = (k, Some(next), c);
-            }
-            if let Some(q) = q {
-                // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²)
-                // rather than O(Δspeed), so that a point usually takes two residuals, not three.
-                let n = nodes[0].jacobian.nrows();
-                let jacobian = predict(&nodes[..2], |s| s.jacobian.as_slice())
-                    .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
-                    .map(|j| DMatrix::from_vec(n, n, j));
-                predicted = Some(Guess {
-                    q,
-                    lambda: predict(&nodes[..=order], |s| &s.lambda),
-                    jacobian,
-                    origin: Origin::Continued {
-                        speed: nodes[0].speed,
-                    },
-                });
-            }
-        }
-        let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
-            iterations: 0,
-        }));
-        // Then the last solution with its Jacobian, then the model's initial guess, each made
-        // only when the starts before it failed.
-        let last = std::iter::once_with(|| {
-            nodes.first().map(|s1| Guess {
-                q: s1.q.clone(),
-                lambda: Some(s1.lambda.clone()),
-                jacobian: Some(s1.jacobian.clone()),
-                origin: Origin::Continued { speed: s1.speed },
-            })
-        })
-        .flatten();
-        let fallback = std::iter::once_with(|| {
-            initial_guess(self.model.model(), &self.params, speed).map(|q| Guess {
-                q,
-                lambda: None,
-                jacobian: None,
-                origin: Origin::InitialGuess,
-            })
-        });
-        for guess in predicted.into_iter().chain(last).map(Ok).chain(fallback) {
-            let guess = guess?;
-            let start = Start {
-                lambda: guess.lambda.as_deref(),
-                jacobian: guess.jacobian.as_ref(),
-                steady_known: self.steady_known,
-            };
-            let q0 = &guess.q;
-            result = point_from(
-                self.model,
-                &self.params,
-                speed,
-                q0,
-                start,
-                &self.options,
-                self.workspace.get(),
-            );
-            if let Ok(pt) = &mut result {
-                pt.branch.origin = guess.origin;
-                break;
-            }
-        }
-        let mut pt = result?;
-        if let Some(unstable) = &pt.switched_from {
-            // Did the branch followed lose its stability, or did Newton from the previous
-            // solution fall onto an unstable equilibrium nearby (near a pitchfork the stable
-            // branch moves like √Δspeed) and the switch return to the branch followed (the
-            // search leans towards the start, see `point_from`)? With u the unstable
-            // equilibrium and f the stable one found, the previous solution p lies near u in
-            // the first case (it drifts by O(Δspeed) while f − u is O(√Δspeed) or O(1)) and on
-            // f's side of u in the second.
-            if let Some(prev) = self.history.first() {
-                let (mut pf, mut ff) = (0.0, 0.0);
-                for ((p, f), u) in prev.q.iter().zip(&pt.equilibrium.q).zip(unstable) {
-                    pf += (p - u) * (f - u);
-                    ff += (f - u) * (f - u);
-                }
-                // Right after a switch the predictor has a single solution to go on, and a
-                // return to the same side is a return to the branch just switched to.
-                pt.new_branch =
-                    !(ff > 0.0 && pf > 0.0 && (prev.switched || pf > RETURN_FRACTION * ff));
-            }
-            // A switch starts the predictor's history anew: extrapolating through solutions of
-            // another branch leads Newton back onto it.
-            self.history.clear();
+        let mut pt = self.solve(speed)?;
+        if pt.switched_from.is_some() {
+            self.judge_switch(&mut pt);
         }
         if let Some(prev) = &self.last_shapes
             && prev.len() == pt.modes.len()
@@ -286,6 +170,133 @@ impl<'a> Sweep<'a> {
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
         Ok(pt)
+    }
+
+    /// The point at `speed` from the first start that converges: the extrapolated one, the
+    /// last solution with its Jacobian, the model's initial guess (each made only when the
+    /// starts before it failed).
+    fn solve(&self, speed: f64) -> Result<Point, PointError> {
+        let mut result = Err(PointError::Equilibrium(EquilibriumError::NotFinite {
+            iterations: 0,
+        }));
+        let last = std::iter::once_with(|| {
+            self.history.first().map(|s1| Guess {
+                q: s1.q.clone(),
+                lambda: Some(s1.lambda.clone()),
+                jacobian: Some(s1.jacobian.clone()),
+                origin: Origin::Continued { speed: s1.speed },
+            })
+        })
+        .flatten();
+        let fallback = std::iter::once_with(|| {
+            initial_guess(self.model.model(), &self.params, speed).map(|q| Guess {
+                q,
+                lambda: None,
+                jacobian: None,
+                origin: Origin::InitialGuess,
+            })
+        });
+        let predicted = self.predicted(speed);
+        for guess in predicted.into_iter().chain(last).map(Ok).chain(fallback) {
+            let guess = guess?;
+            let start = Start {
+                lambda: guess.lambda.as_deref(),
+                jacobian: guess.jacobian.as_ref(),
+                steady_known: self.steady_known,
+            };
+            let solver = Solver {
+                model: self.model,
+                p: &self.params,
+                opt: &self.options,
+                workspace: self.workspace.get(),
+            };
+            result = solver.point_from(speed, &guess.q, start);
+            if let Ok(pt) = &mut result {
+                pt.branch.origin = guess.origin;
+                break;
+            }
+        }
+        result
+    }
+
+    /// The extrapolation of the last solutions to `speed` (coordinates and multipliers: up to
+    /// a cubic on a smooth branch, down to the secant where the higher orders do not settle)
+    /// with the secant extrapolation of their Jacobians; `None` with fewer than two.
+    fn predicted(&self, speed: f64) -> Option<Guess> {
+        let nodes: Vec<&Solved> = self.history.iter().collect();
+        if nodes.len() < 2 {
+            return None;
+        }
+        let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
+            let weights = extrapolation(speed, nodes)?;
+            let mut out = vec![0.0; field(nodes[0]).len()];
+            for (w, s) in weights.iter().zip(nodes) {
+                for (o, v) in out.iter_mut().zip(field(s)) {
+                    *o += w * v;
+                }
+            }
+            Some(out)
+        };
+        let diff = |a: &[f64], b: &[f64]| {
+            a.iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        // Each higher order where its correction to the one below is small against that one's
+        // own correction (a smooth branch); not past the first that is not (say just past a
+        // bifurcation, where the branch has a kink).
+        let mut order = 0;
+        let mut q: Option<Vec<f64>> = None;
+        let mut correction = f64::INFINITY;
+        for k in 1..nodes.len() {
+            let Some(next) = predict(&nodes[..=k], |s| &s.q) else {
+                break;
+            };
+            let c = diff(&next, q.as_deref().unwrap_or(&nodes[0].q));
+            if k > 1 && c > 0.1 * correction {
+                break;
+            }
+            (order, q, correction) = (k, Some(next), c);
+        }
+        // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²) rather
+        // than O(Δspeed), so that a point usually takes two residuals, not three.
+        let n = nodes[0].jacobian.nrows();
+        let jacobian = predict(&nodes[..2], |s| s.jacobian.as_slice())
+            .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
+            .map(|j| DMatrix::from_vec(n, n, j));
+        Some(Guess {
+            q: q?,
+            lambda: predict(&nodes[..=order], |s| &s.lambda),
+            jacobian,
+            origin: Origin::Continued {
+                speed: nodes[0].speed,
+            },
+        })
+    }
+
+    /// After a switch of branch at `pt`: did the branch followed lose its stability, or did
+    /// Newton from the previous solution fall onto an unstable equilibrium nearby (near a
+    /// pitchfork the stable branch moves like √Δspeed) and the switch return to the branch
+    /// followed (the search leans towards the start, see [`Solver::point_from`])? With u the
+    /// unstable equilibrium and f the stable one found, the previous solution p lies near u in
+    /// the first case (it drifts by O(Δspeed) while f − u is O(√Δspeed) or O(1)) and on f's
+    /// side of u in the second. A switch starts the predictor's history anew: extrapolating
+    /// through solutions of another branch leads Newton back onto it.
+    fn judge_switch(&mut self, pt: &mut Point) {
+        let Some(unstable) = &pt.switched_from else {
+            return;
+        };
+        if let Some(prev) = self.history.first() {
+            let (mut pf, mut ff) = (0.0, 0.0);
+            for ((p, f), u) in prev.q.iter().zip(&pt.equilibrium.q).zip(unstable) {
+                pf += (p - u) * (f - u);
+                ff += (f - u) * (f - u);
+            }
+            // Right after a switch the predictor has a single solution to go on, and a
+            // return to the same side is a return to the branch just switched to.
+            pt.new_branch = !(ff > 0.0 && pf > 0.0 && (prev.switched || pf > RETURN_FRACTION * ff));
+        }
+        self.history.clear();
     }
 }
 

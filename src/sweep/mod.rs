@@ -13,7 +13,7 @@ mod solve;
 
 pub use continuation::Sweep;
 pub use point::{Branch, BranchKind, Origin, Point, PointError};
-pub use solve::{point, point_at, point_from};
+pub use solve::{Solver, point, point_at};
 
 use crate::equilibrium::Settings;
 use crate::model::{FieldError, Model};

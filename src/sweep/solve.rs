@@ -22,7 +22,13 @@ pub fn point(
     opt: &Options,
 ) -> Result<Point, PointError> {
     let workspace = Workspace::default();
-    point_from(model, p, speed, q0, Start::default(), opt, &workspace)
+    let solver = Solver {
+        model,
+        p,
+        opt,
+        workspace: &workspace,
+    };
+    solver.point_from(speed, q0, Start::default())
 }
 
 /// Solves one operating point from the model's initial guess (what `modal` reports).
@@ -36,6 +42,16 @@ pub fn point_at(
     let mut pt = point(model, p, speed, &q0, opt)?;
     pt.branch.origin = Origin::InitialGuess;
     Ok(pt)
+}
+
+/// The operating points of one design: the model, its parameters `p`, the options, and the
+/// workspace the recorded program's passes run in.
+#[derive(Debug, Clone, Copy)]
+pub struct Solver<'a> {
+    pub model: &'a Compiled,
+    pub p: &'a [f64],
+    pub opt: &'a Options,
+    pub workspace: &'a Workspace,
 }
 
 /// Amplitudes (rad or m at the largest coordinate of a mode's shape) of the steps off an
@@ -80,133 +96,160 @@ fn search_directions(first: &Point) -> Vec<(usize, C64, bool, Vec<f64>)> {
     out
 }
 
-/// As [`point`], with more to start Newton from (see [`Start`]), the recorded program's
-/// passes run in `workspace`.
-pub fn point_from(
-    model: &Compiled,
-    p: &[f64],
-    speed: f64,
-    q0: &[f64],
-    start: Start,
-    opt: &Options,
-    workspace: &Workspace,
-) -> Result<Point, PointError> {
-    // On the model's route (the recorded program when there is one).
-    let problem = model.problem(p, speed, q0, (opt.tier, workspace))?;
-    let solved = problem.solve(speed, q0, start, opt.newton).map_err(|e| {
-        // A failed solve with redundant cut joints or couplers is reported as such, naming
-        // them.
-        let redundant = problem.redundant_equations(q0);
-        if redundant.is_empty() {
-            return e;
+impl Solver<'_> {
+    /// The point at `speed` from the guess `q0`, with more to start Newton from (see
+    /// [`Start`]); past an unstable equilibrium, the stable one found by stepping along its
+    /// unstable modes (unless [`Options::no_branch_switch`]).
+    pub fn point_from(&self, speed: f64, q0: &[f64], start: Start) -> Result<Point, PointError> {
+        let Solver { model, p, opt, .. } = *self;
+        // On the model's route (the recorded program when there is one).
+        let problem = model.problem(p, speed, q0, (opt.tier, self.workspace))?;
+        let solved = self.solve(&problem, speed, q0, start)?;
+        let mut first = analyse(model.model(), p, &problem, solved, opt)?;
+        if first.stable() {
+            return Ok(first);
         }
-        let owners = model.model().equation_owners();
-        let mut names: Vec<String> = redundant.iter().map(|&k| owners[k].to_string()).collect();
-        names.dedup();
-        EquilibriumError::RedundantConstraints {
-            names,
-            rank: model.model().n_constraints() - redundant.len(),
-            equations: model.model().n_constraints(),
-        }
-    })?;
-    let mut first = analyse(model.model(), p, &problem, solved, opt)?;
-    if first.stable() {
-        return Ok(first);
-    }
-    // The most unstable mode, for the record.
-    let worst = (0..first.modes.len())
-        .filter(|&k| first.modes[k].class == ModeClass::Unstable)
-        .max_by(|&a, &b| {
-            let re = |k: usize| first.modes[k].root.lambda.re;
-            re(a).total_cmp(&re(b))
-        })
-        .map(|k| (k, first.modes[k].root.lambda));
-    let unstable = |searched: bool| {
-        let (mode, root) = worst.unwrap_or_default();
-        BranchKind::Unstable {
-            mode,
-            re: root.re,
-            im: root.im,
-            searched,
-        }
-    };
-    let directions = search_directions(&first);
-    if opt.no_branch_switch || directions.is_empty() {
-        first.branch.kind = unstable(!opt.no_branch_switch);
-        first.branch.kind = unstable(false);
-        return Ok(first);
-    }
-    let free = &first.linear.free;
-    // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep that
-    // fell onto the unstable equilibrium returns to its own branch), else the side of the
-    // model's initial guess (then the positive side).
-    let guess = initial_guess(model.model(), p, speed)?;
-    let side = |q: &[f64], dir: &[f64]| -> f64 {
-        free.iter()
-            .enumerate()
-            .map(|(k, &i)| dir[k] * (q[i] - first.equilibrium.q[i]))
-            .sum()
-    };
-    // A stable equilibrium on the side stepped to is taken at once; one that Newton reached
-    // across the unstable equilibrium only if no step finds one on its own side.
-    let mut across = None;
-    for amp in SEARCH_AMPLITUDES {
-        for (k, root, imaginary_part, dir) in &directions {
-            let mut lean = side(q0, dir);
-            if lean.abs() <= 1e-9 {
-                lean = side(&guess, dir);
+        // The most unstable mode, for the record.
+        let worst = (0..first.modes.len())
+            .filter(|&k| first.modes[k].class == ModeClass::Unstable)
+            .max_by(|&a, &b| {
+                let re = |k: usize| first.modes[k].root.lambda.re;
+                re(a).total_cmp(&re(b))
+            })
+            .map(|k| (k, first.modes[k].root.lambda));
+        let unstable = |searched: bool| {
+            let (mode, root) = worst.unwrap_or_default();
+            BranchKind::Unstable {
+                mode,
+                re: root.re,
+                im: root.im,
+                searched,
             }
-            let signs = if lean < -1e-9 {
-                [-1.0, 1.0]
-            } else {
-                [1.0, -1.0]
-            };
-            for s in signs {
-                let mut q = first.equilibrium.q.clone();
-                for (j, &i) in free.iter().enumerate() {
-                    q[i] += s * amp * dir[j];
+        };
+        let directions = search_directions(&first);
+        if opt.no_branch_switch || directions.is_empty() {
+            first.branch.kind = unstable(false);
+            return Ok(first);
+        }
+        let found = self.stable_nearby(&problem, q0, &first, &directions)?;
+        Ok(found.unwrap_or_else(|| {
+            first.branch.kind = unstable(true);
+            first
+        }))
+    }
+
+    /// Newton's solve of `problem` from `q0`; a failure with redundant cut joints or couplers
+    /// is reported as such, naming them.
+    fn solve(
+        &self,
+        problem: &Problem,
+        speed: f64,
+        q0: &[f64],
+        start: Start,
+    ) -> Result<Solution, EquilibriumError> {
+        problem
+            .solve(speed, q0, start, self.opt.newton)
+            .map_err(|e| {
+                let redundant = problem.redundant_equations(q0);
+                if redundant.is_empty() {
+                    return e;
                 }
-                let Ok(solved) = problem.solve(speed, &q, Start::default(), opt.newton) else {
-                    continue;
+                let model = self.model.model();
+                let owners = model.equation_owners();
+                let mut names: Vec<String> =
+                    redundant.iter().map(|&k| owners[k].to_string()).collect();
+                names.dedup();
+                EquilibriumError::RedundantConstraints {
+                    names,
+                    rank: model.n_constraints() - redundant.len(),
+                    equations: model.n_constraints(),
+                }
+            })
+    }
+
+    /// A stable equilibrium near the unstable one `first` (solved from `q0`), by Newton from
+    /// steps of growing amplitude along `directions` ([`search_directions`]); `None` where no
+    /// step finds one.
+    fn stable_nearby(
+        &self,
+        problem: &Problem,
+        q0: &[f64],
+        first: &Point,
+        directions: &[(usize, C64, bool, Vec<f64>)],
+    ) -> Result<Option<Point>, PointError> {
+        let Solver { model, p, opt, .. } = *self;
+        let speed = first.speed;
+        let free = &first.linear.free;
+        // Prefer the side the Newton start lies on (in a sweep, the last solution: a sweep
+        // that fell onto the unstable equilibrium returns to its own branch), else the side of
+        // the model's initial guess (then the positive side).
+        let guess = initial_guess(model.model(), p, speed)?;
+        let side = |q: &[f64], dir: &[f64]| -> f64 {
+            free.iter()
+                .enumerate()
+                .map(|(k, &i)| dir[k] * (q[i] - first.equilibrium.q[i]))
+                .sum()
+        };
+        // A stable equilibrium on the side stepped to is taken at once; one that Newton
+        // reached across the unstable equilibrium only if no step finds one on its own side.
+        let mut across = None;
+        for amp in SEARCH_AMPLITUDES {
+            for (k, root, imaginary_part, dir) in directions {
+                let mut lean = side(q0, dir);
+                if lean.abs() <= 1e-9 {
+                    lean = side(&guess, dir);
+                }
+                let signs = if lean < -1e-9 {
+                    [-1.0, 1.0]
+                } else {
+                    [1.0, -1.0]
                 };
-                let eq = &solved.equilibrium;
-                let moved = free.iter().fold(0.0f64, |m, &i| {
-                    m.max((eq.q[i] - first.equilibrium.q[i]).abs())
-                });
-                if moved < 1e-7 {
-                    continue;
-                }
-                let own_side = side(&eq.q, dir) * s > 0.0;
-                if let Ok(pt) = analyse(model.model(), p, &problem, solved, opt)
-                    && pt.stable()
-                {
-                    let kind = BranchKind::Switched {
-                        mode: *k,
-                        re: root.re,
-                        im: root.im,
-                        imaginary_part: *imaginary_part,
-                        sign: s,
-                        amplitude: amp,
-                    };
-                    let pt = Point {
-                        switched_from: Some(first.equilibrium.q.clone()),
-                        new_branch: true,
-                        branch: Branch {
-                            kind,
-                            ..first.branch.clone()
-                        },
-                        ..pt
-                    };
-                    if own_side {
-                        return Ok(pt);
+                for s in signs {
+                    let mut q = first.equilibrium.q.clone();
+                    for (j, &i) in free.iter().enumerate() {
+                        q[i] += s * amp * dir[j];
                     }
-                    across.get_or_insert(pt);
+                    let Ok(solved) = problem.solve(speed, &q, Start::default(), opt.newton) else {
+                        continue;
+                    };
+                    let eq = &solved.equilibrium;
+                    let moved = free.iter().fold(0.0f64, |m, &i| {
+                        m.max((eq.q[i] - first.equilibrium.q[i]).abs())
+                    });
+                    if moved < 1e-7 {
+                        continue;
+                    }
+                    let own_side = side(&eq.q, dir) * s > 0.0;
+                    if let Ok(pt) = analyse(model.model(), p, problem, solved, opt)
+                        && pt.stable()
+                    {
+                        let kind = BranchKind::Switched {
+                            mode: *k,
+                            re: root.re,
+                            im: root.im,
+                            imaginary_part: *imaginary_part,
+                            sign: s,
+                            amplitude: amp,
+                        };
+                        let pt = Point {
+                            switched_from: Some(first.equilibrium.q.clone()),
+                            new_branch: true,
+                            branch: Branch {
+                                kind,
+                                ..first.branch.clone()
+                            },
+                            ..pt
+                        };
+                        if own_side {
+                            return Ok(Some(pt));
+                        }
+                        across.get_or_insert(pt);
+                    }
                 }
             }
         }
+        Ok(across)
     }
-    first.branch.kind = unstable(true);
-    Ok(across.unwrap_or(first))
 }
 
 /// Linearises and solves the modes at a converged equilibrium.
@@ -235,7 +278,7 @@ fn analyse(
     let stiffness = eq.jacobian.view((0, 0), (nf, nf)).into_owned();
     let linear = match rates {
         Some(Rates { damping, mass }) => {
-            reduce(&free, &independent, &phi_r, mass, damping, stiffness)?
+            reduce(&free, &independent, &phi_r, [mass, damping, stiffness])?
         }
         // The recorded route always gives the rates; directly otherwise.
         None => problem

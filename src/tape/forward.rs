@@ -106,13 +106,6 @@ impl Tape {
             "a seeding of this program"
         );
         let (val, tan, dirty) = (&mut work.val, &mut work.tan, &mut work.dirty);
-        // An operand's value. SAFETY: `val` holds a value for every operation (resized above)
-        // and an operand precedes its operation, so it is in bounds and written already.
-        macro_rules! v {
-            ($a:expr) => {
-                unsafe { *val.get_unchecked($a as usize) }
-            };
-        }
         for (i, op) in self.ops.iter().enumerate().skip(ns) {
             let (lo, w) = seeding.range[i];
             let at = if REUSE {
@@ -121,18 +114,7 @@ impl Tape {
                 i as u32
             };
             if REUSE && w > 0 {
-                let (lo, w) = (lo as usize, w as usize);
-                let written = if w == 1 {
-                    (lo, lo + 1)
-                } else {
-                    (lo, lo + w.div_ceil(CHUNK) * CHUNK)
-                };
-                let d = &mut dirty[at as usize];
-                if d.0 < written.0 || d.1 > written.1 {
-                    let row = at as usize * stride;
-                    tan[row + d.0..row + d.1].fill(zero);
-                }
-                *d = written;
+                take_row(tan, &mut dirty[at as usize], at as usize * stride, (lo, w));
             }
             let lanes = Lanes::<REUSE> {
                 stride,
@@ -141,73 +123,7 @@ impl Tape {
                 width: w as usize,
                 slot: &seeding.slots.slot,
             };
-            let v = match *op {
-                Op::Input(k) => {
-                    lanes.map(tan, [], |[]| zero);
-                    if lanes.width > 0 {
-                        for &l in &seeding.input_lanes[k as usize] {
-                            tan[lanes.at * stride + l as usize] = S::from(1.0);
-                        }
-                    }
-                    x[k as usize]
-                }
-                Op::Const(c) => {
-                    lanes.map(tan, [], |[]| zero);
-                    S::from(c)
-                }
-                Op::Add(a, b) => {
-                    lanes.map(tan, [a, b], |[x, y]| x + y);
-                    v!(a) + v!(b)
-                }
-                Op::Sub(a, b) => {
-                    lanes.map(tan, [a, b], |[x, y]| x - y);
-                    v!(a) - v!(b)
-                }
-                Op::Mul(a, b) => {
-                    let (va, vb) = (v!(a), v!(b));
-                    lanes.map(tan, [a, b], |[x, y]| x * vb + va * y);
-                    va * vb
-                }
-                Op::Neg(a) => {
-                    lanes.map(tan, [a], |[x]| -x);
-                    -v!(a)
-                }
-                Op::AddC(a, c) => {
-                    lanes.map(tan, [a], |[x]| x);
-                    v!(a) + c
-                }
-                Op::MulC(a, c) => {
-                    lanes.map(tan, [a], |[x]| x * c);
-                    v!(a) * c
-                }
-                Op::MulAdd(a, b, c) => {
-                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
-                    lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y + z);
-                    va * vb + vc
-                }
-                Op::MulSub(a, b, c) => {
-                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
-                    lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y - z);
-                    va * vb - vc
-                }
-                Op::SubMul(a, b, c) => {
-                    let (va, vb, vc) = (v!(a), v!(b), v!(c));
-                    lanes.map(tan, [a, b, c], |[x, y, z]| z - (x * vb + va * y));
-                    vc - va * vb
-                }
-                op => {
-                    // Division and the functions: local partials from a dual evaluation.
-                    let (v, da, db) = op.partials(val);
-                    match (op.args(), da, db) {
-                        ([Some(a), Some(b), _], Some(da), Some(db)) => {
-                            lanes.map(tan, [a, b], |[x, y]| da * x + db * y)
-                        }
-                        ([Some(a), _, _], Some(da), _) => lanes.map(tan, [a], |[x]| da * x),
-                        _ => lanes.map(tan, [], |[]| zero),
-                    }
-                    v
-                }
-            };
+            let v = step(*op, &lanes, (val, tan), x, seeding);
             // SAFETY: `i` is an operation's index and `val` holds one value for each.
             unsafe { *val.get_unchecked_mut(i) = v };
         }
@@ -281,6 +197,111 @@ impl<S: Clone> Rows<'_, S> {
 /// the time of the pass lane by lane). `f64` and `Dual64` keep their chunks.
 const fn wide<S>() -> bool {
     std::mem::size_of::<S>() > 16
+}
+
+/// Takes over the row at `row` of `tan` for an operation that writes the lanes `(lo, w)`
+/// (`w > 0`): clears what the row's last operation wrote (`dirty`) outside what the new one
+/// writes, and records what it writes.
+#[inline(always)]
+fn take_row<S: Real>(tan: &mut [S], dirty: &mut (usize, usize), row: usize, (lo, w): (u32, u32)) {
+    let (lo, w) = (lo as usize, w as usize);
+    let written = if w == 1 {
+        (lo, lo + 1)
+    } else {
+        (lo, lo + w.div_ceil(CHUNK) * CHUNK)
+    };
+    if dirty.0 < written.0 || dirty.1 > written.1 {
+        tan[row + dirty.0..row + dirty.1].fill(S::from(0.0));
+    }
+    *dirty = written;
+}
+
+/// One operation of the forward pass: writes its tangents over `lanes` into `tan` from its
+/// operands' and returns its value (`val` holds every operation's before it, `x` the inputs).
+#[inline(always)]
+fn step<S: Real, const REUSE: bool>(
+    op: Op,
+    lanes: &Lanes<'_, REUSE>,
+    (val, tan): (&[S], &mut [S]),
+    x: &[S],
+    seeding: &Seeding,
+) -> S {
+    let zero = S::from(0.0);
+    let stride = lanes.stride;
+    // An operand's value. SAFETY: `val` holds a value for every operation (resized by the
+    // caller) and an operand precedes its operation, so it is in bounds and written already.
+    macro_rules! v {
+        ($a:expr) => {
+            unsafe { *val.get_unchecked($a as usize) }
+        };
+    }
+    match op {
+        Op::Input(k) => {
+            lanes.map(tan, [], |[]| zero);
+            if lanes.width > 0 {
+                for &l in &seeding.input_lanes[k as usize] {
+                    tan[lanes.at * stride + l as usize] = S::from(1.0);
+                }
+            }
+            x[k as usize]
+        }
+        Op::Const(c) => {
+            lanes.map(tan, [], |[]| zero);
+            S::from(c)
+        }
+        Op::Add(a, b) => {
+            lanes.map(tan, [a, b], |[x, y]| x + y);
+            v!(a) + v!(b)
+        }
+        Op::Sub(a, b) => {
+            lanes.map(tan, [a, b], |[x, y]| x - y);
+            v!(a) - v!(b)
+        }
+        Op::Mul(a, b) => {
+            let (va, vb) = (v!(a), v!(b));
+            lanes.map(tan, [a, b], |[x, y]| x * vb + va * y);
+            va * vb
+        }
+        Op::Neg(a) => {
+            lanes.map(tan, [a], |[x]| -x);
+            -v!(a)
+        }
+        Op::AddC(a, c) => {
+            lanes.map(tan, [a], |[x]| x);
+            v!(a) + c
+        }
+        Op::MulC(a, c) => {
+            lanes.map(tan, [a], |[x]| x * c);
+            v!(a) * c
+        }
+        Op::MulAdd(a, b, c) => {
+            let (va, vb, vc) = (v!(a), v!(b), v!(c));
+            lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y + z);
+            va * vb + vc
+        }
+        Op::MulSub(a, b, c) => {
+            let (va, vb, vc) = (v!(a), v!(b), v!(c));
+            lanes.map(tan, [a, b, c], |[x, y, z]| x * vb + va * y - z);
+            va * vb - vc
+        }
+        Op::SubMul(a, b, c) => {
+            let (va, vb, vc) = (v!(a), v!(b), v!(c));
+            lanes.map(tan, [a, b, c], |[x, y, z]| z - (x * vb + va * y));
+            vc - va * vb
+        }
+        op => {
+            // Division and the functions: local partials from a dual evaluation.
+            let (v, da, db) = op.partials(val);
+            match (op.args(), da, db) {
+                ([Some(a), Some(b), _], Some(da), Some(db)) => {
+                    lanes.map(tan, [a, b], |[x, y]| da * x + db * y)
+                }
+                ([Some(a), _, _], Some(da), _) => lanes.map(tan, [a], |[x]| da * x),
+                _ => lanes.map(tan, [], |[]| zero),
+            }
+            v
+        }
+    }
 }
 
 /// The lanes one operation of [`Tape::forward`] writes: `width` lanes from `lo` of tangent row

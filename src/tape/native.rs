@@ -396,15 +396,6 @@ impl Emitter<'_> {
     /// Operation `i` of [`Tape::forward`]: its lanes written, its value returned.
     fn forward(&mut self, i: usize, op: Op, s: &Seeding) -> Value {
         let lanes = written(s.range[i]);
-        // Operand `a`'s lane `l`: a zero outside the lanes its operation wrote.
-        let lane = |e: &mut Self, a: u32, l: usize| {
-            if written(s.range[a as usize]).contains(&l) {
-                e.load(e.tan, a as usize * e.stride + l)
-            } else {
-                e.constant(0.0)
-            }
-        };
-        let v = |e: &mut Self, a: u32| e.load(e.val, a as usize);
         match op {
             Op::Input(k) => {
                 for l in lanes.clone() {
@@ -428,7 +419,7 @@ impl Emitter<'_> {
             }
             Op::Add(a, b) | Op::Sub(a, b) => {
                 for l in lanes {
-                    let (x, y) = (lane(self, a, l), lane(self, b, l));
+                    let (x, y) = (self.lane(s, a, l), self.lane(s, b, l));
                     let t = match op {
                         Op::Add(..) => self.b.ins().fadd(x, y),
                         _ => self.b.ins().fsub(x, y),
@@ -439,7 +430,7 @@ impl Emitter<'_> {
             }
             Op::Neg(a) | Op::AddC(a, _) | Op::MulC(a, _) => {
                 for l in lanes {
-                    let x = lane(self, a, l);
+                    let x = self.lane(s, a, l);
                     let t = match op {
                         Op::Neg(_) => self.b.ins().fneg(x),
                         Op::AddC(..) => x,
@@ -453,82 +444,106 @@ impl Emitter<'_> {
                 }
                 self.value(i, op)
             }
-            Op::Mul(a, b) | Op::MulAdd(a, b, _) | Op::MulSub(a, b, _) | Op::SubMul(a, b, _) => {
-                let (va, vb) = (v(self, a), v(self, b));
-                for l in lanes {
-                    let (x, y) = (lane(self, a, l), lane(self, b, l));
-                    let xb = self.b.ins().fmul(x, vb);
-                    let ay = self.b.ins().fmul(va, y);
-                    let d = self.b.ins().fadd(xb, ay);
-                    let t = match op {
-                        Op::MulAdd(_, _, c) => {
-                            let z = lane(self, c, l);
-                            self.b.ins().fadd(d, z)
-                        }
-                        Op::MulSub(_, _, c) => {
-                            let z = lane(self, c, l);
-                            self.b.ins().fsub(d, z)
-                        }
-                        Op::SubMul(_, _, c) => {
-                            let z = lane(self, c, l);
-                            self.b.ins().fsub(z, d)
-                        }
-                        _ => d,
-                    };
-                    self.store(self.tan, i * self.stride + l, t);
-                }
-                let p = self.b.ins().fmul(va, vb);
-                match op {
-                    Op::MulAdd(_, _, c) => {
-                        let c = v(self, c);
-                        self.b.ins().fadd(p, c)
-                    }
-                    Op::MulSub(_, _, c) => {
-                        let c = v(self, c);
-                        self.b.ins().fsub(p, c)
-                    }
-                    Op::SubMul(_, _, c) => {
-                        let c = v(self, c);
-                        self.b.ins().fsub(c, p)
-                    }
-                    _ => p,
-                }
+            Op::Mul(..) | Op::MulAdd(..) | Op::MulSub(..) | Op::SubMul(..) => {
+                self.product(i, op, s)
             }
-            _ => {
-                // Division and the functions: value and partials from the interpreter's code.
-                let slot = *self.slot.get_or_insert_with(|| {
-                    self.b.create_sized_stack_slot(StackSlotData::new(
-                        StackSlotKind::ExplicitSlot,
-                        24,
-                        3,
-                    ))
-                });
-                let out = self.b.ins().stack_addr(self.ptr, slot, 0);
-                let index = self.b.ins().iconst(self.ptr, i as i64);
-                self.b
-                    .ins()
-                    .call(self.callbacks.0, &[self.ops, index, self.val, out]);
-                let [value, da, db] =
-                    [0, 8, 16].map(|o| self.b.ins().stack_load(self.ptr, types::F64, slot, o));
-                let [a, b, _] = op.args();
-                for l in lanes {
-                    let t = match (a, b) {
-                        (Some(a), Some(b)) => {
-                            let (x, y) = (lane(self, a, l), lane(self, b, l));
-                            let dx = self.b.ins().fmul(da, x);
-                            let dy = self.b.ins().fmul(db, y);
-                            self.b.ins().fadd(dx, dy)
-                        }
-                        (Some(a), None) => {
-                            let x = lane(self, a, l);
-                            self.b.ins().fmul(da, x)
-                        }
-                        _ => self.constant(0.0),
-                    };
-                    self.store(self.tan, i * self.stride + l, t);
-                }
-                value
-            }
+            _ => self.by_callback(i, op, s),
         }
+    }
+
+    /// Operand `a`'s lane `l`: a zero outside the lanes its operation wrote.
+    fn lane(&mut self, s: &Seeding, a: u32, l: usize) -> Value {
+        if written(s.range[a as usize]).contains(&l) {
+            self.load(self.tan, a as usize * self.stride + l)
+        } else {
+            self.constant(0.0)
+        }
+    }
+
+    /// Operand `a`'s value.
+    fn v(&mut self, a: u32) -> Value {
+        self.load(self.val, a as usize)
+    }
+
+    /// [`Self::forward`] of a product (`Mul`, `MulAdd`, `MulSub`, `SubMul`).
+    fn product(&mut self, i: usize, op: Op, s: &Seeding) -> Value {
+        let lanes = written(s.range[i]);
+        let [Some(a), Some(b), _] = op.args() else {
+            unreachable!("a product has two factors")
+        };
+        let (va, vb) = (self.v(a), self.v(b));
+        for l in lanes {
+            let (x, y) = (self.lane(s, a, l), self.lane(s, b, l));
+            let xb = self.b.ins().fmul(x, vb);
+            let ay = self.b.ins().fmul(va, y);
+            let d = self.b.ins().fadd(xb, ay);
+            let t = match op {
+                Op::MulAdd(_, _, c) => {
+                    let z = self.lane(s, c, l);
+                    self.b.ins().fadd(d, z)
+                }
+                Op::MulSub(_, _, c) => {
+                    let z = self.lane(s, c, l);
+                    self.b.ins().fsub(d, z)
+                }
+                Op::SubMul(_, _, c) => {
+                    let z = self.lane(s, c, l);
+                    self.b.ins().fsub(z, d)
+                }
+                _ => d,
+            };
+            self.store(self.tan, i * self.stride + l, t);
+        }
+        let p = self.b.ins().fmul(va, vb);
+        match op {
+            Op::MulAdd(_, _, c) => {
+                let c = self.v(c);
+                self.b.ins().fadd(p, c)
+            }
+            Op::MulSub(_, _, c) => {
+                let c = self.v(c);
+                self.b.ins().fsub(p, c)
+            }
+            Op::SubMul(_, _, c) => {
+                let c = self.v(c);
+                self.b.ins().fsub(c, p)
+            }
+            _ => p,
+        }
+    }
+
+    /// [`Self::forward`] of a division or a function: value and partials from the
+    /// interpreter's code.
+    fn by_callback(&mut self, i: usize, op: Op, s: &Seeding) -> Value {
+        let lanes = written(s.range[i]);
+        let slot = *self.slot.get_or_insert_with(|| {
+            self.b
+                .create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, 24, 3))
+        });
+        let out = self.b.ins().stack_addr(self.ptr, slot, 0);
+        let index = self.b.ins().iconst(self.ptr, i as i64);
+        self.b
+            .ins()
+            .call(self.callbacks.0, &[self.ops, index, self.val, out]);
+        let [value, da, db] =
+            [0, 8, 16].map(|o| self.b.ins().stack_load(self.ptr, types::F64, slot, o));
+        let [a, b, _] = op.args();
+        for l in lanes {
+            let t = match (a, b) {
+                (Some(a), Some(b)) => {
+                    let (x, y) = (self.lane(s, a, l), self.lane(s, b, l));
+                    let dx = self.b.ins().fmul(da, x);
+                    let dy = self.b.ins().fmul(db, y);
+                    self.b.ins().fadd(dx, dy)
+                }
+                (Some(a), None) => {
+                    let x = self.lane(s, a, l);
+                    self.b.ins().fmul(da, x)
+                }
+                _ => self.constant(0.0),
+            };
+            self.store(self.tan, i * self.stride + l, t);
+        }
+        value
     }
 }

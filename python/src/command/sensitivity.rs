@@ -33,7 +33,13 @@ pub(crate) fn sensitivity<'py>(
             .sensitivities(&wrt, how)
             .map_err(|e| SolveError::new_err(format!("sensitivities at {speed:?} rad/s: {e}")))?;
         let why = report::transfer_defect_at(&pt, at.as_ref());
-        Ok(report::sensitivity_rows(model.m(), &pt, &s, why))
+        let shown = report::SensitivityReport {
+            model: model.m(),
+            point: &pt,
+            sensitivity: &s,
+            no_transfer: why,
+        };
+        Ok(shown.rows())
     })?;
     table(py, &report::SENSITIVITY_HEADER, &rows)
 }

@@ -2,14 +2,14 @@
 
 use crate::cli::*;
 use anyhow::Result;
-use modaltol::allocate::{AllocateOptions, allocate};
+use modaltol::allocate::allocate;
 use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::files::{Inputs, ResultDir};
-use modaltol::model::{Case, Cost, Model, SpeedRange};
-use modaltol::quadrature::QuadOptions;
+use modaltol::model::{Cost, Model, SpeedRange};
+use modaltol::report;
+use modaltol::request::{AllocateRequest, Speeds};
 use modaltol::results::WriteOptions;
-use modaltol::{report, settings};
 use std::io::Write;
 
 /// `modaltol allocate` (see its `--help`).
@@ -28,12 +28,21 @@ pub(crate) fn allocate_command(
         quadrature_tolerance,
         threads,
     } = args;
-    settings::quadrature_tolerance(quadrature_tolerance)
-        .map_err(|e| InputError(format!("--quadrature-tolerance {e}")))?;
-    settings::threads(threads).map_err(|e| InputError(format!("--threads {e}")))?;
-    if let Some(y) = target_yield {
-        settings::target_yield(y).map_err(|e| InputError(format!("--target-yield {e}")))?;
-    }
+    let request = AllocateRequest {
+        speeds: match &speed {
+            Some(s) => Speeds::Range(
+                SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+            ),
+            None => Speeds::Model,
+        },
+        case,
+        costs: Vec::new(),
+        target_yield,
+        quadrature_tolerance,
+        threads,
+    };
+    // The settings that need no model first: a bad flag is reported before a slow load.
+    request.check().map_err(|e| refused(e, &None, true))?;
     let m = load(&model, set)?;
     // The allocation's target is what its analysis is judged against too.
     let m = match target_yield {
@@ -41,35 +50,18 @@ pub(crate) fn allocate_command(
         None => m,
     };
     let md = m.model();
-    let range = match &speed {
-        Some(s) => SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-        None => md.analysis.speed.ok_or_else(|| {
-            InputError("no speeds: give --speed FROM:TO:STEP or [analysis] speed".into())
-        })?,
+    let request = AllocateRequest {
+        costs: (costs.iter())
+            .map(|c| cost(md, c))
+            .collect::<Result<Vec<_>>>()?,
+        ..request
     };
-    settings::analysis_speeds(range.len()).map_err(|e| InputError(format!("--speed: {e}")))?;
-    let grid: Vec<f64> = range.speeds().collect();
-    md.check_requirement_speeds(&grid)
-        .map_err(|e| InputError(format!("--speed: {e}")))?;
-    let start = start_case(md, case.as_deref())?;
-    let costs = costs
-        .iter()
-        .map(|c| cost(md, c))
-        .collect::<Result<Vec<_>>>()?;
+    let opt = request
+        .resolve(md, cancel.clone())
+        .map_err(|e| refused(e, &None, true))?;
     let inputs = Inputs::new(&[&model]);
     refuse_input(&inputs, &output)?;
     let mut dir = protect(ResultDir::create(&output)?, inputs)?;
-    let opt = AllocateOptions {
-        speeds: md.judged_speeds(&grid),
-        case: start,
-        target: md.allocation.target_yield,
-        costs,
-        quadrature: QuadOptions {
-            tolerance: quadrature_tolerance,
-        },
-        threads,
-        cancel: cancel.clone(),
-    };
     let a = allocate(&m, &opt, &|r| {
         note!(
             "modaltol: β = {:.4}: predicted {:.6}, verified yield {:.6} ± {:.1e} ({} nodes)",
@@ -122,23 +114,6 @@ pub(crate) fn allocate_command(
         .into());
     }
     Ok(())
-}
-
-/// The case to start from: `--case`, else the model's `[allocation] case`, else the
-/// parameters' own tolerances.
-fn start_case(md: &Model, name: Option<&str>) -> Result<Case> {
-    match name.or(md.allocation.case.as_deref()) {
-        Some(n) => md
-            .analysis
-            .cases
-            .iter()
-            .find(|c| c.name == n)
-            .cloned()
-            .ok_or_else(|| {
-                InputError(format!("--case: no tolerance case '{n}' in the model")).into()
-            }),
-        None => Ok(Case::from_parameters(md)),
-    }
 }
 
 /// `NAME=B` or `NAME=B,K`.

@@ -13,6 +13,7 @@ use modaltol::results::WriteOptions;
 use modaltol::settings;
 use modaltol::shard::{RunSettings, ShardFile};
 use std::io::Write;
+use std::path::Path;
 
 /// `modaltol analyze` (see its `--help`).
 pub(crate) fn analyze_command(
@@ -20,49 +21,16 @@ pub(crate) fn analyze_command(
     set: &[(String, f64)],
     cancel: &Cancel,
 ) -> Result<()> {
+    let request = args.request()?;
     let AnalyzeArgs {
         model,
         output,
-        speed,
-        samples,
-        seed,
-        threads,
-        no_monte_carlo,
         quadrature_tolerance,
         no_quadrature,
-        sampling,
         shard,
-        cases: only,
-        sobol,
-        target_yield,
         display,
+        ..
     } = args;
-    let request = Request {
-        speeds: match &speed {
-            Some(s) => Speeds::Range(
-                SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
-            ),
-            None => Speeds::Model,
-        },
-        cases: only,
-        samples,
-        seed,
-        sampling: sampling.map(|s| match s {
-            SamplingArg::Random => Sampling::Random,
-            SamplingArg::Lhs => Sampling::Lhs,
-            SamplingArg::Sobol => Sampling::Sobol,
-        }),
-        monte_carlo: !no_monte_carlo,
-        quadrature: !no_quadrature,
-        quadrature_tolerance,
-        threads,
-        shard: shard
-            .as_deref()
-            .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
-            .transpose()?,
-        sobol,
-        target_yield,
-    };
     // The settings that need no model first: a bad flag is reported before a slow load.
     let chosen = !request.cases.is_empty();
     let request = request.check().map_err(|e| refused(e, &shard, chosen))?;
@@ -97,27 +65,14 @@ pub(crate) fn analyze_command(
     };
     let a = analyze(&m, &opt, &progress_printer());
     if let (Split::Shard(k, n), Some(mc)) = (&opt.split, mc) {
-        let Destination::Shard(mut f, path) = destination else {
+        let Destination::Shard(f, path) = destination else {
             unreachable!("a shard's destination is its file")
         };
         let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
         let range = range.expect("a command-line analysis runs over a range");
         let run = RunSettings::new(&range, &mc, tolerance, *n);
-        let Some(file) = ShardFile::of_analysis(m.model(), &opt.cases, &a, &run, *k) else {
-            return Err(Interrupted(format!(
-                "{} not written (a shard is complete or absent)",
-                path.display()
-            ))
-            .into());
-        };
-        f.write_all(file.to_json().as_bytes())
-            .with_context(|| format!("{}: cannot write", path.display()))?;
-        f.commit()?;
-        note!(
-            "modaltol: wrote {}; combine the shards with `modaltol merge`",
-            path.display()
-        );
-        return Ok(());
+        let file = ShardFile::of_analysis(m.model(), &opt.cases, &a, &run, *k);
+        return write_shard(f, &path, file);
     }
     let Destination::Directory(dir) = destination else {
         unreachable!("a whole run's destination is a directory")
@@ -130,5 +85,56 @@ pub(crate) fn analyze_command(
     };
     write_outputs(&m, &a, o, dir, &output)?;
 
+    Ok(())
+}
+
+impl AnalyzeArgs {
+    /// The request these flags make, its settings parsed but not yet checked.
+    fn request(&self) -> Result<Request> {
+        Ok(Request {
+            speeds: match &self.speed {
+                Some(s) => Speeds::Range(
+                    SpeedRange::parse(s).map_err(|e| InputError(format!("--speed: {e}")))?,
+                ),
+                None => Speeds::Model,
+            },
+            cases: self.cases.clone(),
+            samples: self.samples,
+            seed: self.seed,
+            sampling: self.sampling.map(|s| match s {
+                SamplingArg::Random => Sampling::Random,
+                SamplingArg::Lhs => Sampling::Lhs,
+                SamplingArg::Sobol => Sampling::Sobol,
+            }),
+            monte_carlo: !self.no_monte_carlo,
+            quadrature: !self.no_quadrature,
+            quadrature_tolerance: self.quadrature_tolerance,
+            threads: self.threads,
+            shard: (self.shard.as_deref())
+                .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
+                .transpose()?,
+            sobol: self.sobol,
+            target_yield: self.target_yield,
+        })
+    }
+}
+
+/// Writes a shard's `file` to `f` at `path` and commits it; `None` (a run cut short) writes
+/// nothing: a shard is complete or absent.
+fn write_shard(mut f: AtomicFile, path: &Path, file: Option<ShardFile>) -> Result<()> {
+    let Some(file) = file else {
+        return Err(Interrupted(format!(
+            "{} not written (a shard is complete or absent)",
+            path.display()
+        ))
+        .into());
+    };
+    f.write_all(file.to_json().as_bytes())
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    f.commit()?;
+    note!(
+        "modaltol: wrote {}; combine the shards with `modaltol merge`",
+        path.display()
+    );
     Ok(())
 }

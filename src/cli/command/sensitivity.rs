@@ -48,29 +48,20 @@ pub(crate) fn sensitivity_command(
     } else {
         "fd"
     };
+    let shown = report::SensitivityReport {
+        model: m.model(),
+        point: &pt,
+        sensitivity: &s,
+        no_transfer: why,
+    };
     match format {
         Format::Json => writeln!(
             w,
             "{}",
-            serde_json::to_string_pretty(&report::sensitivity_json(
-                m.model(),
-                speed,
-                method,
-                &pt,
-                &s,
-                why
-            ))?
+            serde_json::to_string_pretty(&shown.json(speed, method))?
         )?,
-        Format::Table => write!(
-            w,
-            "{}",
-            report::sensitivity_table(m.model(), speed, method, &pt, &s, why)
-        )?,
-        Format::Csv => write_csv(
-            &mut w,
-            &report::SENSITIVITY_HEADER,
-            &report::sensitivity_rows(m.model(), &pt, &s, why),
-        )?,
+        Format::Table => write!(w, "{}", shown.table(speed, method))?,
+        Format::Csv => write_csv(&mut w, &report::SENSITIVITY_HEADER, &shown.rows())?,
     }
     w.finish()?;
 

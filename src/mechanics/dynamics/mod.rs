@@ -290,8 +290,52 @@ pub fn evaluate_with<T: Real>(
     let sys = &l.base;
     let n = sys.n;
     let motion = motions(l, &j.pose, q, qd, qdd);
-    // The wrench of every body's inertia and weight about the origin: the moment about the
-    // centre of mass `A (I α + ω × I ω)` with `I` the inertia in the reference configuration.
+    let mut wrench = inertia_wrenches(sys, j, &motion);
+    subtract_loads(sys, j, &mut wrench);
+    let (element_force, direct) = element_forces(l, j, &motion, &mut wrench);
+    let phi = constraint_values(sys, &j.pose, q);
+    // The wrench on each body and those below it (children before parents).
+    for jt in sys.joints.iter().rev() {
+        if let Some(p) = jt.parent {
+            let c = wrench[jt.child];
+            wrench[p].add_scaled(&c, cst(1.0));
+        }
+    }
+    // Project onto the coordinates.
+    let mut r: Vec<T> = (0..n)
+        .map(|i| match &j.twist[i] {
+            Some(s) => s.pair(&wrench[sys.joints[sys.coord_joint[i]].child]),
+            None => cst::<T>(f64::NAN),
+        })
+        .collect();
+    for (first, partials) in direct {
+        partials.add_columns(sys, &j.twist, |k, i, d| {
+            r[i] += element_force[first + k] * d;
+        });
+    }
+    for e in &sys.joint_elements {
+        r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
+    }
+    for load in &sys.loads {
+        if let LoadData::Coordinate { coordinate, value } = load {
+            r[*coordinate] -= *value;
+        }
+    }
+    Dynamics {
+        r,
+        phi,
+        phi_q: j.phi_q.clone(),
+        element_force,
+    }
+}
+
+/// The wrench of every body's inertia and weight about the origin: the moment about the
+/// centre of mass `A (I α + ω × I ω)` with `I` the inertia in the reference configuration.
+fn inertia_wrenches<T: Real>(
+    sys: &System<T>,
+    j: &Partials<T>,
+    motion: &[Motion<T>],
+) -> Vec<Screw<T>> {
     let mut wrench = Vec::with_capacity(sys.bodies.len());
     for (b, body) in sys.bodies.iter().enumerate() {
         let (m, pose, x) = (&motion[b], &j.pose[b], j.cm[b]);
@@ -305,8 +349,13 @@ pub fn evaluate_with<T: Real>(
             v: force,
         });
     }
-    // The applied loads, against the inertia as the weight is: a force `f` at the point `x`
-    // is the wrench `(x × f, f)` about the origin; a follower's components turn with its body.
+    wrench
+}
+
+/// The applied loads, against the inertia as the weight is: a force `f` at the point `x` is
+/// the wrench `(x × f, f)` about the origin; a follower's components turn with its body.
+/// (A load on a coordinate enters its row directly.)
+fn subtract_loads<T: Real>(sys: &System<T>, j: &Partials<T>, wrench: &mut [Screw<T>]) {
     for load in &sys.loads {
         let (body, moment, force) = match load {
             LoadData::Force {
@@ -346,10 +395,21 @@ pub fn evaluate_with<T: Real>(
             cst(-1.0),
         );
     }
-    // Each element's components over the poses with their rates (the values and their rates),
-    // applied to its end bodies as the wrenches whose power on a twist is the element's.
+}
+
+/// Each element's components over the poses with their rates (the values and their rates),
+/// applied to its end bodies as the wrenches whose power on a twist is the element's: the
+/// components' forces, and the elements whose derivatives are per coordinate (the first
+/// component's index and the partials), paired with the forces after the projection.
+fn element_forces<'j, T: Real>(
+    l: &Lifted<T>,
+    j: &'j Partials<T>,
+    motion: &[Motion<T>],
+    wrench: &mut [Screw<T>],
+) -> (Vec<T>, Vec<(usize, &'j EndPartials<T>)>) {
+    let sys = &l.base;
     let mut element_force = Vec::new();
-    let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.pose, &motion));
+    let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.pose, motion));
     let mut e = deformation.iter();
     // Derivatives per coordinate, paired with the forces after the projection.
     let mut direct = Vec::new();
@@ -366,7 +426,7 @@ pub fn evaluate_with<T: Real>(
             element_force.push(f + el.preload[c]);
         }
         if damps == Damps::RelativeAngularVelocity {
-            let torque = relative_damping_torque(el, &j.pose, &motion);
+            let torque = relative_damping_torque(el, &j.pose, motion);
             let g = &el.geometry;
             for (body, sign) in [(g.body2, 1.0), (g.body1, -1.0)] {
                 if let Some(b) = body {
@@ -385,40 +445,7 @@ pub fn evaluate_with<T: Real>(
             EndPartials::Coordinates(_) => direct.push((first, partials)),
         }
     }
-    let phi = constraint_values(sys, &j.pose, q);
-    // The wrench on each body and those below it (children before parents).
-    for jt in sys.joints.iter().rev() {
-        if let Some(p) = jt.parent {
-            let c = wrench[jt.child];
-            wrench[p].add_scaled(&c, cst(1.0));
-        }
-    }
-    // Project onto the coordinates.
-    let mut r: Vec<T> = (0..n)
-        .map(|i| match &j.twist[i] {
-            Some(s) => s.pair(&wrench[sys.joints[sys.coord_joint[i]].child]),
-            None => cst::<T>(f64::NAN),
-        })
-        .collect();
-    for (first, partials) in direct {
-        partials.add_columns(sys, &j.twist, |k, i, d| {
-            r[i] += element_force[first + k] * d;
-        });
-    }
-    for e in &sys.joint_elements {
-        r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
-    }
-    for load in &sys.loads {
-        if let LoadData::Coordinate { coordinate, value } = load {
-            r[*coordinate] -= *value;
-        }
-    }
-    Dynamics {
-        r,
-        phi,
-        phi_q: j.phi_q.clone(),
-        element_force,
-    }
+    (element_force, direct)
 }
 
 /// The equilibrium equations `F(q_R, λ) = [r_R + Φ_Rᵀλ; Φ]` at `q̈ = 0` (Kim & Yoo 2007,

@@ -247,15 +247,26 @@ impl<T: Real> EndPartials<T> {
     }
 }
 
+/// The mechanism at `q` as [`end_partials`] reads it: the system, its bodies' poses and each
+/// coordinate's twist (`None` for the coordinates whose partials are not asked).
+struct Moving<'a, T: Real> {
+    sys: &'a System<D1<T>>,
+    poses: &'a [Pose<D1<T>>],
+    twist: &'a [Option<Screw<T>>],
+}
+
 /// [`EndPartials`] of `f` (which pushes `values` values) between the bodies `ends`.
 fn end_partials<T: Real>(
-    sys: &System<D1<T>>,
-    p: &[Pose<D1<T>>],
+    at: &Moving<'_, T>,
     ends: [Option<usize>; 2],
-    twist: &[Option<Screw<T>>],
     values: usize,
     f: impl Fn(&Pose<D1<T>>, &Pose<D1<T>>, &mut Vec<D1<T>>),
 ) -> EndPartials<T> {
+    let Moving {
+        sys,
+        poses: p,
+        twist,
+    } = *at;
     let ground = Pose::identity();
     let pose = |b: Option<usize>| b.map_or(ground, |b| p[b]);
     let (x1, x2) = (pose(ends[0]), pose(ends[1]));
@@ -336,19 +347,19 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             v: t_d - w.cross(&d),
         });
     }
+    let at = Moving {
+        sys: partial,
+        poses: &p0,
+        twist: &twist,
+    };
     let de = partial
         .forces
         .iter()
         .map(|e| {
             let g = &e.geometry;
-            end_partials(
-                partial,
-                &p0,
-                [g.body1, g.body2],
-                &twist,
-                e.free.len(),
-                |x1, x2, out| e.kind.deformation(g, x1, x2, out),
-            )
+            end_partials(&at, [g.body1, g.body2], e.free.len(), |x1, x2, out| {
+                e.kind.deformation(g, x1, x2, out)
+            })
         })
         .collect();
     let mut phi_q = DMatrix::from_element(partial.m, n, cst::<T>(0.0));
@@ -356,14 +367,9 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
     for c in &partial.constraints {
         let g = &c.geometry;
         let rows = c.rows();
-        end_partials(
-            partial,
-            &p0,
-            [g.body1, g.body2],
-            &twist,
-            rows,
-            |x1, x2, out| c.values(g, x1, x2, out),
-        )
+        end_partials(&at, [g.body1, g.body2], rows, |x1, x2, out| {
+            c.values(g, x1, x2, out)
+        })
         .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
         row += rows;
     }

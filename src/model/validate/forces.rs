@@ -3,7 +3,7 @@
 
 use super::geometry::{Item, coincident, known, least_aligned, vector};
 use super::names::{article, body_ref, element_name, type_named};
-use super::per_coordinate::{indexed, per_coordinate};
+use super::per_coordinate::{Each, indexed};
 use super::{Ctx, R};
 use crate::forces::{Geometry, Kind};
 use crate::joints::Use;
@@ -119,10 +119,15 @@ fn geometry(
 fn component_fields(ctx: &Ctx, item: &Item, s: &ForceSchema, kind: Kind) -> R<ComponentFields> {
     let k = kind.components().len();
     let what = |x: &str| format!("{} {x}", item.owner);
-    let stiffness = per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "component", &what)?;
-    let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "component", &what)?;
-    let free = per_coordinate(ctx, &s.free, k, "free", false, "component", &what)?;
-    let preload = per_coordinate(ctx, &s.preload, k, "preload", false, "component", &what)?;
+    let each = Each {
+        k,
+        per: "component",
+        what: &what,
+    };
+    let stiffness = each.read(ctx, &s.stiffness, "stiffness", true)?;
+    let damping = each.read(ctx, &s.damping, "damping", true)?;
+    let free = each.read(ctx, &s.free, "free", false)?;
+    let preload = each.read(ctx, &s.preload, "preload", false)?;
     for x in stiffness
         .iter()
         .chain(&damping)

@@ -3,7 +3,7 @@
 
 use super::geometry::{Item, least_aligned, not_parallel, vector};
 use super::names::{article, body_ref, check_name, type_named};
-use super::per_coordinate::{indexed, per_coordinate};
+use super::per_coordinate::{Each, indexed};
 use super::{Ctx, R};
 use crate::joints::{Geometry, Kind, Use};
 use crate::model::schema::JointSchema;
@@ -153,22 +153,21 @@ fn coordinate_fields(ctx: &Ctx, item: &Item, s: &JointSchema, kind: Kind) -> R<C
     let k = kind.coordinates().len();
     refuse_fields(ctx, item, s, k)?;
     let what = |f: &str| format!("{} {f}", item.owner);
+    let each = Each {
+        k,
+        per: "coordinate",
+        what: &what,
+    };
     let zero = |f: &str, v: Vec<Option<Field>>| -> Vec<Field> {
         v.into_iter()
             .enumerate()
             .map(|(i, x)| x.unwrap_or_else(|| ctx.zero(&item.span, what(&indexed(f, i, k)))))
             .collect()
     };
-    let initial = zero(
-        "initial",
-        per_coordinate(ctx, &s.initial, k, "initial", false, "coordinate", &what)?,
-    );
-    let free = zero(
-        "free",
-        per_coordinate(ctx, &s.free, k, "free", false, "coordinate", &what)?,
-    );
-    let stiffness = per_coordinate(ctx, &s.stiffness, k, "stiffness", true, "coordinate", &what)?;
-    let damping = per_coordinate(ctx, &s.damping, k, "damping", true, "coordinate", &what)?;
+    let initial = zero("initial", each.read(ctx, &s.initial, "initial", false)?);
+    let free = zero("free", each.read(ctx, &s.free, "free", false)?);
+    let stiffness = each.read(ctx, &s.stiffness, "stiffness", true)?;
+    let damping = each.read(ctx, &s.damping, "damping", true)?;
     let drive = ctx.opt_field(&s.drive, what("drive"))?;
     for f in initial
         .iter()

@@ -49,33 +49,59 @@ fn load(
             format!("{owner}: unknown type '{kind}' (expected force, torque or coordinate)"),
         ));
     }
-    let this = format!("a {kind} load");
-    // The keys this type does not read, refused rather than ignored.
-    let unused = |present: bool, key: &str, span: std::ops::Range<usize>| -> R<()> {
+    let table = Table {
+        ctx,
+        item,
+        this: format!("a {kind} load"),
+        owner,
+    };
+    if kind == "coordinate" {
+        table.on_coordinate(coordinates)
+    } else {
+        table.on_body(body_names, kind == "force")
+    }
+}
+
+/// One `[[loads]]` table of a known type: what its messages name it (`owner`, and `this`,
+/// its type).
+struct Table<'a> {
+    ctx: &'a Ctx<'a>,
+    item: &'a Spanned<LoadSchema>,
+    owner: String,
+    this: String,
+}
+
+impl Table<'_> {
+    /// A key this type does not read, refused rather than ignored (`span` where it is given,
+    /// the table where not known).
+    fn unused(&self, present: bool, key: &str, span: Option<std::ops::Range<usize>>) -> R<()> {
         if present {
-            Err(ctx.err(span, format!("{owner}: {this} has no '{key}'")))
+            let span = span.unwrap_or_else(|| self.item.span());
+            Err(self.ctx.err(
+                span,
+                format!("{}: {} has no '{key}'", self.owner, self.this),
+            ))
         } else {
             Ok(())
         }
-    };
-    let span = |o: Option<std::ops::Range<usize>>| o.unwrap_or_else(|| item.span());
-    if kind == "coordinate" {
-        unused(
-            s.body.is_some(),
-            "body",
-            span(s.body.as_ref().map(|b| b.span())),
-        )?;
-        unused(
+    }
+
+    /// A generalised force on a free joint coordinate.
+    fn on_coordinate(&self, coordinates: &[Coordinate]) -> R<LoadKind> {
+        let (ctx, item, owner, this) = (self.ctx, self.item, &self.owner, &self.this);
+        let s = item.get_ref();
+        self.unused(s.body.is_some(), "body", s.body.as_ref().map(|b| b.span()))?;
+        self.unused(
             s.frame.is_some(),
             "frame",
-            span(s.frame.as_ref().map(|b| b.span())),
+            s.frame.as_ref().map(|b| b.span()),
         )?;
         for (v, key) in [
             (&s.point, "point"),
             (&s.force, "force"),
             (&s.torque, "torque"),
         ] {
-            unused(v.is_some(), key, span(v.as_ref().map(|v| v.span())))?;
+            self.unused(v.is_some(), key, v.as_ref().map(|v| v.span()))?;
         }
         let Some(c) = &s.coordinate else {
             return Err(ctx.err(
@@ -106,68 +132,69 @@ fn load(
         };
         let value = ctx.field(v, format!("{owner} value"))?;
         ctx.nominal(&value)?;
-        return Ok(LoadKind::Coordinate {
+        Ok(LoadKind::Coordinate {
             coordinate: k,
             value,
-        });
+        })
     }
-    unused(
-        s.coordinate.is_some(),
-        "coordinate",
-        span(s.coordinate.as_ref().map(|b| b.span())),
-    )?;
-    unused(
-        s.value.is_some(),
-        "value",
-        span(s.value.as_ref().map(|b| b.span())),
-    )?;
-    let Some(b) = &s.body else {
-        return Err(ctx.err(item.span(), format!("{owner}: {this} needs 'body'")));
-    };
-    let Some(body) = body_ref(ctx, body_names, b)? else {
-        return Err(ctx.err(
-            b.span(),
-            format!("{owner}: the ground takes any load; give a body"),
-        ));
-    };
-    let follower = match s.frame.as_ref().map(|f| f.get_ref().as_str()) {
-        None | Some("ground") => false,
-        Some("body") => true,
-        Some(other) => {
-            let f = s.frame.as_ref().expect("given");
+
+    /// A force (`force`) at a body's point or a torque on a body, in ground axes or turning
+    /// with the body.
+    fn on_body(&self, body_names: &HashMap<String, usize>, force: bool) -> R<LoadKind> {
+        let (ctx, item, owner, this) = (self.ctx, self.item, &self.owner, &self.this);
+        let s = item.get_ref();
+        let c = s.coordinate.as_ref();
+        self.unused(c.is_some(), "coordinate", c.map(|b| b.span()))?;
+        let v = s.value.as_ref();
+        self.unused(v.is_some(), "value", v.map(|b| b.span()))?;
+        let Some(b) = &s.body else {
+            return Err(ctx.err(item.span(), format!("{owner}: {this} needs 'body'")));
+        };
+        let Some(body) = body_ref(ctx, body_names, b)? else {
             return Err(ctx.err(
-                f.span(),
-                format!(
-                    "{owner}: unknown frame '{other}' (expected ground: fixed axes, or body: turning with the body)"
-                ),
+                b.span(),
+                format!("{owner}: the ground takes any load; give a body"),
             ));
-        }
-    };
-    let table = Item {
-        owner: &owner,
-        kind: &this,
-        span: item.span(),
-    };
-    let (point_use, force_use, torque_use) = if kind == "force" {
-        (Use::Required, Use::Required, Use::Unused)
-    } else {
-        (Use::Unused, Use::Unused, Use::Required)
-    };
-    let point = vector(ctx, &table, &s.point, point_use, "point")?;
-    let force = vector(ctx, &table, &s.force, force_use, "force")?;
-    let torque = vector(ctx, &table, &s.torque, torque_use, "torque")?;
-    Ok(if kind == "force" {
-        LoadKind::Force {
-            body,
-            point: Box::new(point),
-            force: Box::new(force),
-            follower,
-        }
-    } else {
-        LoadKind::Torque {
-            body,
-            torque: Box::new(torque),
-            follower,
-        }
-    })
+        };
+        let follower = match s.frame.as_ref().map(|f| f.get_ref().as_str()) {
+            None | Some("ground") => false,
+            Some("body") => true,
+            Some(other) => {
+                let f = s.frame.as_ref().expect("given");
+                return Err(ctx.err(
+                    f.span(),
+                    format!(
+                        "{owner}: unknown frame '{other}' (expected ground: fixed axes, or body: turning with the body)"
+                    ),
+                ));
+            }
+        };
+        let table = Item {
+            owner,
+            kind: this,
+            span: item.span(),
+        };
+        let (point_use, force_use, torque_use) = if force {
+            (Use::Required, Use::Required, Use::Unused)
+        } else {
+            (Use::Unused, Use::Unused, Use::Required)
+        };
+        let point = vector(ctx, &table, &s.point, point_use, "point")?;
+        let force_v = vector(ctx, &table, &s.force, force_use, "force")?;
+        let torque = vector(ctx, &table, &s.torque, torque_use, "torque")?;
+        Ok(if force {
+            LoadKind::Force {
+                body,
+                point: Box::new(point),
+                force: Box::new(force_v),
+                follower,
+            }
+        } else {
+            LoadKind::Torque {
+                body,
+                torque: Box::new(torque),
+                follower,
+            }
+        })
+    }
 }

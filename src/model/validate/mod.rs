@@ -14,7 +14,7 @@
 //! stops validation, so this order is also the order in which errors are reported. Two stages
 //! keep a part with checks of its own apart: [`inertia`] (of [`bodies`]) and [`cases`] (of
 //! [`analysis`]). The checks several stages share are [`names`], [`geometry`],
-//! [`per_coordinate`] and [`locate`] (where a message points).
+//! [`per_coordinate::Each`] and [`locate`] (where a message points).
 
 mod analysis;
 mod bodies;

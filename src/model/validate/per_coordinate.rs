@@ -16,43 +16,52 @@ pub(super) fn indexed(field: &str, i: usize, k: usize) -> String {
     }
 }
 
-/// Values given per coordinate (or, for a force element, per component: `per` names which): a
-/// list of `k`, or one value where `k` is one (or, when `broadcast`, for every one).
-pub(super) fn per_coordinate(
-    ctx: &Ctx,
-    v: &Option<SNums>,
-    k: usize,
-    field: &str,
-    broadcast: bool,
-    per: &str,
-    what: &impl Fn(&str) -> String,
-) -> R<Vec<Option<Field>>> {
-    let Some(v) = v else {
-        return Ok(vec![None; k]);
-    };
-    match v.get_ref() {
-        Nums::One(n) if k == 1 || broadcast => {
-            let sn = Spanned::new(v.span(), n.clone());
-            (0..k)
-                .map(|i| ctx.field(&sn, what(&indexed(field, i, k))).map(Some))
-                .collect()
+/// The `k` coordinates of a joint or components of a force element (`per` names which) whose
+/// fields are read, and how a field of the element is named in messages (`what`).
+pub(super) struct Each<'a, W> {
+    pub k: usize,
+    pub per: &'static str,
+    pub what: &'a W,
+}
+
+impl<W: Fn(&str) -> String> Each<'_, W> {
+    /// The values of `field` (given as `v`) per coordinate or component: a list of `k`, or one
+    /// value where `k` is one (or, when `broadcast`, for every one).
+    pub(super) fn read(
+        &self,
+        ctx: &Ctx,
+        v: &Option<SNums>,
+        field: &str,
+        broadcast: bool,
+    ) -> R<Vec<Option<Field>>> {
+        let Each { k, per, what } = *self;
+        let Some(v) = v else {
+            return Ok(vec![None; k]);
+        };
+        match v.get_ref() {
+            Nums::One(n) if k == 1 || broadcast => {
+                let sn = Spanned::new(v.span(), n.clone());
+                (0..k)
+                    .map(|i| ctx.field(&sn, what(&indexed(field, i, k))).map(Some))
+                    .collect()
+            }
+            Nums::One(_) => Err(ctx.err(
+                v.span(),
+                format!("{}: give one value per {per}, a list of {k}", what(field)),
+            )),
+            Nums::Many(items) if items.len() == k => items
+                .iter()
+                .enumerate()
+                .map(|(i, n)| ctx.field(n, what(&indexed(field, i, k))).map(Some))
+                .collect(),
+            Nums::Many(items) => Err(ctx.err(
+                v.span(),
+                format!(
+                    "{}: expected {k} value(s), one per {per}, got {}",
+                    what(field),
+                    items.len()
+                ),
+            )),
         }
-        Nums::One(_) => Err(ctx.err(
-            v.span(),
-            format!("{}: give one value per {per}, a list of {k}", what(field)),
-        )),
-        Nums::Many(items) if items.len() == k => items
-            .iter()
-            .enumerate()
-            .map(|(i, n)| ctx.field(n, what(&indexed(field, i, k))).map(Some))
-            .collect(),
-        Nums::Many(items) => Err(ctx.err(
-            v.span(),
-            format!(
-                "{}: expected {k} value(s), one per {per}, got {}",
-                what(field),
-                items.len()
-            ),
-        )),
     }
 }

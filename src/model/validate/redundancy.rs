@@ -30,12 +30,7 @@ pub(super) fn redundant(
     couplers: &[Coupler],
     p: &[f64],
 ) -> Option<(Vec<Vec<usize>>, Vec<usize>)> {
-    let Mechanism {
-        joints,
-        order,
-        bodies,
-        coordinates,
-    } = *mech;
+    let coordinates = mech.coordinates;
     let free: Vec<usize> = (0..coordinates.len())
         .filter(|&i| !coordinates[i].driven)
         .collect();
@@ -54,29 +49,7 @@ pub(super) fn redundant(
         }
     }
     for (col, &i) in free.iter().enumerate() {
-        let ji = coordinate_joint[i];
-        let joint = &joints[ji];
-        // The bodies the joint carries: its child and, parents first, their children.
-        let mut carried = vec![false; bodies];
-        carried[joint.child] = true;
-        for &j in order {
-            if joints[j].parent.is_some_and(|b| carried[b]) {
-                carried[joints[j].child] = true;
-            }
-        }
-        let [_, use_axis, use_axis2] = joint.kind.uses();
-        let g = &joint.geometry;
-        let geometry = crate::joints::Geometry {
-            at: vector(&g.at, p)?,
-            axis: direction(&g.axis, use_axis, p)?,
-            axis2: direction(&g.axis2, use_axis2, p)?,
-        };
-        let q: Vec<Dual64> = joint
-            .coords
-            .clone()
-            .map(|c| Dual64::new(0.0, if c == i { 1.0 } else { 0.0 }))
-            .collect();
-        let moved = joint.kind.relative(&geometry, &q);
+        let (carried, moved) = moved_by(mech, coordinate_joint[i], i, p)?;
         let identity = Pose::identity();
         let pose = |b: Option<usize>| {
             if b.is_some_and(|b| carried[b]) {
@@ -87,23 +60,7 @@ pub(super) fn redundant(
         };
         let mut row = 0;
         for c in constraints {
-            let [_, use_axis, use_axis2, _] = c.kind.uses();
-            let g = &c.geometry;
-            let geometry = crate::cuts::Geometry {
-                body1: g.body1,
-                point1: vector(&g.point1, p)?,
-                body2: g.body2,
-                point2: vector(&g.point2, p)?,
-                axis: direction(&g.axis, use_axis, p)?,
-                axis2: direction(&g.axis2, use_axis2, p)?,
-                length: match &g.length {
-                    Some(f) => Some(Dual64::from(f.eval(p, 0.0).ok()?)),
-                    None => None,
-                },
-            };
-            let mut out = Vec::new();
-            c.kind
-                .values(&geometry, pose(g.body1), pose(g.body2), &mut out);
+            let out = cut_values(c, p, pose(c.geometry.body1), pose(c.geometry.body2))?;
             for (k, v) in out.iter().enumerate() {
                 phi[(row + k, col)] = v.eps;
             }
@@ -135,6 +92,66 @@ pub(super) fn redundant(
         start += n;
     }
     Some((out, coupled))
+}
+
+/// The bodies joint `ji` carries (its child and, parents first, their children) and its
+/// relative pose with coordinate `i` moved by `ε` (the others at 0); `None` where a field does
+/// not evaluate.
+fn moved_by(mech: &Mechanism, ji: usize, i: usize, p: &[f64]) -> Option<(Vec<bool>, Pose<Dual64>)> {
+    let Mechanism {
+        joints,
+        order,
+        bodies,
+        ..
+    } = *mech;
+    let joint = &joints[ji];
+    let mut carried = vec![false; bodies];
+    carried[joint.child] = true;
+    for &j in order {
+        if joints[j].parent.is_some_and(|b| carried[b]) {
+            carried[joints[j].child] = true;
+        }
+    }
+    let [_, use_axis, use_axis2] = joint.kind.uses();
+    let g = &joint.geometry;
+    let geometry = crate::joints::Geometry {
+        at: vector(&g.at, p)?,
+        axis: direction(&g.axis, use_axis, p)?,
+        axis2: direction(&g.axis2, use_axis2, p)?,
+    };
+    let q: Vec<Dual64> = joint
+        .coords
+        .clone()
+        .map(|c| Dual64::new(0.0, if c == i { 1.0 } else { 0.0 }))
+        .collect();
+    Some((carried, joint.kind.relative(&geometry, &q)))
+}
+
+/// The equations of cut joint `c` with its bodies at `x1` and `x2`; `None` where a field does
+/// not evaluate.
+fn cut_values(
+    c: &Constraint,
+    p: &[f64],
+    x1: &Pose<Dual64>,
+    x2: &Pose<Dual64>,
+) -> Option<Vec<Dual64>> {
+    let [_, use_axis, use_axis2, _] = c.kind.uses();
+    let g = &c.geometry;
+    let geometry = crate::cuts::Geometry {
+        body1: g.body1,
+        point1: vector(&g.point1, p)?,
+        body2: g.body2,
+        point2: vector(&g.point2, p)?,
+        axis: direction(&g.axis, use_axis, p)?,
+        axis2: direction(&g.axis2, use_axis2, p)?,
+        length: match &g.length {
+            Some(f) => Some(Dual64::from(f.eval(p, 0.0).ok()?)),
+            None => None,
+        },
+    };
+    let mut out = Vec::new();
+    c.kind.values(&geometry, x1, x2, &mut out);
+    Some(out)
 }
 
 fn vector(f: &[Field; 3], p: &[f64]) -> Option<V3<Dual64>> {

@@ -123,7 +123,7 @@ pub(super) struct Requirements<'a> {
 }
 
 /// The yield at `stage` with its error estimates' parts (the margins met at the target are
-/// left to [`at_target`]).
+/// left to [`final_yield`]).
 pub(super) fn evaluate_yield(
     store: &NodeData,
     rule: &Rule,
@@ -131,11 +131,30 @@ pub(super) fn evaluate_yield(
     nominal: &Reference,
     reqs: &Requirements,
 ) -> (QuadYield, ErrorParts) {
+    yield_on(&Source::new(store, rule, stage), nominal, reqs)
+}
+
+/// The yield at `stage` (the last) with every margin's [`AtTarget`].
+pub(super) fn final_yield(
+    store: &NodeData,
+    rule: &Rule,
+    stage: Stage,
+    nominal: &Reference,
+    reqs: &Requirements,
+) -> QuadYield {
+    let source = Source::new(store, rule, stage);
+    let (mut y, _) = yield_on(&source, nominal, reqs);
+    at_target(&source, nominal, reqs, &mut y);
+    y
+}
+
+/// The yield integrated on `source`, with its error estimates' parts.
+fn yield_on(source: &Source, nominal: &Reference, reqs: &Requirements) -> (QuadYield, ErrorParts) {
     let l = Layout {
         reqs: reqs.list.len(),
-        speeds: store.speeds,
+        speeds: source.speeds(),
     };
-    let tallies = Source::new(store, rule, stage).tallies(nominal, reqs, l);
+    let tallies = source.tallies(nominal, reqs, l);
     let mut parts = ErrorParts::default();
     let mut prob = |k: usize| -> (f64, f64) {
         let (p, e) = tallies.probability(l, k);
@@ -199,64 +218,17 @@ pub(super) fn evaluate_yield(
     )
 }
 
-/// Fills every margin's [`AtTarget`] at `stage` (the last): the roots of `P(M_r ≥ q) = Y`,
-/// then of `Y ± e` with `e` the probability's error estimate at the first root.
-pub(super) fn at_target(
-    store: &NodeData,
-    rule: &Rule,
-    stage: Stage,
-    nominal: &Reference,
-    reqs: &Requirements,
-    y: &mut QuadYield,
-) {
+/// Fills every margin's [`AtTarget`] from the lines of `source`: the roots of
+/// `P(M_r ≥ q) = Y`, then of `Y ± e` with `e` the probability's error estimate at the first
+/// root.
+fn at_target(source: &Source, nominal: &Reference, reqs: &Requirements, y: &mut QuadYield) {
     let n = reqs.list.len();
     let with_margin: Vec<usize> = (0..n).filter(|&r| y.margins[r].is_some()).collect();
     if with_margin.is_empty() {
         return;
     }
-    let source = Source::new(store, rule, stage);
     let target = reqs.target;
-    let l = Layout {
-        reqs: n,
-        speeds: store.speeds,
-    };
-    // P(M ≥ q) for q → −∞: the designs with a margin.
-    let reqs = &Requirements {
-        moments: false,
-        ..reqs.clone()
-    };
-    let reached = source.fine(
-        nominal,
-        &Requirements {
-            offset: vec![f64::NEG_INFINITY; n],
-            ..reqs.clone()
-        },
-        l,
-    );
-    let reached = |r: usize| reached.ratio(l, l.each(r));
-    // Each sought root as (requirement, target probability, start, scale); several at once
-    // share an integration: the requirements are repeated, each copy with its own offset.
-    let solve = |goals: &[(usize, f64, f64, f64)]| -> Vec<Root> {
-        let list: Vec<Requirement> = goals.iter().map(|g| reqs.list[g.0].clone()).collect();
-        let lg = Layout {
-            reqs: goals.len(),
-            speeds: store.speeds,
-        };
-        let moved = |offset: &[f64]| Requirements {
-            list: &list,
-            offset: offset.to_vec(),
-            shift: goals.iter().map(|g| reqs.shift[g.0]).collect(),
-            ..reqs.clone()
-        };
-        let roots = goals
-            .iter()
-            .map(|&(r, p, start, scale)| Root::new(p, reached(r), start, scale, reqs.request))
-            .collect::<Vec<_>>();
-        find_roots(roots, |q| {
-            let t = source.fine(nominal, &moved(q), lg);
-            (0..goals.len()).map(|k| t.ratio(lg, lg.each(k))).collect()
-        })
-    };
+    let seek = Seeker::new(source, nominal, reqs);
     // From the normal quantile of the margin's moments, on the scale of its σ.
     let z = Normal::standard().inverse_cdf((1.0 - target).clamp(1e-300, 1.0 - 1e-16));
     let first: Vec<(usize, f64, f64, f64)> = with_margin
@@ -266,32 +238,9 @@ pub(super) fn at_target(
             (r, target, m.mean + m.std * z, m.std)
         })
         .collect();
-    let roots = solve(&first);
+    let roots = seek.solve(&first);
     let estimates: Vec<f64> = roots.iter().map(|r| r.found.expect("found")).collect();
-    // The probability's error at each estimate.
-    let mut offset = vec![0.0; n];
-    for (&r, &q) in with_margin.iter().zip(&estimates) {
-        offset[r] = if q.is_finite() { q } else { 0.0 };
-    }
-    let tallies = source.tallies(
-        nominal,
-        &Requirements {
-            offset,
-            ..reqs.clone()
-        },
-        l,
-    );
-    let errors: Vec<f64> = with_margin
-        .iter()
-        .zip(&estimates)
-        .map(|(&r, q)| {
-            if q.is_finite() {
-                tallies.probability(l, l.each(r)).0.1
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let errors = seek.errors(&with_margin, &estimates);
     // The ends start where the slope of P at the estimate puts them, `∓ e / |P'|`.
     let ends: Vec<(usize, f64, f64, f64)> = with_margin
         .iter()
@@ -307,7 +256,7 @@ pub(super) fn at_target(
             ]
         })
         .collect();
-    let ends = solve(&ends);
+    let ends = seek.solve(&ends);
     for (k, &r) in with_margin.iter().enumerate() {
         let m = y.margins[r].as_mut().expect("a margin");
         // The ends hold the estimate (at an atom of the margin, the three roots meet to
@@ -319,5 +268,102 @@ pub(super) fn at_target(
             high: ends[2 * k + 1].found.expect("found").max(q),
             probability_error: errors[k],
         });
+    }
+}
+
+/// What the roots of the margins' probabilities at given levels are sought on: the lines of
+/// `source` (their tallies without the margins' moments) and each requirement's probability of
+/// having a margin at all (`P(M ≥ q)` for `q → −∞`).
+struct Seeker<'a> {
+    source: &'a Source<'a>,
+    nominal: &'a Reference<'a>,
+    reqs: Requirements<'a>,
+    reached: Tally,
+    l: Layout,
+}
+
+impl<'a> Seeker<'a> {
+    fn new(source: &'a Source, nominal: &'a Reference, reqs: &Requirements<'a>) -> Self {
+        let n = reqs.list.len();
+        let l = Layout {
+            reqs: n,
+            speeds: source.speeds(),
+        };
+        let reqs = Requirements {
+            moments: false,
+            ..reqs.clone()
+        };
+        let reached = source.fine(
+            nominal,
+            &Requirements {
+                offset: vec![f64::NEG_INFINITY; n],
+                ..reqs.clone()
+            },
+            l,
+        );
+        Seeker {
+            source,
+            nominal,
+            reqs,
+            reached,
+            l,
+        }
+    }
+
+    /// Each sought root as (requirement, target probability, start, scale); several at once
+    /// share an integration: the requirements are repeated, each copy with its own offset.
+    fn solve(&self, goals: &[(usize, f64, f64, f64)]) -> Vec<Root> {
+        let (reqs, l) = (&self.reqs, self.l);
+        let list: Vec<Requirement> = goals.iter().map(|g| reqs.list[g.0].clone()).collect();
+        let lg = Layout {
+            reqs: goals.len(),
+            speeds: l.speeds,
+        };
+        let moved = |offset: &[f64]| Requirements {
+            list: &list,
+            offset: offset.to_vec(),
+            shift: goals.iter().map(|g| reqs.shift[g.0]).collect(),
+            ..reqs.clone()
+        };
+        let roots = goals
+            .iter()
+            .map(|&(r, p, start, scale)| {
+                let reached = self.reached.ratio(l, l.each(r));
+                Root::new(p, reached, start, scale, reqs.request)
+            })
+            .collect::<Vec<_>>();
+        find_roots(roots, |q| {
+            let t = self.source.fine(self.nominal, &moved(q), lg);
+            (0..goals.len()).map(|k| t.ratio(lg, lg.each(k))).collect()
+        })
+    }
+
+    /// The probability's error estimate at each requirement's `estimates` (of those
+    /// `with_margin`; 0 where the estimate is not finite).
+    fn errors(&self, with_margin: &[usize], estimates: &[f64]) -> Vec<f64> {
+        let (reqs, l) = (&self.reqs, self.l);
+        let mut offset = vec![0.0; reqs.list.len()];
+        for (&r, &q) in with_margin.iter().zip(estimates) {
+            offset[r] = if q.is_finite() { q } else { 0.0 };
+        }
+        let tallies = self.source.tallies(
+            self.nominal,
+            &Requirements {
+                offset,
+                ..reqs.clone()
+            },
+            l,
+        );
+        with_margin
+            .iter()
+            .zip(estimates)
+            .map(|(&r, q)| {
+                if q.is_finite() {
+                    tallies.probability(l, l.each(r)).0.1
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 }

@@ -5,7 +5,7 @@ use super::line::line_tally;
 use super::tally::{Layout, Tally};
 use super::{PROBABILITY_FLOOR, Requirements};
 use crate::quadrature::line::Context;
-use crate::quadrature::rules::{Rule, Stage, TENSOR_ORDERS, Transverse};
+use crate::quadrature::rules::{Rule, Stage, Transverse};
 use crate::quadrature::sums::{ErrorParts, across};
 use crate::quadrature::surrogate::{VirtualRule, interpolate};
 use crate::quadrature::{NodeData, Reference};
@@ -96,20 +96,18 @@ pub(super) fn contexts<'a>(store: &'a NodeData, nominal: &'a Reference) -> Vec<C
         .collect()
 }
 
-/// `Σ w · tally` over `lines` (line index and weight) of `store` with the nodes at `stride`,
-/// the lines in parallel.
+/// `Σ w · tally` over `lines` (line index and weight) of the store whose per-speed `contexts`
+/// these are ([`contexts`]) with the nodes at `stride`, the lines in parallel.
 pub(super) fn weighted(
-    store: &NodeData,
-    nominal: &Reference,
+    contexts: &[Context],
     lines: &[(usize, f64)],
     stride: usize,
     reqs: &Requirements,
     l: Layout,
 ) -> Tally {
-    let contexts = contexts(store, nominal);
     let parts: Vec<(f64, Tally)> = lines
         .par_iter()
-        .map(|&(li, w)| (w, line_tally(&contexts, li, stride, reqs, l)))
+        .map(|&(li, w)| (w, line_tally(contexts, li, stride, reqs, l)))
         .collect();
     let mut sum = Tally::new(l);
     for (w, t) in &parts {
@@ -151,7 +149,6 @@ impl<'a> Source<'a> {
                 let dims = rule.lines.first().map_or(0, |line| line.y.len());
                 let (fine_rule, half_rule) = VirtualRule::for_dims(dims);
                 let (main, check) = (stage.per, stage.per - 1);
-                let order = |rank: usize| TENSOR_ORDERS[rank];
                 let lines_of = |r: &VirtualRule| -> Vec<(usize, f64)> {
                     r.points
                         .iter()
@@ -160,9 +157,9 @@ impl<'a> Source<'a> {
                         .collect()
                 };
                 Source::Tensor {
-                    main: interpolate(store, rule, main, order(main), stride, &fine_rule),
-                    check: interpolate(store, rule, check, order(check), check_stride, &fine_rule),
-                    half: interpolate(store, rule, main, order(main), stride, &half_rule),
+                    main: interpolate(store, rule, main, stride, &fine_rule),
+                    check: interpolate(store, rule, check, check_stride, &fine_rule),
+                    half: interpolate(store, rule, main, stride, &half_rule),
                     fine_lines: lines_of(&fine_rule),
                     half_lines: lines_of(&half_rule),
                     stride,
@@ -190,6 +187,14 @@ impl<'a> Source<'a> {
         }
     }
 
+    /// The number of speeds of the lines' nodes.
+    pub(super) fn speeds(&self) -> usize {
+        match self {
+            Source::Tensor { main, .. } => main.speeds,
+            Source::Lines { store, .. } => store.speeds,
+        }
+    }
+
     /// The estimate alone.
     pub(super) fn fine(&self, nominal: &Reference, reqs: &Requirements, l: Layout) -> Tally {
         match self {
@@ -198,7 +203,7 @@ impl<'a> Source<'a> {
                 fine_lines,
                 stride,
                 ..
-            } => weighted(main, nominal, fine_lines, *stride, reqs, l),
+            } => weighted(&contexts(main, nominal), fine_lines, *stride, reqs, l),
             Source::Lines {
                 store,
                 used,
@@ -206,7 +211,7 @@ impl<'a> Source<'a> {
                 ..
             } => {
                 let lines: Vec<(usize, f64)> = used.iter().map(|x| (x.0, x.1)).collect();
-                weighted(store, nominal, &lines, *stride, reqs, l)
+                weighted(&contexts(store, nominal), &lines, *stride, reqs, l)
             }
         }
     }
@@ -223,7 +228,9 @@ impl<'a> Source<'a> {
                 stride,
                 check_stride,
             } => {
-                let w = |store, lines, stride| weighted(store, nominal, lines, stride, reqs, l);
+                let w = |store, lines, stride| {
+                    weighted(&contexts(store, nominal), lines, stride, reqs, l)
+                };
                 let fine = w(main, fine_lines, *stride);
                 let main_at_check = w(main, fine_lines, *check_stride);
                 let checked = w(check, fine_lines, *check_stride);

@@ -29,19 +29,19 @@ use std::fmt::Write;
 /// specification sections, the numeric summary per case, the timing table (beside the paper's Tables 1–2
 /// for its two examples), the critical speeds, the mechanism and its modes (`extra.drawing`,
 /// where there is one), a short reading guide and the plots (each an `<stem>.svg` in the same
-/// directory), in the display units `d`.
+/// directory), in the display units `extra.display`.
 pub fn report_html(
     model: &Model,
     a: &Analysis,
     plots: &[&Plot],
     critical: &[CriticalSpeed],
-    mc: Option<&McOptions>,
-    d: Display,
     extra: Extra<'_>,
 ) -> String {
     let Extra {
         allocation,
         drawing,
+        mc,
+        display: d,
     } = extra;
     let mut h = String::new();
     page_head(&mut h, model);
@@ -79,9 +79,14 @@ pub fn report_html(
     h
 }
 
-/// What a report shows besides the analysis.
+/// What a report shows besides the analysis, and in which units.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct Extra<'a> {
+    /// The Monte Carlo's options, where the run had one (its sample count and seed in the
+    /// notices and the timings).
+    pub mc: Option<&'a McOptions>,
+    /// The units speeds and frequencies are shown in.
+    pub display: Display,
     /// The tolerance allocation that made the design, opening the report.
     pub allocation: Option<&'a Allocation>,
     /// The mechanism drawn at the middle of the speeds, its files (`mechanism.svg`,

@@ -25,12 +25,20 @@
 //! ([`Allocation::cost_gap`]). The result states the verified yield, never only the model's
 //! prediction.
 
+mod problem;
+mod search;
+
+pub use search::COST_GAP;
+
+use problem::Problem;
+use search::BetaSearch;
+
 use crate::analyze::{AnalyzeOptions, analyze};
 use crate::cancel::Cancel;
 use crate::compiled::Compiled;
 use crate::margins::covers;
 use crate::model::{Case, Cost, Distribution, Tolerance};
-use crate::propagate::{Run, Study};
+use crate::propagate::Study;
 use crate::quadrature::QuadOptions;
 use crate::table::Method;
 use crate::taylor::yields::linear_margin;
@@ -250,121 +258,21 @@ pub fn allocate(
     progress: &dyn Fn(&Round),
 ) -> Result<Allocation, AllocateError> {
     let m = model.model();
-    if m.requirements.is_empty() {
-        return Err(AllocateError::NoRequirements);
-    }
-    if opt.case.correlation.is_some() {
-        return Err(AllocateError::Correlated);
-    }
-    let vars: Vec<usize> = opt.case.tolerances.iter().map(|t| t.0).collect();
-    if vars.is_empty() {
-        return Err(AllocateError::NoVariables);
-    }
-    let pool = crate::threads::pool(opt.threads);
-    let run = Run {
-        cancel: &opt.cancel,
-        pool: &pool,
-        progress: &|_, _| {},
-    };
-    let study = Study::build(model, vars.clone(), opt.speeds.clone(), &run);
-    if study.nominal.iter().all(Option::is_none) {
-        let why = study
-            .failures
-            .first()
-            .map_or(String::new(), |f| f.1.clone());
-        return Err(AllocateError::NoSweep(why));
-    }
-    let cons = constraints(&study);
-    if cons.is_empty() {
-        return Err(AllocateError::NoMargins);
-    }
-    if let Some(c) = cons.iter().find(|c| c.margin <= 0.0) {
-        return Err(AllocateError::NominalFails {
-            requirement: m.requirements[c.requirement].name.clone(),
-            speed: c.speed,
-            margin: c.margin,
-        });
-    }
-    if let Some((p, _)) = opt.costs.iter().find(|(p, _)| !vars.contains(p)) {
-        return Err(AllocateError::CostWithoutTolerance(
-            m.parameters[*p].name.clone(),
-        ));
-    }
-    let costs: Vec<Cost> = vars
-        .iter()
-        .map(|v| {
-            opt.costs
-                .iter()
-                .chain(&m.allocation.costs)
-                .find(|(p, _)| p == v)
-                .map_or(Cost::default(), |c| c.1)
-        })
-        .collect();
-    let before: Vec<f64> = opt
-        .case
-        .tolerances
-        .iter()
-        .map(|(p, t)| t.absolute(m.parameters[*p].value))
-        .collect();
-    let max: Vec<f64> = vars
-        .iter()
-        .zip(&costs)
-        .zip(&before)
-        .map(|((v, c), b)| {
-            c.max.map_or(DEFAULT_MAX_FACTOR * b, |t| {
-                t.absolute(m.parameters[*v].value)
-            })
-        })
-        .collect();
-    // The costs of the case's tolerances must be numbers (the allocated ones are checked too).
-    let overflow = |t: &[f64]| {
-        (0..vars.len())
-            .find(|&k| !costs[k].of(t[k]).is_finite())
-            .map(|k| AllocateError::CostOverflow {
-                parameter: m.parameters[vars[k]].name.clone(),
-                tolerance: t[k],
-            })
-    };
-    if let Some(e) = overflow(&before) {
-        return Err(e);
-    }
-    let s: Vec<f64> = vars
-        .iter()
-        .map(|&v| sigma_per_tolerance(m.parameters[v].distribution))
-        .collect();
-    // The study's variables are the case's, in its order.
-    let a: Vec<Vec<f64>> = cons
-        .iter()
-        .map(|c| {
-            c.gradient
-                .iter()
-                .zip(&s)
-                .map(|(g, s)| (g * s).powi(2))
-                .collect()
-        })
-        .collect();
-    let b: Vec<f64> = costs.iter().map(|c| c.b).collect();
-    let e: Vec<f64> = costs.iter().map(|c| c.k).collect();
-    let umax: Vec<f64> = max.iter().map(|x| x * x).collect();
-    let normal = Normal::standard();
-    let allocated = |beta: f64| -> Vec<f64> {
-        let c: Vec<f64> = cons.iter().map(|c| (c.margin / beta).powi(2)).collect();
-        solve(&b, &e, &umax, &a, &c)
-    };
-    let mut search = BetaSearch::new(normal.inverse_cdf(opt.target));
+    let problem = Problem::new(model, opt)?;
+    let Problem {
+        vars,
+        cons,
+        costs,
+        before,
+        max,
+        ..
+    } = &problem;
+    let mut search = BetaSearch::new(Normal::standard().inverse_cdf(opt.target));
     let mut rounds = Vec::new();
     let mut result = None;
     while let Some(beta) = search.next() {
-        let u = allocated(beta);
+        let u = problem.allocated(beta);
         let t: Vec<f64> = u.iter().map(|u| u.sqrt()).collect();
-        let predicted = cons
-            .iter()
-            .zip(&a)
-            .map(|(c, a)| {
-                let sd = a.iter().zip(&u).map(|(a, u)| a * u).sum::<f64>().sqrt();
-                normal.cdf(c.margin / sd)
-            })
-            .fold(1.0, f64::min);
         let case = Case {
             name: "allocated".into(),
             tolerances: vars
@@ -377,7 +285,7 @@ pub fn allocate(
         let verified = verify(model, opt, &case);
         let round = Round {
             beta,
-            predicted,
+            predicted: problem.predicted(&u),
             verified: (verified.0, verified.1),
             nodes: verified.2,
         };
@@ -401,7 +309,7 @@ pub fn allocate(
         }
     }
     let (t, case, met, _, chosen) = result.expect("one round at least");
-    if let Some(e) = overflow(&t) {
+    if let Some(e) = problem.overflow(m, &t) {
         return Err(e);
     }
     let variables: Vec<Allocated> = vars
@@ -428,93 +336,6 @@ pub fn allocate(
         constraints: cons.len(),
         case,
     })
-}
-
-/// The search for the smallest `β` whose allocation the quadrature verifies to meet the target
-/// (the cost grows with `β`): the verified yield less its error, in reliability index,
-/// `h(β) = Φ⁻¹(verified − error) − Φ⁻¹(target)`, is nearly `β − β*` (the first-order slope
-/// is 1), so a step of `−h` from one end and regula falsi across a bracket, with a bisection
-/// wherever two steps did not halve it, find the root in a few rounds; the search stops once
-/// the design meeting the target costs at most [`COST_GAP`] more than one falling short.
-struct BetaSearch {
-    start: f64,
-    /// The smallest `β` verified to meet the target and the largest short of it: `(β, h, cost)`.
-    met: Option<(f64, f64, f64)>,
-    short: Option<(f64, f64, f64)>,
-    rounds: usize,
-    /// The bracket's widths after the last two rounds (the bisection safeguard).
-    widths: [f64; 2],
-}
-
-/// The relative cost between the cheapest design meeting the target and the dearest falling
-/// short of it at which the search stops: the optimum of the family lies between them (a
-/// fifth of the 0.1 % asked of an allocation, leaving room for the family's own distance from
-/// the optimum over every tolerance, 0.07 % in a two-variable case with an exact optimum).
-pub const COST_GAP: f64 = 2e-4;
-
-impl BetaSearch {
-    fn new(start: f64) -> BetaSearch {
-        BetaSearch {
-            start,
-            met: None,
-            short: None,
-            rounds: 0,
-            widths: [f64::INFINITY; 2],
-        }
-    }
-
-    /// The `β` of the next round, `None` once done.
-    fn next(&self) -> Option<f64> {
-        if self.rounds >= MAX_ROUNDS || self.cost_gap().is_some_and(|g| g <= COST_GAP) {
-            return None;
-        }
-        // The least step: 10⁻³ of β (about 10⁻³ of the cost, which goes as β^e).
-        let least = 1e-3 * self.start.abs().max(1.0);
-        Some(match (self.short, self.met) {
-            (None, None) => self.start,
-            (Some(s), None) => s.0 + (-s.1).max(least).min(self.start.abs().max(1.0)),
-            (None, Some(m)) => m.0 - m.1.max(least).min(self.start.abs().max(1.0)),
-            (Some(s), Some(m)) => {
-                let w = m.0 - s.0;
-                let falsi = s.0 + w * (-s.1) / (m.1 - s.1);
-                let slow = w > 0.5 * self.widths[0];
-                if slow || !(falsi > s.0 + 0.01 * w && falsi < m.0 - 0.01 * w) {
-                    0.5 * (s.0 + m.0)
-                } else {
-                    falsi
-                }
-            }
-        })
-    }
-
-    /// Takes the round at `beta`: `h` from the verified yield less its error, and its cost.
-    fn take(&mut self, beta: f64, lower: f64, target: f64, cost: f64) {
-        self.rounds += 1;
-        let normal = Normal::standard();
-        let probit = |p: f64| normal.inverse_cdf(p.clamp(1e-300, 1.0 - 1e-16));
-        let h = if lower.is_nan() {
-            f64::NEG_INFINITY
-        } else {
-            probit(lower) - probit(target)
-        };
-        if lower >= target {
-            if self.met.is_none_or(|m| beta < m.0) {
-                self.met = Some((beta, h.max(0.0), cost));
-            }
-        } else if self.short.is_none_or(|s| beta > s.0) {
-            // A step of −h is ∞ where nothing is verified: the least step's limit applies.
-            self.short = Some((beta, if h.is_finite() { h.min(0.0) } else { -1e300 }, cost));
-        }
-        if let (Some(s), Some(m)) = (self.short, self.met) {
-            self.widths = [self.widths[1], m.0 - s.0];
-        }
-    }
-
-    /// The relative cost of the cheapest design meeting the target above the dearest falling
-    /// short of it.
-    fn cost_gap(&self) -> Option<f64> {
-        Some(self.met?.2 / self.short?.2 - 1.0)
-    }
 }
 
 /// The quadrature's yield of every requirement under `case`: probability, error, nodes.
