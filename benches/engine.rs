@@ -69,7 +69,7 @@ fn passes(
     // the exact evaluation (Jacobian, C and M in one pass).
     let workspace = Workspace::default();
     if let Some(inst) = model
-        .program(&p, speed, q0)
+        .program()
         .and_then(|program| program.at(&p, speed, tier, &workspace))
     {
         let lambda = point(model, &p, speed, q0, &Options::default())

@@ -456,7 +456,7 @@ fn main() {
             let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
             record = record.min(time(&mut || {
                 model
-                    .problem(&p, 5.0, &q0, (Tier::Few, &Workspace::default()))
+                    .problem(&p, 5.0, (Tier::Few, &Workspace::default()))
                     .unwrap();
             }));
             after = after.min(time(&mut || {

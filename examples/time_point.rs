@@ -37,7 +37,7 @@ fn main() {
     let q0 = initial_guess(model.model(), &p, speed).unwrap();
     let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
     let (q, l) = (pt.equilibrium.q.clone(), pt.equilibrium.lambda.clone());
-    let program = model.program(&p, speed, &q).unwrap();
+    let program = model.program().unwrap();
     // Exact evaluation, residual and a cold modal point (s), at a sweep's tier or compiled, in
     // one working memory as a sweep or an analysis keeps it.
     let workspace = Workspace::default();

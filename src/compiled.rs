@@ -3,7 +3,8 @@
 //! A [`Model`] is the validated description of a mechanism. Solving thousands of operating
 //! points of it (a sweep, a Monte Carlo run, the quadrature nodes) is faster through its
 //! equations recorded once as a [`Program`]; [`Compiled`] holds the model and that recording,
-//! made on first use, and hands out each point's equations ([`Compiled::at`], and the solve of
+//! made on first use at one of the model's own reference points (so that it does not depend
+//! on who asks first), and hands out each point's equations ([`Compiled::at`], and the solve of
 //! them, [`Compiled::problem`]) on the [`Route`] chosen when it is made.
 //! It dereferences to the model, so everything that only describes the mechanism reads it as
 //! before.
@@ -23,8 +24,8 @@ use std::sync::OnceLock;
 /// sensitivities and the Hessians). The two routes give the same numbers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Route {
-    /// Through the program recorded on first use, where the recording is valid (else
-    /// directly): the fast route, and the default.
+    /// Through the program recorded on first use ([`Compiled::program`]), where the
+    /// recording is valid (else directly): the fast route, and the default.
     #[default]
     Recorded,
     /// Always through the generic mechanics: the reference the recorded route is checked
@@ -113,42 +114,46 @@ impl Compiled {
         &self.model
     }
 
-    /// The model's equations recorded as a program for fast operating-point solves, recorded
-    /// on the first call (at these parameters, speed and coordinates); `None` on the
-    /// [`Route::Direct`] and where the recording is not valid, and then the direct route
-    /// serves.
-    pub fn program(&self, p: &[f64], speed: f64, q: &[f64]) -> Option<&Program> {
+    /// The model's equations recorded as a program for fast operating-point solves: recorded
+    /// once, whoever asks first, at the first of the model's own reference points
+    /// ([`Model::reference_points`]) where the model evaluates and the recording is valid, so
+    /// that the route every later computation takes depends on the model alone; `None` on the
+    /// [`Route::Direct`] and where no reference point gives a valid recording (a value the
+    /// recording branched on everywhere, a model that does not evaluate), and then the direct
+    /// route serves.
+    pub fn program(&self) -> Option<&Program> {
         if self.route == Route::Direct {
             return None;
         }
-        if let Some(recorded) = self.program.get() {
-            return recorded.as_ref();
-        }
-        // Values at which the model does not evaluate cannot be recorded at; a later call may
-        // bring better ones.
-        if System::new(&self.model, p, speed).is_err() || q.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
         self.program
-            .get_or_init(|| Program::record(&self.model, p, speed, q))
+            .get_or_init(|| {
+                self.model
+                    .reference_points()
+                    .into_iter()
+                    .find_map(|(p, speed, q)| {
+                        let evaluates = System::new(&self.model, &p, speed).is_ok()
+                            && q.iter().all(|v| v.is_finite());
+                        evaluates
+                            .then(|| Program::record(&self.model, &p, speed, &q))
+                            .flatten()
+                    })
+            })
             .as_ref()
     }
 
     /// The equations at parameters `p` and `speed` over any [`Scalar`], on the model's
-    /// [`Route`]: the recorded program where the model has a valid one (recorded on first use,
-    /// near the coordinates `q`), else the generic mechanics. The one object the equilibrium
+    /// [`Route`]: the recorded program where the model has a valid one ([`Compiled::program`]),
+    /// else the generic mechanics. The one object the equilibrium
     /// solve, the linearisation, the sensitivities and the Hessians evaluate. The recorded
     /// program's passes run at the caller's [`Tier`] in the caller's [`Workspace`].
     pub fn at<'a, S: Scalar>(
         &'a self,
         p: &[S],
         speed: S,
-        q: &[f64],
         (tier, workspace): (Tier, &'a Workspace),
     ) -> Result<Box<dyn Equations<S> + 'a>, FieldError> {
-        let p0: Vec<f64> = p.iter().map(|v| v.re()).collect();
         let recorded = self
-            .program(&p0, speed.re(), q)
+            .program()
             .and_then(|program| S::recorded(program, p, speed, (tier, workspace)));
         Ok(match recorded {
             Some(equations) => equations,
@@ -171,17 +176,16 @@ impl Compiled {
         wrt: &[usize],
         workspace: &Workspace,
     ) -> Option<Vec<f64>> {
-        self.program(p, speed, q)
+        self.program()
             .map(|program| program.parameter_derivatives(p, speed, (q, lambda), wrt, workspace))
     }
 
-    /// The equilibrium solve at parameters `p` and `speed` from near `q0`, of the equations
-    /// [`Compiled::at`] gives at `tier` in `workspace`.
+    /// The equilibrium solve at parameters `p` and `speed`, of the equations [`Compiled::at`]
+    /// gives at `tier` in `workspace`.
     pub fn problem<'a>(
         &'a self,
         p: &[f64],
         speed: f64,
-        q0: &[f64],
         run: (Tier, &'a Workspace),
     ) -> Result<Problem<'a>, FieldError> {
         let names = self
@@ -191,7 +195,7 @@ impl Compiled {
             .map(|c| c.name.as_str())
             .collect();
         let qd = steady_speeds(&self.model, p, speed)?;
-        let mut problem = Problem::new(self.at(p, speed, q0, run)?, qd, self.model.driven(), names);
+        let mut problem = Problem::new(self.at(p, speed, run)?, qd, self.model.driven(), names);
         problem.symmetric = self.model.steady_by_symmetry(p, speed);
         if self.model.constraints.iter().any(|c| !c.dropped.is_empty()) {
             problem.limit_steps(REDUNDANT_LOOP_STEP);

@@ -37,7 +37,7 @@ fn native_passes_give_the_interpreters_bits_at_any_state() {
         let p = model.model().nominal();
         let speed = 1.3;
         let q0 = initial_guess(model.model(), &p, speed).unwrap();
-        let program = model.program(&p, speed, &q0).unwrap();
+        let program = model.program().unwrap();
         let (w1, w2) = (Workspace::default(), Workspace::default());
         let inst = program.at(&p, speed, Tier::Many, &w1).unwrap();
         let native = program.at(&p, speed, Tier::Native, &w2).unwrap();
@@ -106,8 +106,7 @@ fn a_sweep_gives_the_same_points_at_every_tier() {
             let points: Vec<String> = (0..=120)
                 .map(|i| format!("{:?}", sweep.step(0.025 * i as f64)))
                 .collect();
-            let q0 = initial_guess(model.model(), &p, 0.5).unwrap();
-            let program = model.program(&p, 0.5, &q0).unwrap();
+            let program = model.program().unwrap();
             (
                 points,
                 program.is_native(),

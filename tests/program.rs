@@ -299,7 +299,7 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
         let model = example(name);
         let p0 = model.model().nominal();
         let q0 = initial_guess(model.model(), &p0, 1.0).unwrap();
-        let program = model.program(&p0, 1.0, &q0).unwrap();
+        let program = model.program().unwrap();
         // The model's states, and the reference configuration at rest (exact zeros).
         let mut at = states(name);
         at.push((
@@ -339,10 +339,8 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
 fn the_program_reproduces_the_direct_route_on_every_example() {
     for name in EXAMPLES {
         let model = example(name);
-        let p0 = model.model().nominal();
-        let q0 = initial_guess(model.model(), &p0, 1.0).unwrap();
         let program = model
-            .program(&p0, 1.0, &q0)
+            .program()
             .unwrap_or_else(|| panic!("{name}: the recording was refused"));
         let free = model.model().free();
         let nf = free.len();
@@ -549,22 +547,21 @@ fn every_swept_point_is_certified_by_an_exact_newton_step() {
 /// The governor with a stiffness term `(100 (attach − 0.08))^1.5` that vanishes at the nominal
 /// attachment: the expression takes its special case for a zero base there, so a recording
 /// made at nominal would hold a constant where the direct route has a function of `attach`.
-fn governor_with_a_kinked_spring() -> Compiled {
+/// `set` replaces parameters' nominal values.
+fn governor_with_a_kinked_spring(set: &[(String, f64)]) -> Compiled {
     let text = common::example_text("governor.toml").replace(
         "stiffness = \"spring_k\"",
         "stiffness = \"spring_k * (1 + (100*(attach - 0.08))^1.5)\"",
     );
-    Compiled::from_str(&text, "kinked.toml").unwrap()
+    Compiled::from_bytes_with(text.as_bytes(), "kinked.toml", set).unwrap()
 }
 
 #[test]
 fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_route_serves() {
     use modaltol::sensitivity::DesignPoint;
-    let model = governor_with_a_kinked_spring();
+    let model = governor_with_a_kinked_spring(&[]);
     let p = model.model().nominal();
-    let speed = 2.0;
-    let q0 = initial_guess(model.model(), &p, speed).unwrap();
-    assert!(model.program(&p, speed, &q0).is_none());
+    assert!(model.program().is_none());
     // Everything still runs, directly: the sweep and the sensitivities (off the kink, where the
     // finite differences are meaningful).
     let mut p1 = p.clone();
@@ -575,13 +572,11 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
         .position(|x| x.name == "attach")
         .unwrap();
     p1[attach] *= 1.05;
-    // Recorded off the kink, the same model is traced fine (so the refusal above is the check
-    // against the direct route at a perturbed point, not a failure to record).
-    assert!(
-        governor_with_a_kinked_spring()
-            .program(&p1, speed, &q0)
-            .is_some()
-    );
+    // Recorded off the kink (its nominal attachment moved there), the same model is traced
+    // fine (so the refusal above is the check against the direct route at a perturbed point,
+    // not a failure to record).
+    let off = [("attach".to_string(), p1[attach])];
+    assert!(governor_with_a_kinked_spring(&off).program().is_some());
     let mut sweep = Sweep::new(&model, p1.clone(), Options::default());
     let pt = (1..=16)
         .map(|i| sweep.step(0.125 * i as f64).unwrap())
@@ -600,8 +595,9 @@ fn a_recording_that_misses_a_value_dependent_case_is_refused_and_the_direct_rout
 
 #[test]
 fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
-    // The spring rate needs Ω ≥ 0.5 rad/s; the sweep starts above that, so the program is
-    // recorded, then meets speeds where the field does not evaluate. Both routes give the same
+    // The spring rate needs Ω ≥ 0.5 rad/s; the model's speeds start below that, so the program
+    // is recorded at the middle of their range (the next of the model's reference points), and
+    // the sweep meets speeds where the field does not evaluate. Both routes give the same
     // results and the same errors (a soft spring also locks the links at some speeds).
     let text = common::example_text("governor.toml").replace(
         "stiffness = \"spring_k\"",
@@ -622,12 +618,7 @@ fn a_field_that_fails_at_some_speeds_is_named_there_on_the_recorded_route() {
             .collect::<Vec<_>>()
     };
     let (recorded, direct) = (run(false), run(true));
-    let p0 = model.model().nominal();
-    assert!(
-        model
-            .program(&p0, 2.0, &initial_guess(model.model(), &p0, 2.0).unwrap())
-            .is_some()
-    );
+    assert!(model.program().is_some());
     for (a, b) in recorded.iter().zip(&direct) {
         match (a, b) {
             (Ok(a), Ok(b)) => {
@@ -688,8 +679,8 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
                 .collect();
             let lift = |v: &[f64]| v.iter().map(|&x| D::from_re(x)).collect::<Vec<_>>();
             let (ql, ll) = (lift(&q), lift(&lambda));
-            let a = (recorded.at(&pd, D::from_re(speed), &q, (Tier::Few, &workspace))).unwrap();
-            let d = (direct.at(&pd, D::from_re(speed), &q, (Tier::Few, &workspace))).unwrap();
+            let a = (recorded.at(&pd, D::from_re(speed), (Tier::Few, &workspace))).unwrap();
+            let d = (direct.at(&pd, D::from_re(speed), (Tier::Few, &workspace))).unwrap();
             assert_eq!(a.free(), d.free());
             assert_eq!(a.constraints(), d.constraints());
             let (fa, fd) = (a.residual(&ql, &ll), d.residual(&ql, &ll));

@@ -141,7 +141,7 @@ impl Expansion<'_> {
         let eq = &pt.equilibrium;
         let free = &pt.linear.free;
         let nf = free.len();
-        let equations = model.at(seeded, J::from(pt.speed), &eq.q, (Tier::Few, workspace))?;
+        let equations = model.at(seeded, J::from(pt.speed), (Tier::Few, workspace))?;
         let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
             .chain(eq.lambda.iter().copied())
             .map(J::from)

@@ -311,6 +311,33 @@ impl Model {
         self.parameters.iter().map(|p| p.value).collect()
     }
 
+    /// The joints' initial coordinates at parameters `p` and `speed`: where Newton starts.
+    pub fn initial_guess(&self, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
+        let mut q = vec![0.0; self.coordinates.len()];
+        for j in &self.joints {
+            for (k, c) in j.coords.clone().enumerate() {
+                q[c] = j.initial[k].eval(p, speed)?;
+            }
+        }
+        Ok(q)
+    }
+
+    /// Where the model's equations may be recorded ([`crate::program::Program::record`]), in
+    /// the order to try them: its nominal parameters at the first, middle and last speeds of
+    /// its `[analysis] speed` (0 without one), each with its initial guess there; a speed where
+    /// the initial guess does not evaluate is left out. The model alone decides them.
+    pub fn reference_points(&self) -> Vec<(Vec<f64>, f64, Vec<f64>)> {
+        let p = self.nominal();
+        let mut speeds = match self.analysis.speed {
+            Some(r) if !r.is_empty() => vec![r.at(0), r.at(r.len() / 2), r.at(r.len() - 1)],
+            _ => vec![0.0],
+        };
+        speeds.dedup_by(|a, b| a.to_bits() == b.to_bits());
+        (speeds.into_iter())
+            .filter_map(|w| Some((p.clone(), w, self.initial_guess(&p, w).ok()?)))
+            .collect()
+    }
+
     /// Indices of the parameters that carry a tolerance: the default design variables.
     pub fn toleranced(&self) -> Vec<usize> {
         (0..self.parameters.len())

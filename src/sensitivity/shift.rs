@@ -85,7 +85,7 @@ impl Shift<'_> {
                 .collect()
         };
         let pd = seeded(self.p, &|k, i| if i == group[k] { 1.0 } else { 0.0 });
-        let equations = (self.model).at(&pd, D::from(speed), &eq.q, (Tier::Few, self.workspace))?;
+        let equations = (self.model).at(&pd, D::from(speed), (Tier::Few, self.workspace))?;
         // The shift `[dq_R; dλ]/db = −J⁻¹ ∂F/∂b`: one implicit step from the nominal solution,
         // with `∂F/∂b` from the recorded program where there is one.
         let nf = free.len();

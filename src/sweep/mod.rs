@@ -44,13 +44,7 @@ impl Options {
     }
 }
 
-/// The model's initial guesses at parameters `p` and `speed`.
+/// The model's initial guesses at parameters `p` and `speed` ([`Model::initial_guess`]).
 pub fn initial_guess(model: &Model, p: &[f64], speed: f64) -> Result<Vec<f64>, FieldError> {
-    let mut q = vec![0.0; model.coordinates.len()];
-    for j in &model.joints {
-        for (k, c) in j.coords.clone().enumerate() {
-            q[c] = j.initial[k].eval(p, speed)?;
-        }
-    }
-    Ok(q)
+    model.initial_guess(p, speed)
 }

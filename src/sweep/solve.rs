@@ -103,7 +103,7 @@ impl Solver<'_> {
     pub fn point_from(&self, speed: f64, q0: &[f64], start: Start) -> Result<Point, PointError> {
         let Solver { model, p, opt, .. } = *self;
         // On the model's route (the recorded program when there is one).
-        let problem = model.problem(p, speed, q0, (opt.tier, self.workspace))?;
+        let problem = model.problem(p, speed, (opt.tier, self.workspace))?;
         let solved = self.solve(&problem, speed, q0, start)?;
         let mut first = analyse(model.model(), p, &problem, solved, opt)?;
         if first.stable() {

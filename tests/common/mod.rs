@@ -118,7 +118,7 @@ pub fn solve(model: &Compiled, speed: f64, direct: bool) -> Point {
     let q0 = initial_guess(model.model(), &p, speed).unwrap();
     if !direct {
         assert!(
-            model.program(&p, speed, &q0).is_some(),
+            model.program().is_some(),
             "{}: the equations record as a program",
             model.model().name
         );
