@@ -120,7 +120,6 @@ fn indices(
         study.vars.clone(),
         spread.clone(),
     );
-    let normal = Normal::standard();
     // Uniforms of A (rows 0..N) and B (rows N..2N), one stream per row.
     let draw = |row: usize| -> Vec<f64> {
         let mut rng = ChaCha8Rng::seed_from_u64(opt.seed);
@@ -130,33 +129,16 @@ fn indices(
             .collect()
     };
     let big_n = opt.samples;
-    // Design (row of A or B, with column i from B): `(j, Some(i))` is A_B^(i)'s row j.
-    let designs: Vec<(usize, Option<usize>)> = (0..2 * big_n)
-        .map(|j| (j, None))
-        .chain((0..d).flat_map(|i| (0..big_n).map(move |j| (j, Some(i)))))
-        .collect();
+    let draws = Draws {
+        active: &active,
+        map: &map,
+        draw: &draw,
+        rows: big_n,
+    };
     let speeds = study.speeds.len();
     let outs = study.outputs.len();
     let reqs = &study.model.model().requirements;
-    let width = speeds * outs + reqs.len();
-    let tier = Tier::for_points(designs.len() * speeds);
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let values: Vec<Vec<f64>> = run.pool.install(|| {
-        designs
-            .par_iter()
-            .map_init(Workspace::default, |workspace, &(j, col)| {
-                let mut u = draw(j);
-                if let Some(i) = col {
-                    u[active[i]] = draw(big_n + j)[active[i]];
-                }
-                let z: Vec<f64> = u.iter().map(|&x| normal.inverse_cdf(x)).collect();
-                let v = evaluate(study, map.parameters(&z, &u), (tier, workspace), width);
-                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                (run.progress)(k, designs.len());
-                v
-            })
-            .collect()
-    });
+    let values = draws.values(study, speeds * outs + reqs.len(), run);
     let a = |j: usize, t: usize| values[j][t];
     let b = |j: usize, t: usize| values[big_n + j][t];
     let ab = |i: usize, j: usize, t: usize| values[2 * big_n + i * big_n + j][t];
@@ -164,7 +146,7 @@ fn indices(
         .flat_map(|s| (0..outs).map(move |o| Target::Output(s, o)))
         .chain((0..reqs.len()).map(Target::Margin))
         .collect();
-    let bounds = derivative_bounds(study, spread, &active, &map, &draw, big_n, run);
+    let bounds = derivative_bounds(study, spread, &draws, run);
     let mut out = Vec::new();
     for (t, &target) in targets.iter().enumerate() {
         if let Target::Margin(r) = target
@@ -200,6 +182,83 @@ fn indices(
         }
     }
     Ok(out)
+}
+
+/// The Sobol design's draws: the active variables, the map to designs, the uniforms of row
+/// `j` (`draw(j)`: of `A` for `j < N`, of `B` after) and `N`, the rows of `A`.
+struct Draws<'a> {
+    active: &'a [usize],
+    map: &'a DesignMap,
+    draw: &'a (dyn Fn(usize) -> Vec<f64> + Sync),
+    rows: usize,
+}
+
+impl Draws<'_> {
+    /// The derivative bounds' rule over the `n` variables: its nodes in standard normals (the
+    /// inactive variables at 0) and weights; the 5-point Gauss–Hermite tensor rule for up to
+    /// [`TENSOR_MAX`] active variables, else the first rows of `A` (an estimate).
+    fn bound_nodes(&self, n: usize) -> Vec<(Vec<f64>, f64)> {
+        let d = self.active.len();
+        if d <= TENSOR_MAX {
+            let (x, w) = crate::linalg::gauss_hermite(TENSOR_ORDER);
+            (0..TENSOR_ORDER.pow(d as u32))
+                .map(|mut k| {
+                    let mut z = vec![0.0; n];
+                    let mut wt = 1.0;
+                    for &a in self.active {
+                        z[a] = x[k % TENSOR_ORDER];
+                        wt *= w[k % TENSOR_ORDER];
+                        k /= TENSOR_ORDER;
+                    }
+                    (z, wt)
+                })
+                .collect()
+        } else {
+            let normal = Normal::standard();
+            let m = self.rows.min(BOUND_ROWS);
+            (0..m)
+                .map(|j| {
+                    let z = (self.draw)(j)
+                        .iter()
+                        .map(|&u| normal.inverse_cdf(u))
+                        .collect();
+                    (z, 1.0 / m as f64)
+                })
+                .collect()
+        }
+    }
+
+    /// Every row's values ([`evaluate`], `width` of them): the rows of `A`, of `B`, then of
+    /// each `A_B^(i)` (`A` with the active variable `i`'s column from `B`), swept on the run's
+    /// workers.
+    fn values(&self, study: &Study, width: usize, run: &Run) -> Vec<Vec<f64>> {
+        let (big_n, d) = (self.rows, self.active.len());
+        let normal = Normal::standard();
+        // Design (row of A or B, with column i from B): `(j, Some(i))` is A_B^(i)'s row j.
+        let designs: Vec<(usize, Option<usize>)> = (0..2 * big_n)
+            .map(|j| (j, None))
+            .chain((0..d).flat_map(|i| (0..big_n).map(move |j| (j, Some(i)))))
+            .collect();
+        let tier = Tier::for_points(designs.len() * study.speeds.len());
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        run.pool.install(|| {
+            designs
+                .par_iter()
+                .map_init(Workspace::default, |workspace, &(j, col)| {
+                    let mut u = (self.draw)(j);
+                    if let Some(i) = col {
+                        u[self.active[i]] = (self.draw)(big_n + j)[self.active[i]];
+                    }
+                    let z: Vec<f64> = u.iter().map(|&x| normal.inverse_cdf(x)).collect();
+                    let p = self.map.parameters(&z, &u);
+                    let v = evaluate(study, p, (tier, workspace), width);
+                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    (run.progress)(k, designs.len());
+                    v
+                })
+                .collect()
+        })
+    }
 }
 
 /// One design's values: every output at every speed (NaN where none), then every
@@ -333,39 +392,13 @@ const BOUND_ROWS: usize = 256;
 fn derivative_bounds(
     study: &Study,
     spread: &Spread,
-    active: &[usize],
-    map: &DesignMap,
-    draw: &(dyn Fn(usize) -> Vec<f64> + Sync),
-    rows: usize,
+    draws: &Draws,
     run: &Run,
 ) -> Vec<Vec<Option<(Vec<f64>, f64)>>> {
-    let n = spread.sigma.len();
+    let (active, map) = (draws.active, draws.map);
     let d = active.len();
     let normal = Normal::standard();
-    // The rule's nodes in standard normals (all variables; inactive ones at 0) and weights.
-    let nodes: Vec<(Vec<f64>, f64)> = if d <= TENSOR_MAX {
-        let (x, w) = crate::linalg::gauss_hermite(TENSOR_ORDER);
-        (0..TENSOR_ORDER.pow(d as u32))
-            .map(|mut k| {
-                let mut z = vec![0.0; n];
-                let mut wt = 1.0;
-                for &a in active {
-                    z[a] = x[k % TENSOR_ORDER];
-                    wt *= w[k % TENSOR_ORDER];
-                    k /= TENSOR_ORDER;
-                }
-                (z, wt)
-            })
-            .collect()
-    } else {
-        let m = rows.min(BOUND_ROWS);
-        (0..m)
-            .map(|j| {
-                let z = draw(j).iter().map(|&u| normal.inverse_cdf(u)).collect();
-                (z, 1.0 / m as f64)
-            })
-            .collect()
-    };
+    let nodes = draws.bound_nodes(spread.sigma.len());
     let speeds = study.speeds.len();
     let outs = study.outputs.len();
     // Per node: per speed and output, the value and the gradient over the study's variables.

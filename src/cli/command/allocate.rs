@@ -2,7 +2,7 @@
 
 use crate::cli::*;
 use anyhow::Result;
-use modaltol::allocate::allocate;
+use modaltol::allocate::{Allocation, allocate};
 use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::cancel::Cancel;
 use modaltol::files::{Inputs, ResultDir};
@@ -77,14 +77,7 @@ pub(crate) fn allocate_command(
         return Err(Interrupted("nothing written (a result is complete or absent)".into()).into());
     }
     print!("{}", report::allocation_table(md, &a));
-    dir.write(
-        "allocation.csv",
-        &modaltol::results::csv_bytes(&report::ALLOCATION_HEADER, &report::allocation_rows(md, &a)),
-    )?;
-    dir.write(
-        "allocation.json",
-        serde_json::to_string_pretty(&report::allocation_json(md, &a))?.as_bytes(),
-    )?;
+    write_allocation(&mut dir, md, &a)?;
     // The allocated design's whole analysis (its yield by the quadrature, the report).
     let analysis = analyze(
         &m,
@@ -152,4 +145,17 @@ fn cost(md: &Model, spec: &str) -> Result<(usize, Cost)> {
         .find(|c| c.0 == p)
         .map_or(Cost::default(), |c| c.1);
     Ok((p, Cost { b, k, ..base }))
+}
+
+/// `allocation.csv` and `allocation.json`.
+fn write_allocation(dir: &mut ResultDir, md: &Model, a: &Allocation) -> Result<()> {
+    dir.write(
+        "allocation.csv",
+        &modaltol::results::csv_bytes(&report::ALLOCATION_HEADER, &report::allocation_rows(md, a)),
+    )?;
+    dir.write(
+        "allocation.json",
+        serde_json::to_string_pretty(&report::allocation_json(md, a))?.as_bytes(),
+    )?;
+    Ok(())
 }
