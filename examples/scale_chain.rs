@@ -27,6 +27,7 @@
 //! `modaltol analyze` (`… -- model n k` prints the model file).
 use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::{Compiled, Route};
+use modaltol::hessian::MixedRoute;
 use modaltol::modal::ModeClass;
 use modaltol::model::Sampling;
 use modaltol::montecarlo::McOptions;
@@ -43,7 +44,36 @@ use std::time::Instant;
 
 #[path = "common/chain.rs"]
 mod common_chain;
-use common_chain::{chain, chain_toleranced, with_joint_dampers};
+use common_chain::{Coupling, chain, chain_family, chain_toleranced, with_joint_dampers};
+
+/// The family `--family neighbours|global|moving` names (issue 55's), if any.
+fn coupling(args: &[String]) -> Option<Coupling> {
+    let at = args.iter().position(|a| a == "--family")?;
+    Some(match args.get(at + 1).map(String::as_str) {
+        Some("neighbours") => Coupling::Neighbours,
+        Some("global") => Coupling::Global,
+        Some("moving") => Coupling::Moving,
+        other => panic!("--family neighbours|global|moving, not {other:?}"),
+    })
+}
+
+/// The numbers among `args` (the flags and `--family`'s value left out).
+fn numbers(args: &[String]) -> Vec<usize> {
+    args.iter()
+        .enumerate()
+        .filter(|(i, a)| !a.starts_with("--") && (*i == 0 || args[i - 1] != "--family"))
+        .map(|(_, a)| a.parse().unwrap())
+        .collect()
+}
+
+/// The `n`-segment chain with `k` toleranced segments: issue 38's family (each parameter in
+/// one element) or the `--family` asked for.
+fn toleranced(n: usize, k: usize, args: &[String]) -> String {
+    match coupling(args) {
+        Some(c) => chain_family(n, k, c),
+        None => chain_toleranced(n, k),
+    }
+}
 
 /// Peak resident memory of this process (MB), from `/proc/self/status`.
 fn peak_mb() -> f64 {
@@ -108,18 +138,14 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
 
 /// `tolerances n [--monte-carlo] [--no-quadrature] k …` (see the module documentation).
 fn tolerances(args: &[String]) {
-    let nums: Vec<usize> = args
-        .iter()
-        .filter(|a| !a.starts_with("--"))
-        .map(|a| a.parse().unwrap())
-        .collect();
+    let nums = numbers(args);
     let n = nums.first().copied().unwrap_or(40);
     let ks = if nums.len() > 1 {
         nums[1..].to_vec()
     } else {
         vec![5, 10, 20]
     };
-    let models = ks.iter().map(|&k| chain_toleranced(n, k)).collect();
+    let models = ks.iter().map(|&k| toleranced(n, k, args)).collect();
     let speeds = (0..13).map(|i| 5.0 * i as f64).collect();
     family(&format!("{n}-segment chain"), models, speeds, args);
 }
@@ -364,10 +390,8 @@ fn reference_rows(path: &str) -> Vec<Row> {
 
 /// `model n k`: the n-segment chain with 2k toleranced variables, as a model file.
 fn print_model(args: &[String]) {
-    print!(
-        "{}",
-        chain_toleranced(args[0].parse().unwrap(), args[1].parse().unwrap())
-    );
+    let nums = numbers(args);
+    print!("{}", toleranced(nums[0], nums[1], args));
 }
 
 fn main() {
@@ -504,9 +528,9 @@ fn main() {
         // `local n k`: at one point (5 rad/s) of the n-segment chain with 2k toleranced
         // variables, the gradients of every output (first order) and the gradients and
         // Hessians (second order), best of 3.
-        let n: usize = args[1].parse().unwrap();
-        let k: usize = args[2].parse().unwrap();
-        let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+        let nums = numbers(&args[1..]);
+        let (n, k) = (nums[0], nums[1]);
+        let model = Compiled::from_str(&toleranced(n, k, &args[1..]), "chain.toml").unwrap();
         let p = model.model().nominal();
         let q0 = initial_guess(model.model(), &p, 5.0).unwrap();
         let pt = point(&model, &p, 5.0, &q0, &Options::default()).unwrap();
@@ -532,17 +556,34 @@ fn main() {
                 .analytic(&wrt)
                 .unwrap();
         });
-        let h = best(&mut || {
+        let by = |route| {
             DesignPoint::new(&model, &p, &pt)
                 .with_workspace(&ws)
-                .hessians(&wrt, &outs)
-                .unwrap();
+                .hessians_by(&wrt, &outs, route)
+                .unwrap()
+        };
+        let h = best(&mut || {
+            by(MixedRoute::Fastest);
         });
+        let passes = best(&mut || {
+            by(MixedRoute::Passes);
+        });
+        // The two routes' Hessians entry by entry, relative to each Hessian's largest entry.
+        let (fast, reference) = (by(MixedRoute::Fastest), by(MixedRoute::Passes));
+        let deviation = fast
+            .outputs
+            .iter()
+            .zip(&reference.outputs)
+            .filter_map(|(a, b)| Some((a.as_ref().ok()?, b.as_ref().ok()?)))
+            .map(|(a, b)| (a - b).amax() / b.amax().max(f64::MIN_POSITIVE))
+            .fold(0.0, f64::max);
         println!(
-            "{n} segments, {} variables: gradients {:.2} ms, gradients and Hessians {:.2} ms",
+            "{n} segments, {} variables: gradients {:.2} ms, gradients and Hessians {:.2} ms \
+             (a pass per pair {:.2} ms; largest relative difference {deviation:.1e})",
             wrt.len(),
             g * 1e3,
-            h * 1e3
+            h * 1e3,
+            passes * 1e3
         );
         return;
     }

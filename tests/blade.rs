@@ -4,6 +4,8 @@
 //! centrifugal stiffening `dω₁²/dΩ²` at low speed to Southwell's coefficient `S = 1.193`
 //! (zero hub radius), as N grows. The shipped example is the N = 20 chain.
 
+// The coupled families of the shared generators are not used here.
+#[allow(dead_code)]
 #[path = "../examples/common/chain.rs"]
 mod chain;
 mod common;

@@ -4,6 +4,10 @@
 mod chain;
 mod common;
 
+use chain::Coupling;
+use modaltol::hessian::MixedRoute;
+use modaltol::output::outputs;
+
 use common::pendulum::G;
 
 use common::example;
@@ -333,6 +337,67 @@ fn hessians_of_many_modes_and_variables_match_differences_whichever_pairs_couple
             "{what}: only {checked} Hessians compared"
         );
     }
+}
+
+#[test]
+fn reverse_mode_mixed_terms_match_a_pass_per_pair_on_every_coupling() {
+    // Issue 55's families: springs the harmonic mean of two segments' EI, a density factor in
+    // every segment, and gravity along the spin axis moving the equilibrium with every
+    // variable. The roots' mixed terms by forward over reverse mode (`MixedRoute::Reverse`)
+    // against a hyper-dual pass per pair, entry by entry, at rest and spinning.
+    for coupling in [Coupling::Neighbours, Coupling::Global, Coupling::Moving] {
+        let model = Compiled::from_str(&chain::chain_family(8, 4, coupling), "chain.toml").unwrap();
+        let p = model.model().nominal();
+        let vars = model.model().toleranced();
+        let q0 = initial_guess(model.model(), &p, 0.0).unwrap();
+        for w in [0.0, 12.0] {
+            let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
+            let outs = outputs(pt.modes.len(), false);
+            let by = |route| {
+                DesignPoint::new(&model, &p, &pt)
+                    .hessians_by(&vars, &outs, route)
+                    .unwrap()
+            };
+            let (reverse, passes) = (by(MixedRoute::Reverse), by(MixedRoute::Passes));
+            let all = |h: &modaltol::hessian::Hessians| {
+                h.outputs
+                    .iter()
+                    .chain(&h.discriminant)
+                    .cloned()
+                    .collect::<Vec<_>>()
+            };
+            let mut compared = 0;
+            let mut coupled = 0;
+            for (a, b) in all(&reverse).iter().zip(all(&passes)) {
+                assert_eq!(a.is_ok(), b.is_ok(), "{coupling:?} Ω = {w}");
+                if let (Ok(a), Ok(b)) = (a, b) {
+                    let scale = b.amax().max(1e-300);
+                    assert!(
+                        (a - &b).amax() <= 1e-10 * scale,
+                        "{coupling:?} Ω = {w}: reverse {a} vs passes {b}"
+                    );
+                    compared += 1;
+                    coupled += usize::from(
+                        (0..b.nrows()).any(|i| (0..i).any(|j| b[(i, j)].abs() > 1e-6 * scale)),
+                    );
+                }
+            }
+            assert!(
+                compared >= 2 * pt.modes.len(),
+                "{coupling:?} Ω = {w}: {compared}"
+            );
+            assert!(
+                coupled > 0,
+                "{coupling:?} Ω = {w}: no mixed derivative to compare"
+            );
+        }
+    }
+    // And against central differences of the exact gradients where every pair couples (the
+    // default route takes reverse mode there).
+    let moving =
+        Compiled::from_str(&chain::chain_family(8, 4, Coupling::Moving), "chain.toml").unwrap();
+    let checked = check_hessians("moving chain", &moving, &[0.0, 12.0]);
+    assert!(checked >= 2 * 8, "only {checked} Hessians compared");
 }
 
 #[test]

@@ -82,3 +82,83 @@ pub fn chain_toleranced(n: usize, k: usize) -> String {
     }
     out
 }
+
+/// How the toleranced parameters of [`chain_family`] enter the chain: issue 55's families,
+/// written the way engineers write a segmented blade.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coupling {
+    /// Each joint's spring the harmonic mean of its two segments' bending stiffness,
+    /// `2·EI_a·EI_b/(EI_a + EI_b)/h`: every `EI` enters two joints.
+    Neighbours,
+    /// A toleranced density factor `rho` in every segment's mass and inertia, beside the own
+    /// `mu_i` and `EI_i` (each `EI` in one joint).
+    Global,
+    /// Gravity along the spin axis (it bends the blade out of its plane of rotation, so the
+    /// equilibrium moves with every parameter), with `rho` and the harmonic-mean springs.
+    Moving,
+}
+
+/// The `n`-segment chain of [`chain`] whose first `k` segments carry their own toleranced
+/// `mu_i` (2 %) and `EI_i` (5 %) (the rest the shared, untoleranced `mu` and `EI`), entering as
+/// `coupling` says: `2k` toleranced variables, `2k + 1` with `rho` (1 %).
+pub fn chain_family(n: usize, k: usize, coupling: Coupling) -> String {
+    assert!(k <= n, "at most one set of parameters a segment");
+    let gravity = if coupling == Coupling::Moving {
+        "[0, 0, -9.81]"
+    } else {
+        "[0, 0, 0]"
+    };
+    let global = coupling != Coupling::Neighbours;
+    let harmonic = coupling != Coupling::Global;
+    let mut s = format!("name = \"chain {n}, {k} toleranced segments, {coupling:?}\"\n");
+    s += &format!(
+        "gravity = {gravity}\n[parameters]\nmu = 2.0\nEI = 50.0\nh = {}\n",
+        1.0 / n as f64
+    );
+    for i in 0..k {
+        s += &format!(
+            "mu_{i} = {{ value = 2.0, tolerance = \"2%\" }}\n\
+             EI_{i} = {{ value = 50.0, tolerance = \"5%\" }}\n"
+        );
+    }
+    s += if global {
+        "rho = { value = 1.0, tolerance = \"1%\" }\n"
+    } else {
+        "rho = 1.0\n"
+    };
+    s += "[[bodies]]\nname = \"hub\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\n\
+          cm = [0, 0, 0]\n[[joints]]\nname = \"spin\"\ntype = \"revolute\"\n\
+          parent = \"ground\"\nchild = \"hub\"\nat = [0, 0, 0]\naxis = [0, 0, 1]\n\
+          drive = \"speed\"\n";
+    let own = |name: &str, i: usize| {
+        if i < k {
+            format!("{name}_{i}")
+        } else {
+            name.to_string()
+        }
+    };
+    for i in 0..n {
+        let parent = if i == 0 {
+            "hub".into()
+        } else {
+            format!("s{}", i - 1)
+        };
+        let (mu, ei) = (own("mu", i), own("EI", i));
+        let k_joint = if i == 0 {
+            format!("2*{ei}/h")
+        } else if harmonic {
+            let before = own("EI", i - 1);
+            format!("2*{before}*{ei}/({before} + {ei})/h")
+        } else {
+            format!("{ei}/h")
+        };
+        s += &format!(
+            "[[bodies]]\nname = \"s{i}\"\nmass = \"rho*{mu}*h\"\n\
+             inertia = [0, \"rho*{mu}*h^3/12\", \"rho*{mu}*h^3/12\"]\ncm = [\"{}*h\", 0, 0]\n\
+             [[joints]]\nname = \"j{i}\"\ntype = \"revolute\"\nparent = \"{parent}\"\n\
+             child = \"s{i}\"\nat = [\"{i}*h\", 0, 0]\naxis = [0, -1, 0]\nstiffness = \"{k_joint}\"\n",
+            i as f64 + 0.5
+        );
+    }
+    s
+}

@@ -19,6 +19,20 @@
 //!    derivatives vanish, and at most `1 + 2p + p(p−1)/2` where they do not. (With few
 //!    variables the screening is shortened where it cannot pay: up to three pairs get their
 //!    own passes unscreened, and up to five variables skip the rows' passes.)
+//!
+//!    Where the coupled pairs are many (a spring the harmonic mean of two segments' stiffness,
+//!    one density in every segment, an equilibrium that moves with every variable) and the
+//!    model has no constraint equations, the roots' mixed terms come from reverse mode instead
+//!    (`mixed.rs`): per root, `⌈p/4⌉` forward-over-reverse sweeps of the recorded equations give
+//!    `yᵀP_ab x` for every pair, the equilibrium's second-order move eliminated by one adjoint
+//!    solve. The route is chosen by its cost in pair passes (`SWEEP_LANES`); both give the
+//!    same Hessians to rounding (1e-12 relative on the 81-variable blade). On the 40-segment
+//!    blade with gravity along the spin axis (`scale_chain local 40 k --family moving`, one
+//!    point, best of 3): 0.32 s against 0.54 s at 21 variables, 1.2 s against 7.1–8.7 s at 81,
+//!    growing as `p^0.9` instead of `p^1.9`. Reverse mode over the recorded program was chosen
+//!    over vector hyper-dual lanes, which would still carry `p²` mixed parts through every
+//!    coordinate's three lanes, and over colouring, which a moving equilibrium leaves nothing to
+//!    colour (every pair couples).
 //! 3. **Roots** (`root.rs`): each simple root's bordered eigen-equations are
 //!    factorised once; the root's first and second derivatives follow in closed form from the
 //!    matrices' derivatives, one solve per variable and `O(n)` per pair.
@@ -38,6 +52,7 @@
 //! differentiation*, ACM TOMS 34 (2008), for exploiting the pairs that vanish; Schwartz, *Fast
 //! probabilistic algorithms for verification of polynomial identities*, J. ACM 27 (1980).
 
+mod mixed;
 mod root;
 
 use crate::compiled::Compiled;
@@ -59,6 +74,11 @@ use root::{Along, RootTerms};
 
 /// Scalar of the mixed (pair) passes.
 type Hd = HyperDual64;
+
+/// The cost of a reverse sweep of [`mixed`] in lanes of a pair's pass (a pass carries three
+/// lanes a free coordinate): measured on the 40-segment blade (120 lanes), a sweep of four
+/// directions costs 0.42 of a pair's pass (1.1 against 2.6 ms).
+const SWEEP_LANES: f64 = 50.0;
 
 /// First and second derivatives at one point: per output (as [`crate::output::outputs`]
 /// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; where an output is
@@ -216,6 +236,7 @@ fn rows_with_mixed_terms(
     x: &Expansion<'_>,
     p: &[f64],
     vars: &[usize],
+    rows: bool,
 ) -> Result<Vec<bool>, PointError> {
     let nv = vars.len();
     let pairs = nv * nv.saturating_sub(1) / 2;
@@ -234,8 +255,8 @@ fn rows_with_mixed_terms(
     if vanishes(&along_w, 1) {
         return Ok(vec![false; nv]);
     }
-    // The rows' passes (p of them) pay only where the pairs are many.
-    if pairs <= 2 * nv {
+    // The rows' passes (p of them) pay only where the pairs are many and get passes.
+    if !rows || pairs <= 2 * nv {
         return Ok(vec![true; nv]);
     }
     let rows: Vec<bool> = (0..nv)
@@ -256,21 +277,61 @@ fn rows_with_mixed_terms(
     })
 }
 
+/// Each wanted root's `yᵀP_ab x` for every pair ([`mixed::pencil_pairs`]).
+type PencilPairs = Vec<DMatrix<C64>>;
+
+impl Expansion<'_> {
+    /// Which variables' pairs get passes of their own, and each wanted root's mixed terms by
+    /// reverse mode where `route` and the costs choose it ([`mixed`]; the rows' screening is
+    /// left out where reverse mode clearly costs less than the pairs).
+    fn mixed_route(
+        &self,
+        p: &[f64],
+        vars: &[usize],
+        (route, whole): (MixedRoute, bool),
+        wanted: &[&Root],
+    ) -> Result<(Vec<bool>, Option<PencilPairs>), PointError> {
+        let (pt, nv) = (self.pt, vars.len());
+        // Reverse mode applies to a recorded program without constraint equations.
+        let applies = !whole && pt.equilibrium.lambda.is_empty() && self.model.program().is_some();
+        let reverse = match route {
+            _ if !applies => None,
+            MixedRoute::Fastest => Some(reverse_cost(wanted.len(), nv, pt.linear.free.len())),
+            MixedRoute::Reverse => Some(0.0),
+            MixedRoute::Passes => None,
+        };
+        let pairs = (nv * nv.saturating_sub(1) / 2) as f64;
+        let rows = reverse.is_none_or(|cost| cost >= pairs / 4.0);
+        let mixed_rows = rows_with_mixed_terms(self, p, vars, rows)?;
+        let flagged = mixed_rows.iter().filter(|&&r| r).count();
+        let coupled = (flagged * flagged.saturating_sub(1) / 2) as f64;
+        let pairs = match reverse {
+            Some(cost) if cost < coupled => mixed::pencil_pairs(self, p, vars, wanted)?,
+            _ => None,
+        };
+        Ok(match pairs {
+            Some(pairs) => (vec![false; nv], Some(pairs)),
+            None => (mixed_rows, None),
+        })
+    }
+}
+
+/// The cost of the roots' mixed terms by reverse mode in pair passes: a sweep per root and
+/// [`crate::program::BATCH`] variables, a sweep costing [`SWEEP_LANES`] lanes of a pass.
+fn reverse_cost(roots: usize, nv: usize, nf: usize) -> f64 {
+    let sweep = (SWEEP_LANES / (3 * nf.max(1)) as f64).min(1.0);
+    (roots * nv.div_ceil(crate::program::BATCH)) as f64 * sweep
+}
+
 /// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
 enum Partner {
     Conjugate,
     Own(Box<RootTerms>),
 }
 
-/// The roots' terms of every simple mode, or why the mode's roots have none.
-fn root_terms(
-    pt: &Point,
-    smooth: &[Smoothness],
-    along: &[Along<'_>],
-) -> Vec<Result<(RootTerms, Partner), Missing>> {
-    let lin = &pt.linear;
-    // The roots that need terms of their own: each simple mode's root, and its partner where
-    // that is not the conjugate.
+/// The roots that need terms of their own: each simple mode's root, and its partner where that
+/// is not the conjugate; and per mode whether the partner is the conjugate.
+fn wanted_roots<'p>(pt: &'p Point, smooth: &[Smoothness]) -> (Vec<&'p Root>, Vec<bool>) {
     let mut wanted: Vec<&Root> = Vec::new();
     let conjugate: Vec<bool> = pt
         .modes
@@ -290,7 +351,27 @@ fn root_terms(
             conjugate
         })
         .collect();
-    let mut terms = RootTerms::all(&wanted, (&lin.m, &lin.c, &lin.k), along).into_iter();
+    (wanted, conjugate)
+}
+
+/// The roots' terms of every simple mode, or why the mode's roots have none; `pairs`, where
+/// given, each wanted root's `yᵀP_ab x` for every pair ([`mixed::pencil_pairs`]).
+fn root_terms(
+    (pt, smooth): (&Point, &[Smoothness]),
+    along: &[Along<'_>],
+    (wanted, conjugate): (&[&Root], Vec<bool>),
+    pairs: Option<PencilPairs>,
+) -> Vec<Result<(RootTerms, Partner), Missing>> {
+    let lin = &pt.linear;
+    let mut terms = RootTerms::all(wanted, (&lin.m, &lin.c, &lin.k), along);
+    if let Some(pairs) = pairs {
+        for (t, pairs) in terms.iter_mut().zip(pairs) {
+            if let Some(t) = t {
+                t.pairs = Some(pairs);
+            }
+        }
+    }
+    let mut terms = terms.into_iter();
     smooth
         .iter()
         .zip(conjugate)
@@ -460,10 +541,33 @@ fn pair(
     Ok((first, second))
 }
 
+/// How the roots' mixed second derivatives are taken (the results agree to rounding).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MixedRoute {
+    /// Reverse mode where the variables are many and the model has no constraint equations
+    /// (`mixed.rs`), a pass per coupled pair otherwise.
+    Fastest,
+    /// A hyper-dual pass per pair whose mixed derivatives may not vanish: the reference.
+    Passes,
+    /// Reverse mode wherever it applies, whatever it costs (for comparisons).
+    Reverse,
+}
+
 impl DesignPoint<'_> {
     /// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
-    /// discriminant with respect to the parameters `vars`, at the design point (see the module documentation for the passes).
+    /// discriminant with respect to the parameters `vars`, at the design point (see the module
+    /// documentation for the passes).
     pub fn hessians(&self, vars: &[usize], outs: &[Output]) -> Result<Hessians, PointError> {
+        self.hessians_by(vars, outs, MixedRoute::Fastest)
+    }
+
+    /// [`DesignPoint::hessians`] with the roots' mixed terms taken by `route`.
+    pub fn hessians_by(
+        &self,
+        vars: &[usize],
+        outs: &[Output],
+        route: MixedRoute,
+    ) -> Result<Hessians, PointError> {
         let (model, p, pt, tf) = (self.model, self.p, self.point, self.transfer);
         let lent = self.workspace();
         let workspace: &Workspace = &lent;
@@ -483,12 +587,13 @@ impl DesignPoint<'_> {
         // freedom's invariants.
         let whole = tf.is_some() || pt.linear.m.nrows() == 1;
         let (derivatives, singles) = x.along_each(p, vars, whole)?;
-        let mixed_rows = rows_with_mixed_terms(&x, p, vars)?;
+        let (wanted, conjugate) = wanted_roots(pt, &smooth);
+        let (mixed_rows, pairs) = x.mixed_route(p, vars, (route, whole), &wanted)?;
         let along: Vec<Along<'_>> = derivatives
             .iter()
             .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
             .collect();
-        let roots = root_terms(pt, &smooth, &along);
+        let roots = root_terms((pt, &smooth), &along, (&wanted, conjugate), pairs);
         let Hessians {
             gradients: mut grad,
             outputs: mut hess,

@@ -65,6 +65,8 @@ pub struct RootTerms {
     alpha: Vec<C64>,
     /// `u_aᵀx_b + u_bᵀx_a` (symmetric, variables × variables).
     cross: DMatrix<C64>,
+    /// `yᵀP_ab x` for every pair, where reverse mode gave them all (`mixed.rs`).
+    pub pairs: Option<DMatrix<C64>>,
 }
 
 /// A variable's first and second derivatives of `(M̂, Ĉ, K̂)` along itself.
@@ -139,6 +141,7 @@ impl Partial {
             diagonal: self.diagonal,
             alpha: self.alpha,
             cross: &ux + ux.transpose(),
+            pairs: None,
         }
     }
 }
@@ -232,12 +235,14 @@ impl RootTerms {
         self.lambda
     }
 
-    /// `λ_ab` for variables `a ≠ b`, with `second` the matrices' mixed derivatives `(M̂_ab,
-    /// Ĉ_ab, K̂_ab)` (`None` where they are zero).
+    /// `λ_ab` for variables `a < b`, with `second` the matrices' mixed derivatives `(M̂_ab,
+    /// Ĉ_ab, K̂_ab)` (`None` where they are zero or the root has [`RootTerms::pairs`]).
     pub fn mixed(&self, (a, b): (usize, usize), second: Option<Triple<'_>>) -> C64 {
-        let cab = second.map_or(C64::new(0.0, 0.0), |s| {
-            dot(&self.left, &pencil(self.lambda, s, &self.right))
-        });
+        let cab = match (second, &self.pairs) {
+            (Some(s), _) => dot(&self.left, &pencil(self.lambda, s, &self.right)),
+            (None, Some(pairs)) => pairs[(a, b)],
+            (None, None) => C64::new(0.0, 0.0),
+        };
         let (la, lb) = (self.first[a], self.first[b]);
         -(cab
             + self.alpha[a] * lb

@@ -24,11 +24,13 @@
 //! evaluation at a second, perturbed set of inputs, is discarded: the caller then keeps to the
 //! direct route, which is always available.
 
+mod adjoint;
 mod instance;
 mod linear;
 mod routes;
 mod workspace;
 
+pub use adjoint::{BATCH, Contraction};
 pub use instance::Instance;
 pub use linear::Linear;
 pub use routes::Recorded;

@@ -26,15 +26,19 @@
 
 mod eval;
 mod forward;
+mod hyper;
 mod native;
 mod op;
 mod passes;
+mod reverse;
 mod seeding;
 mod var;
 
 pub use forward::{Forward, Rows};
+pub use hyper::Hyper;
 pub use native::NativePass;
 pub use op::{Fun, Op};
+pub use reverse::Reverse;
 pub use seeding::{BLOCK, Seeding};
 pub use var::{Term, Var};
 
