@@ -19,7 +19,8 @@
 //! Hessians), of all the Taylor methods, of the quadrature (and its nodes) and of a
 //! 3000-sample Monte Carlo, the rows each method filled, the peak memory so far, and the
 //! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
-//! alone, and with the Hessians, at one point of that chain; `… -- governor [--monte-carlo]
+//! alone, and with the Hessians, at one point of that chain (`--fastest-only`: without the
+//! pass-per-pair route beside it); `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
 //! variables; `… -- accuracy n k samples [--reference FILE]`: the quadrature's, second order's
 //! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
@@ -565,6 +566,15 @@ fn main() {
         let h = best(&mut || {
             by(MixedRoute::Fastest);
         });
+        if args.iter().any(|a| a == "--fastest-only") {
+            println!(
+                "{n} segments, {} variables: gradients {:.2} ms, gradients and Hessians {:.2} ms",
+                wrt.len(),
+                g * 1e3,
+                h * 1e3
+            );
+            return;
+        }
         let passes = best(&mut || {
             by(MixedRoute::Passes);
         });

@@ -12,8 +12,8 @@
 //!
 //! (differentiating `F(w(b)) = 0` twice and eliminating `q_ab`: the second-order adjoint of an
 //! implicit function). [`crate::program::Program::pencil_hessian`] gives `∇²ℒ d_a` by forward
-//! over reverse mode over the recorded equations, [`crate::program::BATCH`] directions a sweep. So a root costs
-//! `p/BATCH` sweeps of the program, and the pairs cost `O(p²)` dot products, against one
+//! over reverse mode over the recorded equations, [`crate::program::BATCH`] directions a
+//! sweep. So a root costs `p/BATCH` sweeps of the program, and the pairs cost `O(p²)` dot products, against one
 //! hyper-dual pass of the whole linearisation per pair (`p²/2` passes, each carrying every
 //! coordinate's three lanes). Measured on the 40-segment blade with gravity along the spin axis
 //! and 81 variables, where every pair couples: see `examples/scale_chain.rs` and the module

@@ -23,13 +23,13 @@
 //!    Where the coupled pairs are many (a spring the harmonic mean of two segments' stiffness,
 //!    one density in every segment, an equilibrium that moves with every variable) and the
 //!    model has no constraint equations, the roots' mixed terms come from reverse mode instead
-//!    (`mixed.rs`): per root, `⌈p/4⌉` forward-over-reverse sweeps of the recorded equations give
+//!    (`mixed.rs`): per root, `⌈p/8⌉` forward-over-reverse sweeps of the recorded equations give
 //!    `yᵀP_ab x` for every pair, the equilibrium's second-order move eliminated by one adjoint
 //!    solve. The route is chosen by its cost in pair passes (`SWEEP_LANES`); both give the
 //!    same Hessians to rounding (1e-12 relative on the 81-variable blade). On the 40-segment
 //!    blade with gravity along the spin axis (`scale_chain local 40 k --family moving`, one
-//!    point, best of 3): 0.32 s against 0.54 s at 21 variables, 1.2 s against 7.1–8.7 s at 81,
-//!    growing as `p^0.9` instead of `p^1.9`. Reverse mode over the recorded program was chosen
+//!    point, best of 3): 0.16 s against 0.50 s at 21 variables, 0.53 s against 8.0 s at 81,
+//!    growing as `p^0.9` instead of `p^2`. Reverse mode over the recorded program was chosen
 //!    over vector hyper-dual lanes, which would still carry `p²` mixed parts through every
 //!    coordinate's three lanes, and over colouring, which a moving equilibrium leaves nothing to
 //!    colour (every pair couples).
@@ -76,9 +76,9 @@ use root::{Along, RootTerms};
 type Hd = HyperDual64;
 
 /// The cost of a reverse sweep of [`mixed`] in lanes of a pair's pass (a pass carries three
-/// lanes a free coordinate): measured on the 40-segment blade (120 lanes), a sweep of four
-/// directions costs 0.42 of a pair's pass (1.1 against 2.6 ms).
-const SWEEP_LANES: f64 = 50.0;
+/// lanes a free coordinate): measured on the 40-segment blade (120 lanes), a sweep of eight
+/// directions costs 0.3 of a pair's pass (0.7–0.8 against 2.3–2.6 ms).
+const SWEEP_LANES: f64 = 36.0;
 
 /// First and second derivatives at one point: per output (as [`crate::output::outputs`]
 /// lists them) and per mode for the discriminant `D = λ₁λ₂ − (λ₁+λ₂)²/4`; where an output is

@@ -10,18 +10,19 @@
 //! reverse in the adjoints); [`Program::pencil_hessian`] gives `∇²_w ℒ · d` along directions
 //! `d` for `ℒ = Ψ − μ̄ᵀF` (hyper-dual numbers: `ṽ` and the directions in the values, a batch of
 //! [`BATCH`] directions at once). Complex vectors are carried as two real lanes and two
-//! weightings of the outputs.
+//! weightings of the outputs in the gradient, as one complex lane and one complex weighting
+//! in the Hessian's sweep ([`Adjoint`]).
 
 use super::Program;
 use super::instance::inputs;
 /// A complex number (a root, an entry of its vectors).
 type C64 = nalgebra::Complex<f64>;
-use crate::tape::{Hyper, Reverse};
+use crate::tape::{Adjoint, Hyper, Reverse};
 use nalgebra::Vector2;
 use num_dual::{Derivative, DualSVec64};
 
 /// Directions per reverse sweep of [`Program::pencil_hessian`].
-pub const BATCH: usize = 4;
+pub const BATCH: usize = 8;
 
 /// One root of the pencil as the program's inputs and outputs see it.
 #[derive(Debug, Clone)]
@@ -112,19 +113,17 @@ impl Program {
     ) -> Vec<Vec<C64>> {
         type H = Hyper<BATCH>;
         let (vr, vi) = self.lane(c, w.len());
-        // `ỹ_re − ε1a μ̄_re − ε1b μ̄_im` and `ỹ_im`.
-        let first: Vec<(usize, H)> = (c.left.iter().zip(mu).enumerate())
+        // The weighting `ỹ − ε₁ μ̄`.
+        let seeds: Vec<(usize, Adjoint<BATCH>)> = (c.left.iter().zip(mu).enumerate())
             .map(|(o, (y, m))| {
-                let mut h = H::constant(y.re);
-                h.e1 = [-m.re, -m.im];
-                (o, h)
+                let mut a = Adjoint::ZERO;
+                a.re = [y.re, y.im];
+                a.e1 = [-m.re, -m.im];
+                (o, a)
             })
             .collect();
-        let second: Vec<(usize, H)> = (c.left.iter().enumerate())
-            .map(|(o, y)| (o, H::constant(y.im)))
-            .collect();
         let mut out = Vec::with_capacity(directions.len());
-        let (mut values, mut adjoints) = (Vec::new(), [Vec::new(), Vec::new()]);
+        let (mut values, mut adjoint) = (Vec::new(), Vec::new());
         for batch in directions.chunks(BATCH) {
             let x: Vec<H> = (0..w.len())
                 .map(|k| {
@@ -136,16 +135,13 @@ impl Program {
                     h
                 })
                 .collect();
-            let [a, b] =
-                self.full
-                    .hyper_gradients(&x, [&first, &second], &mut values, &mut adjoints);
+            let g = self
+                .full
+                .hyper_gradients(&x, &seeds, &mut values, &mut adjoint);
             for j in 0..batch.len() {
                 out.push(
-                    a.iter()
-                        .zip(&b)
-                        .map(|(a, b)| {
-                            C64::new(a.e12[0][j] - b.e12[1][j], a.e12[1][j] + b.e12[0][j])
-                        })
+                    g.iter()
+                        .map(|a| C64::new(a.e12[0][j], a.e12[1][j]))
                         .collect(),
                 );
             }

@@ -35,7 +35,7 @@ mod seeding;
 mod var;
 
 pub use forward::{Forward, Rows};
-pub use hyper::Hyper;
+pub use hyper::{Adjoint, Hyper};
 pub use native::NativePass;
 pub use op::{Fun, Op};
 pub use reverse::Reverse;
