@@ -22,7 +22,7 @@
 //! alone, and with the Hessians, at one point of that chain (`--fastest-only`: without the
 //! pass-per-pair route beside it); `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables; `… -- accuracy n k samples [--reference FILE]`: the quadrature's, second order's
+//! variables; `… -- accuracy n k samples [--reference FILE] [--family F]`: the quadrature's, second order's
 //! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
 //! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
 //! `modaltol analyze` (`… -- model n k` prints the model file).
@@ -267,7 +267,7 @@ fn accuracy(args: &[String]) {
         .iter()
         .position(|a| a == "--reference")
         .map(|i| reference_rows(&args[i + 1]));
-    let model = Compiled::from_str(&chain_toleranced(n, k), "chain.toml").unwrap();
+    let model = Compiled::from_str(&toleranced(n, k, args), "chain.toml").unwrap();
     let options = AnalyzeOptions {
         speeds: (0..13).map(|i| 5.0 * i as f64).collect(),
         cases: model.model().tolerance_cases(&[]).unwrap(),
@@ -288,7 +288,7 @@ fn accuracy(args: &[String]) {
         "{n}-segment chain, {} variables, Monte Carlo {samples} samples ({:.0} s), quadrature \
          {:.1} s: method | rows | mean inside 99 % | σ inside 99 % | largest |σ/σ_MC − 1| \
          | error estimate covers",
-        2 * k,
+        a.vars.len(),
         a.monte_carlo_seconds.unwrap_or(f64::NAN),
         a.quadrature_seconds.unwrap_or(f64::NAN)
     );

@@ -50,6 +50,17 @@ pub fn quadrature_tolerance(x: f64) -> Result<f64, String> {
     }
 }
 
+/// The most nodes one case's quadrature may sweep: 1 to [`MAX_SAMPLES`] (a rule's first stage
+/// is swept whatever is asked: [`crate::quadrature::QuadOptions::nodes`]).
+pub fn quadrature_nodes<N: TryInto<usize> + Copy + Display>(n: N) -> Result<usize, String> {
+    n.try_into()
+        .ok()
+        .filter(|n| (1..=MAX_SAMPLES).contains(n))
+        .ok_or_else(|| {
+            format!("must be a number of nodes in 1..={MAX_SAMPLES}, e.g. 150 (got {n})")
+        })
+}
+
 /// A target yield: a probability strictly between 0 and 1.
 pub fn target_yield(y: f64) -> Result<f64, String> {
     if y > 0.0 && y < 1.0 {
@@ -154,6 +165,13 @@ mod tests {
         assert!(quadrature_tolerance(1e-3).is_ok());
         for x in [0.0, 1.0, -1e-3, f64::NAN] {
             assert!(quadrature_tolerance(x).is_err(), "{x}");
+        }
+        assert_eq!(quadrature_nodes(150u32), Ok(150));
+        for n in [-5i64, 0, MAX_SAMPLES as i64 + 1] {
+            assert!(
+                quadrature_nodes(n).unwrap_err().contains(&n.to_string()),
+                "{n}"
+            );
         }
         // `0:999999999:1`.
         assert!(

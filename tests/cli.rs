@@ -675,6 +675,66 @@ fn quadrature_tolerance_must_be_a_relative_error() {
     }
 }
 
+/// `--quadrature-nodes` caps the designs the quadrature sweeps per case (never below the
+/// rule's first stage, which the summary then names), and refuses what is not a count.
+#[test]
+fn quadrature_nodes_cap_the_quadrature() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = common::example_path("multi_arm_governor_13_variables.toml");
+    let m = m.to_str().unwrap();
+    for bad in ["0", "-3", "1.5", "many"] {
+        let out = dir.path().join("bad");
+        let o = run(&[
+            "analyze",
+            m,
+            "-o",
+            out.to_str().unwrap(),
+            "--no-monte-carlo",
+            &format!("--quadrature-nodes={bad}"),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--quadrature-nodes"), "{}", stderr(&o));
+    }
+    // A tolerance no rule meets: the refinement runs to its budget.
+    let swept = |nodes: Option<&str>| {
+        let out = dir.path().join(format!("q{}", nodes.unwrap_or("default")));
+        let mut args = vec![
+            "analyze",
+            m,
+            "-o",
+            out.to_str().unwrap(),
+            "--no-monte-carlo",
+            "--speed",
+            "1:2:0.5",
+            "--quadrature-tolerance",
+            "1e-9",
+        ];
+        let flag = nodes.map(|n| format!("--quadrature-nodes={n}"));
+        args.extend(flag.as_deref());
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let case = summary["quadrature"]["cases"][0].clone();
+        (
+            case["nodes_swept"].as_u64().unwrap(),
+            case["rule"].as_str().unwrap().to_string(),
+        )
+    };
+    let (default, _) = swept(None);
+    let (capped, _) = swept(Some("150"));
+    let (least, rule) = swept(Some("10"));
+    assert!(default > 150 && default <= 300, "{default}");
+    assert!(capped <= 150 && capped > 80, "{capped}");
+    // Below the first stage (16 lines of 5 nodes), the first stage is swept and said so.
+    assert_eq!(least, 80);
+    assert!(
+        rule.contains("first stage needs 80 nodes, more than the 10 asked for"),
+        "{rule}"
+    );
+}
+
 #[test]
 fn frf_takes_the_transfer_like_sweep_and_output_is_the_file() {
     let dir = tempfile::tempdir().unwrap();

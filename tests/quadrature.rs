@@ -662,7 +662,10 @@ fn rows_outside_the_requested_accuracy_are_named() {
         let opt = AnalyzeOptions {
             speeds: speeds.clone(),
             cases: cases(&model, &["L6"]),
-            quadrature: Some(QuadOptions { tolerance }),
+            quadrature: Some(QuadOptions {
+                tolerance,
+                nodes: None,
+            }),
             monte_carlo: None,
             ..Default::default()
         };

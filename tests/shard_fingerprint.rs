@@ -10,6 +10,7 @@ use modaltol::compiled::Compiled;
 use modaltol::model::{Model, SpeedRange};
 use modaltol::montecarlo::McOptions;
 use modaltol::montecarlo::Split;
+use modaltol::quadrature::QuadOptions;
 use modaltol::shard::{RunSettings, ShardFile, read_all};
 use std::path::{Path, PathBuf};
 use toml_edit::{DocumentMut, Item, TableLike};
@@ -45,7 +46,7 @@ fn shard_of(model: &Compiled, dir: &Path) -> PathBuf {
         ..Default::default()
     };
     let a = analyze(model, &opt, &|_: &str, _: usize, _: usize| {});
-    let run = RunSettings::new(&range, &mc, Some(1e-3), 1);
+    let run = RunSettings::new(&range, &mc, Some(QuadOptions::default()), 1);
     let file = ShardFile::of_analysis(model.model(), &cases, &a, &run, 0).unwrap();
     let path = dir.join("shard-1-of-1.json");
     std::fs::write(&path, file.to_json()).unwrap();
@@ -304,7 +305,7 @@ fn a_shard_of_other_settings_is_refused_naming_them() {
     let file = ShardFile::parse(&text, "shard").unwrap();
     // A shard that claims other settings than it was computed with (its digest resealed, as
     // a careful forger would) is refused by its fingerprint, naming the setting.
-    let edits: [(&str, Forgery); 5] = [
+    let edits: [(&str, Forgery); 6] = [
         ("speeds", |f| f.speed = "0:1:1".into()),
         ("samples", |f| f.samples = 3),
         ("seed", |f| f.seed += 1),
@@ -315,6 +316,7 @@ fn a_shard_of_other_settings_is_refused_naming_them() {
             }
         }),
         ("quadrature", |f| f.quadrature = None),
+        ("--quadrature-nodes", |f| f.quadrature_nodes = Some(150)),
     ];
     for (what, edit) in edits {
         let mut f = file.clone();

@@ -46,7 +46,10 @@ fn run(model: &Compiled, samples: Option<usize>) -> Analysis {
     let opt = AnalyzeOptions {
         speeds: speeds(),
         cases,
-        quadrature: Some(QuadOptions { tolerance: 1e-5 }),
+        quadrature: Some(QuadOptions {
+            tolerance: 1e-5,
+            nodes: None,
+        }),
         monte_carlo: samples.map(|samples| McOptions {
             samples,
             seed: 7,

@@ -30,6 +30,7 @@ class AnalyzeOptions(TypedDict):
     monte_carlo: bool
     quadrature: bool
     quadrature_tolerance: float
+    quadrature_nodes: int | None
     threads: int | None
     output: str | None
     speed_unit: str
@@ -89,6 +90,7 @@ class NativeModel:
         target_yield: float | None,
         case: str | None,
         quadrature_tolerance: float,
+        quadrature_nodes: int | None,
         threads: int | None,
     ) -> dict[str, Any]: ...
 

@@ -210,6 +210,7 @@ class Model:
         target_yield: float | None = None,
         case: str | None = None,
         quadrature_tolerance: float = 1e-3,
+        quadrature_nodes: int | None = None,
         threads: int | None = None,
     ) -> tuple[pd.DataFrame, dict[str, Any]]:
         """Tolerance allocation (the CLI's ``allocate``): the tolerances of ``case``'s variables
@@ -217,9 +218,12 @@ class Model:
         cost of the ``[allocation]`` table while every requirement is met at ``target_yield``
         (default the model's), verified by the quadrature. Returns the table of
         ``allocation.csv`` and the document of ``allocation.json`` (its ``met`` says whether the
-        verified yield reaches the target)."""
+        verified yield reaches the target). ``quadrature_tolerance`` and ``quadrature_nodes``
+        are :meth:`analyze`'s."""
         return _allocation(
-            self._native.allocate(speeds, target_yield, case, quadrature_tolerance, threads)
+            self._native.allocate(
+                speeds, target_yield, case, quadrature_tolerance, quadrature_nodes, threads
+            )
         )
 
     def analyze(
@@ -233,6 +237,7 @@ class Model:
         monte_carlo: bool = True,
         quadrature: bool = True,
         quadrature_tolerance: float = 1e-3,
+        quadrature_nodes: int | None = None,
         threads: int | None = None,
         output: str | PathLike[str] | None = None,
         speed_unit: str = "rad/s",
@@ -254,7 +259,11 @@ class Model:
         model's ``[[requirements]]`` is in ``yield_``; ``sobol=N`` adds the Sobol indices
         (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``; ``target_yield`` replaces the
         model's ``[allocation] target_yield`` (what ``limits`` is met at and ``yield_`` is judged
-        against). Returns an :class:`Analysis`.
+        against). The quadrature (``quadrature=False`` skips it) refines until its error
+        estimates meet ``quadrature_tolerance`` (relative to each output's σ) or it has swept
+        ``quadrature_nodes`` designs per case (the command line's ``--quadrature-nodes``;
+        default its rule's own budget: 300 with five or more variables). Returns an
+        :class:`Analysis`.
 
         Scale-out (speeds then as ``"FROM:TO:STEP"`` or the model's):
 
@@ -297,6 +306,7 @@ class Model:
                 "sampling": sampling,
                 "quadrature": quadrature,
                 "quadrature_tolerance": quadrature_tolerance,
+                "quadrature_nodes": quadrature_nodes,
             }
             futures = []
             try:
@@ -341,6 +351,7 @@ class Model:
                 "monte_carlo": monte_carlo,
                 "quadrature": quadrature,
                 "quadrature_tolerance": quadrature_tolerance,
+                "quadrature_nodes": quadrature_nodes,
                 "threads": threads,
                 "output": None if output is None else str(output),
                 "speed_unit": speed_unit,

@@ -51,6 +51,7 @@ pub(crate) fn refused(e: RequestError) -> PyErr {
                 Setting::Samples => "samples",
                 Setting::Sobol => "sobol",
                 Setting::QuadratureTolerance => "quadrature_tolerance",
+                Setting::QuadratureNodes => "quadrature_nodes",
                 Setting::Threads => "threads",
                 Setting::Shard => "shard",
                 Setting::TargetYield => "target_yield",

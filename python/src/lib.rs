@@ -37,7 +37,8 @@ pub(crate) struct NativeModel {
 impl NativeModel {
     /// Tolerance allocation (see `modaltol::allocate`): `allocation.csv`'s table and
     /// `allocation.json`'s text.
-    #[pyo3(signature = (speeds, target_yield, case, quadrature_tolerance, threads))]
+    #[pyo3(signature = (speeds, target_yield, case, quadrature_tolerance, quadrature_nodes, threads))]
+    #[allow(clippy::too_many_arguments)]
     fn allocate<'py>(
         &self,
         py: Python<'py>,
@@ -45,6 +46,7 @@ impl NativeModel {
         target_yield: Option<f64>,
         case: Option<String>,
         quadrature_tolerance: f64,
+        quadrature_nodes: Option<i64>,
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         command::allocate::allocate(
@@ -53,7 +55,7 @@ impl NativeModel {
             speeds,
             target_yield,
             case,
-            quadrature_tolerance,
+            (quadrature_tolerance, quadrature_nodes),
             threads,
         )
     }

@@ -112,6 +112,26 @@ def test_settings_follow_the_command_line_rules(pendulum: modaltol.Model, cli: P
             pendulum.analyze("0:1:1", samples=samples)
     with pytest.raises(ValueError, match="named twice"):
         pendulum.modal(1.0, independent="hinge,hinge")
+    with pytest.raises(ValueError, match="quadrature_nodes") as e:
+        pendulum.analyze("0:1:1", quadrature_nodes=0, monte_carlo=False)
+    r = subprocess.run([str(cli), "analyze", str(PENDULUM), "-o", "/nonexistent/x",
+                        "--speed", "0:1:1", "--quadrature-nodes=0"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    reason = str(e.value).removeprefix("quadrature_nodes ")
+    assert reason in r.stderr, (reason, r.stderr)
+    # A negative count is a value refused (the command line's parser refuses it too).
+    with pytest.raises(ValueError, match="quadrature_nodes must be a number of nodes"):
+        pendulum.analyze("0:1:1", quadrature_nodes=-3, monte_carlo=False)
+
+
+def test_quadrature_nodes_cap_the_quadrature() -> None:
+    # The 13-variable governor's quadrature, to a tolerance no rule meets, within 150 nodes
+    # (the command line's --quadrature-nodes; tests/cli.rs checks the default budget).
+    m = modaltol.load(EXAMPLES / "multi_arm_governor_13_variables.toml")
+    a = m.analyze("1:2:0.5", monte_carlo=False, quadrature_tolerance=1e-9, quadrature_nodes=150)
+    swept = [c["nodes_swept"] for c in a.summary["quadrature"]["cases"]]
+    assert swept and all(80 < n <= 150 for n in swept), swept
 
 
 def test_an_infinite_transfer_function_says_why(pendulum: modaltol.Model) -> None:

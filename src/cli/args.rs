@@ -403,10 +403,17 @@ pub(crate) struct AnalyzeArgs {
     /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
     /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
     /// line, or the rule across the lines, is refined until the error estimate meets it or the
-    /// rule's largest stage is reached (with five or more variables: 300 nodes, a tenth of the
-    /// default Monte Carlo); rows that miss it say so (within_request).
+    /// rule's largest stage or --quadrature-nodes is reached; rows that miss it say so
+    /// (within_request).
     #[arg(long, default_value_t = 1e-3, value_name = "REL")]
     pub(crate) quadrature_tolerance: f64,
+    /// The most nodes the quadrature sweeps per tolerance case (a node is a design swept
+    /// across the speeds, as a Monte Carlo sample is, so N nodes cost about N samples);
+    /// default: 300 (a tenth of the default Monte Carlo) with five or more variables, 3000
+    /// with two to four, every node of the finest grid with one. The rule's first stage is
+    /// swept whatever is asked (80 nodes with five or more variables; the summary says so).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]
+    pub(crate) quadrature_nodes: Option<usize>,
     /// Skip the quadrature (the "analytic" rows then take the automatic Taylor choice).
     #[arg(long)]
     pub(crate) no_quadrature: bool,
@@ -462,6 +469,9 @@ pub(crate) struct AllocateArgs {
     /// Requested accuracy of the verifying quadrature (as analyze's).
     #[arg(long, default_value_t = 1e-3, value_name = "REL")]
     pub(crate) quadrature_tolerance: f64,
+    /// The most nodes the verifying quadrature sweeps (as analyze's).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]
+    pub(crate) quadrature_nodes: Option<usize>,
     /// Worker threads: 1 to 1024; default: all cores.
     #[arg(long, allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     pub(crate) threads: Option<usize>,

@@ -108,6 +108,7 @@ pub(crate) fn refused(
         e => {
             let flag = match e.setting() {
                 Setting::QuadratureTolerance => "--quadrature-tolerance",
+                Setting::QuadratureNodes => "--quadrature-nodes",
                 Setting::Threads => "--threads",
                 Setting::Samples => "--samples",
                 Setting::Sobol => "--sobol",

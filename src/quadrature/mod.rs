@@ -26,7 +26,7 @@
 //!    five or more, randomised quasi-Monte Carlo (eight independently Owen-scrambled Sobol
 //!    sets, Owen 1997; the error from their spread), two lines each at first, doubled where the
 //!    transverse error is what misses the request, within a budget of a tenth of the default
-//!    Monte Carlo (`rules.rs`). With that many variables most of an output's variance lies
+//!    Monte Carlo or the nodes asked for ([`QuadOptions::nodes`], `rules.rs`). With that many variables most of an output's variance lies
 //!    across the lines, so there the rule integrates only what the output's exact
 //!    second-order expansion leaves (the expansion as a **control variate**, its moments
 //!    exact: `control.rs`).
@@ -90,17 +90,25 @@ pub use yields::{AtTarget, MarginStat, QuadYield};
 use yields::{Requirements, evaluate_yield, final_yield};
 
 /// Settings of the quadrature.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QuadOptions {
     /// Requested error of mean and σ, relative to the larger of the output's σ at that speed
     /// and 2 % of its largest σ over the speeds; also the absolute target for probabilities
     /// (times 5). Refinement stops there or at the largest grid.
     pub tolerance: f64,
+    /// The most nodes (designs swept across the speeds, as a Monte Carlo sample is) a case may
+    /// take; `None`: the rule's own budget (a tenth of the default Monte Carlo for five or more
+    /// variables, the default Monte Carlo for two to four, every node of the finest grid for
+    /// one). The rule's first stage is swept whatever is asked (the rule then says so).
+    pub nodes: Option<usize>,
 }
 
 impl Default for QuadOptions {
     fn default() -> Self {
-        QuadOptions { tolerance: 1e-3 }
+        QuadOptions {
+            tolerance: 1e-3,
+            nodes: None,
+        }
     }
 }
 
@@ -197,7 +205,7 @@ impl Propagation for Quadrature {
             };
         }
         Estimate {
-            value: Some(integrate(study, spread, self.options.tolerance, run)),
+            value: Some(integrate(study, spread, self.options, run)),
             termination: Termination::Completed,
         }
     }
@@ -225,8 +233,10 @@ fn nominal_values(study: &Study) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The whole integration of one case to the requested relative `tolerance`.
-fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadResult {
+/// The whole integration of one case to the requested relative tolerance, within the nodes
+/// asked for.
+fn integrate(study: &Study, spread: &Spread, options: QuadOptions, run: &Run) -> QuadResult {
+    let tolerance = options.tolerance;
     // One ω_d output per mode (see `crate::output::outputs`).
     let modes = study
         .outputs
@@ -240,7 +250,7 @@ fn integrate(study: &Study, spread: &Spread, tolerance: f64, run: &Run) -> QuadR
     if active.is_empty() {
         return deterministic(&values, &study.nominal, modes);
     }
-    let nodes = Nodes::new(study, spread, &active, modes);
+    let nodes = Nodes::new(study, spread, (&active, options.nodes), modes);
     let rule = &nodes.rule;
     let nominal = Reference {
         values: &values,
@@ -361,8 +371,14 @@ struct Nodes<'a> {
 }
 
 impl<'a> Nodes<'a> {
-    /// The nodes of the variables `active` (indices into the study's variables) of `spread`.
-    fn new(study: &'a Study<'a>, spread: &Spread, active: &[usize], modes: usize) -> Self {
+    /// The nodes of the variables `active` (indices into the study's variables) of `spread`,
+    /// at most `asked` of them where given ([`QuadOptions::nodes`]).
+    fn new(
+        study: &'a Study<'a>,
+        spread: &Spread,
+        (active, asked): (&[usize], Option<usize>),
+        modes: usize,
+    ) -> Self {
         let d = active.len();
         // Standard normals of the active variables.
         let sub = DMatrix::from_fn(d, d, |i, j| spread.correlation[(active[i], active[j])]);
@@ -375,7 +391,7 @@ impl<'a> Nodes<'a> {
         };
         let map = DesignMap::new(study.model.model().nominal(), sub_vars, sub_spread.clone());
         let basis = directions(&study.locals, active, &sub_spread, map.factor());
-        let rule = design(d);
+        let rule = design(d, asked);
         let control = matches!(rule.transverse, Transverse::Scrambled { .. }).then(|| {
             let jac = design_jacobian(&sub_spread, map.factor());
             let offsets: Vec<DVector<f64>> = rule.lines.iter().map(|l| offset(&basis, l)).collect();

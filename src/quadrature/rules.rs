@@ -16,6 +16,9 @@ pub(super) struct Rule {
     pub levels: Levels,
     /// Lines per replicate: at the start and at most (1 and 1 but for the scrambled rule).
     pub per: (usize, usize),
+    /// The most nodes asked for ([`super::QuadOptions::nodes`]; `None`: the rule's own
+    /// budget).
+    pub asked: Option<usize>,
 }
 
 /// How far a rule is refined: the node level along the lines, and the lines per replicate in
@@ -58,8 +61,9 @@ impl Rule {
     }
 
     /// Nodes swept at most: every node of the finest grid on the lines of every stage (the
-    /// first level's on lines that only check); for the scrambled rule at most [`NODE_BUDGET`],
-    /// for the tensor rule at most [`TENSOR_BUDGET`].
+    /// first level's on lines that only check), and at most the nodes asked for, or by
+    /// default [`NODE_BUDGET`] for the scrambled rule and [`TENSOR_BUDGET`] for the tensor
+    /// rule; never fewer than the first stage's.
     pub fn budget(&self) -> usize {
         let finest = Levels::nodes(self.levels.last);
         let all: usize = self
@@ -77,11 +81,13 @@ impl Rule {
                 }
             })
             .sum();
-        match self.transverse {
-            Transverse::Tensor => all.min(TENSOR_BUDGET),
-            Transverse::Scrambled { .. } => all.min(NODE_BUDGET),
-            _ => all,
-        }
+        let cap = match (self.asked, self.transverse) {
+            (Some(n), _) => n,
+            (None, Transverse::Tensor) => TENSOR_BUDGET,
+            (None, Transverse::Scrambled { .. }) => NODE_BUDGET,
+            (None, Transverse::Single) => all,
+        };
+        all.min(cap.max(self.nodes(self.first())))
     }
 
     /// Nodes swept once the rule is refined to `stage` (the lines of earlier stages
@@ -127,7 +133,13 @@ impl Rule {
                 ),
             },
             Levels::nodes(stage.level)
-        )
+        ) + &match self.asked {
+            Some(n) if n < self.nodes(self.first()) => format!(
+                " (the rule's first stage needs {} nodes, more than the {n} asked for)",
+                self.nodes(self.first())
+            ),
+            _ => String::new(),
+        }
     }
 }
 
@@ -173,13 +185,15 @@ pub(super) fn grid(n: usize, j: usize) -> f64 {
     -HALF_WIDTH + 2.0 * HALF_WIDTH * j as f64 / (n - 1) as f64
 }
 
-/// The rule for `d` variables.
-pub(super) fn design(d: usize) -> Rule {
+/// The rule for `d` variables, sweeping at most `asked` nodes where given (never fewer than
+/// its first stage's).
+pub(super) fn design(d: usize, asked: Option<usize>) -> Rule {
     let (transverse, lines, levels) = design_parts(d);
     Rule {
         transverse,
         lines,
         levels,
+        asked,
         per: match transverse {
             Transverse::Scrambled { .. } => (FIRST_PER_REPLICATE, LINES_PER_REPLICATE),
             Transverse::Tensor => (1, TENSOR_ORDERS.len() - 1),

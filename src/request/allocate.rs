@@ -21,6 +21,8 @@ pub struct AllocateRequest {
     pub target_yield: Option<f64>,
     /// The verifying quadrature's requested error, relative to each output's σ.
     pub quadrature_tolerance: f64,
+    /// The most nodes the verifying quadrature may sweep (`None`: its rule's own budget).
+    pub quadrature_nodes: Option<usize>,
     /// Worker threads (`None`: one per core).
     pub threads: Option<usize>,
 }
@@ -34,17 +36,21 @@ impl Default for AllocateRequest {
             costs: Vec::new(),
             target_yield: None,
             quadrature_tolerance: QuadOptions::default().tolerance,
+            quadrature_nodes: None,
             threads: None,
         }
     }
 }
 
 impl AllocateRequest {
-    /// The rules that need no model: the quadrature's tolerance, the thread count, the target
-    /// yield.
+    /// The rules that need no model: the quadrature's tolerance and nodes, the thread count,
+    /// the target yield.
     pub fn check(&self) -> Result<(), RequestError> {
         settings::quadrature_tolerance(self.quadrature_tolerance)
             .map_err(RequestError::QuadratureTolerance)?;
+        if let Some(n) = self.quadrature_nodes {
+            settings::quadrature_nodes(n).map_err(RequestError::QuadratureNodes)?;
+        }
         settings::threads(self.threads).map_err(RequestError::Threads)?;
         if let Some(y) = self.target_yield {
             settings::target_yield(y).map_err(RequestError::TargetYield)?;
@@ -75,6 +81,7 @@ impl AllocateRequest {
             costs: self.costs,
             quadrature: QuadOptions {
                 tolerance: self.quadrature_tolerance,
+                nodes: self.quadrature_nodes,
             },
             threads: self.threads,
             cancel,
@@ -118,6 +125,10 @@ mod tests {
         assert_eq!(
             given(|r| r.quadrature_tolerance = 0.0),
             Setting::QuadratureTolerance
+        );
+        assert_eq!(
+            given(|r| r.quadrature_nodes = Some(0)),
+            Setting::QuadratureNodes
         );
         assert_eq!(given(|r| r.threads = Some(0)), Setting::Threads);
         assert_eq!(given(|r| r.target_yield = Some(1.5)), Setting::TargetYield);

@@ -54,6 +54,8 @@ pub struct Request {
     pub quadrature: bool,
     /// The quadrature's requested error, relative to each output's σ.
     pub quadrature_tolerance: f64,
+    /// The most nodes the quadrature may sweep per case (`None`: its rule's own budget).
+    pub quadrature_nodes: Option<usize>,
     /// Worker threads (`None`: one per core).
     pub threads: Option<usize>,
     /// This run as shard `k` (from 0) of `n` of the Monte Carlo.
@@ -77,6 +79,7 @@ impl Default for Request {
             monte_carlo: true,
             quadrature: true,
             quadrature_tolerance: QuadOptions::default().tolerance,
+            quadrature_nodes: None,
             threads: None,
             shard: None,
             sobol: None,
@@ -92,6 +95,7 @@ pub enum Setting {
     Cases,
     Samples,
     QuadratureTolerance,
+    QuadratureNodes,
     Threads,
     Shard,
     Sobol,
@@ -104,6 +108,8 @@ pub enum Setting {
 pub enum RequestError {
     #[error("{0}")]
     QuadratureTolerance(String),
+    #[error("{0}")]
+    QuadratureNodes(String),
     #[error("{0}")]
     Threads(ThreadsError),
     #[error("no speeds given and the model has no [analysis] speed")]
@@ -140,6 +146,7 @@ impl RequestError {
     pub fn setting(&self) -> Setting {
         match self {
             RequestError::QuadratureTolerance(_) => Setting::QuadratureTolerance,
+            RequestError::QuadratureNodes(_) => Setting::QuadratureNodes,
             RequestError::Threads(_) => Setting::Threads,
             RequestError::NoSpeeds | RequestError::Speeds(_) | RequestError::ModelSpeeds(_) => {
                 Setting::Speeds
@@ -172,11 +179,14 @@ pub struct Resolved {
 }
 
 impl Request {
-    /// The rules that need no model: the quadrature's tolerance, then the thread count (which
-    /// the operating system may refuse: [`ThreadsError::Refused`]).
+    /// The rules that need no model: the quadrature's tolerance and nodes, then the thread
+    /// count (which the operating system may refuse: [`ThreadsError::Refused`]).
     pub fn check(self) -> Result<Checked, RequestError> {
         settings::quadrature_tolerance(self.quadrature_tolerance)
             .map_err(RequestError::QuadratureTolerance)?;
+        if let Some(n) = self.quadrature_nodes {
+            settings::quadrature_nodes(n).map_err(RequestError::QuadratureNodes)?;
+        }
         settings::threads(self.threads).map_err(RequestError::Threads)?;
         if let Some(n) = self.sobol {
             settings::samples(n).map_err(RequestError::Sobol)?;
@@ -223,6 +233,7 @@ impl Checked {
         };
         let quadrature = (request.quadrature && request.shard.is_none()).then_some(QuadOptions {
             tolerance: request.quadrature_tolerance,
+            nodes: request.quadrature_nodes,
         });
         Ok(Resolved {
             options: AnalyzeOptions {
@@ -317,6 +328,11 @@ mod tests {
             ..Request::default()
         });
         assert_eq!(e.setting(), Setting::QuadratureTolerance);
+        let e = refused(Request {
+            quadrature_nodes: Some(0),
+            ..Request::default()
+        });
+        assert_eq!(e.setting(), Setting::QuadratureNodes);
         let e = refused(Request {
             threads: Some(0),
             ..Request::default()

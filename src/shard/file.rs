@@ -4,6 +4,7 @@ use super::fingerprint::{Fingerprint, RunSettings};
 use crate::analyze::Analysis;
 use crate::model::{Case, Model, Sampling};
 use crate::montecarlo::{self, Block, Kept};
+use crate::quadrature::QuadOptions;
 use base64::Engine;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use serde::{Deserialize, Serialize};
@@ -36,6 +37,9 @@ pub struct ShardFile {
     /// The quadrature's requested relative error of the run the shard belongs to (`merge`
     /// runs the quadrature with it); `None`: the run has no quadrature (`--no-quadrature`).
     pub quadrature: Option<f64>,
+    /// The most nodes that quadrature may sweep per case, where asked (`--quadrature-nodes`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quadrature_nodes: Option<usize>,
     /// 1-based shard number `K` of `of`.
     pub shard: usize,
     pub of: usize,
@@ -141,7 +145,8 @@ impl ShardFile {
             samples: run.samples,
             seed: run.seed,
             sampling: run.sampling,
-            quadrature: run.quadrature,
+            quadrature: run.quadrature.map(|q| q.tolerance),
+            quadrature_nodes: run.quadrature.and_then(|q| q.nodes),
             shard: k + 1,
             of: run.of,
             outputs: output_count(model),
@@ -196,7 +201,10 @@ impl ShardFile {
             samples: self.samples,
             seed: self.seed,
             sampling: self.sampling,
-            quadrature: self.quadrature,
+            quadrature: self.quadrature.map(|tolerance| QuadOptions {
+                tolerance,
+                nodes: self.quadrature_nodes,
+            }),
             of: self.of,
         }
     }

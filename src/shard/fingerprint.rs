@@ -2,6 +2,7 @@
 
 use crate::model::{Case, Model, Sampling, SpeedRange};
 use crate::montecarlo::McOptions;
+use crate::quadrature::QuadOptions;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -9,7 +10,7 @@ use std::collections::BTreeMap;
 /// validated model (its serialisation, see [`Model`]: `name`, `parameters`, `gravity`,
 /// `bodies`, `joints`, `forces`, `constraints`, `ports`, `independent`, `analysis`, …), the
 /// tolerance cases run (`cases`) and each run setting (`speed`, `samples`, `seed`,
-/// `sampling`, `quadrature`), the first 32 hex digits of the SHA-256 of its canonical JSON.
+/// `sampling`, `quadrature`, and `quadrature_nodes` where asked), the first 32 hex digits of the SHA-256 of its canonical JSON.
 /// Where the model was written (file, lines, columns, comments) is no part of it; every
 /// number the model holds is, bit for bit. Two shards with equal fingerprints computed the
 /// same numbers; where they differ, [`Fingerprint::differences`] names what.
@@ -40,7 +41,12 @@ impl Fingerprint {
         add("samples", json(&run.samples));
         add("seed", json(&run.seed));
         add("sampling", json(&run.sampling));
-        add("quadrature", json(&run.quadrature));
+        add("quadrature", json(&run.quadrature.map(|q| q.tolerance)));
+        // A section of its own, only where asked: the fingerprints of runs that leave the
+        // quadrature's budget alone are what they were before it could be asked for.
+        if let Some(n) = run.quadrature.and_then(|q| q.nodes) {
+            add("quadrature_nodes", json(&n));
+        }
         Fingerprint(sections)
     }
 
@@ -86,7 +92,9 @@ fn section_title(section: &str) -> &'static str {
         "samples" => "samples (--samples)",
         "seed" => "seed (--seed)",
         "sampling" => "sampling (--sampling)",
-        "quadrature" => "quadrature options (--quadrature-tolerance, --no-quadrature)",
+        "quadrature" | "quadrature_nodes" => {
+            "quadrature options (--quadrature-tolerance, --quadrature-nodes, --no-quadrature)"
+        }
         _ => "a part this version of modaltol does not know",
     }
 }
@@ -99,16 +107,21 @@ pub struct RunSettings {
     pub samples: usize,
     pub seed: u64,
     pub sampling: Sampling,
-    /// The quadrature's requested relative error; `None`: no quadrature.
-    pub quadrature: Option<f64>,
+    /// The quadrature's options; `None`: no quadrature.
+    pub quadrature: Option<QuadOptions>,
     /// The number of shards.
     pub of: usize,
 }
 
 impl RunSettings {
     /// The settings of a sharded run over `speed` with the Monte Carlo options `mc`, the
-    /// quadrature's tolerance `quadrature` (`None`: none) split into `of` shards.
-    pub fn new(speed: &SpeedRange, mc: &McOptions, quadrature: Option<f64>, of: usize) -> Self {
+    /// quadrature's options `quadrature` (`None`: none) split into `of` shards.
+    pub fn new(
+        speed: &SpeedRange,
+        mc: &McOptions,
+        quadrature: Option<QuadOptions>,
+        of: usize,
+    ) -> Self {
         RunSettings {
             speed: format!("{}:{}:{}", speed.from, speed.to, speed.step),
             samples: mc.samples,

@@ -7,7 +7,6 @@ use crate::analyze::AnalyzeOptions;
 use crate::model::{Case, Model, SpeedRange};
 use crate::montecarlo::Split;
 use crate::montecarlo::{CaseShard, Kept, McOptions};
-use crate::quadrature::QuadOptions;
 use std::path::PathBuf;
 
 /// The analysis that merges shards of the run `run` (their gathered `states`): `base`'s cases,
@@ -29,7 +28,7 @@ pub fn merged_options(
     let opt = AnalyzeOptions {
         speeds: range.speeds().collect(),
         // The quadrature of the run the shards belong to.
-        quadrature: run.quadrature.map(|tolerance| QuadOptions { tolerance }),
+        quadrature: run.quadrature,
         monte_carlo: Some(mc),
         split: Split::Merged(states),
         sobol: None,

@@ -7,6 +7,7 @@ use modaltol::cancel::Cancel;
 use modaltol::model::SpeedRange;
 use modaltol::report;
 use modaltol::request::{AllocateRequest, RequestError, Speeds};
+use modaltol::settings;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -19,7 +20,7 @@ pub(crate) fn allocate<'py>(
     speeds: Option<String>,
     target_yield: Option<f64>,
     case: Option<String>,
-    quadrature_tolerance: f64,
+    (quadrature_tolerance, quadrature_nodes): (f64, Option<i64>),
     threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = model.m();
@@ -33,6 +34,12 @@ pub(crate) fn allocate<'py>(
         case,
         target_yield,
         quadrature_tolerance,
+        // A negative count is refused as any count out of range.
+        quadrature_nodes: quadrature_nodes
+            .map(|n| {
+                settings::quadrature_nodes(n).map_err(|e| bad(format!("quadrature_nodes {e}")))
+            })
+            .transpose()?,
         threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
         ..AllocateRequest::default()
     };

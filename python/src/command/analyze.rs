@@ -10,6 +10,7 @@ use modaltol::files::ResultDir;
 use modaltol::model::{Sampling, SpeedRange};
 use modaltol::montecarlo::McOptions;
 use modaltol::plots::Display;
+use modaltol::quadrature::QuadOptions;
 use modaltol::report;
 use modaltol::request::{Request, Resolved, Speeds};
 use modaltol::settings;
@@ -31,6 +32,7 @@ pub(crate) struct AnalyzeKeywords {
     monte_carlo: bool,
     quadrature: bool,
     quadrature_tolerance: f64,
+    quadrature_nodes: Option<i64>,
     threads: Option<i64>,
     output: Option<PathBuf>,
     speed_unit: String,
@@ -132,6 +134,7 @@ pub(crate) fn analyze<'py>(
         monte_carlo,
         quadrature,
         quadrature_tolerance,
+        quadrature_nodes,
         threads,
         output,
         speed_unit,
@@ -182,6 +185,12 @@ pub(crate) fn analyze<'py>(
         monte_carlo,
         quadrature,
         quadrature_tolerance,
+        // A negative count is refused as any count out of range.
+        quadrature_nodes: quadrature_nodes
+            .map(|n| {
+                settings::quadrature_nodes(n).map_err(|e| bad(format!("quadrature_nodes {e}")))
+            })
+            .transpose()?,
         // A negative count is refused as zero is (the command line's parser refuses it too).
         threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
         shard,
@@ -195,6 +204,11 @@ pub(crate) fn analyze<'py>(
              (modaltol.merge) with output=",
         ));
     }
+    // The quadrature of the run a shard belongs to (`merge` runs it).
+    let run_quadrature = quadrature.then_some(QuadOptions {
+        tolerance: quadrature_tolerance,
+        nodes: request.quadrature_nodes,
+    });
     let Resolved {
         options: opt,
         range,
@@ -212,8 +226,7 @@ pub(crate) fn analyze<'py>(
     if let (Some((k, n)), Some(mc)) = (shard, mc) {
         let range =
             range.ok_or_else(|| bad("shards need speeds as \"FROM:TO:STEP\" (or the model's)"))?;
-        let tolerance = quadrature.then_some(quadrature_tolerance);
-        let run = RunSettings::new(&range, &mc, tolerance, n);
+        let run = RunSettings::new(&range, &mc, run_quadrature, n);
         let file = ShardFile::of_analysis(m, &opt.cases, &a, &run, k).ok_or_else(|| {
             PyRuntimeError::new_err("the shard was not completed (a shard is complete or absent)")
         })?;

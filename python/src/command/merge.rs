@@ -55,6 +55,7 @@ pub(crate) fn merge<'py>(
         monte_carlo: true,
         quadrature: true,
         quadrature_tolerance: 1e-3,
+        quadrature_nodes: None,
         threads: threads.map(|n| usize::try_from(n).unwrap_or(0)),
         shard: None,
         sobol: None,

@@ -26,6 +26,7 @@ pub(crate) fn allocate_command(
         costs,
         speed,
         quadrature_tolerance,
+        quadrature_nodes,
         threads,
     } = args;
     let request = AllocateRequest {
@@ -39,6 +40,7 @@ pub(crate) fn allocate_command(
         costs: Vec::new(),
         target_yield,
         quadrature_tolerance,
+        quadrature_nodes,
         threads,
     };
     // The settings that need no model first: a bad flag is reported before a slow load.

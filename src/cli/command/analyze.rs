@@ -8,6 +8,7 @@ use modaltol::files::{AtomicFile, Inputs, ResultDir};
 use modaltol::model::Sampling;
 use modaltol::model::SpeedRange;
 use modaltol::montecarlo::Split;
+use modaltol::quadrature::QuadOptions;
 use modaltol::request::{Request, Resolved, Speeds};
 use modaltol::results::WriteOptions;
 use modaltol::settings;
@@ -26,6 +27,7 @@ pub(crate) fn analyze_command(
         model,
         output,
         quadrature_tolerance,
+        quadrature_nodes,
         no_quadrature,
         shard,
         display,
@@ -68,9 +70,12 @@ pub(crate) fn analyze_command(
         let Destination::Shard(f, path) = destination else {
             unreachable!("a shard's destination is its file")
         };
-        let tolerance = (!no_quadrature).then_some(quadrature_tolerance);
+        let quadrature = (!no_quadrature).then_some(QuadOptions {
+            tolerance: quadrature_tolerance,
+            nodes: quadrature_nodes,
+        });
         let range = range.expect("a command-line analysis runs over a range");
-        let run = RunSettings::new(&range, &mc, tolerance, *n);
+        let run = RunSettings::new(&range, &mc, quadrature, *n);
         let file = ShardFile::of_analysis(m.model(), &opt.cases, &a, &run, *k);
         return write_shard(f, &path, file);
     }
@@ -109,6 +114,7 @@ impl AnalyzeArgs {
             monte_carlo: !self.no_monte_carlo,
             quadrature: !self.no_quadrature,
             quadrature_tolerance: self.quadrature_tolerance,
+            quadrature_nodes: self.quadrature_nodes,
             threads: self.threads,
             shard: (self.shard.as_deref())
                 .map(|spec| settings::shard(spec).map_err(|e| InputError(format!("--shard {e}"))))
