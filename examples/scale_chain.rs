@@ -22,7 +22,7 @@
 //! alone, and with the Hessians, at one point of that chain (`--fastest-only`: without the
 //! pass-per-pair route beside it); `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables; `… -- accuracy n k samples [--reference FILE] [--family F]`: the quadrature's, second order's
+//! variables; `… -- accuracy n k samples [--reference FILE] [--family F] [--detail]`: the quadrature's, second order's
 //! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
 //! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
 //! `modaltol analyze` (`… -- model n k` prints the model file).
@@ -279,6 +279,7 @@ fn accuracy(args: &[String]) {
         threads: Some(2),
         ..AnalyzeOptions::default()
     };
+    let detail = args.iter().any(|a| a == "--detail");
     let mut a = analyze(&model, &options, &|_: &str, _: usize, _: usize| {});
     if let Some(rows) = reference {
         a.rows.extend(rows);
@@ -321,6 +322,21 @@ fn accuracy(args: &[String]) {
             let (hm, hs) = (half(mc.mean_ci), half(mc.std_ci));
             mean_in += usize::from(dm <= hm);
             std_in += usize::from(ds <= hs);
+            if detail && ds > hs {
+                println!(
+                    "  {} speed {} mode {:?} {:?}: σ {:.6e} against {:.6e} ({:.6e}..{:.6e}), \
+                     error estimate {:.1e}",
+                    method.as_str(),
+                    r.speed,
+                    r.mode,
+                    r.quantity,
+                    r.std,
+                    mc.std,
+                    mc.std_ci.0,
+                    mc.std_ci.1,
+                    r.errors().map_or(f64::NAN, |e| e.1)
+                );
+            }
             worst = worst.max((r.std / mc.std - 1.0).abs());
             if let Some((em, es)) = r.errors() {
                 covered += usize::from(dm <= hm + em && ds <= hs + es);
