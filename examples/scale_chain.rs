@@ -22,10 +22,12 @@
 //! alone, and with the Hessians, at one point of that chain (`--fastest-only`: without the
 //! pass-per-pair route beside it); `… -- governor [--monte-carlo]
 //! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables; `… -- accuracy n k samples [--reference FILE] [--family F] [--detail]`: the quadrature's, second order's
-//! and first order's mean and σ against a Monte Carlo of that many samples (inside its 99 %
-//! intervals), or against the Monte Carlo rows of a `tolerance.csv` written once by
-//! `modaltol analyze` (`… -- model n k` prints the model file).
+//! variables; `… -- accuracy n k samples [--reference FILE] [--family F] [--seed S]
+//! [--detail]`: the quadrature's, second order's and first order's mean and σ against a Monte
+//! Carlo of that many samples (inside its 99 % intervals; `--detail`: each row outside), or
+//! against the Monte Carlo rows of a `tolerance.csv` written once by `modaltol analyze`
+//! (`… -- model n k` prints the model file). Judge the share of rows inside on two seeds or
+//! more: every row reads the same samples, so one sample set moves many rows together.
 use modaltol::analyze::{AnalyzeOptions, analyze};
 use modaltol::compiled::{Compiled, Route};
 use modaltol::hessian::MixedRoute;
@@ -255,7 +257,7 @@ fn family(what: &str, models: Vec<String>, speeds: Vec<f64>, args: &[String]) {
 
 /// `accuracy n k samples`: the n-segment chain with 2k toleranced variables, 13 speeds, by the
 /// quadrature, second order, first order and a Monte Carlo of `samples` random samples (seed
-/// 1): per method, the share of rows whose mean and σ lie inside the Monte Carlo's 99 %
+/// `--seed`, default 1): per method, the share of rows whose mean and σ lie inside the Monte Carlo's 99 %
 /// intervals (its 95 % ones widened by 2.576/1.960) and the largest relative deviation of σ;
 /// for the quadrature also the share of rows whose error estimate covers its distance from the
 /// Monte Carlo beyond that interval.
@@ -273,7 +275,10 @@ fn accuracy(args: &[String]) {
         cases: model.model().tolerance_cases(&[]).unwrap(),
         monte_carlo: reference.is_none().then_some(McOptions {
             samples,
-            seed: 1,
+            seed: args
+                .iter()
+                .position(|a| a == "--seed")
+                .map_or(1, |i| args[i + 1].parse().unwrap()),
             sampling: Sampling::Random,
         }),
         threads: Some(2),
