@@ -12,10 +12,13 @@
 //! outputs (a root's left vector) is complex, and everything the sweep computes is linear in
 //! the lane and in the weighting, so one complex adjoint does the work of the four real
 //! products of two real lanes with two real weightings, with a fifth fewer multiplications and
-//! a third less adjoint memory (1.1 ms → 0.85 ms a sweep of 4 directions, 40-segment blade).
-//! The sweep is compiled twice, for the baseline instruction set and for AVX2, and the second
-//! is used where the processor has it: the same operations in the same order on the same
-//! operands, so the results are the same to the bit; only the registers are wider.
+//! a third less adjoint memory. The sweep is compiled twice, for the baseline instruction set
+//! and for AVX2, and the second is used where the processor has it: the same operations in the
+//! same order on the same operands, so the results are the same to the bit; only the registers
+//! are wider. On the 40-segment blade's point with 81 variables (40 roots, four directions a
+//! sweep) the roots' mixed terms took 0.94 s with the real form, 0.55 s with the complex one
+//! (0.65 ms a sweep) and about 0.40 s with AVX2 besides (`scale_chain local 40 40 --family
+//! moving`, best of 3).
 
 use super::{Op, Tape, Term};
 use num_dual::{Derivative, HyperDualSVec64};
