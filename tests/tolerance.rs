@@ -344,9 +344,15 @@ fn reverse_mode_mixed_terms_match_a_pass_per_pair_on_every_coupling() {
     // Issue 55's families: springs the harmonic mean of two segments' EI, a density factor in
     // every segment, and gravity along the spin axis moving the equilibrium with every
     // variable. The roots' mixed terms by forward over reverse mode (`MixedRoute::Reverse`)
-    // against a hyper-dual pass per pair, entry by entry, at rest and spinning.
-    for coupling in [Coupling::Neighbours, Coupling::Global, Coupling::Moving] {
-        let model = Compiled::from_str(&chain::chain_family(8, 4, coupling), "chain.toml").unwrap();
+    // against a hyper-dual pass per pair, entry by entry, at rest and spinning. With four
+    // toleranced segments (9 variables) the products go along each variable's equilibrium
+    // move; with eight (17) the parameters' block goes by colours and the equilibrium's move
+    // by a product per coordinate (fewer sweeps), where gravity moves it.
+    for (coupling, k) in [Coupling::Neighbours, Coupling::Global, Coupling::Moving]
+        .into_iter()
+        .flat_map(|c| [(c, 4), (c, 8)])
+    {
+        let model = Compiled::from_str(&chain::chain_family(8, k, coupling), "chain.toml").unwrap();
         let p = model.model().nominal();
         let vars = model.model().toleranced();
         let q0 = initial_guess(model.model(), &p, 0.0).unwrap();

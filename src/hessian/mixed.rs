@@ -1,5 +1,5 @@
 //! The matrices' mixed second derivatives where a root reads them, `yᵀP_ab x` for every pair of
-//! variables at once: `p` Hessian-vector products per root instead of a pass per pair.
+//! variables at once: at most `p` Hessian-vector products per root instead of a pass per pair.
 //!
 //! A root's second derivative reads the matrices' mixed derivatives only through `yᵀP_ab x`
 //! (`root.rs`), at the fixed `λ`, `x`, `y`. That is the Hessian of `Ψ(b) = yᵀP(b)x` along the
@@ -11,12 +11,25 @@
 //! ```
 //!
 //! (differentiating `F(w(b)) = 0` twice and eliminating `q_ab`: the second-order adjoint of an
-//! implicit function). [`crate::program::Program::pencil_hessian`] gives `∇²ℒ d_a` by forward
-//! over reverse mode over the recorded equations, [`crate::program::BATCH`] directions a
-//! sweep. So a root costs `p/BATCH` sweeps of the program, and the pairs cost `O(p²)` dot products, against one
-//! hyper-dual pass of the whole linearisation per pair (`p²/2` passes, each carrying every
-//! coordinate's three lanes). Measured on the 40-segment blade with gravity along the spin axis
-//! and 81 variables, where every pair couples: see `examples/scale_chain.rs` and the module
+//! implicit function). [`crate::program::Program::pencil_hessian`] gives `∇²ℒ v` by forward
+//! over reverse mode over the recorded equations, [`crate::program::BATCH`] directions `v` a
+//! sweep, against one hyper-dual pass of the whole linearisation per pair (`p²/2` passes, each
+//! carrying every coordinate's three lanes). The directions are the fewer of two sets:
+//!
+//! * **along each variable**, `v = d_a`: `p` products, `Ψ_ab` read off product `a`;
+//! * **compressed**: splitting `d_a = e_a + Q e_a` (`Q` the moves over the coordinates),
+//!   `Ψ = A_pp + A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` in the blocks of `A = ∇²ℒ`. The parameters'
+//!   block `A_pp` (the equilibrium held) is sparse with a pattern read from the recorded
+//!   operations, so its columns are compressed by a colouring (`colouring.rs`: a harmonic-mean
+//!   spring couples two variables, a density factor is a hub of its own, a mass couples with
+//!   nothing); the equilibrium's move takes one unit direction per coordinate it moves
+//!   (`A_qp`, `A_qq`), none where the parameters leave the equilibrium put. So the products
+//!   number `colours + moving coordinates`: 3 instead of 80 on the 40-segment blade with
+//!   harmonic-mean springs, 2 with a density factor, 44 instead of 81 with gravity along the
+//!   spin axis as well.
+//!
+//! The pairs then cost `O(p²)` reads, plus `O(p²m)` for the move's blocks (real matrix
+//! products, `m` moving coordinates). Measured: see `examples/scale_chain.rs` and the module
 //! documentation of [`crate::hessian`].
 //!
 //! Here for models without constraint equations: there `P` is the program's own pencil (the
@@ -26,11 +39,14 @@
 //! # Reference
 //! Griewank & Walther, *Evaluating Derivatives* (2008), §5.4 and §15.3 (second-order adjoints,
 //! of implicit functions too); Christianson, *Automatic Hessians by reverse accumulation*, IMA
-//! J. Numer. Anal. 12 (1992).
+//! J. Numer. Anal. 12 (1992); Walther, *Computing sparse Hessians with automatic
+//! differentiation*, ACM TOMS 34 (2008), and Gebremedhin, Manne & Pothen, SIAM Review 47
+//! (2005), for the compressed products.
 
 use super::Expansion;
+use super::colouring::Colouring;
 use crate::modal::{C64, Root};
-use crate::program::Contraction;
+use crate::program::{BATCH, Contraction};
 use crate::sweep::PointError;
 use nalgebra::{DMatrix, DVector};
 
@@ -42,6 +58,7 @@ pub(super) fn pencil_pairs(
     p: &[f64],
     vars: &[usize],
     roots: &[&Root],
+    colouring: Colouring,
 ) -> Result<Option<Vec<DMatrix<C64>>>, PointError> {
     let eq = &x.pt.equilibrium;
     let free = &x.pt.linear.free;
@@ -64,16 +81,46 @@ pub(super) fn pencil_pairs(
         };
         moves.push(z);
     }
-    let directions: Vec<Vec<f64>> = (vars.iter().zip(&moves))
-        .map(|(&k, z)| {
-            let mut d = vec![0.0; w.len()];
-            d[k] = 1.0;
-            for (j, &i) in free.iter().enumerate() {
-                d[program.coordinate_input(i)] = z[j];
-            }
-            d
-        })
+    // The coordinates the equilibrium moves along (none where the parameters leave it put).
+    let moving: Vec<usize> = (0..nf)
+        .filter(|&j| moves.iter().any(|z| z[j] != 0.0))
         .collect();
+    let compressed = colouring.directions + moving.len();
+    let route = if compressed.div_ceil(BATCH) < nv.div_ceil(BATCH) {
+        Route::Compressed { colouring, moving }
+    } else {
+        Route::Along
+    };
+    let unit = |k: usize| {
+        let mut d = vec![0.0; w.len()];
+        d[k] = 1.0;
+        d
+    };
+    let directions: Vec<Vec<f64>> = match &route {
+        Route::Along => (vars.iter().zip(&moves))
+            .map(|(&k, z)| {
+                let mut d = unit(k);
+                for (j, &i) in free.iter().enumerate() {
+                    d[program.coordinate_input(i)] = z[j];
+                }
+                d
+            })
+            .collect(),
+        Route::Compressed { colouring, moving } => (0..colouring.directions)
+            .map(|c| {
+                let mut d = vec![0.0; w.len()];
+                for a in colouring.members(c) {
+                    d[vars[a]] = 1.0;
+                }
+                d
+            })
+            .chain(
+                moving
+                    .iter()
+                    .map(|&j| unit(program.coordinate_input(free[j]))),
+            )
+            .collect(),
+    };
     let Some(transposed) = Some(eq.jacobian.transpose().lu()).filter(|lu| lu.is_invertible())
     else {
         return Ok(None);
@@ -107,13 +154,71 @@ pub(super) fn pencil_pairs(
             return Ok(None);
         };
         let products = program.pencil_hessian(&w, &c, &mu, &directions);
-        out.push(DMatrix::from_fn(nv, nv, |a, b| {
-            let g = &products[a];
-            let along_q: C64 = (free.iter().zip(&moves[b]))
-                .map(|(&i, &z)| g[program.coordinate_input(i)] * z)
-                .sum();
-            g[vars[b]] + along_q
-        }));
+        out.push(match &route {
+            Route::Along => DMatrix::from_fn(nv, nv, |a, b| {
+                let g = &products[a];
+                let along_q: C64 = (free.iter().zip(&moves[b]))
+                    .map(|(&i, &z)| g[program.coordinate_input(i)] * z)
+                    .sum();
+                g[vars[b]] + along_q
+            }),
+            Route::Compressed { colouring, moving } => {
+                let own = DMatrix::from_fn(nv, nv, |a, b| {
+                    colouring
+                        .source(a, b)
+                        .map_or(C64::new(0.0, 0.0), |(d, row)| products[d][vars[row]])
+                });
+                if moving.is_empty() {
+                    own
+                } else {
+                    let coordinates: Vec<usize> = moving
+                        .iter()
+                        .map(|&j| program.coordinate_input(free[j]))
+                        .collect();
+                    let along = &products[colouring.directions..];
+                    own + through_equilibrium(along, (vars, &coordinates), &moves, moving)
+                }
+            }
+        });
     }
     Ok(Some(out))
+}
+
+/// Which directions the Hessian-vector products take.
+enum Route {
+    /// The equilibrium's first move along each variable, `d_a = (e_a, q_a)`: `p` products.
+    Along,
+    /// The parameters' block by colours (`colouring.rs`), and a unit direction along each
+    /// coordinate the equilibrium moves along (`moving`, indices into the free coordinates):
+    /// `Ψ_ab = A_pp + A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` with `Q` the moves.
+    Compressed {
+        colouring: Colouring,
+        moving: Vec<usize>,
+    },
+}
+
+/// `A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` (variables × variables) from the products `along` the moving
+/// coordinates (their entries at the variables' inputs `vars` and the coordinates' inputs
+/// `coordinates`), `moves[a]` the equilibrium's move along variable `a` over the free
+/// coordinates, `moving` the coordinates it moves: `X + Xᵀ` with `X = Qᵀ(A_qp + ½ A_qq Q)`,
+/// in real arithmetic part by part (the moves are real).
+fn through_equilibrium(
+    along: &[Vec<C64>],
+    (vars, coordinates): (&[usize], &[usize]),
+    moves: &[Vec<f64>],
+    moving: &[usize],
+) -> DMatrix<C64> {
+    let (m, nv) = (moving.len(), vars.len());
+    let q = DMatrix::from_fn(m, nv, |j, a| moves[a][moving[j]]);
+    let part = |f: fn(&C64) -> f64| {
+        let gp = DMatrix::from_fn(m, nv, |j, a| f(&along[j][vars[a]]));
+        // `A_qq` symmetrised (it is symmetric but for rounding).
+        let gq = DMatrix::from_fn(m, m, |j, k| {
+            0.5 * (f(&along[j][coordinates[k]]) + f(&along[k][coordinates[j]]))
+        });
+        let x = q.tr_mul(&(gp + gq * &q * 0.5));
+        &x + x.transpose()
+    };
+    let (re, im) = (part(|z| z.re), part(|z| z.im));
+    re.zip_map(&im, C64::new)
 }

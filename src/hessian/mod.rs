@@ -6,7 +6,8 @@
 //! and outputs in closed form:
 //!
 //! 1. **Per variable** `b_a`: a `Dual2` pass (`b + ε e_a`) gives the matrices' first and
-//!    second derivatives along it (`M̂_a`, `M̂_aa`, …, the basis and the ports likewise).
+//!    second derivatives along it (`M̂_a`, `M̂_aa`, …, the basis and the ports likewise; first
+//!    derivatives only, four variables a pass, where reverse mode gives the second: step 2).
 //! 2. **Screening the pairs**: the mixed derivatives of the matrices `M̂_ab` vanish for most
 //!    pairs of a real tolerance stack (a mass and a stiffness of two different parts, when the
 //!    equilibrium does not move). One `Dual2` pass along a fixed direction `w` with irregular
@@ -23,16 +24,23 @@
 //!    Where the coupled pairs are many (a spring the harmonic mean of two segments' stiffness,
 //!    one density in every segment, an equilibrium that moves with every variable) and the
 //!    model has no constraint equations, the roots' mixed terms come from reverse mode instead
-//!    (`mixed.rs`): per root, `⌈p/8⌉` forward-over-reverse sweeps of the recorded equations give
+//!    (`mixed.rs`): per root, forward-over-reverse sweeps of the recorded equations give
 //!    `yᵀP_ab x` for every pair, the equilibrium's second-order move eliminated by one adjoint
-//!    solve. The route is chosen by its cost in pair passes (`SWEEP_LANES`); both give the
-//!    same Hessians to rounding (1e-12 relative on the 81-variable blade). On the 40-segment
-//!    blade with gravity along the spin axis (`scale_chain local 40 k --family moving`, one
-//!    point, best of 3): 0.16 s against 0.50 s at 21 variables, 0.53 s against 8.0 s at 81,
-//!    growing as `p^0.9` instead of `p^2`. Reverse mode over the recorded program was chosen
-//!    over vector hyper-dual lanes, which would still carry `p²` mixed parts through every
-//!    coordinate's three lanes, and over colouring, which a moving equilibrium leaves nothing to
-//!    colour (every pair couples).
+//!    solve, [`crate::program::BATCH`] Hessian-vector products a sweep. The products are the
+//!    fewer of `p` (along each variable's equilibrium move) and the **compressed** set: the
+//!    parameters' own block coloured by its pattern from the recorded operations
+//!    (`colouring.rs`), plus one product per coordinate the equilibrium moves along. The
+//!    diagonal comes with them, so the per-variable passes then need first derivatives only
+//!    (four variables a [`Dual4`] pass). The route is chosen by its cost in pair passes
+//!    (`SWEEP_LANES`); every route gives the same Hessians to rounding (1.9e-12 relative on the
+//!    81-variable blade). On the 40-segment blade at 80/81 variables (`scale_chain local 40 40
+//!    --family F`, one point, best of 3, gradients and Hessians): 0.14–0.15 s with
+//!    harmonic-mean springs (3 products a root) or a density in every segment (2), 0.29 s with
+//!    gravity along the spin axis as well (44), against 1.9, 2.3 and 8.3 s by a pass per pair
+//!    and 0.50, 0.55 and 0.60 s by a product per variable. Reverse mode over the recorded
+//!    program was chosen over vector hyper-dual lanes, which would still carry `p²` mixed
+//!    parts through every coordinate's three lanes; the colouring is applied to the parameters'
+//!    block only, because a moving equilibrium couples every pair through the coordinates.
 //! 3. **Roots** (`root.rs`): each simple root's bordered eigen-equations are
 //!    factorised once; the root's first and second derivatives follow in closed form from the
 //!    matrices' derivatives, one solve per variable and `O(n)` per pair.
@@ -52,10 +60,12 @@
 //! differentiation*, ACM TOMS 34 (2008), for exploiting the pairs that vanish; Schwartz, *Fast
 //! probabilistic algorithms for verification of polynomial identities*, J. ACM 27 (1980).
 
+mod colouring;
 mod mixed;
 mod root;
 
 use crate::compiled::Compiled;
+use crate::dual4::Dual4;
 use crate::equilibrium::Factor;
 use crate::frf::transfer;
 use crate::implicit;
@@ -68,6 +78,7 @@ use crate::pair;
 use crate::program::{Tier, Workspace};
 use crate::sensitivity::{DesignPoint, TransferAt};
 use crate::sweep::{Point, PointError};
+use colouring::Colouring;
 use nalgebra::{Complex, DMatrix};
 use num_dual::{Dual2_64, HyperDual64};
 use root::{Along, RootTerms};
@@ -114,33 +125,42 @@ impl Hessians {
     }
 }
 
-/// The derivatives of `M̂`, `Ĉ` and `K̂` along one variable: first (`M, C, K`) then second.
-type AlongOne = [DMatrix<f64>; 6];
+/// The derivatives of `M̂`, `Ĉ` and `K̂` along one variable: first (`M, C, K`), then second
+/// where taken.
+type AlongOne = ([DMatrix<f64>; 3], Option<[DMatrix<f64>; 3]>);
 
 impl Expansion<'_> {
-    /// Per variable of `vars`: the matrices' first and second derivatives along it, and the
-    /// whole linearisation where more than the roots reads it (`whole`; kept only then: at 160
+    /// Per variable of `vars`: the matrices' first and second derivatives along it (first
+    /// only where `second` is false: then four variables a `Dual4` pass), and the whole
+    /// linearisation where more than the roots reads it (`whole`; kept only then: at 160
     /// variables of an 80-segment chain the linearisations would be most of the memory).
     fn along_each(
         &self,
         p: &[f64],
         vars: &[usize],
-        whole: bool,
+        (second, whole): (bool, bool),
     ) -> Result<(Vec<AlongOne>, Vec<Linearization<Dual2_64>>), PointError> {
         let mut singles = Vec::new();
         let mut derivatives = Vec::with_capacity(vars.len());
+        if !second {
+            for start in (0..vars.len()).step_by(4) {
+                let s = self.linearization(&seed::<Dual4<f64>>(p, vars, |b, k| {
+                    f64::from(u8::from(b == start + k))
+                }))?;
+                for k in 0..4.min(vars.len() - start) {
+                    derivatives.push(([part(&s.m, k), part(&s.c, k), part(&s.k, k)], None));
+                }
+            }
+            return Ok((derivatives, singles));
+        }
         for a in 0..vars.len() {
             let s = self.linearization(&seed::<Dual2_64>(p, vars, |b, k| {
                 f64::from(u8::from(a == b && k == 0))
             }))?;
-            derivatives.push([
-                part(&s.m, 0),
-                part(&s.c, 0),
-                part(&s.k, 0),
-                part(&s.m, 1),
-                part(&s.c, 1),
-                part(&s.k, 1),
-            ]);
+            derivatives.push((
+                [part(&s.m, 0), part(&s.c, 0), part(&s.k, 0)],
+                Some([part(&s.m, 1), part(&s.c, 1), part(&s.k, 1)]),
+            ));
             if whole {
                 singles.push(s);
             }
@@ -294,9 +314,21 @@ impl Expansion<'_> {
         let (pt, nv) = (self.pt, vars.len());
         // Reverse mode applies to a recorded program without constraint equations.
         let applies = !whole && pt.equilibrium.lambda.is_empty() && self.model.program().is_some();
+        // The parameters' own block coloured by its pattern (the products it needs, besides
+        // one per coordinate the equilibrium moves along at most).
+        let program = self.model.program().filter(|_| applies);
+        let colouring = program.map(|program| {
+            let pattern = program.parameter_pattern();
+            Colouring::new(nv, |a, b| pattern.contains(vars[a], vars[b]))
+        });
+        let directions = colouring
+            .as_ref()
+            .map_or(nv, |c| nv.min(c.directions + pt.linear.free.len()));
         let reverse = match route {
             _ if !applies => None,
-            MixedRoute::Fastest => Some(reverse_cost(wanted.len(), nv, pt.linear.free.len())),
+            MixedRoute::Fastest => {
+                Some(reverse_cost(wanted.len(), directions, pt.linear.free.len()))
+            }
             MixedRoute::Reverse => Some(0.0),
             MixedRoute::Passes => None,
         };
@@ -305,8 +337,10 @@ impl Expansion<'_> {
         let mixed_rows = rows_with_mixed_terms(self, p, vars, rows)?;
         let flagged = mixed_rows.iter().filter(|&&r| r).count();
         let coupled = (flagged * flagged.saturating_sub(1) / 2) as f64;
-        let pairs = match reverse {
-            Some(cost) if cost < coupled => mixed::pencil_pairs(self, p, vars, wanted)?,
+        let pairs = match (reverse, colouring) {
+            (Some(cost), Some(colouring)) if cost < coupled => {
+                mixed::pencil_pairs(self, p, vars, wanted, colouring)?
+            }
             _ => None,
         };
         Ok(match pairs {
@@ -317,10 +351,11 @@ impl Expansion<'_> {
 }
 
 /// The cost of the roots' mixed terms by reverse mode in pair passes: a sweep per root and
-/// [`crate::program::BATCH`] variables, a sweep costing [`SWEEP_LANES`] lanes of a pass.
-fn reverse_cost(roots: usize, nv: usize, nf: usize) -> f64 {
+/// [`crate::program::BATCH`] of the `directions` products, a sweep costing [`SWEEP_LANES`]
+/// lanes of a pass.
+fn reverse_cost(roots: usize, directions: usize, nf: usize) -> f64 {
     let sweep = (SWEEP_LANES / (3 * nf.max(1)) as f64).min(1.0);
-    (roots * nv.div_ceil(crate::program::BATCH)) as f64 * sweep
+    (roots * directions.div_ceil(crate::program::BATCH)) as f64 * sweep
 }
 
 /// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
@@ -363,15 +398,7 @@ fn root_terms(
     pairs: Option<PencilPairs>,
 ) -> Vec<Result<(RootTerms, Partner), Missing>> {
     let lin = &pt.linear;
-    let mut terms = RootTerms::all(wanted, (&lin.m, &lin.c, &lin.k), along);
-    if let Some(pairs) = pairs {
-        for (t, pairs) in terms.iter_mut().zip(pairs) {
-            if let Some(t) = t {
-                t.pairs = Some(pairs);
-            }
-        }
-    }
-    let mut terms = terms.into_iter();
+    let mut terms = RootTerms::all(wanted, (&lin.m, &lin.c, &lin.k), along, pairs).into_iter();
     smooth
         .iter()
         .zip(conjugate)
@@ -586,12 +613,19 @@ impl DesignPoint<'_> {
         // The linearisation over jets is needed beyond the roots for |H| and for one degree of
         // freedom's invariants.
         let whole = tf.is_some() || pt.linear.m.nrows() == 1;
-        let (derivatives, singles) = x.along_each(p, vars, whole)?;
         let (wanted, conjugate) = wanted_roots(pt, &smooth);
         let (mixed_rows, pairs) = x.mixed_route(p, vars, (route, whole), &wanted)?;
+        // Where reverse mode gave every root's `yᵀP_ab x`, the diagonal too: the passes along
+        // each variable then need first derivatives only.
+        let (derivatives, singles) = x.along_each(p, vars, (pairs.is_none(), whole))?;
         let along: Vec<Along<'_>> = derivatives
             .iter()
-            .map(|d| ((&d[0], &d[1], &d[2]), (&d[3], &d[4], &d[5])))
+            .map(|(d, s)| {
+                (
+                    (&d[0], &d[1], &d[2]),
+                    s.as_ref().map(|s| (&s[0], &s[1], &s[2])),
+                )
+            })
             .collect();
         let roots = root_terms((pt, &smooth), &along, (&wanted, conjugate), pairs);
         let Hessians {

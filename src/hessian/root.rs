@@ -69,8 +69,9 @@ pub struct RootTerms {
     pub pairs: Option<DMatrix<C64>>,
 }
 
-/// A variable's first and second derivatives of `(M̂, Ĉ, K̂)` along itself.
-pub type Along<'a> = (Triple<'a>, Triple<'a>);
+/// A variable's first and second derivatives of `(M̂, Ĉ, K̂)` along itself (the second where
+/// taken: otherwise every root's [`RootTerms::pairs`] holds the diagonal).
+pub type Along<'a> = (Triple<'a>, Option<Triple<'a>>);
 
 /// A root's terms while the variables are added (see [`RootTerms::all`]).
 struct Partial {
@@ -129,7 +130,7 @@ impl Partial {
     }
 
     /// The root's terms, the cross products `u_aᵀx_b + u_bᵀx_a` of every pair taken at once.
-    fn finish(self, root: &Root) -> RootTerms {
+    fn finish(self, root: &Root, pairs: Option<DMatrix<C64>>) -> RootTerms {
         let ux = self.us.transpose() * &self.xs;
         RootTerms {
             lambda: self.lambda,
@@ -141,7 +142,7 @@ impl Partial {
             diagonal: self.diagonal,
             alpha: self.alpha,
             cross: &ux + ux.transpose(),
-            pairs: None,
+            pairs,
         }
     }
 }
@@ -149,13 +150,15 @@ impl Partial {
 impl RootTerms {
     /// The terms of each of `roots` of the nominal matrices `(m, c, k)`, with `along[a]`
     /// variable `a`'s derivatives of the matrices; `None` for a root whose bordered equations
-    /// are exactly singular. The matrices' products with the roots' vectors are taken for all
-    /// the roots at once (one matrix product per variable and matrix, not one matrix–vector
-    /// product per root).
+    /// are exactly singular; `pairs`, where given, each root's `yᵀP_ab x` for every pair (the
+    /// diagonal read from there where `along` has no second derivatives). The matrices'
+    /// products with the roots' vectors are taken for all the roots at once (one matrix product
+    /// per variable and matrix, not one matrix–vector product per root).
     pub fn all(
         roots: &[&Root],
         (m, c, k): Triple<'_>,
         along: &[Along<'_>],
+        pairs: Option<Vec<DMatrix<C64>>>,
     ) -> Vec<Option<RootTerms>> {
         let n = m.nrows();
         let nv = along.len();
@@ -187,9 +190,10 @@ impl RootTerms {
             .iter()
             .map(|root| Partial::new(root, (m, c, k), nv))
             .collect();
-        for (a, &((ma, ca, ka), (m2, c2, k2))) in along.iter().enumerate() {
-            let [mx, cx, kx, m2x, c2x, k2x] =
-                [ma, ca, ka, m2, c2, k2].map(|mat| product(mat, &xs_all, false));
+        for (a, &((ma, ca, ka), second)) in along.iter().enumerate() {
+            let [mx, cx, kx] = [ma, ca, ka].map(|mat| product(mat, &xs_all, false));
+            let second_x =
+                second.map(|(m2, c2, k2)| [m2, c2, k2].map(|mat| product(mat, &xs_all, false)));
             let [mty, cty, kty] = [ma, ca, ka].map(|mat| product(mat, &ys_all, true));
             for (j, t) in terms.iter_mut().enumerate() {
                 let Some(t) = t.as_mut().filter(|t| !t.failed) else {
@@ -213,7 +217,11 @@ impl RootTerms {
                 let xa = sol.rows(0, n).into_owned();
                 let al = dot(&t.left, &(col(&mx) * (l * 2.0) + col(&cx)));
                 let u = pencil(l, (&mty, &cty, &kty)) + &t.dpty * la;
-                let caa = dot(&t.left, &pencil(l, (&m2x, &c2x, &k2x)));
+                let caa = match (&second_x, &pairs) {
+                    (Some([m2x, c2x, k2x]), _) => dot(&t.left, &pencil(l, (m2x, c2x, k2x))),
+                    (None, Some(pairs)) => pairs[j][(a, a)],
+                    (None, None) => C64::new(0.0, 0.0),
+                };
                 let cross = dot(&u, &xa);
                 t.diagonal
                     .push(-(caa + al * la * 2.0 + la * la * t.ymx * 2.0 + cross * 2.0) / t.den);
@@ -223,10 +231,14 @@ impl RootTerms {
                 t.us.column_mut(a).copy_from(&u);
             }
         }
+        let mut pairs = pairs.map(Vec::into_iter);
         terms
             .into_iter()
             .zip(roots)
-            .map(|(t, root)| t.filter(|t| !t.failed).map(|t| t.finish(root)))
+            .map(|(t, root)| {
+                let own = pairs.as_mut().and_then(Iterator::next);
+                t.filter(|t| !t.failed).map(|t| t.finish(root, own))
+            })
             .collect()
     }
 

@@ -42,7 +42,7 @@ use crate::mechanics::System;
 use crate::mechanics::dynamics::{Lifted, equilibrium_residual, evaluate_rows};
 use crate::model::Model;
 use crate::real::Real;
-use crate::tape::{NativePass, Seeding, Tape, Var, record};
+use crate::tape::{NativePass, Pattern, Seeding, Tape, Var, record};
 use std::cell::{OnceCell, RefCell};
 use std::sync::{Arc, OnceLock, RwLock};
 
@@ -74,6 +74,9 @@ pub struct Program {
     parametric: Parametric,
     /// The `f64` passes compiled to native code, made when [`Tier::Native`] first asks.
     native: Arc<OnceLock<Native>>,
+    /// Which pairs of parameters `F` can have a mixed second derivative in
+    /// ([`Tape::hessian_pattern`]), made when first asked for.
+    pattern: OnceLock<Pattern>,
 }
 
 /// How a program's `f64` passes run, chosen by the caller for the work ahead: every tier gives
@@ -239,8 +242,17 @@ impl Program {
             jacobian: OnceLock::new(),
             linear,
             native: Arc::default(),
+            pattern: OnceLock::new(),
         };
         program.reproduces(model, p, speed, q).then_some(program)
+    }
+
+    /// The pairs of parameters whose mixed second derivative of `F` (and of its derivatives
+    /// along the coordinates, rates and multipliers) may be nonzero at any inputs: the
+    /// structure of the parameters' Hessian, from the recorded operations.
+    pub fn parameter_pattern(&self) -> &Pattern {
+        self.pattern
+            .get_or_init(|| self.full.hessian_pattern(self.np))
     }
 
     /// Does the program give the direct route's residual here and at a perturbed point?
