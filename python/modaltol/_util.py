@@ -18,8 +18,9 @@ def _frame(columns: Mapping[str, list]) -> pd.DataFrame:
 def _speeds(speeds: Speeds | None) -> Any:
     if speeds is None or isinstance(speeds, str):
         return speeds
-    # `tolist` makes the Python floats in C, several times faster than a comprehension.
-    return np.asarray(speeds, dtype=float).ravel().tolist()
+    # One flat float array: the native side checks its length before it makes the Python
+    # floats (by `tolist`, in C: several times faster than a comprehension).
+    return np.asarray(speeds, dtype=float).ravel()
 
 
 def _names(names: str | Iterable[str] | None) -> list[str] | None:

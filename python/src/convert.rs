@@ -121,7 +121,17 @@ pub(crate) fn speeds(spec: &Bound<'_, PyAny>, what: &str, fits: Fits<'_>) -> PyR
         let r = SpeedRange::parse(&s).map_err(|e| bad(format!("{what}: {e}")))?;
         range(&r, what, fits)?
     } else {
-        spec.extract()
+        // Refused by its length before its numbers are made into Python floats (30 million of
+        // them take seconds); an array is then converted by its own `tolist`, in C.
+        if let Ok(n) = spec.len() {
+            fits(n).map_err(|e| bad(format!("{what}: {e}")))?;
+        }
+        let values = match spec.hasattr("tolist") {
+            Ok(true) => spec.call_method0("tolist")?,
+            _ => spec.clone(),
+        };
+        values
+            .extract()
             .map_err(|_| bad(format!("{what}: expected \"FROM:TO:STEP\" or numbers")))?
     };
     let v = settings::values(v).map_err(|e| bad(format!("{what}: {e}")))?;
