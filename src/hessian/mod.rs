@@ -316,7 +316,7 @@ impl Expansion<'_> {
         let applies = !whole && pt.equilibrium.lambda.is_empty() && self.model.program().is_some();
         // The parameters' own block coloured by its pattern (the products it needs, besides
         // one per coordinate the equilibrium moves along at most).
-        let program = self.model.program().filter(|_| applies);
+        let program = (self.model.program()).filter(|_| applies && route != MixedRoute::Passes);
         let colouring = program.map(|program| {
             let pattern = program.parameter_pattern();
             Colouring::new(nv, |a, b| pattern.contains(vars[a], vars[b]))
@@ -617,7 +617,7 @@ impl DesignPoint<'_> {
         let (mixed_rows, pairs) = x.mixed_route(p, vars, (route, whole), &wanted)?;
         // Where reverse mode gave every root's `yᵀP_ab x`, the diagonal too: the passes along
         // each variable then need first derivatives only.
-        let (derivatives, singles) = x.along_each(p, vars, (pairs.is_none(), whole))?;
+        let (derivatives, singles) = x.along_each(p, vars, (pairs.is_none() || whole, whole))?;
         let along: Vec<Along<'_>> = derivatives
             .iter()
             .map(|(d, s)| {
