@@ -16,7 +16,8 @@
 //! and are left out of the others' graph: the symmetric direct recovery that star colouring
 //! formalises, taken for its most common case (Gebremedhin, Tarafdar, Manne & Pothen, *New
 //! acyclic and star coloring algorithms with application to computing Hessians*, SIAM J. Sci.
-//! Comput. 29, 2007). The number of hubs is chosen by trying: the fewest products win.
+//! Comput. 29, 2007). The number of hubs is chosen by trying: the fewest products win, and a
+//! product per variable where nothing fewer is found (a dense pattern).
 
 /// Each variable's product (its colour's, or its own for a hub) and whether it is a hub.
 #[derive(Debug, Clone)]
@@ -42,25 +43,38 @@ impl Colouring {
         // Largest degree first, for the hubs and for the greedy order.
         let mut order: Vec<usize> = (0..nv).collect();
         order.sort_by_key(|&a| std::cmp::Reverse(lists[a].len()));
-        let mut best: Option<(Vec<usize>, Vec<bool>, usize)> = None;
+        // Every variable a product of its own: the colouring to beat.
+        let mut best = ((0..nv).collect::<Vec<_>>(), vec![true; nv], nv);
         let mut stale = 0;
         for hubs in 0..=nv.min(MAX_HUBS) {
-            if best.as_ref().is_some_and(|b| hubs >= b.2) || stale >= PATIENCE {
+            if hubs >= best.2 || stale >= PATIENCE {
                 break;
             }
             let mut hub = vec![false; nv];
             for &a in &order[..hubs] {
                 hub[a] = true;
             }
+            // A distance-2 colouring needs more colours than any vertex has neighbours: where
+            // that bound cannot beat the best, the greedy pass (quadratic in the degrees, slow
+            // on a dense pattern) is not run.
+            let degree = (0..nv)
+                .filter(|&a| !hub[a])
+                .map(|a| lists[a].iter().filter(|&&b| !hub[b]).count() + 1)
+                .max()
+                .unwrap_or(0);
+            if hubs + degree >= best.2 {
+                stale += 1;
+                continue;
+            }
             let (direction, count) = colour(&lists, &order, &hub);
-            if best.as_ref().is_none_or(|b| count < b.2) {
-                best = Some((direction, hub, count));
+            if count < best.2 {
+                best = (direction, hub, count);
                 stale = 0;
             } else {
                 stale += 1;
             }
         }
-        let (direction, hub, directions) = best.unwrap_or_default();
+        let (direction, hub, directions) = best;
         Colouring {
             direction,
             hub,
@@ -173,5 +187,18 @@ mod tests {
                 assert_eq!(got.to_bits(), h[(a, b)].to_bits(), "({a}, {b})");
             }
         }
+    }
+
+    /// A dense pattern keeps a product per variable (every entry read from its own column),
+    /// found without the greedy passes; no variables, no products.
+    #[test]
+    fn a_dense_pattern_keeps_a_product_per_variable() {
+        let nv = 400;
+        let colouring = Colouring::new(nv, |_, _| true);
+        assert_eq!(colouring.directions, nv);
+        for (a, b) in [(0, 0), (3, 399), (399, 3), (17, 18)] {
+            assert_eq!(colouring.source(a, b), Some((a, b)));
+        }
+        assert_eq!(Colouring::new(0, |_, _| true).directions, 0);
     }
 }
