@@ -81,7 +81,7 @@ impl Study<'_> {
                 if !started {
                     sweep.warm_start(nom);
                 }
-                let pt = sweep.step(w).ok()?;
+                let pt = sweep.step_beside(w, nom).ok()?;
                 started = true;
                 switches += usize::from(pt.new_branch);
                 (pt.modes.len() == nom.modes.len()).then(|| (nom, match_modes(nom, pt)))

@@ -1,5 +1,6 @@
-//! A sweep over speeds: continuation of the equilibrium (a predictor over the last solutions)
-//! and tracking of the modes by their shapes.
+//! A sweep over speeds: continuation of the equilibrium (a predictor over the last solutions,
+//! or over their offsets from a reference design's points) and tracking of the modes by their
+//! shapes.
 
 use super::point::{BranchKind, Origin, Point, PointError};
 use super::solve::Solver;
@@ -25,8 +26,11 @@ struct Guess {
     origin: Origin,
 }
 
+/// A field of a kept state (its coordinates, multipliers or Jacobian entries).
+type Field = for<'s, 't> fn(&'s Solved<'t>) -> &'s [f64];
+
 /// A converged state kept for continuation.
-struct Solved {
+struct Solved<'a> {
     speed: f64,
     q: Vec<f64>,
     lambda: Vec<f64>,
@@ -34,16 +38,20 @@ struct Solved {
     jacobian: DMatrix<f64>,
     /// The point was found by a switch of branch.
     switched: bool,
+    /// The reference design's point at the same speed, where the sweep follows one
+    /// ([`Sweep::step_beside`]).
+    beside: Option<&'a Point>,
 }
 
-impl Solved {
-    fn from(pt: &Point) -> Self {
+impl<'a> Solved<'a> {
+    fn from(pt: &Point, beside: Option<&'a Point>) -> Self {
         Solved {
             speed: pt.speed,
             q: pt.equilibrium.q.clone(),
             lambda: pt.equilibrium.lambda.clone(),
             jacobian: pt.equilibrium.jacobian.clone(),
             switched: pt.switched_from.is_some(),
+            beside,
         }
     }
 }
@@ -54,7 +62,15 @@ pub struct Sweep<'a> {
     params: Vec<f64>,
     options: Options,
     /// The last solutions, newest first (at most [`PREDICTOR_NODES`]), for the predictor.
-    history: Vec<Solved>,
+    history: Vec<Solved<'a>>,
+    /// The reference design's point at the speed being solved ([`Sweep::step_beside`]).
+    beside: Option<&'a Point>,
+    /// Switches of branch since the first step: the design's own, and the reference's
+    /// between the points it was stepped beside (the design starts on the reference's first
+    /// one).
+    switches: [usize; 2],
+    /// A point of the reference was stepped beside.
+    stepped_beside: bool,
     /// The steady-state check passed at an earlier speed where every drive turned (the
     /// parameters do not change; at a speed where a drive stands still it is not checked).
     steady_known: bool,
@@ -112,6 +128,9 @@ impl<'a> Sweep<'a> {
             params,
             options,
             history: Vec::new(),
+            beside: None,
+            switches: [0, 0],
+            stepped_beside: false,
             steady_known: false,
             last_shapes: None,
             last_stable: None,
@@ -122,10 +141,26 @@ impl<'a> Sweep<'a> {
     /// Continues from `pt` as if it had been solved last (its equilibrium, Jacobian and mode
     /// shapes): a Monte Carlo sample starts from the nominal point at its first speed instead of
     /// the model's initial guess.
-    pub fn warm_start(&mut self, pt: &Point) {
-        self.history = vec![Solved::from(pt)];
+    pub fn warm_start(&mut self, pt: &'a Point) {
+        self.history = vec![Solved::from(pt, Some(pt))];
         self.last_shapes = Some(pt.shapes.clone());
         self.last_stable = Some(pt.stable());
+    }
+
+    /// [`Sweep::step`] for a design beside a reference design whose point at `speed` is
+    /// `beside` (a Monte Carlo sample or a quadrature node beside the nominal design): the
+    /// predictor extrapolates the design's offsets from the reference's points, which are
+    /// small and smooth where the designs are near, rather than its solutions themselves,
+    /// while the design is on the reference's branch (as often switched since the start). On
+    /// the moving 40-segment blade and the paper's governor a sample's points then take about one
+    /// fresh Jacobian each instead of two (`docs/benchmarks.md`).
+    pub fn step_beside(&mut self, speed: f64, beside: &'a Point) -> Result<Point, PointError> {
+        self.switches[1] += usize::from(self.stepped_beside && beside.new_branch);
+        self.stepped_beside = true;
+        self.beside = (beside.speed.to_bits() == speed.to_bits()).then_some(beside);
+        let pt = self.step(speed);
+        self.beside = None;
+        pt
     }
 
     /// Solves the next speed. Failures leave the continuation state as it was.
@@ -164,7 +199,10 @@ impl<'a> Sweep<'a> {
             });
         }
         self.history.truncate(PREDICTOR_NODES - 1);
-        self.history.insert(0, Solved::from(&pt));
+        self.switches[0] += usize::from(pt.new_branch);
+        let on_reference = self.switches[0] == self.switches[1];
+        let beside = self.beside.filter(|_| on_reference);
+        self.history.insert(0, Solved::from(&pt, beside));
         let eq = &pt.equilibrium;
         self.steady_known |= (self.model.model().driven().iter()).all(|&c| eq.qd[c] != 0.0);
         self.last_shapes = Some(pt.shapes.clone());
@@ -223,11 +261,14 @@ impl<'a> Sweep<'a> {
     /// a cubic on a smooth branch, down to the secant where the higher orders do not settle)
     /// with the secant extrapolation of their Jacobians; `None` with fewer than two.
     fn predicted(&self, speed: f64) -> Option<Guess> {
+        if let Some(guess) = self.predicted_beside(speed) {
+            return Some(guess);
+        }
         let nodes: Vec<&Solved> = self.history.iter().collect();
         if nodes.len() < 2 {
             return None;
         }
-        let predict = |nodes: &[&Solved], field: fn(&Solved) -> &[f64]| {
+        let predict = |nodes: &[&Solved], field: Field| {
             let weights = extrapolation(speed, nodes)?;
             let mut out = vec![0.0; field(nodes[0]).len()];
             for (w, s) in weights.iter().zip(nodes) {
@@ -270,6 +311,87 @@ impl<'a> Sweep<'a> {
             jacobian,
             origin: Origin::Continued {
                 speed: nodes[0].speed,
+            },
+        })
+    }
+
+    /// Beside a reference design ([`Sweep::step_beside`]): the reference's point at `speed`
+    /// plus the extrapolation of the offsets `x − x_ref` of the last solutions that have a
+    /// reference point (coordinates, multipliers and Jacobian). The offsets are of the order
+    /// of the designs' difference, so the predictor's error is that fraction of the plain
+    /// extrapolation's, and with one solution the last offset alone (the reference's own
+    /// change from speed to speed) predicts. Up to a cubic for the coordinates and
+    /// multipliers, each order where its correction is small against the one below's (as in
+    /// [`Sweep::predicted`]); the secant for the Jacobian. `None` without a reference point,
+    /// off the reference's branch or where the shapes differ.
+    fn predicted_beside(&self, speed: f64) -> Option<Guess> {
+        // Only while the design is on the reference's branch (as often switched), and from
+        // the solutions since it was: offsets between branches are neither small nor smooth,
+        // and would carry the design across a switch of the reference's unnoticed, where its
+        // own sweep makes the switch and counts it.
+        let here = self
+            .beside
+            .filter(|_| self.switches[0] == self.switches[1])?;
+        let nodes: Vec<(&Solved, &Point)> = (self.history.iter())
+            .map_while(|s| s.beside.map(|b| (s, b)))
+            .collect();
+        let same = |s: &Solved, b: &Point| {
+            let e = &b.equilibrium;
+            s.q.len() == e.q.len()
+                && s.lambda.len() == e.lambda.len()
+                && s.jacobian.shape() == e.jacobian.shape()
+        };
+        let (newest, _) = nodes.first()?;
+        if !nodes.iter().all(|(s, b)| same(s, b)) || !same(newest, here) {
+            return None;
+        }
+        let solved: Vec<&Solved> = nodes.iter().map(|(s, _)| *s).collect();
+        // The reference's `field` at `speed` plus the offsets of the first `k` nodes
+        // extrapolated (the newest one's alone for `k = 1`).
+        let offset = |k: usize, field: Field, base: fn(&Point) -> &[f64]| {
+            let weights = match k {
+                1 => vec![1.0],
+                _ => extrapolation(speed, &solved[..k])?,
+            };
+            let mut out = base(here).to_vec();
+            for (w, (s, b)) in weights.iter().zip(&nodes) {
+                for ((o, v), r) in out.iter_mut().zip(field(s)).zip(base(b)) {
+                    *o += w * (v - r);
+                }
+            }
+            Some(out)
+        };
+        let diff = |a: &[f64], b: &[f64]| {
+            a.iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        let q_of: fn(&Point) -> &[f64] = |p| &p.equilibrium.q;
+        let mut q = offset(1, |s| &s.q, q_of)?;
+        let (mut order, mut correction) = (1, f64::INFINITY);
+        for k in 2..=nodes.len() {
+            let Some(next) = offset(k, |s| &s.q, q_of) else {
+                break;
+            };
+            let c = diff(&next, &q);
+            if k > 2 && c > 0.1 * correction {
+                break;
+            }
+            (order, q, correction) = (k, next, c);
+        }
+        let n = newest.jacobian.nrows();
+        let jacobian = offset(
+            order.min(2),
+            |s| s.jacobian.as_slice(),
+            |p| p.equilibrium.jacobian.as_slice(),
+        )
+        .map(|j| DMatrix::from_vec(n, n, j));
+        Some(Guess {
+            q,
+            lambda: offset(order, |s| &s.lambda, |p| &p.equilibrium.lambda),
+            jacobian,
+            origin: Origin::Continued {
+                speed: newest.speed,
             },
         })
     }
