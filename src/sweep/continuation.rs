@@ -278,26 +278,11 @@ impl<'a> Sweep<'a> {
             }
             Some(out)
         };
-        let diff = |a: &[f64], b: &[f64]| {
-            a.iter()
-                .zip(b)
-                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-        };
-        // Each higher order where its correction to the one below is small against that one's
-        // own correction (a smooth branch); not past the first that is not (say just past a
-        // bifurcation, where the branch has a kink).
-        let mut order = 0;
-        let mut q: Option<Vec<f64>> = None;
-        let mut correction = f64::INFINITY;
-        for k in 1..nodes.len() {
-            let Some(next) = predict(&nodes[..=k], |s| &s.q) else {
-                break;
-            };
-            let c = diff(&next, q.as_deref().unwrap_or(&nodes[0].q));
-            if k > 1 && c > 0.1 * correction {
-                break;
-            }
-            (order, q, correction) = (k, Some(next), c);
+        let (q, used) = settled(nodes[0].q.clone(), nodes.len(), |k| {
+            predict(&nodes[..k], |s| &s.q)
+        });
+        if used < 2 {
+            return None;
         }
         // The Jacobian extrapolated too: chord steps with it contract by O(Δspeed²) rather
         // than O(Δspeed), so that a point usually takes two residuals, not three.
@@ -306,8 +291,8 @@ impl<'a> Sweep<'a> {
             .filter(|_| nodes[1].jacobian.shape() == nodes[0].jacobian.shape())
             .map(|j| DMatrix::from_vec(n, n, j));
         Some(Guess {
-            q: q?,
-            lambda: predict(&nodes[..=order], |s| &s.lambda),
+            q,
+            lambda: predict(&nodes[..used], |s| &s.lambda),
             jacobian,
             origin: Origin::Continued {
                 speed: nodes[0].speed,
@@ -361,24 +346,10 @@ impl<'a> Sweep<'a> {
             }
             Some(out)
         };
-        let diff = |a: &[f64], b: &[f64]| {
-            a.iter()
-                .zip(b)
-                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-        };
         let q_of: fn(&Point) -> &[f64] = |p| &p.equilibrium.q;
-        let mut q = offset(1, |s| &s.q, q_of)?;
-        let (mut order, mut correction) = (1, f64::INFINITY);
-        for k in 2..=nodes.len() {
-            let Some(next) = offset(k, |s| &s.q, q_of) else {
-                break;
-            };
-            let c = diff(&next, &q);
-            if k > 2 && c > 0.1 * correction {
-                break;
-            }
-            (order, q, correction) = (k, next, c);
-        }
+        let (q, order) = settled(offset(1, |s| &s.q, q_of)?, nodes.len(), |k| {
+            offset(k, |s| &s.q, q_of)
+        });
         let n = newest.jacobian.nrows();
         let jacobian = offset(
             order.min(2),
@@ -420,6 +391,31 @@ impl<'a> Sweep<'a> {
         }
         self.history.clear();
     }
+}
+
+/// The extrapolation's order, chosen by its corrections: from `base`, the prediction by the
+/// newest solution alone, each prediction `by(k)` from the newest `k` solutions (`k` from 2 to
+/// `most`) replaces the one below where its correction to it is at most a tenth of that one's
+/// own correction (a smooth branch; the secant's is always taken), and not past the first that
+/// is not or cannot be made (say just past a bifurcation, where the branch has a kink). The
+/// prediction and the solutions it used.
+fn settled(
+    base: Vec<f64>,
+    most: usize,
+    by: impl Fn(usize) -> Option<Vec<f64>>,
+) -> (Vec<f64>, usize) {
+    let (mut q, mut used, mut correction) = (base, 1, f64::INFINITY);
+    for k in 2..=most {
+        let Some(next) = by(k) else {
+            break;
+        };
+        let c = (next.iter().zip(&q)).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        if k > 2 && c > 0.1 * correction {
+            break;
+        }
+        (q, used, correction) = (next, k, c);
+    }
+    (q, used)
 }
 
 /// Weights of the solutions `solved` (newest first) that extrapolate them to `speed`:
