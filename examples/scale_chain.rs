@@ -20,10 +20,10 @@
 //! 3000-sample Monte Carlo, the rows each method filled, the peak memory so far, and the
 //! growth exponents of the times in the number of variables; `… -- local n k`: the gradients
 //! alone, and with the Hessians, at one point of that chain (`--fastest-only`: without the
-//! pass-per-pair route beside it); `… -- governor [--monte-carlo]
-//! [--no-quadrature]`: the same for the 12-arm governor with 13 and with 37 toleranced
-//! variables; `… -- accuracy n k samples [--reference FILE] [--family F] [--seed S]
-//! [--detail]`: the quadrature's, second order's and first order's mean and σ against a Monte
+//! pass-per-pair route beside it); `… -- governor [--monte-carlo] [--no-quadrature]
+//! [--without-transfer]`: the same for the 12-arm governor with 13 and with 37 toleranced
+//! variables (without its transfer function: ω_d and ζ only); `… -- accuracy n k samples
+//! [--reference FILE] [--family F] [--seed S] [--detail]`: the quadrature's, second order's and first order's mean and σ against a Monte
 //! Carlo of that many samples (inside its 99 % intervals; `--detail`: each row outside), or
 //! against the Monte Carlo rows of a `tolerance.csv` written once by `modaltol analyze`
 //! (`… -- model n k` prints the model file). Judge the share of rows inside on two seeds or
@@ -153,12 +153,18 @@ fn tolerances(args: &[String]) {
     family(&format!("{n}-segment chain"), models, speeds, args);
 }
 
-/// `governor [--monte-carlo] [--no-quadrature]`: the 12-arm governor with 13 toleranced
-/// variables (`examples/multi_arm_governor_13_variables.toml`: the spring and each arm's link
-/// attachment) and with 37 (each arm's ball mass and link length too), 13 speeds over
-/// 0.5–3.5 rad/s.
+/// `governor [--monte-carlo] [--no-quadrature] [--without-transfer]`: the 12-arm governor with
+/// 13 toleranced variables (`examples/multi_arm_governor_13_variables.toml`: the spring and
+/// each arm's link attachment) and with 37 (each arm's ball mass and link length too), 13
+/// speeds over 0.5–3.5 rad/s; with its transfer function (|H| rows) unless
+/// `--without-transfer`.
 fn governor(args: &[String]) {
-    let thirteen = include_str!("multi_arm_governor_13_variables.toml").to_string();
+    let mut thirteen = include_str!("multi_arm_governor_13_variables.toml").to_string();
+    if args.iter().any(|a| a == "--without-transfer") {
+        let line = "transfer = { input = \"slide\", output = \"slide\", order = 1 }\n";
+        assert!(thirteen.contains(line));
+        thirteen = thirteen.replace(line, "");
+    }
     let mut more = thirteen.clone();
     let mut own = String::new();
     let mut tolerances = String::new();

@@ -44,6 +44,8 @@ pub struct Linearization<T: Real> {
     pub m_full: DMatrix<T>,
     pub c_full: DMatrix<T>,
     pub k_full: DMatrix<T>,
+    /// `Φ_R`, constraint equations × free coordinates (`0 × n_R` without constraints).
+    pub phi: DMatrix<T>,
     /// Reduced `M̂`, `Ĉ`, `K̂` (`n_dof × n_dof`).
     pub m: DMatrix<T>,
     pub c: DMatrix<T>,
@@ -64,6 +66,7 @@ impl<T: Real> Linearization<T> {
             m_full: self.m_full.map(f),
             c_full: self.c_full.map(f),
             k_full: self.k_full.map(f),
+            phi: self.phi.map(f),
             m: self.m.map(f),
             c: self.c.map(f),
             k: self.k.map(f),
@@ -90,6 +93,7 @@ impl<T: Real> Linearization<T> {
             m_full: both(&self.m_full, &other.m_full),
             c_full: both(&self.c_full, &other.c_full),
             k_full: both(&self.k_full, &other.k_full),
+            phi: both(&self.phi, &other.phi),
             m: both(&self.m, &other.m),
             c: both(&self.c, &other.c),
             k: both(&self.k, &other.k),
@@ -250,6 +254,7 @@ pub fn reduce<T: Real>(
         m_full,
         c_full,
         k_full,
+        phi: phi_r.clone(),
         ports: Vec::new(),
     })
 }

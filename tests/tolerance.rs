@@ -293,6 +293,9 @@ fn hessians_match_differences_of_the_exact_gradient_on_every_example() {
         ("rotating_pendulum.toml", vec![1.0, 3.0, 5.0]),
         ("governor.toml", vec![0.5, 1.595, 3.0, 4.5]),
         ("spinning_universal_pendulum.toml", vec![0.5, 2.0, 6.0]),
+        // Thirteen variables moving a constrained equilibrium: reverse mode in the augmented
+        // pencil, |H| from its responses.
+        ("multi_arm_governor_13_variables.toml", vec![0.5, 2.5]),
     ] {
         let checked = check_hessians(file, &example(file), &speeds);
         assert!(
@@ -404,6 +407,80 @@ fn reverse_mode_mixed_terms_match_a_pass_per_pair_on_every_coupling() {
         Compiled::from_str(&chain::chain_family(8, 4, Coupling::Moving), "chain.toml").unwrap();
     let checked = check_hessians("moving chain", &moving, &[0.0, 12.0]);
     assert!(checked >= 2 * 8, "only {checked} Hessians compared");
+}
+
+#[test]
+fn reverse_mode_mixed_terms_match_a_pass_per_pair_with_constraint_equations() {
+    // Models with cut joints: the roots' mixed terms by forward over reverse mode taken in the
+    // augmented pencil over the free coordinates and the multipliers (`MixedRoute::Reverse`),
+    // and |H| between two coordinates from the same pencil's responses, against a hyper-dual
+    // pass per pair of the reduced linearisation, entry by entry, with the model's transfer
+    // function and without. The 12-arm governor's arm attachments move its equilibrium and its
+    // multipliers with every variable; the spatial four-bar spins on a loop of spherical and
+    // revolute joints. One degree of freedom each: the invariants come from the roots here.
+    for (file, speeds) in [
+        ("multi_arm_governor_13_variables.toml", vec![0.5, 2.0, 3.5]),
+        ("governor.toml", vec![0.5, 1.595, 3.0]),
+        ("spinning_spatial_fourbar.toml", vec![0.0, 2.0, 6.0]),
+    ] {
+        let model = example(file);
+        let p = model.model().nominal();
+        let vars = model.model().toleranced();
+        let tf = model.model().analysis.transfer.as_ref();
+        assert!(tf.is_some(), "{file}: no transfer function");
+        let q0 = initial_guess(model.model(), &p, speeds[0]).unwrap();
+        let mut compared = 0;
+        let mut coupled = 0;
+        for (&w, with_transfer) in speeds.iter().flat_map(|w| [(w, false), (w, true)]) {
+            let pt = point(&model, &p, w, &q0, &Options::default()).unwrap();
+            assert!(!pt.equilibrium.lambda.is_empty(), "{file}: no constraint");
+            let outs = outputs(pt.modes.len(), with_transfer);
+            let by = |route| {
+                DesignPoint::new(&model, &p, &pt)
+                    .with_model_transfer(tf.filter(|_| with_transfer))
+                    .hessians_by(&vars, &outs, route)
+                    .unwrap()
+            };
+            let (reverse, passes) = (by(MixedRoute::Reverse), by(MixedRoute::Passes));
+            let all = |h: &modaltol::hessian::Hessians| {
+                let gradients = h.gradients.iter().chain(&h.discriminant_gradients);
+                let hessians = h.outputs.iter().chain(&h.discriminant);
+                (
+                    gradients.cloned().collect::<Vec<_>>(),
+                    hessians.cloned().collect::<Vec<_>>(),
+                )
+            };
+            let ((rg, rh), (pg, ph)) = (all(&reverse), all(&passes));
+            for (a, b) in rg.iter().zip(&pg) {
+                assert_eq!(a.is_ok(), b.is_ok(), "{file} Ω = {w}");
+                if let (Ok(a), Ok(b)) = (a, b) {
+                    let scale = b.iter().fold(1e-300f64, |s, x| s.max(x.abs()));
+                    for (x, y) in a.iter().zip(b) {
+                        assert!(
+                            (x - y).abs() <= 1e-10 * scale,
+                            "{file} Ω = {w}: {a:?} vs {b:?}"
+                        );
+                    }
+                }
+            }
+            for (a, b) in rh.iter().zip(&ph) {
+                assert_eq!(a.is_ok(), b.is_ok(), "{file} Ω = {w}");
+                if let (Ok(a), Ok(b)) = (a, b) {
+                    let scale = b.amax().max(1e-300);
+                    assert!(
+                        (a - b).amax() <= 1e-10 * scale,
+                        "{file} Ω = {w}: reverse {a} vs passes {b}"
+                    );
+                    compared += 1;
+                    coupled += usize::from(
+                        (0..b.nrows()).any(|i| (0..i).any(|j| b[(i, j)].abs() > 1e-6 * scale)),
+                    );
+                }
+            }
+        }
+        assert!(compared >= 5 * speeds.len(), "{file}: {compared} compared");
+        assert!(coupled > 0, "{file}: no mixed derivative to compare");
+    }
 }
 
 #[test]

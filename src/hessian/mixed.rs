@@ -3,38 +3,40 @@
 //!
 //! A root's second derivative reads the matrices' mixed derivatives only through `yᵀP_ab x`
 //! (`root.rs`), at the fixed `λ`, `x`, `y`. That is the Hessian of `Ψ(b) = yᵀP(b)x` along the
-//! equilibrium `q(b)`: with `w = (b, q)`, the equilibrium's first moves `d_a = (e_a, q_a)`
-//! (`q_a = −J⁻¹F_a`) and the adjoint `μ̄ = J⁻ᵀΨ_q`,
+//! equilibrium `z(b) = [q_R; λ](b)`: with `w = (b, z)`, the equilibrium's first moves `d_a =
+//! (e_a, z_a)` (`z_a = −J⁻¹F_a`) and the adjoint `μ̄ = J⁻ᵀΨ_z`,
 //!
 //! ```text
 //! Ψ_ab = d_aᵀ ∇²ℒ d_b,   ℒ(w) = Ψ(w) − μ̄ᵀF(w)
 //! ```
 //!
-//! (differentiating `F(w(b)) = 0` twice and eliminating `q_ab`: the second-order adjoint of an
+//! (differentiating `F(w(b)) = 0` twice and eliminating `z_ab`: the second-order adjoint of an
 //! implicit function). [`crate::program::Program::pencil_hessian`] gives `∇²ℒ v` by forward
 //! over reverse mode over the recorded equations, [`crate::program::BATCH`] directions `v` a
 //! sweep, against one hyper-dual pass of the whole linearisation per pair (`p²/2` passes, each
 //! carrying every coordinate's three lanes). The directions are the fewer of two sets:
 //!
 //! * **along each variable**, `v = d_a`: `p` products, `Ψ_ab` read off product `a`;
-//! * **compressed**: splitting `d_a = e_a + Q e_a` (`Q` the moves over the coordinates),
+//! * **compressed**: splitting `d_a = e_a + Q e_a` (`Q` the moves over the unknowns),
 //!   `Ψ = A_pp + A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` in the blocks of `A = ∇²ℒ`. The parameters'
 //!   block `A_pp` (the equilibrium held) is sparse with a pattern read from the recorded
 //!   operations, so its columns are compressed by a colouring (`colouring.rs`: a harmonic-mean
 //!   spring couples two variables, a density factor is a hub of its own, a mass couples with
-//!   nothing); the equilibrium's move takes one unit direction per coordinate it moves
-//!   (`A_qp`, `A_qq`), none where the parameters leave the equilibrium put. So the products
-//!   number `colours + moving coordinates`: 3 instead of 80 on the 40-segment blade with
+//!   nothing); the equilibrium's move takes one unit direction per unknown it moves (`A_qp`,
+//!   `A_qq`), none where the parameters leave the equilibrium put. So the products number
+//!   `colours + moving unknowns`: 3 instead of 80 on the 40-segment blade with
 //!   harmonic-mean springs, 2 with a density factor, 44 instead of 81 with gravity along the
 //!   spin axis as well.
 //!
 //! The pairs then cost `O(p²)` reads, plus `O(p²m)` for the move's blocks (real matrix
-//! products, `m` moving coordinates). Measured: see `examples/scale_chain.rs` and the module
+//! products, `m` moving unknowns). Measured: see `examples/scale_chain.rs` and the module
 //! documentation of [`crate::hessian`].
 //!
-//! Here for models without constraint equations: there `P` is the program's own pencil (the
-//! linearisation's basis is the identity). With constraints the reduced pencil's mixed
-//! derivatives also read the basis's second derivatives, and the pairs keep their passes.
+//! Without constraint equations `P` is the program's own pencil (the linearisation's basis is
+//! the identity). With them, the reduced pencil's mixed derivatives would also read the basis's
+//! second derivatives; the roots are then taken as the augmented pencil's over the free
+//! coordinates and the multipliers (`augmented.rs`), which is the program's own again, and the
+//! multipliers are unknowns of the equilibrium like the coordinates.
 //!
 //! # Reference
 //! Griewank & Walther, *Evaluating Derivatives* (2008), §5.4 and §15.3 (second-order adjoints,
@@ -50,9 +52,9 @@ use crate::program::{BATCH, Contraction};
 use crate::sweep::PointError;
 use nalgebra::{DMatrix, DVector};
 
-/// For each of `roots`, `yᵀP_ab x` for every pair of `vars` (variables × variables), or `None`
-/// where the route does not apply (constraint equations, no recorded program, a singular
-/// Jacobian).
+/// For each of `roots` (the augmented pencil's where the model has constraint equations),
+/// `yᵀP_ab x` for every pair of `vars` (variables × variables), or `None` where the route does
+/// not apply (no recorded program, a singular Jacobian).
 pub(super) fn pencil_pairs(
     x: &Expansion<'_>,
     p: &[f64],
@@ -65,24 +67,30 @@ pub(super) fn pencil_pairs(
     let Some(program) = x.model.program() else {
         return Ok(None);
     };
-    if !eq.lambda.is_empty() {
-        return Ok(None);
-    }
+    // The unknowns of `F`: the free coordinates, then the multipliers.
     let nf = free.len();
+    let nz = nf + eq.lambda.len();
+    let input = |j: usize| {
+        if j < nf {
+            program.coordinate_input(free[j])
+        } else {
+            program.multiplier_input(j - nf)
+        }
+    };
     let nv = vars.len();
     let w = program.input_vector(p, x.pt.speed, &eq.q, &eq.lambda);
-    // The equilibrium's first moves, `q_a = −J⁻¹ F_a`, and the directions `d_a` over the inputs.
+    // The equilibrium's first moves, `z_a = −J⁻¹ F_a`, and the directions `d_a` over the inputs.
     let fp = program.parameter_derivatives(p, x.pt.speed, (&eq.q, &eq.lambda), vars, x.workspace);
     let mut moves = Vec::with_capacity(nv);
     for a in 0..nv {
-        let column: Vec<f64> = (0..nf).map(|r| -fp[r * nv + a]).collect();
+        let column: Vec<f64> = (0..nz).map(|r| -fp[r * nv + a]).collect();
         let Some(z) = x.lu.solve(&column) else {
             return Ok(None);
         };
         moves.push(z);
     }
-    // The coordinates the equilibrium moves along (none where the parameters leave it put).
-    let moving: Vec<usize> = (0..nf)
+    // The unknowns the equilibrium moves along (none where the parameters leave it put).
+    let moving: Vec<usize> = (0..nz)
         .filter(|&j| moves.iter().any(|z| z[j] != 0.0))
         .collect();
     let compressed = colouring.directions + moving.len();
@@ -100,8 +108,8 @@ pub(super) fn pencil_pairs(
         Route::Along => (vars.iter().zip(&moves))
             .map(|(&k, z)| {
                 let mut d = unit(k);
-                for (j, &i) in free.iter().enumerate() {
-                    d[program.coordinate_input(i)] = z[j];
+                for (j, &v) in z.iter().enumerate() {
+                    d[input(j)] = v;
                 }
                 d
             })
@@ -114,11 +122,7 @@ pub(super) fn pencil_pairs(
                 }
                 d
             })
-            .chain(
-                moving
-                    .iter()
-                    .map(|&j| unit(program.coordinate_input(free[j]))),
-            )
+            .chain(moving.iter().map(|&j| unit(input(j))))
             .collect(),
     };
     let Some(transposed) = Some(eq.jacobian.transpose().lu()).filter(|lu| lu.is_invertible())
@@ -126,7 +130,7 @@ pub(super) fn pencil_pairs(
         return Ok(None);
     };
     let solve = |b: &[C64]| -> Option<Vec<C64>> {
-        let part = |f: fn(&C64) -> f64| DVector::from_iterator(nf, b.iter().map(f));
+        let part = |f: fn(&C64) -> f64| DVector::from_iterator(nz, b.iter().map(f));
         let (re, im) = (
             transposed.solve(&part(|z| z.re))?,
             transposed.solve(&part(|z| z.im))?,
@@ -146,21 +150,18 @@ pub(super) fn pencil_pairs(
             left: root.left.iter().copied().collect(),
         };
         let gradient = program.pencil_gradient(&w, &c);
-        let psi_q: Vec<C64> = free
-            .iter()
-            .map(|&i| gradient[program.coordinate_input(i)])
-            .collect();
-        let Some(mu) = solve(&psi_q) else {
+        let psi_z: Vec<C64> = (0..nz).map(|j| gradient[input(j)]).collect();
+        let Some(mu) = solve(&psi_z) else {
             return Ok(None);
         };
         let products = program.pencil_hessian(&w, &c, &mu, &directions);
         out.push(match &route {
             Route::Along => DMatrix::from_fn(nv, nv, |a, b| {
                 let g = &products[a];
-                let along_q: C64 = (free.iter().zip(&moves[b]))
-                    .map(|(&i, &z)| g[program.coordinate_input(i)] * z)
+                let along_z: C64 = (moves[b].iter().enumerate())
+                    .map(|(j, &z)| g[input(j)] * z)
                     .sum();
-                g[vars[b]] + along_q
+                g[vars[b]] + along_z
             }),
             Route::Compressed { colouring, moving } => {
                 let own = DMatrix::from_fn(nv, nv, |a, b| {
@@ -171,10 +172,7 @@ pub(super) fn pencil_pairs(
                 if moving.is_empty() {
                     own
                 } else {
-                    let coordinates: Vec<usize> = moving
-                        .iter()
-                        .map(|&j| program.coordinate_input(free[j]))
-                        .collect();
+                    let coordinates: Vec<usize> = moving.iter().map(|&j| input(j)).collect();
                     let along = &products[colouring.directions..];
                     own + through_equilibrium(along, (vars, &coordinates), &moves, moving)
                 }
@@ -189,7 +187,7 @@ enum Route {
     /// The equilibrium's first move along each variable, `d_a = (e_a, q_a)`: `p` products.
     Along,
     /// The parameters' block by colours (`colouring.rs`), and a unit direction along each
-    /// coordinate the equilibrium moves along (`moving`, indices into the free coordinates):
+    /// unknown the equilibrium moves along (`moving`, indices into `[q_R; λ]`):
     /// `Ψ_ab = A_pp + A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` with `Q` the moves.
     Compressed {
         colouring: Colouring,
@@ -198,9 +196,9 @@ enum Route {
 }
 
 /// `A_pq Q + Qᵀ A_qp + Qᵀ A_qq Q` (variables × variables) from the products `along` the moving
-/// coordinates (their entries at the variables' inputs `vars` and the coordinates' inputs
-/// `coordinates`), `moves[a]` the equilibrium's move along variable `a` over the free
-/// coordinates, `moving` the coordinates it moves: `X + Xᵀ` with `X = Qᵀ(A_qp + ½ A_qq Q)`,
+/// unknowns (their entries at the variables' inputs `vars` and the unknowns' inputs
+/// `coordinates`), `moves[a]` the equilibrium's move along variable `a` over the unknowns
+/// `[q_R; λ]`, `moving` the unknowns it moves: `X + Xᵀ` with `X = Qᵀ(A_qp + ½ A_qq Q)`,
 /// in real arithmetic part by part (the moves are real).
 fn through_equilibrium(
     along: &[Vec<C64>],

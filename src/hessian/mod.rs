@@ -22,9 +22,9 @@
 //!    own passes unscreened, and up to five variables skip the rows' passes.)
 //!
 //!    Where the coupled pairs are many (a spring the harmonic mean of two segments' stiffness,
-//!    one density in every segment, an equilibrium that moves with every variable) and the
-//!    model has no constraint equations, the roots' mixed terms come from reverse mode instead
-//!    (`mixed.rs`): per root, forward-over-reverse sweeps of the recorded equations give
+//!    one density in every segment, an equilibrium that moves with every variable, arms that
+//!    each move a governor's equilibrium), the roots' mixed terms come from reverse mode
+//!    instead (`mixed.rs`): per root, forward-over-reverse sweeps of the recorded equations give
 //!    `yᵀP_ab x` for every pair, the equilibrium's second-order move eliminated by one adjoint
 //!    solve, [`crate::program::BATCH`] Hessian-vector products a sweep. The products are the
 //!    fewer of `p` (along each variable's equilibrium move) and the **compressed** set: the
@@ -41,6 +41,17 @@
 //!    program was chosen over vector hyper-dual lanes, which would still carry `p²` mixed
 //!    parts through every coordinate's three lanes; the colouring is applied to the parameters'
 //!    block only, because a moving equilibrium couples every pair through the coordinates.
+//!    With constraint equations the roots are then taken as the augmented pencil's over the
+//!    free coordinates and the multipliers (`augmented.rs`): the recorded equations' own
+//!    pencil, whose mixed derivatives need no second derivative of the reduced basis. `H(jω)`
+//!    between two free coordinates comes from the same pencil's responses (`transfer.rs`:
+//!    its `vᵀP_ab u` is one more contraction beside the roots'); between ports it keeps a
+//!    pass per coupled pair, because the ports' vectors' second derivatives are not in the
+//!    recorded program. One degree of freedom's invariants come from the roots on this route
+//!    where the roots lie apart (`ROOTS_APART`), from the matrices otherwise. The 12-arm
+//!    governor with 37 variables (`scale_chain governor`, 13 speeds, best of 3): 0.05 s for
+//!    its second-order stage against 0.87 s by a pass per coupled pair; the spinning spatial
+//!    four-bar's Hessians 0.37 → 0.18 s.
 //! 3. **Roots** (`root.rs`): each simple root's bordered eigen-equations are
 //!    factorised once; the root's first and second derivatives follow in closed form from the
 //!    matrices' derivatives, one solve per variable and `O(n)` per pair.
@@ -60,14 +71,16 @@
 //! differentiation*, ACM TOMS 34 (2008), for exploiting the pairs that vanish; Schwartz, *Fast
 //! probabilistic algorithms for verification of polynomial identities*, J. ACM 27 (1980).
 
+mod augmented;
 mod colouring;
 mod mixed;
 mod root;
+mod transfer;
 
 use crate::compiled::Compiled;
 use crate::dual4::Dual4;
 use crate::equilibrium::Factor;
-use crate::frf::transfer;
+use crate::frf::{self, transfer};
 use crate::implicit;
 use crate::jet::Jet;
 use crate::linearize::Linearization;
@@ -81,10 +94,16 @@ use crate::sweep::{Point, PointError};
 use colouring::Colouring;
 use nalgebra::{Complex, DMatrix};
 use num_dual::{Dual2_64, HyperDual64};
-use root::{Along, RootTerms};
+use root::{Along, RootTerms, Triple};
 
 /// Scalar of the mixed (pair) passes.
 type Hd = HyperDual64;
+
+/// How far apart (relative to their size) a single degree of freedom's two roots must lie for
+/// its invariants to be taken from them rather than from the matrices: the roots' second
+/// derivatives carry rounding amplified by about the inverse square of their gap, so 1e-2
+/// keeps it under 1e-12 relative.
+const ROOTS_APART: f64 = 1e-2;
 
 /// The cost of a reverse sweep of [`mixed`] in lanes of a pair's pass (a pass carries three
 /// lanes a free coordinate): measured on the 40-segment blade (120 lanes), a sweep of eight
@@ -131,14 +150,15 @@ type AlongOne = ([DMatrix<f64>; 3], Option<[DMatrix<f64>; 3]>);
 
 impl Expansion<'_> {
     /// Per variable of `vars`: the matrices' first and second derivatives along it (first
-    /// only where `second` is false: then four variables a `Dual4` pass), and the whole
+    /// only where `second` is false: then four variables a `Dual4` pass), the augmented
+    /// pencil's where `augmented` (`augmented.rs`), the reduced one's otherwise; and the whole
     /// linearisation where more than the roots reads it (`whole`; kept only then: at 160
     /// variables of an 80-segment chain the linearisations would be most of the memory).
     fn along_each(
         &self,
         p: &[f64],
         vars: &[usize],
-        (second, whole): (bool, bool),
+        (second, whole, augmented): (bool, bool, bool),
     ) -> Result<(Vec<AlongOne>, Vec<Linearization<Dual2_64>>), PointError> {
         let mut singles = Vec::new();
         let mut derivatives = Vec::with_capacity(vars.len());
@@ -148,7 +168,7 @@ impl Expansion<'_> {
                     f64::from(u8::from(b == start + k))
                 }))?;
                 for k in 0..4.min(vars.len() - start) {
-                    derivatives.push(([part(&s.m, k), part(&s.c, k), part(&s.k, k)], None));
+                    derivatives.push((pencil_part(&s, k, augmented), None));
                 }
             }
             return Ok((derivatives, singles));
@@ -158,8 +178,8 @@ impl Expansion<'_> {
                 f64::from(u8::from(a == b && k == 0))
             }))?;
             derivatives.push((
-                [part(&s.m, 0), part(&s.c, 0), part(&s.k, 0)],
-                Some([part(&s.m, 1), part(&s.c, 1), part(&s.k, 1)]),
+                pencil_part(&s, 0, augmented),
+                Some(pencil_part(&s, 1, augmented)),
             ));
             if whole {
                 singles.push(s);
@@ -250,6 +270,17 @@ fn part<J: Jet>(a: &DMatrix<J>, k: usize) -> DMatrix<f64> {
     a.map(|v| v.part(k))
 }
 
+/// Part `k` of the pencil's matrices `(M, C, K)`: the augmented pencil's where `augmented`,
+/// the reduced one's otherwise.
+fn pencil_part<J: Jet>(lin: &Linearization<J>, k: usize, augmented: bool) -> [DMatrix<f64>; 3] {
+    if augmented {
+        let [m, c, kk] = [&lin.m_full, &lin.c_full, &lin.k_full].map(|a| part(a, k));
+        augmented::matrices([&m, &c, &kk], &part(&lin.phi, k))
+    } else {
+        [part(&lin.m, k), part(&lin.c, k), part(&lin.k, k)]
+    }
+}
+
 /// Which variables have mixed second derivatives of the matrices with some other variable
 /// (step 2 of the module documentation): none where the pass along `w` has no second part.
 fn rows_with_mixed_terms(
@@ -302,18 +333,20 @@ type PencilPairs = Vec<DMatrix<C64>>;
 
 impl Expansion<'_> {
     /// Which variables' pairs get passes of their own, and each wanted root's mixed terms by
-    /// reverse mode where `route` and the costs choose it ([`mixed`]; the rows' screening is
-    /// left out where reverse mode clearly costs less than the pairs).
+    /// reverse mode where `route` and the costs choose it and `possible` allows it ([`mixed`];
+    /// the rows' screening is left out where reverse mode clearly costs less than the pairs).
     fn mixed_route(
         &self,
         p: &[f64],
         vars: &[usize],
-        (route, whole): (MixedRoute, bool),
-        wanted: &[&Root],
+        (route, possible): (MixedRoute, bool),
+        wanted: Option<&[&Root]>,
     ) -> Result<(Vec<bool>, Option<PencilPairs>), PointError> {
         let (pt, nv) = (self.pt, vars.len());
-        // Reverse mode applies to a recorded program without constraint equations.
-        let applies = !whole && pt.equilibrium.lambda.is_empty() && self.model.program().is_some();
+        // Reverse mode applies to a recorded program, with the roots as its pencil's (`wanted`).
+        let applies = possible && wanted.is_some() && self.model.program().is_some();
+        let wanted = wanted.unwrap_or_default();
+        let unknowns = pt.linear.free.len() + pt.equilibrium.lambda.len();
         // The parameters' own block coloured by its pattern (the products it needs, besides
         // one per coordinate the equilibrium moves along at most).
         let program = (self.model.program()).filter(|_| applies && route != MixedRoute::Passes);
@@ -323,7 +356,7 @@ impl Expansion<'_> {
         });
         let directions = colouring
             .as_ref()
-            .map_or(nv, |c| nv.min(c.directions + pt.linear.free.len()));
+            .map_or(nv, |c| nv.min(c.directions + unknowns));
         let reverse = match route {
             _ if !applies => None,
             MixedRoute::Fastest => {
@@ -350,12 +383,14 @@ impl Expansion<'_> {
     }
 }
 
-/// The cost of the roots' mixed terms by reverse mode in pair passes: a sweep per root and
-/// [`crate::program::BATCH`] of the `directions` products, a sweep costing [`SWEEP_LANES`]
-/// lanes of a pass.
+/// The cost of the roots' mixed terms by reverse mode in pair passes: per root a gradient
+/// sweep and a sweep per [`crate::program::BATCH`] of the `directions` products, a sweep
+/// costing [`SWEEP_LANES`] lanes of a pass; and a pass for the equilibrium's moves. (Without
+/// the gradient and the moves, a governor's three coupled pairs went to reverse mode at 1.4
+/// times their cost.)
 fn reverse_cost(roots: usize, directions: usize, nf: usize) -> f64 {
     let sweep = (SWEEP_LANES / (3 * nf.max(1)) as f64).min(1.0);
-    (roots * directions.div_ceil(crate::program::BATCH)) as f64 * sweep
+    (roots * (directions.div_ceil(crate::program::BATCH) + 1)) as f64 * sweep + 1.0
 }
 
 /// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
@@ -389,16 +424,17 @@ fn wanted_roots<'p>(pt: &'p Point, smooth: &[Smoothness]) -> (Vec<&'p Root>, Vec
     (wanted, conjugate)
 }
 
-/// The roots' terms of every simple mode, or why the mode's roots have none; `pairs`, where
-/// given, each wanted root's `yᵀP_ab x` for every pair ([`mixed::pencil_pairs`]).
+/// The roots' terms of every simple mode, or why the mode's roots have none, in the pencil
+/// `nominal` whose roots `wanted` are (the reduced one, or the augmented one: `augmented.rs`);
+/// `pairs`, where given, each wanted root's `yᵀP_ab x` for every pair
+/// ([`mixed::pencil_pairs`]).
 fn root_terms(
-    (pt, smooth): (&Point, &[Smoothness]),
-    along: &[Along<'_>],
+    smooth: &[Smoothness],
+    (nominal, along): (Triple<'_>, &[Along<'_>]),
     (wanted, conjugate): (&[&Root], Vec<bool>),
     pairs: Option<PencilPairs>,
 ) -> Vec<Result<(RootTerms, Partner), Missing>> {
-    let lin = &pt.linear;
-    let mut terms = RootTerms::all(wanted, (&lin.m, &lin.c, &lin.k), along, pairs).into_iter();
+    let mut terms = RootTerms::all(wanted, nominal, along, pairs).into_iter();
     smooth
         .iter()
         .zip(conjugate)
@@ -420,6 +456,34 @@ fn root_terms(
         .collect()
 }
 
+/// `H` over jets, or why it has none.
+type TransferJet<J> = Result<frf::Complex<J>, Missing>;
+
+/// `H` as a jet where a transfer function is asked for: from its value and the parts
+/// `parts(terms)` where reverse mode gave its terms (`transfer.rs`), from the linearisation
+/// over the same jets otherwise.
+fn transfer_jet<J: Jet>(
+    tf: Option<TransferAt>,
+    lin: Option<&Linearization<J>>,
+    terms: Option<&(frf::Complex<f64>, Result<transfer::TransferTerms, Missing>)>,
+    parts: impl Fn(&transfer::TransferTerms) -> Vec<C64>,
+) -> Option<TransferJet<J>> {
+    let t = tf?;
+    match (terms, lin) {
+        (Some((h, terms)), _) => Some(terms.as_ref().map_err(Clone::clone).map(|terms| {
+            let p = parts(terms);
+            frf::Complex {
+                re: J::seeded(h.re, |k| p[k].re),
+                im: J::seeded(h.im, |k| p[k].im),
+            }
+        })),
+        (None, Some(lin)) => {
+            Some(transfer(lin, t.input, t.output, t.omega).ok_or(Missing::TransferUnbounded))
+        }
+        (None, None) => None,
+    }
+}
+
 /// One root as a complex jet from its value and parts.
 fn complex_jet<J: Jet>(l: C64, parts: &[C64]) -> Complex<J> {
     Complex::new(
@@ -429,12 +493,13 @@ fn complex_jet<J: Jet>(l: C64, parts: &[C64]) -> Complex<J> {
 }
 
 /// The outputs `outs` and each mode's discriminant as jets, from the modes' roots as jets
-/// (`roots(i)`, or why not) and, where a transfer function is asked for or the model has one
-/// degree of freedom, the linearisation over the same jets.
+/// (`roots(i)`, or why not), `H` over the same jets where a transfer function is asked for,
+/// and, where the model has one degree of freedom and its invariants are taken from the
+/// matrices, the linearisation over the same jets.
 fn outputs_at<J: Jet>(
     pt: &Point,
-    (smooth, outs, tf): (&[Smoothness], &[Output], Option<TransferAt>),
-    lin: Option<&Linearization<J>>,
+    (smooth, outs): (&[Smoothness], &[Output]),
+    (lin, h): (Option<&Linearization<J>>, Option<TransferJet<J>>),
     roots: impl Fn(usize) -> Result<(Complex<J>, Complex<J>), Missing>,
 ) -> Jets<J> {
     let one_dof = pt.linear.m.nrows() == 1;
@@ -483,8 +548,8 @@ fn outputs_at<J: Jet>(
         .collect();
     // |H| is not differentiable where H passes through zero, unless H vanishes identically
     // to this order (a transfer that symmetry makes zero): then |H| ≡ 0.
-    let h = tf.zip(lin).map(|(t, lin)| {
-        let h = transfer(lin, t.input, t.output, t.omega).ok_or(Missing::TransferUnbounded)?;
+    let h = h.map(|h| {
+        let h = h?;
         let zero = [h.re, h.im]
             .iter()
             .all(|v| v.re() == 0.0 && (0..J::PARTS).all(|k| v.part(k) == 0.0));
@@ -600,6 +665,7 @@ impl DesignPoint<'_> {
         let workspace: &Workspace = &lent;
         let nv = vars.len();
         let nm = pt.modes.len();
+        let nf = pt.linear.free.len();
         // Newton's Jacobian, factorised once for every pass (balanced: a model's scale does not
         // cost the chord steps accuracy); the caller's workspace for every pass.
         let x = Expansion {
@@ -609,15 +675,71 @@ impl DesignPoint<'_> {
             workspace,
         };
         let smooth = smoothness(&pt.modes);
-        let shared = (smooth.as_slice(), outs, tf);
-        // The linearisation over jets is needed beyond the roots for |H| and for one degree of
-        // freedom's invariants.
-        let whole = tf.is_some() || pt.linear.m.nrows() == 1;
+        let shared = (smooth.as_slice(), outs);
+        let lin = &pt.linear;
         let (wanted, conjugate) = wanted_roots(pt, &smooth);
-        let (mixed_rows, pairs) = x.mixed_route(p, vars, (route, whole), &wanted)?;
+        // Reverse mode can pay only where the pairs outnumber its least cost (one batch of
+        // products a root, a transfer function's responses counted as a root).
+        let worth = match route {
+            MixedRoute::Passes => false,
+            MixedRoute::Reverse => true,
+            MixedRoute::Fastest => {
+                let least = reverse_cost(wanted.len() + usize::from(tf.is_some()), 1, nf);
+                (nv * nv.saturating_sub(1) / 2) as f64 > least
+            }
+        };
+        // The pencil reverse mode contracts: the linearisation's own, or with constraint
+        // equations the augmented one over the free coordinates and the multipliers, whose
+        // roots' vectors extend the reduced ones' (`augmented.rs`).
+        let constrained = !pt.equilibrium.lambda.is_empty();
+        let program_nominal = (constrained && worth).then(|| augmented::nominal(lin));
+        let nominal: Triple<'_> = match &program_nominal {
+            Some([m, c, k]) => (m, c, k),
+            None => (&lin.m, &lin.c, &lin.k),
+        };
+        // |H| between two free coordinates by reverse mode as well (`transfer.rs`), where it is
+        // finite.
+        let value = tf
+            .filter(|_| worth)
+            .and_then(|t| transfer(lin, t.input, t.output, t.omega));
+        let responses = (tf.zip(value)).and_then(|(t, _)| {
+            transfer::Responses::new(nominal, &lin.free, (t.input, t.output), t.omega)
+        });
+        // The linearisation over jets is needed beyond the roots for a transfer between ports,
+        // and for one degree of freedom's invariants unless its roots lie well apart (where
+        // they coalesce, the invariants straight from the matrices are smooth and the roots
+        // are not); otherwise reverse mode may give the mixed terms.
+        let one_dof = lin.m.nrows() == 1;
+        let apart = smooth.iter().all(|&s| s == Smoothness::Simple)
+            && (pt.modes.iter()).all(|md| {
+                (md.root.lambda - md.partner.lambda).norm() >= ROOTS_APART * md.root.lambda.norm()
+            });
+        let reverse_possible =
+            worth && (tf.is_none() || responses.is_some()) && (!one_dof || apart);
+        let extended = (constrained && reverse_possible)
+            .then(|| augmented::roots(lin, &wanted))
+            .flatten();
+        let extended: Option<Vec<&Root>> = extended.as_ref().map(|r| r.iter().collect());
+        let mut program_roots = if constrained {
+            extended.clone()
+        } else {
+            Some(wanted.clone())
+        };
+        if let (Some(roots), Some(responses)) = (program_roots.as_mut(), &responses) {
+            roots.push(&responses.root);
+        }
+        let (mixed_rows, mut pairs) =
+            x.mixed_route(p, vars, (route, reverse_possible), program_roots.as_deref())?;
+        let transfer_pairs = pairs
+            .as_mut()
+            .and_then(|pairs| responses.as_ref().and_then(|_| pairs.pop()));
+        let whole = (tf.is_some() || one_dof) && pairs.is_none();
         // Where reverse mode gave every root's `yᵀP_ab x`, the diagonal too: the passes along
-        // each variable then need first derivatives only.
-        let (derivatives, singles) = x.along_each(p, vars, (pairs.is_none() || whole, whole))?;
+        // each variable then need first derivatives only, and the roots are taken in the
+        // pencil reverse mode contracted.
+        let augmented = constrained && pairs.is_some();
+        let (derivatives, singles) =
+            x.along_each(p, vars, (pairs.is_none() || whole, whole, augmented))?;
         let along: Vec<Along<'_>> = derivatives
             .iter()
             .map(|(d, s)| {
@@ -627,7 +749,16 @@ impl DesignPoint<'_> {
                 )
             })
             .collect();
-        let roots = root_terms((pt, &smooth), &along, (&wanted, conjugate), pairs);
+        let (nominal, roots_in): (Triple<'_>, &[&Root]) = match &extended {
+            Some(extended) if augmented => (nominal, extended),
+            _ => ((&lin.m, &lin.c, &lin.k), &wanted),
+        };
+        let transfer_terms =
+            (responses.as_ref().zip(transfer_pairs).zip(value)).map(|((responses, pairs), h)| {
+                let terms = responses.terms(&along, pairs);
+                (h, terms.ok_or(Missing::TransferUnbounded))
+            });
+        let roots = root_terms(&smooth, (nominal, &along), (roots_in, conjugate), pairs);
         let Hessians {
             gradients: mut grad,
             outputs: mut hess,
@@ -636,7 +767,11 @@ impl DesignPoint<'_> {
         } = Hessians::zeros(nv, outs.len(), nm);
         let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| pair(&roots[i], parts);
         for a in 0..nv {
-            let (o, d) = outputs_at::<Dual2_64>(pt, shared, whole.then(|| &singles[a]), |i| {
+            let single = whole.then(|| &singles[a]);
+            let h = transfer_jet(tf, single, transfer_terms.as_ref(), |t| {
+                vec![t.first[a], t.second[(a, a)]]
+            });
+            let (o, d) = outputs_at::<Dual2_64>(pt, shared, (single, h), |i| {
                 pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
                     .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
             });
@@ -668,7 +803,10 @@ impl DesignPoint<'_> {
                         None => joined,
                     }
                 });
-                let (o, d) = outputs_at::<Hd>(pt, shared, lin.as_ref(), |i| {
+                let h = transfer_jet(tf, lin.as_ref(), transfer_terms.as_ref(), |t| {
+                    vec![t.first[a], t.first[b], t.second[(a, b)]]
+                });
+                let (o, d) = outputs_at::<Hd>(pt, shared, (lin.as_ref(), h), |i| {
                     pair_of(i, &|t| {
                         vec![t.first[a], t.first[b], t.mixed((a, b), second)]
                     })
