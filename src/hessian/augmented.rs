@@ -24,6 +24,7 @@
 //! constrained problem and its augmented form); Andrew & Tan, SIAM J. Matrix Anal. Appl. 20
 //! (1998), for the bordered equations of a pencil's simple root.
 
+use super::root::{complex, pencil_matrix};
 use crate::linearize::Linearization;
 use crate::modal::{C64, Root};
 use nalgebra::{DMatrix, DVector};
@@ -53,12 +54,6 @@ pub fn nominal(lin: &Linearization<f64>) -> [DMatrix<f64>; 3] {
 /// Each of `roots` (of `lin`'s reduced pencil) with its right and left vectors extended to the
 /// augmented pencil's (see the module documentation); `None` where `Φ_R Φ_Rᵀ` is singular.
 pub fn roots(lin: &Linearization<f64>, roots: &[&Root]) -> Option<Vec<Root>> {
-    let complex = |a: &DMatrix<f64>| a.map(|v| C64::new(v, 0.0));
-    let (m, c, k) = (
-        complex(&lin.m_full),
-        complex(&lin.c_full),
-        complex(&lin.k_full),
-    );
     let (basis, phi) = (complex(&lin.basis), complex(&lin.phi));
     let gram = (&phi * phi.transpose()).lu();
     if !gram.is_invertible() {
@@ -76,7 +71,7 @@ pub fn roots(lin: &Linearization<f64>, roots: &[&Root]) -> Option<Vec<Root>> {
         .iter()
         .map(|root| {
             let l = root.lambda;
-            let pencil = &m * (l * l) + &c * l + &k;
+            let pencil = pencil_matrix(l, (&lin.m_full, &lin.c_full, &lin.k_full));
             let (x, y) = (&basis * &root.right, &basis * &root.left);
             let px = &pencil * &x;
             let pty = pencil.transpose() * &y;

@@ -42,6 +42,16 @@ fn pencil(l: C64, (m, c, k): Triple<'_>, v: &DVector<C64>) -> DVector<C64> {
     times(m, v) * (l * l) + times(c, v) * l + times(k, v)
 }
 
+/// A real matrix as a complex one.
+pub(super) fn complex(a: &DMatrix<f64>) -> DMatrix<C64> {
+    a.map(|v| C64::new(v, 0.0))
+}
+
+/// The pencil `P(λ) = λ²M + λC + K` of the matrices `(m, c, k)`.
+pub(super) fn pencil_matrix(l: C64, (m, c, k): Triple<'_>) -> DMatrix<C64> {
+    complex(m) * (l * l) + complex(c) * l + complex(k)
+}
+
 /// `yᵀ v` without conjugation.
 fn dot(y: &DVector<C64>, v: &DVector<C64>) -> C64 {
     y.iter().zip(v.iter()).map(|(a, b)| a * b).sum()
@@ -98,8 +108,7 @@ impl Partial {
     fn new(root: &Root, (m, c, k): Triple<'_>, nv: usize) -> Option<Partial> {
         let n = m.nrows();
         let (l, x, y) = (root.lambda, &root.right, &root.left);
-        let cm = |a: &DMatrix<f64>| a.map(|v| C64::new(v, 0.0));
-        let (mc, cc, kc) = (cm(m), cm(c), cm(k));
+        let (mc, cc, kc) = (complex(m), complex(c), complex(k));
         let p0 = &mc * (l * l) + &cc * l + &kc;
         let dp = &mc * (l * 2.0) + &cc;
         let dpx = &dp * x;

@@ -22,7 +22,7 @@
 //! Adelman & Haftka, *Sensitivity analysis of discrete structural systems*, AIAA J. 24 (1986),
 //! for the adjoint response.
 
-use super::root::{Along, Triple};
+use super::root::{Along, Triple, pencil_matrix};
 use crate::modal::{C64, Root};
 use crate::model::Channel;
 use nalgebra::{DMatrix, DVector, Dyn, LU};
@@ -35,14 +35,9 @@ pub struct Responses {
     pub root: Root,
 }
 
-/// `a` as a complex matrix.
-fn complex(a: &DMatrix<f64>) -> DMatrix<C64> {
-    a.map(|v| C64::new(v, 0.0))
-}
-
 /// `P(jω) = K − ω²M + jωC` of the matrices `(m, c, k)`.
-fn dynamic((m, c, k): Triple<'_>, omega: f64) -> DMatrix<C64> {
-    complex(k) - complex(m) * C64::new(omega * omega, 0.0) + complex(c) * C64::new(0.0, omega)
+fn dynamic(triple: Triple<'_>, omega: f64) -> DMatrix<C64> {
+    pencil_matrix(C64::new(0.0, omega), triple)
 }
 
 impl Responses {
