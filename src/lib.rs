@@ -9,7 +9,7 @@
 //! 1. Foundations: [`real`] (the scalar trait the mechanics is generic over), [`linalg`],
 //!    [`schur`], [`rigid`], [`dual4`], [`jet`] (Taylor numbers part by part), [`implicit`] (the
 //!    derivatives of an implicit solution), [`settings`], [`threads`], [`cancel`], [`files`].
-//! 2. Element types: [`joints`], [`cuts`], [`forces`], and the [`requirements`] a design
+//! 2. Element types: [`joints`], [`cuts`], [`forces`], [`beams`], and the [`requirements`] a design
 //!    must meet (each kind one file plus one list, declared by [`kinds`]).
 //! 3. [`model`]: the file format, validated once into a [`model::Model`].
 //! 4. [`mechanics`]: kinematics, equations of motion and constraints over any [`real::Real`].
@@ -54,6 +54,7 @@
 
 pub mod allocate;
 pub mod analyze;
+pub mod beams;
 pub mod cancel;
 pub mod compiled;
 pub mod cuts;

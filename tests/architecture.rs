@@ -16,7 +16,7 @@ const LAYERS: &[(&[&str], bool)] = &[
         ],
         true,
     ),
-    (&["joints", "cuts", "forces", "requirements"], true),
+    (&["joints", "cuts", "forces", "beams", "requirements"], true),
     (&["model"], false),
     (&["mechanics"], false),
     (&["linearize"], false),

@@ -5,6 +5,9 @@
 //! published Friswell Example 5.9.1 rotor (ROSS's `rotor_example1`). Once the element exists,
 //! its linearisation is compared with these assemblies matrix by matrix and root by root.
 
+mod common;
+
+use common::timoshenko::{self, Plane, whirl};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -26,70 +29,18 @@ impl Section {
     fn inertia(&self) -> f64 {
         PI * self.d.powi(4) / 64.0
     }
-    /// `φ = 12EI/(κGAL²)`; zero for Euler–Bernoulli (`kappa` infinite).
-    fn phi(&self, l: f64) -> f64 {
-        if self.kappa.is_infinite() {
-            0.0
-        } else {
-            12.0 * self.e * self.inertia() / (self.kappa * self.g * self.area() * l * l)
-        }
-    }
 }
 
 /// One element's stiffness, consistent mass (translational plus rotary, the rotary part only
 /// where `rotary`) and gyroscopic matrix (`I_p = 2I`), dofs `(v₁, θ₁, v₂, θ₂)`.
 fn element(s: Section, l: f64, rotary: bool) -> [DMatrix<f64>; 3] {
-    let p = s.phi(l);
-    let sym = |a: [[f64; 4]; 4], f: f64| DMatrix::from_fn(4, 4, |i, j| f * a[i][j]);
-    let k = sym(
-        [
-            [12.0, 6.0 * l, -12.0, 6.0 * l],
-            [6.0 * l, (4.0 + p) * l * l, -6.0 * l, (2.0 - p) * l * l],
-            [-12.0, -6.0 * l, 12.0, -6.0 * l],
-            [6.0 * l, (2.0 - p) * l * l, -6.0 * l, (4.0 + p) * l * l],
-        ],
-        s.e * s.inertia() / (l.powi(3) * (1.0 + p)),
-    );
-    let (m1, m2, m3) = (
-        312.0 + 588.0 * p + 280.0 * p * p,
-        (44.0 + 77.0 * p + 35.0 * p * p) * l,
-        108.0 + 252.0 * p + 140.0 * p * p,
-    );
-    let (m4, m5, m6) = (
-        (26.0 + 63.0 * p + 35.0 * p * p) * l,
-        (8.0 + 14.0 * p + 7.0 * p * p) * l * l,
-        (6.0 + 14.0 * p + 7.0 * p * p) * l * l,
-    );
-    let translational = sym(
-        [
-            [m1, m2, m3, -m4],
-            [m2, m5, m4, -m6],
-            [m3, m4, m1, -m2],
-            [-m4, -m6, -m2, m5],
-        ],
-        s.rho * s.area() * l / (840.0 * (1.0 + p).powi(2)),
-    );
-    let (r2, r3, r4) = (
-        (3.0 - 15.0 * p) * l,
-        (4.0 + 5.0 * p + 10.0 * p * p) * l * l,
-        (-1.0 - 5.0 * p + 5.0 * p * p) * l * l,
-    );
-    let rotary_mass = sym(
-        [
-            [36.0, r2, -36.0, r2],
-            [r2, r3, -r2, r4],
-            [-36.0, -r2, 36.0, -r2],
-            [r2, r4, -r2, r3],
-        ],
-        s.rho * s.inertia() / (30.0 * l * (1.0 + p).powi(2)),
-    );
-    let gyroscopic = &rotary_mass * 2.0;
-    let mass = if rotary {
-        translational + rotary_mass
-    } else {
-        translational
+    let plane = Plane {
+        ei: s.e * s.inertia(),
+        ga: s.kappa * s.g * s.area(),
+        rho_a: s.rho * s.area(),
+        rho_i: s.rho * s.inertia(),
     };
-    [k, mass, gyroscopic]
+    timoshenko::plane(plane, l, rotary)
 }
 
 /// A uniform beam of `n` elements of length `l` over `2(n + 1)` dofs: `[K, M, G]`.
@@ -112,44 +63,6 @@ fn restrain(mats: [DMatrix<f64>; 3], fixed: &[usize]) -> [DMatrix<f64>; 3] {
         .filter(|i| !fixed.contains(i))
         .collect();
     mats.map(|a| DMatrix::from_fn(keep.len(), keep.len(), |i, j| a[(keep[i], keep[j])]))
-}
-
-/// The whirl frequencies `ω > 0` of `(K − ω²M + sΩωG) φ = 0` (`s = +1` forward, `−1`
-/// backward), ascending: estimated by the eigenvalues of `[0 I; M⁻¹K M⁻¹(sΩG)]`, then each
-/// refined by Newton's method on the eigenvalue of the symmetric `D(ω) = K − ω²M + sΩωG`
-/// nearest zero (`μ' = φᵀD'(ω)φ`), which the companion form's spread of scales would leave
-/// inaccurate for the low modes.
-fn whirl([k, m, g]: &[DMatrix<f64>; 3], spin: f64) -> Vec<f64> {
-    let n = k.nrows();
-    let minv = m.clone().try_inverse().unwrap();
-    let mut a = DMatrix::zeros(2 * n, 2 * n);
-    a.view_mut((0, n), (n, n))
-        .copy_from(&DMatrix::identity(n, n));
-    a.view_mut((n, 0), (n, n)).copy_from(&(&minv * k));
-    a.view_mut((n, n), (n, n)).copy_from(&(&minv * g * spin));
-    let refine = |mut w: f64| {
-        for _ in 0..50 {
-            let d = k - m * (w * w) + g * (spin * w);
-            let eig = d.symmetric_eigen();
-            let j = eig.eigenvalues.iamin();
-            let phi = eig.eigenvectors.column(j);
-            let slope = phi.dot(&((m * (-2.0 * w) + g * spin) * phi));
-            let step = eig.eigenvalues[j] / slope;
-            w -= step;
-            if step.abs() <= 1e-15 * w.abs() {
-                break;
-            }
-        }
-        w
-    };
-    let mut w: Vec<f64> = a
-        .complex_eigenvalues()
-        .iter()
-        .filter(|z| z.im.abs() <= 1e-6 * z.norm() && z.re > 0.0)
-        .map(|z| refine(z.re))
-        .collect();
-    w.sort_by(f64::total_cmp);
-    w
 }
 
 /// `|a − b| ≤ tol·|b|`.

@@ -723,14 +723,24 @@ fn both_routes_answer_every_method_of_the_equations_alike_over_dual_numbers() {
             let (ca, cd) = (a.constraint_jacobian(&ql), d.constraint_jacobian(&ql));
             same(name, "Φ_R", &re(ca.as_slice()), &re(cd.as_slice()));
             same(name, "∂Φ_R/∂p", &eps(ca.as_slice()), &eps(cd.as_slice()));
+            let offsets = [0.5, 1.5, -2.0];
             for (k, &c) in driven.iter().enumerate() {
-                let offsets = [0.5, 1.5, -2.0];
+                let alone = [(k, c, 1.0)];
                 let (oa, od) = (
-                    a.residual_at_drive_offsets(&ql, &ll, k, c, offsets),
-                    d.residual_at_drive_offsets(&ql, &ll, k, c, offsets),
+                    a.residual_at_drive_offsets(&ql, &ll, &alone, offsets),
+                    d.residual_at_drive_offsets(&ql, &ll, &alone, offsets),
                 );
                 same(name, "steady-state probe", &oa, &od);
             }
+            // All of them turning together, at unequal rates.
+            let together: Vec<(usize, usize, f64)> = (driven.iter().enumerate())
+                .map(|(k, &c)| (k, c, 1.0 / (k + 1) as f64))
+                .collect();
+            let (oa, od) = (
+                a.residual_at_drive_offsets(&ql, &ll, &together, offsets),
+                d.residual_at_drive_offsets(&ql, &ll, &together, offsets),
+            );
+            same(name, "steady-state probe, drives together", &oa, &od);
         }
     }
 }

@@ -89,23 +89,17 @@ pub trait Equations<S: Real> {
     /// The rows `driven` of `r + Φ_qᵀλ` (with `q̇` at steady state, `q̈ = 0`): the drive forces.
     fn drive_rows(&self, q: &[S], lambda: &[S], driven: &[usize]) -> Vec<S>;
 
-    /// The largest `|F|` at each of the values `q_c + offsets[l]` of the driven coordinate `c`
-    /// (the `d`-th driven one), the rest as given.
+    /// The largest `|F|` at each of the configurations the driven coordinates pass through
+    /// in time: `q_c + rate · offsets[l]` for each `(d, c, rate)` of `shift` (`c` the `d`-th
+    /// driven coordinate, `rate` its speed over the fastest's), the rest as given.
     fn residual_at_drive_offsets(
         &self,
         q: &[S],
         lambda: &[S],
-        d: usize,
-        c: usize,
+        shift: &[(usize, usize, f64)],
         offsets: [f64; 3],
     ) -> [f64; 3] {
-        let _ = d;
-        let mut qo = q.to_vec();
-        offsets.map(|offset| {
-            qo[c] = q[c] + S::from(offset);
-            let f = self.residual(&qo, lambda);
-            f.iter().fold(0.0f64, |a, v| a.max(v.re().abs()))
-        })
+        residual_at_shifts(self, q, lambda, shift, offsets)
     }
 
     /// `Φ_R` (constraint equations × free coordinates) at `q`.
@@ -121,4 +115,22 @@ pub trait Equations<S: Real> {
         independent: &[usize],
         stiffness: Option<&DMatrix<S>>,
     ) -> Result<Linearization<S>, LinearizeError>;
+}
+
+/// [`Equations::residual_at_drive_offsets`] by one evaluation of `F` per offset.
+pub fn residual_at_shifts<S: Real, E: Equations<S> + ?Sized>(
+    equations: &E,
+    q: &[S],
+    lambda: &[S],
+    shift: &[(usize, usize, f64)],
+    offsets: [f64; 3],
+) -> [f64; 3] {
+    let mut qo = q.to_vec();
+    offsets.map(|offset| {
+        for &(_, c, rate) in shift {
+            qo[c] = q[c] + S::from(rate * offset);
+        }
+        let f = equations.residual(&qo, lambda);
+        f.iter().fold(0.0f64, |a, v| a.max(v.re().abs()))
+    })
 }

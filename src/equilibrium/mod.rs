@@ -68,14 +68,14 @@ pub enum EquilibriumError {
         violation: String,
     },
     #[error(
-        "no steady state: the equilibrium equations depend on the value of the driven coordinate '{coordinate}' (residual change {sensitivity:.3e}); is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
+        "no steady state: the equilibrium equations depend on the value of the driven coordinate {coordinate} (residual change {sensitivity:.3e}); is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
     )]
     NoSteadyState {
         coordinate: String,
         sensitivity: f64,
     },
     #[error(
-        "no steady state: the linearisation depends on the value of the driven coordinate '{coordinate}' although the equilibrium does not (as the coordinate turns, {change}), so the modes would be those of a periodic system; is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
+        "no steady state: the linearisation depends on the value of the driven coordinate {coordinate} although the equilibrium does not (as the coordinate turns, {change}), so the modes would be those of a periodic system; is gravity along the drive axis, and is no load fixed in ground axes on what it turns (frame = \"body\" turns a load with its body)?"
     )]
     UnsteadyLinearisation {
         coordinate: String,

@@ -12,7 +12,8 @@ impl Problem<'_> {
     /// modes are those of a periodic system, `K = −(mgL/2) cos ψ` for a rod with gravity
     /// across the drive axis, although its equilibrium may not move).
     ///
-    /// Checked by evaluation at three other values of each driven coordinate: `F` first. With
+    /// Checked by evaluation at three other values of the driven coordinates, all turned
+    /// together as time turns them: `F` first. With
     /// `F = 0` at the solution that is four conditions: a dependence through one revolution's
     /// sine and cosine (gravity off a spin axis) cannot vanish at all four, wherever it is
     /// stationary. Then the linearisation ([`Problem::check_steady_linearisation`]). Skipped
@@ -39,42 +40,66 @@ impl Problem<'_> {
         });
         // The linearisation at the solution, made once where a drive is checked.
         let base = std::cell::LazyCell::new(|| Steady::at(self, q, lambda, jac, balance));
-        for (d, &c) in self.driven.iter().enumerate() {
-            if self.symmetric.contains(&c) || self.qd[c] == 0.0 {
-                continue;
-            }
-            let change = self
-                .route
-                .residual_at_drive_offsets(q, lambda, d, c, OFFSETS);
-            let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
-            if change > *tol {
-                return Err(EquilibriumError::NoSteadyState {
-                    coordinate: self.names[c].to_string(),
-                    sensitivity: change,
-                });
-            }
-            if let Some(base) = &*base {
-                self.check_steady_linearisation(base, q, lambda, c)?;
-            }
+        // The driven coordinates that turn, each at its speed over the fastest's: the motion
+        // is `q_D + Ω_D t` for all of them at once, so the equations must not change along
+        // that path (several drives at one speed may be coupled, as the nodes of a spinning
+        // shaft are by its twist). Those steady by symmetry turn with the rest, harmlessly.
+        let fastest = (self.driven.iter()).fold(0.0f64, |a, &c| a.max(self.qd[c].abs()));
+        let shift: Vec<(usize, usize, f64)> = (self.driven.iter().enumerate())
+            .filter(|&(_, &c)| self.qd[c] != 0.0)
+            .map(|(d, &c)| (d, c, self.qd[c] / fastest))
+            .collect();
+        if shift.iter().all(|(_, c, _)| self.symmetric.contains(c)) {
+            return Ok(());
+        }
+        let names = self.turning(&shift);
+        let change = self
+            .route
+            .residual_at_drive_offsets(q, lambda, &shift, OFFSETS);
+        let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
+        if change > *tol {
+            return Err(EquilibriumError::NoSteadyState {
+                coordinate: names,
+                sensitivity: change,
+            });
+        }
+        if let Some(base) = &*base {
+            self.check_steady_linearisation(base, q, lambda, &shift, &names)?;
         }
         Ok(())
     }
 
+    /// The driven coordinates of `shift` as messages name them: `'s'`, or the first three and
+    /// how many more turn with them.
+    fn turning(&self, shift: &[(usize, usize, f64)]) -> String {
+        let quoted: Vec<String> = (shift.iter().take(3))
+            .map(|&(_, c, _)| format!("'{}'", self.names[c]))
+            .collect();
+        match shift.len() {
+            0..=3 => quoted.join(", "),
+            n => format!("{} and {} more turning with them", quoted.join(", "), n - 3),
+        }
+    }
+
     /// Fails when the linearisation's full matrices `K`, `C`, `M` (over the free coordinates,
-    /// `λ` held) or its null-space basis `R` change at the values `q_c + OFFSETS` of the driven
-    /// coordinate `c`, beyond [`STEADY_TOLERANCE`] of their scales ([`Steady`]).
+    /// `λ` held) or its null-space basis `R` change as the driven coordinates of `shift` turn
+    /// by `OFFSETS` (see [`Problem::check_steady`]), beyond [`STEADY_TOLERANCE`] of their
+    /// scales ([`Steady`]); `names` says which turn.
     fn check_steady_linearisation(
         &self,
         base: &Steady,
         q: &[f64],
         lambda: &[f64],
-        c: usize,
+        shift: &[(usize, usize, f64)],
+        names: &str,
     ) -> Result<(), EquilibriumError> {
         let mut qo = q.to_vec();
         for offset in OFFSETS {
-            qo[c] = q[c] + offset;
+            for &(_, c, rate) in shift {
+                qo[c] = q[c] + rate * offset;
+            }
             let unsteady = |change: String| EquilibriumError::UnsteadyLinearisation {
-                coordinate: self.names[c].to_string(),
+                coordinate: names.to_string(),
                 change,
             };
             let Ok(lin) = self.route.linearize(&qo, lambda, &base.independent, None) else {

@@ -5,11 +5,13 @@ use super::{
     BodyData, ConstraintData, CouplerData, ForceData, JointData, JointElement, LoadData, PortData,
     System,
 };
-use crate::model::{Body, Constraint, Coupler, Field, FieldError, ForceElement, Load, LoadKind};
-use crate::model::{Model, Port};
+use crate::model::{
+    Beam, BeamSection, Body, Constraint, Coupler, Field, FieldError, ForceElement, Load, LoadKind,
+};
+use crate::model::{Model, Port, SectionProperties, TubeSection};
 use crate::real::{M3, Real, V3, cst, mul3, mul3_t};
 use crate::rigid::{Pose, perpendicular};
-use crate::{cuts, forces, joints};
+use crate::{beams, cuts, forces, joints};
 
 impl<T: Real> System<T> {
     /// Evaluates every field of `model` at parameter values `p` and operating speed `speed`
@@ -26,6 +28,9 @@ impl<T: Real> System<T> {
         } = tree(model, p, w)?;
         let forces = (model.forces.iter())
             .map(|e| force(e, p, w))
+            .collect::<Result<_, _>>()?;
+        let beams = (model.beams.iter())
+            .map(|b| beam(b, p, w))
             .collect::<Result<_, _>>()?;
         let constraints = (model.constraints.iter())
             .map(|c| constraint(c, p, w))
@@ -50,6 +55,7 @@ impl<T: Real> System<T> {
             joints,
             joint_elements,
             forces,
+            beams,
             constraints,
             ports,
             loads,
@@ -96,6 +102,7 @@ impl<T: Real> System<T> {
                 })
                 .collect(),
             forces: self.forces.iter().map(|e| e.map(f)).collect(),
+            beams: self.beams.iter().map(|b| b.map(f)).collect(),
             constraints: self.constraints.iter().map(|c| c.map(f)).collect(),
             ports: (self.ports.iter())
                 .map(|port| PortData {
@@ -239,6 +246,124 @@ fn force<T: Real>(e: &ForceElement, p: &[T], w: T) -> Result<ForceData<T>, Field
         free,
         geometry,
     })
+}
+
+/// A beam element: its reference axes (`e₁` along the chord, `e₂` from the reference
+/// direction), length and section properties.
+fn beam<T: Real>(b: &Beam, p: &[T], w: T) -> Result<beams::Element<T>, FieldError> {
+    let point1 = v3(&b.point1, p, w)?;
+    let point2 = v3(&b.point2, p, w)?;
+    let chord = point2 - point1;
+    let length = chord.dot(&chord).sqrt();
+    let e1 = chord / length;
+    let e2 = perpendicular(&e1, &v3(&b.reference, p, w)?);
+    let axes = M3::from_columns(&[e1, e2, e1.cross(&e2)]);
+    let section = section(&b.section, length, p, w)?;
+    Ok(beams::Element {
+        body1: b.body1,
+        point1,
+        body2: b.body2,
+        point2,
+        axes,
+        length,
+        section,
+    })
+}
+
+/// A beam's section properties. A tube of outer and inner diameter `D`, `d` has
+/// `A = π(D² − d²)/4`, `I₂ = I₃ = π(D⁴ − d⁴)/64`, `J = 2I`, and, where no shear coefficient is
+/// given, Cowper's (1966, J. Appl. Mech. 33:335) for the hollow circle, `m = d/D`:
+/// `κ = 6(1+ν)(1+m²)² / ((7+6ν)(1+m²)² + (20+12ν)m²)`; `φ = 12EI/(κGAL²)` per bending axis.
+fn section<T: Real>(
+    s: &BeamSection,
+    length: T,
+    p: &[T],
+    w: T,
+) -> Result<beams::Section<T>, FieldError> {
+    let one = cst::<T>(1.0);
+    let l2 = length * length;
+    match s {
+        BeamSection::Tube(tube) => {
+            let TubeSection {
+                outer,
+                inner,
+                youngs,
+                shear_modulus,
+                poisson,
+                density,
+                coefficient,
+            } = &**tube;
+            let (d, di) = (outer.eval(p, w)?, or_zero(inner, p, w)?);
+            let (e, rho) = (youngs.eval(p, w)?, density.eval(p, w)?);
+            let two = cst::<T>(2.0);
+            let (g, nu) = match (shear_modulus, poisson) {
+                (Some(g), _) => {
+                    let g = g.eval(p, w)?;
+                    (g, e / (two * g) - one)
+                }
+                (None, Some(nu)) => {
+                    let nu = nu.eval(p, w)?;
+                    (e / (two * (one + nu)), nu)
+                }
+                (None, None) => unreachable!("validation asks for G or nu"),
+            };
+            let pi = cst::<T>(std::f64::consts::PI);
+            let (d2, di2) = (d * d, di * di);
+            let area = pi * (d2 - di2) / cst::<T>(4.0);
+            let i = pi * (d2 * d2 - di2 * di2) / cst::<T>(64.0);
+            let kappa = match coefficient {
+                Some(k) => k.eval(p, w)?,
+                None => {
+                    let m2 = di2 / d2;
+                    let s = (one + m2) * (one + m2);
+                    cst::<T>(6.0) * (one + nu) * s
+                        / ((cst::<T>(7.0) + cst::<T>(6.0) * nu) * s
+                            + (cst::<T>(20.0) + cst::<T>(12.0) * nu) * m2)
+                }
+            };
+            let phi = cst::<T>(12.0) * e * i / (kappa * g * area * l2);
+            Ok(beams::Section {
+                ea: e * area,
+                gj: g * i * two,
+                ei: [e * i, e * i],
+                phi: [phi, phi],
+                rho_a: rho * area,
+                rho_i: [rho * i * two, rho * i, rho * i],
+            })
+        }
+        BeamSection::Properties(props) => {
+            let SectionProperties {
+                ea,
+                gj,
+                ei,
+                kga,
+                rho_a,
+                rho_i,
+            } = &**props;
+            let ei = [ei[0].eval(p, w)?, ei[1].eval(p, w)?];
+            // Bending about e₂ shears along e₃, and about e₃ along e₂.
+            let phi = match kga {
+                Some([k2, k3]) => {
+                    let (k2, k3) = (k2.eval(p, w)?, k3.eval(p, w)?);
+                    let twelve = cst::<T>(12.0);
+                    [twelve * ei[0] / (k3 * l2), twelve * ei[1] / (k2 * l2)]
+                }
+                None => [cst(0.0), cst(0.0)],
+            };
+            Ok(beams::Section {
+                ea: ea.eval(p, w)?,
+                gj: gj.eval(p, w)?,
+                ei,
+                phi,
+                rho_a: rho_a.eval(p, w)?,
+                rho_i: [
+                    rho_i[0].eval(p, w)?,
+                    rho_i[1].eval(p, w)?,
+                    rho_i[2].eval(p, w)?,
+                ],
+            })
+        }
+    }
 }
 
 fn constraint<T: Real>(c: &Constraint, p: &[T], w: T) -> Result<ConstraintData<T>, FieldError> {

@@ -143,6 +143,8 @@ pub struct System<T> {
     pub joints: Vec<JointData<T>>,
     pub joint_elements: Vec<JointElement<T>>,
     pub forces: Vec<ForceData<T>>,
+    /// Beam elements, their sections evaluated.
+    pub beams: Vec<crate::beams::Element<T>>,
     pub constraints: Vec<ConstraintData<T>>,
     pub ports: Vec<PortData<T>>,
     pub loads: Vec<LoadData<T>>,

@@ -2,11 +2,13 @@
 //! any design (a Monte Carlo sample, a quadrature node, the ends of a tolerance range).
 //!
 //! A design is admissible when every number of the model that does not depend on the speed
-//! evaluates to a finite value, no body has negative mass, and every inertia is symmetric and
-//! positive semi-definite. (Numbers that depend on the speed are checked where they are
-//! evaluated, speed by speed, and a failure there fails that speed with its reason.) A sample
-//! that is not admissible is a sample of a mechanism that cannot exist: it counts as failed, with
-//! the reason, instead of entering the statistics with a negative mass.
+//! evaluates to a finite value, no body has negative mass, every inertia is symmetric and
+//! positive semi-definite, and every beam's section is physical (positive stiffnesses,
+//! diameters and densities, an inner diameter below the outer one). (Numbers that depend on
+//! the speed are checked where they are evaluated, speed by speed, and a failure there fails
+//! that speed with its reason.) A sample that is not admissible is a sample of a mechanism that
+//! cannot exist: it counts as failed, with the reason, instead of entering the statistics with
+//! a negative mass.
 
 use super::{Field, Model};
 
@@ -34,6 +36,56 @@ impl std::fmt::Display for Element<'_> {
             "" => write!(f, "{}", self.0),
             name => write!(f, "{} '{name}'", self.0),
         }
+    }
+}
+
+/// A beam section's defect at the design `p`, if any, as `(defect, value)`: a stiffness,
+/// diameter or density not positive, a rotary inertia negative, an inner diameter not below
+/// the outer one, Poisson's ratio outside (−1, ½). Fields that depend on the speed are checked
+/// where they are evaluated.
+fn section_defect(beam: &super::Beam, p: &[f64]) -> Option<(String, f64)> {
+    let name = &beam.name;
+    let value = |f: &Field| (!f.expr.uses_speed()).then(|| f.eval(p, 0.0).unwrap_or(f64::NAN));
+    let not_positive = |f: &Field, zero: bool| {
+        let v = value(f)?;
+        (!(v > 0.0 || zero && v == 0.0)).then(|| (format!("{} is not positive", f.site.what), v))
+    };
+    match &beam.section {
+        super::BeamSection::Tube(t) => {
+            let positive = [&t.outer, &t.youngs, &t.density]
+                .into_iter()
+                .chain(t.shear_modulus.iter())
+                .chain(t.coefficient.iter());
+            if let Some(d) = positive.filter_map(|f| not_positive(f, false)).next() {
+                return Some(d);
+            }
+            if let Some(inner) = &t.inner {
+                if let Some(d) = not_positive(inner, true) {
+                    return Some(d);
+                }
+                if let (Some(i), Some(o)) = (value(inner), value(&t.outer))
+                    && i >= o
+                {
+                    let reason =
+                        format!("beam '{name}': inner diameter not below the outer one (m)");
+                    return Some((reason, i));
+                }
+            }
+            let nu = t.poisson.as_ref().and_then(value);
+            nu.filter(|v| !(*v > -1.0 && *v < 0.5)).map(|v| {
+                (
+                    format!("beam '{name}': Poisson's ratio outside (-1, 0.5)"),
+                    v,
+                )
+            })
+        }
+        super::BeamSection::Properties(q) => [&q.ea, &q.gj, &q.rho_a]
+            .into_iter()
+            .chain(&q.ei)
+            .chain(q.kga.iter().flatten())
+            .filter_map(|f| not_positive(f, false))
+            .chain(q.rho_i.iter().filter_map(|f| not_positive(f, true)))
+            .next(),
     }
 }
 
@@ -105,6 +157,33 @@ impl Model {
                     .map(|f| (e, f)),
             );
         }
+        for b in &self.beams {
+            let e = Element("beam", &b.name);
+            out.extend(
+                b.point1
+                    .iter()
+                    .chain(&b.point2)
+                    .chain(&b.reference)
+                    .map(|f| (e, f)),
+            );
+            let section: Vec<&Field> = match &b.section {
+                crate::model::BeamSection::Tube(t) => [&t.outer, &t.youngs, &t.density]
+                    .into_iter()
+                    .chain(
+                        [&t.inner, &t.shear_modulus, &t.poisson, &t.coefficient]
+                            .into_iter()
+                            .flatten(),
+                    )
+                    .collect(),
+                crate::model::BeamSection::Properties(p) => [&p.ea, &p.gj, &p.rho_a]
+                    .into_iter()
+                    .chain(&p.ei)
+                    .chain(p.kga.iter().flatten())
+                    .chain(&p.rho_i)
+                    .collect(),
+            };
+            out.extend(section.into_iter().map(|f| (e, f)));
+        }
         for c in &self.constraints {
             let e = Element("constraint", &c.name);
             let g = &c.geometry;
@@ -163,6 +242,11 @@ impl Model {
                         value,
                     });
                 }
+            }
+        }
+        for b in &self.beams {
+            if let Some((reason, value)) = section_defect(b, p) {
+                return Err(Defect { reason, value });
             }
         }
         Ok(())

@@ -179,6 +179,55 @@ pub enum LoadKind {
     Coordinate { coordinate: usize, value: Field },
 }
 
+/// A beam element (`[[beams]]`; the mechanics is [`crate::beams`]): node `a` at `point1` of
+/// `body1`, node `b` at `point2` of `body2` (reference configuration; `None` is ground), the
+/// section's second axis taken from `reference` (made perpendicular to the chord).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Beam {
+    pub name: String,
+    pub body1: Option<usize>,
+    pub point1: [Field; 3],
+    pub body2: Option<usize>,
+    pub point2: [Field; 3],
+    pub reference: [Field; 3],
+    pub section: BeamSection,
+}
+
+/// How a beam's section is given (SI units).
+#[derive(Debug, Clone, serde::Serialize)]
+pub enum BeamSection {
+    /// A circular tube of one isotropic material.
+    Tube(Box<TubeSection>),
+    /// Section properties.
+    Properties(Box<SectionProperties>),
+}
+
+/// A circular tube of one isotropic material: outer and inner diameter (m), Young's modulus
+/// (Pa), the shear modulus (Pa) or Poisson's ratio, density (kg/m³), and the shear coefficient
+/// (Cowper's for the hollow circle, from Poisson's ratio, where not given).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TubeSection {
+    pub outer: Field,
+    pub inner: Option<Field>,
+    pub youngs: Field,
+    pub shear_modulus: Option<Field>,
+    pub poisson: Option<Field>,
+    pub density: Field,
+    pub coefficient: Option<Field>,
+}
+
+/// A beam's section properties: `EA` (N), `GJ`, `[EI₂, EI₃]` (N·m²), the shear stiffnesses
+/// `[κGA₂, κGA₃]` (N; none: Euler–Bernoulli), `ρA` (kg/m) and `[ρJ, ρI₂, ρI₃]` (kg·m).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SectionProperties {
+    pub ea: Field,
+    pub gj: Field,
+    pub ei: [Field; 2],
+    pub kga: Option<[Field; 2]>,
+    pub rho_a: Field,
+    pub rho_i: [Field; 3],
+}
+
 /// A validated mechanism. Immutable; numbers are expressions of the parameters and speed.
 ///
 /// Its serialisation is everything that can change a number computed from it (every body,
@@ -203,6 +252,8 @@ pub struct Model {
     pub order: Vec<usize>,
     pub coordinates: Vec<Coordinate>,
     pub forces: Vec<ForceElement>,
+    /// Beam elements (`[[beams]]`), in file order.
+    pub beams: Vec<Beam>,
     pub constraints: Vec<Constraint>,
     /// Named ports for transfer functions between physical points.
     pub ports: Vec<Port>,

@@ -104,6 +104,8 @@ pub struct FileSchema {
     #[serde(default)]
     pub forces: Vec<Spanned<ForceSchema>>,
     #[serde(default)]
+    pub beams: Vec<Spanned<BeamSchema>>,
+    #[serde(default)]
     pub constraints: Vec<Spanned<ConstraintSchema>>,
     #[serde(default)]
     pub ports: Vec<Spanned<PortSchema>>,
@@ -165,6 +167,41 @@ pub struct ForceSchema {
     #[serde(alias = "free_length")]
     pub free: Option<SNums>,
     pub preload: Option<SNums>,
+}
+
+/// One `[[beams]]` entry: a Timoshenko beam element between two bodies, its section given by
+/// a circular tube's geometry and material or by its section properties.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeamSchema {
+    pub name: Spanned<String>,
+    pub body1: Spanned<String>,
+    pub point1: SVec,
+    pub body2: Spanned<String>,
+    pub point2: SVec,
+    /// The direction the section's second axis `e₂` is taken from.
+    pub reference: Option<SVec>,
+    pub outer_diameter: Option<SNum>,
+    pub inner_diameter: Option<SNum>,
+    #[serde(rename = "E")]
+    pub youngs: Option<SNum>,
+    #[serde(rename = "G")]
+    pub shear_modulus: Option<SNum>,
+    pub nu: Option<SNum>,
+    pub density: Option<SNum>,
+    pub shear_coefficient: Option<SNum>,
+    #[serde(rename = "EA")]
+    pub ea: Option<SNum>,
+    #[serde(rename = "GJ")]
+    pub gj: Option<SNum>,
+    #[serde(rename = "EI")]
+    pub ei: Option<SNums>,
+    #[serde(rename = "kGA")]
+    pub kga: Option<SNums>,
+    #[serde(rename = "rhoA")]
+    pub rho_a: Option<SNum>,
+    #[serde(rename = "rhoI")]
+    pub rho_i: Option<SNums>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -8,7 +8,7 @@
 //! ground turns everything it carries rigidly about a fixed axis. The equations of motion are
 //! invariant under a rotation of the whole world, and the joint's own coordinate enters no row
 //! of `F` but its own drive row. So `F` cannot depend on the joint's angle when nothing the joint
-//! does not carry sees that part of the world turn: no force element and no cut joint joins a
+//! does not carry sees that part of the world turn: no force element, beam or cut joint joins a
 //! carried body to one it does not carry (or to the ground), no load fixed in ground axes acts
 //! on a carried body, and gravity is along the axis (or zero). The proof is exact and covers
 //! the whole equations of motion, so their linearisation too; where it does not apply, the
@@ -44,6 +44,7 @@ impl Model {
                 .forces
                 .iter()
                 .any(|e| joins(e.geometry.body1, e.geometry.body2))
+                && !self.beams.iter().any(|b| joins(b.body1, b.body2))
                 && !self
                     .constraints
                     .iter()

@@ -127,15 +127,20 @@ impl Equations<f64> for Instance<'_> {
         self.linear_plain(q, lambda).drive
     }
 
+    /// One driven coordinate turning alone is one pass over the recorded residual with that
+    /// input varied; several turning together, an evaluation per offset.
     fn residual_at_drive_offsets(
         &self,
         q: &[f64],
         lambda: &[f64],
-        d: usize,
-        _c: usize,
+        shift: &[(usize, usize, f64)],
         offsets: [f64; 3],
     ) -> [f64; 3] {
-        Instance::residual_at_drive_offsets(self, q, lambda, d, offsets)
+        match shift {
+            // Alone, it is the fastest: its rate is one.
+            [(d, _, _)] => Instance::residual_at_drive_offsets(self, q, lambda, *d, offsets),
+            _ => crate::equations::residual_at_shifts(self, q, lambda, shift, offsets),
+        }
     }
 
     /// The `λ` columns of the Jacobian are `[Φ_Rᵀ; 0]`.

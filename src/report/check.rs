@@ -1,6 +1,6 @@
-//! The summary `check` prints: what a model file holds (bodies, joints, coordinates,
-//! constraints, parameters, tolerance cases) and the physical limits its tolerances reach. A
-//! file of its own because it formats the model, not a result.
+//! The summary `check` prints: what a model file holds (bodies, joints, coordinates, beams
+//! and their nodes, constraints, parameters, tolerance cases) and the physical limits its
+//! tolerances reach. A file of its own because it formats the model, not a result.
 
 use crate::model::Model;
 use std::fmt::Write;
@@ -38,6 +38,7 @@ pub fn check_summary(model: &Model) -> String {
         model.free().len()
     );
     let _ = writeln!(s, "  force elements: {}", model.forces.len());
+    beams(&mut s, model);
     loads(&mut s, model);
     constraints(&mut s, model);
     let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
@@ -71,6 +72,41 @@ fn wide<'a>(names: impl Iterator<Item = &'a str>, least: usize) -> usize {
 }
 
 /// The applied loads, where there are any.
+/// The beam elements (each with its two nodes' bodies and its section's form) and the bodies
+/// that are their nodes.
+fn beams(s: &mut String, model: &Model) {
+    if model.beams.is_empty() {
+        return;
+    }
+    let body = |b: Option<usize>| b.map_or("ground", |i| model.bodies[i].name.as_str());
+    let _ = writeln!(s, "  beams ({}):", model.beams.len());
+    let w = wide(model.beams.iter().map(|b| b.name.as_str()), 12);
+    for b in &model.beams {
+        let section = match b.section {
+            crate::model::BeamSection::Tube(_) => "tube",
+            crate::model::BeamSection::Properties(_) => "section properties",
+        };
+        let _ = writeln!(
+            s,
+            "    {:<w$} {} → {} ({section})",
+            b.name,
+            body(b.body1),
+            body(b.body2)
+        );
+    }
+    let mut nodes: Vec<usize> = (model.beams.iter())
+        .flat_map(|b| [b.body1, b.body2])
+        .flatten()
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let names: Vec<&str> = nodes
+        .iter()
+        .map(|&i| model.bodies[i].name.as_str())
+        .collect();
+    let _ = writeln!(s, "  beam nodes ({}): {}", names.len(), names.join(", "));
+}
+
 fn loads(s: &mut String, model: &Model) {
     if !model.loads.is_empty() {
         let _ = writeln!(s, "  loads ({}):", model.loads.len());

@@ -7,6 +7,7 @@ use modaltol::sweep::{Options, Point, initial_guess, point};
 use std::path::{Path, PathBuf};
 
 pub mod pendulum;
+pub mod timoshenko;
 
 /// The shipped example models but the rotating blade (a chain of many segments).
 pub const EXAMPLES: [&str; 8] = [

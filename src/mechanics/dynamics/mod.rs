@@ -17,7 +17,9 @@
 
 mod partials;
 
-pub use partials::{EndPartials, Partials, Screw, mass_matrix, partials, partials_for};
+pub use partials::{
+    BeamPartials, EndPartials, Partials, Screw, SlicePartials, mass_matrix, partials, partials_for,
+};
 
 use super::kinematics::{Pose, poses};
 use super::{ForceData, LoadData, System};
@@ -292,7 +294,9 @@ pub fn evaluate_with<T: Real>(
     let motion = motions(l, &j.pose, q, qd, qdd);
     let mut wrench = inertia_wrenches(sys, j, &motion);
     subtract_loads(sys, j, &mut wrench);
-    let (element_force, direct) = element_forces(l, j, &motion, &mut wrench);
+    let (element_force, mut direct) = element_forces(l, j, &motion, &mut wrench);
+    beam_inertia(l, j, &motion, &mut wrench);
+    let beam_force = beam_forces(sys, j, &mut wrench);
     let phi = constraint_values(sys, &j.pose, q);
     // The wrench on each body and those below it (children before parents).
     for jt in sys.joints.iter().rev() {
@@ -308,10 +312,16 @@ pub fn evaluate_with<T: Real>(
             None => cst::<T>(f64::NAN),
         })
         .collect();
-    for (first, partials) in direct {
+    for (first, partials) in direct.drain(..) {
         partials.add_columns(sys, &j.twist, |k, i, d| {
             r[i] += element_force[first + k] * d;
         });
+    }
+    for (b, f) in j.beams.iter().zip(&beam_force) {
+        if let EndPartials::Coordinates(_) = &b.elastic {
+            b.elastic
+                .add_columns(sys, &j.twist, |k, i, d| r[i] += f[k] * d);
+        }
     }
     for e in &sys.joint_elements {
         r[e.coord] += e.stiffness * (q[e.coord] - e.free) + e.damping * qd[e.coord];
@@ -350,6 +360,94 @@ fn inertia_wrenches<T: Real>(
         });
     }
     wrench
+}
+
+/// The beams' slices' inertia and weight ([`crate::beams`]), each slice's wrench carried to
+/// its elements' end bodies ([`SlicePartials::transmit`]). A slice's pose is evaluated over
+/// second-order dual numbers in time from its end bodies' poses and their rates
+/// (`Ȧ = A ω̃`, `Ä = A (α̃ + ω̃²)`), which gives its `ω`, `α` and the acceleration of its centre.
+fn beam_inertia<T: Real>(
+    l: &Lifted<T>,
+    j: &Partials<T>,
+    motion: &[Motion<T>],
+    wrench: &mut [Screw<T>],
+) {
+    let sys = &l.base;
+    let moving = |b: Option<usize>| -> Pose<D2<T>> {
+        let Some(b) = b else {
+            return Pose::identity();
+        };
+        let (p, m) = (&j.pose[b], &motion[b]);
+        let wx = skew(&m.w);
+        let rd = mul3(&p.rot, &wx);
+        let rdd = mul3(&p.rot, &(skew(&m.a) + mul3(&wx, &wx)));
+        Pose {
+            rot: M3::from_fn(|r, c| Dual2::new(p.rot[(r, c)], rd[(r, c)], rdd[(r, c)])),
+            trans: V3::from_fn(|r, _| Dual2::new(p.trans[r], m.d[r], m.dd[r])),
+        }
+    };
+    let id = |x: D2<T>| x;
+    for ((beam, time), bp) in sys.beams.iter().zip(&l.time.beams).zip(&j.beams) {
+        let here = time.local(id, &moving(beam.body1), &moving(beam.body2));
+        for (slice, &(xi, w)) in bp.slices.iter().zip(&crate::beams::SLICES) {
+            let pose = time.slice(id, &here, xi);
+            let r = pose.rot.map(|c| c.re);
+            let (omega, alpha) = (
+                axial_tn(&r, &pose.rot.map(|c| c.v1)),
+                axial_tn(&r, &pose.rot.map(|c| c.v2)),
+            );
+            let (m, inertia) = beam.slice_inertia(w);
+            let x = pose.trans.map(|c| c.re);
+            let force = (pose.trans.map(|c| c.v2) - sys.gravity) * m;
+            let h = mulv(&inertia, &omega);
+            let moment = mulv(&r, &(mulv(&inertia, &alpha) + omega.cross(&h)));
+            let w = Screw {
+                w: moment + x.cross(&force),
+                v: force,
+            };
+            slice.transmit(&w, wrench);
+        }
+    }
+}
+
+/// `[v]×`.
+fn skew<T: Real>(v: &V3<T>) -> M3<T> {
+    let z = cst::<T>(0.0);
+    M3::new(z, -v.z, v.y, v.z, z, -v.x, -v.y, v.x, z)
+}
+
+/// The beams' elastic forces `f_c = k_c e_c` (the elements are unloaded as drawn), applied to
+/// their end bodies where their derivatives are per body; the rest are added per coordinate by
+/// the caller. Returns each beam's component forces.
+fn beam_forces<T: Real>(
+    sys: &System<T>,
+    j: &Partials<T>,
+    wrench: &mut [Screw<T>],
+) -> Vec<[T; crate::beams::COMPONENTS]> {
+    let id = |x: T| x;
+    let ground = Pose::identity();
+    let pose = |b: Option<usize>| b.map_or(&ground, |b| &j.pose[b]);
+    let mut out = Vec::with_capacity(sys.beams.len());
+    let mut e = Vec::with_capacity(crate::beams::COMPONENTS);
+    for (beam, bp) in sys.beams.iter().zip(&j.beams) {
+        e.clear();
+        beam.deformations(
+            id,
+            &beam.local(id, pose(beam.body1), pose(beam.body2)),
+            &mut e,
+        );
+        let k = beam.stiffness();
+        let f: [T; crate::beams::COMPONENTS] = std::array::from_fn(|c| k[c] * e[c]);
+        if let EndPartials::Bodies(g) = &bp.elastic {
+            for (fc, ends) in f.iter().zip(g) {
+                for (b, gc) in ends {
+                    wrench[*b].add_scaled(gc, *fc);
+                }
+            }
+        }
+        out.push(f);
+    }
+    out
 }
 
 /// The applied loads, against the inertia as the weight is: a force `f` at the point `x` is

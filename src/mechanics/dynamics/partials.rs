@@ -62,6 +62,73 @@ pub struct Partials<T: Real> {
     pub pose: Vec<Pose<T>>,
     /// Centre of mass of every body at `q`.
     pub cm: Vec<V3<T>>,
+    /// Every beam's deformation derivatives and slices (see [`BeamPartials`]).
+    pub beams: Vec<BeamPartials<T>>,
+}
+
+/// A beam's first-order kinematics at `q`: the derivatives of its deformation components
+/// ([`EndPartials`]), and for each slice ([`crate::beams::SLICES`]) its pose and the twist it
+/// takes from each unit twist of each end body (`(body, [T u₀, …, T u₅])`: `u₀…u₂` rotations
+/// about the global axes through the origin, `u₃…u₅` translations along them), so that a
+/// wrench `W` on the slice acts on the end body as the wrench whose `k`-th component is
+/// `T u_k · W`.
+#[derive(Debug, Clone)]
+pub struct BeamPartials<T: Real> {
+    pub elastic: EndPartials<T>,
+    pub slices: Vec<SlicePartials<T>>,
+}
+
+/// One slice of a beam: see [`BeamPartials`].
+#[derive(Debug, Clone)]
+pub struct SlicePartials<T: Real> {
+    pub pose: Pose<T>,
+    pub ends: Vec<(usize, [Screw<T>; 6])>,
+}
+
+impl<T: Real> BeamPartials<T> {
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> BeamPartials<U> {
+        BeamPartials {
+            elastic: self.elastic.map(f),
+            slices: (self.slices.iter())
+                .map(|s| SlicePartials {
+                    pose: s.pose.map(f),
+                    ends: (s.ends.iter())
+                        .map(|(b, t)| (*b, t.map(|x| x.map(f))))
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
+}
+
+impl<T: Real> SlicePartials<T> {
+    /// The slice's twist when its end bodies move with the twist `s` where `moves(body)`.
+    pub fn twist(&self, s: &Screw<T>, moves: impl Fn(usize) -> bool) -> Screw<T> {
+        let mut out = Screw::zero();
+        for (b, t) in &self.ends {
+            if moves(*b) {
+                for (k, tk) in t.iter().enumerate() {
+                    let c = if k < 3 { s.w[k] } else { s.v[k - 3] };
+                    out.add_scaled(tk, c);
+                }
+            }
+        }
+        out
+    }
+
+    /// The wrench on each end body of the wrench `w` on the slice, added into `out`.
+    pub fn transmit(&self, w: &Screw<T>, out: &mut [Screw<T>]) {
+        for (b, t) in &self.ends {
+            for (k, tk) in t.iter().enumerate() {
+                let c = tk.pair(w);
+                if k < 3 {
+                    out[*b].w[k] += c;
+                } else {
+                    out[*b].v[k - 3] += c;
+                }
+            }
+        }
+    }
 }
 
 impl<T: Real> Partials<T> {
@@ -73,6 +140,7 @@ impl<T: Real> Partials<T> {
             phi_q: self.phi_q.map(f),
             pose: self.pose.iter().map(|p| p.map(f)).collect(),
             cm: self.cm.iter().map(|x| x.map(f)).collect(),
+            beams: self.beams.iter().map(|b| b.map(f)).collect(),
         }
     }
 
@@ -123,7 +191,7 @@ pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usiz
     }
     let body = |i: usize| sys.joints[sys.coord_joint[i]].child;
     let n = coords.len();
-    DMatrix::from_fn(n, n, |r, c| {
+    let mut out = DMatrix::from_fn(n, n, |r, c| {
         let (i, k) = (coords[r], coords[c]);
         let (bi, bk) = (body(i), body(k));
         let b = if sys.carries(bi, bk) {
@@ -141,7 +209,49 @@ pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usiz
             + si.v.dot(&sk.w.cross(&h))
             + si.w.cross(&h).dot(&sk.v)
             + si.w.dot(&mulv(&second[b], &sk.w))
-    })
+    });
+    add_slices(sys, j, coords, &mut out);
+    out
+}
+
+/// The beams' slices' part of the mass matrix: `Σ tᵢᵀ I_s t_k` over the slices, `tᵢ` the
+/// slice's twist from coordinate `i` and `I_s` its spatial inertia about the origin.
+fn add_slices<T: Real>(
+    sys: &System<D1<T>>,
+    j: &Partials<T>,
+    coords: &[usize],
+    out: &mut DMatrix<T>,
+) {
+    for (beam, bp) in sys.beams.iter().zip(&j.beams) {
+        for (slice, &(_, w)) in bp.slices.iter().zip(&crate::beams::SLICES) {
+            let (m, inertia) = beam.slice_inertia(w);
+            let (m, inertia) = (m.re, inertia.map(|x| x.re));
+            let (a, x) = (&slice.pose.rot, slice.pose.trans);
+            let h = x * m;
+            let second = mul3_t(&mul3(a, &inertia), a)
+                + (M3::identity() * x.dot(&x) - x * x.transpose()) * m;
+            // The slice's twist from each coordinate that moves one of its ends.
+            let twists: Vec<(usize, Screw<T>)> = (coords.iter().enumerate())
+                .filter_map(|(r, &i)| {
+                    let s = j.twist[i].as_ref()?;
+                    let moved = |b: usize| sys.moves(i, b);
+                    slice
+                        .ends
+                        .iter()
+                        .any(|(b, _)| moved(*b))
+                        .then(|| (r, slice.twist(s, moved)))
+                })
+                .collect();
+            for (r, ti) in &twists {
+                for (c, tk) in &twists {
+                    out[(*r, *c)] += ti.v.dot(&tk.v) * m
+                        + ti.v.dot(&tk.w.cross(&h))
+                        + ti.w.cross(&h).dot(&tk.v)
+                        + ti.w.dot(&mulv(&second, &tk.w));
+                }
+            }
+        }
+    }
 }
 
 /// Partial velocities at `q` for every coordinate; `partial` is the system lifted to `Dual<T>`.
@@ -362,6 +472,9 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             })
         })
         .collect();
+    let beams = (partial.beams.iter())
+        .map(|b| beam_partials(&at, b))
+        .collect();
     let mut phi_q = DMatrix::from_element(partial.m, n, cst::<T>(0.0));
     let mut row = 0;
     for c in &partial.constraints {
@@ -392,5 +505,57 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             .zip(&partial.bodies)
             .map(|(p, b)| p.apply(&b.cm).map(|c| c.re))
             .collect(),
+        beams,
     }
+}
+
+/// The twist of a pose whose dual part is its rate: `ω = axial(Ṙ Rᵀ)`, `v = ṫ − ω × t`.
+fn twist_of<T: Real>(p: &Pose<D1<T>>) -> Screw<T> {
+    let r = p.rot.map(|c| c.re);
+    let w = axial(&mul3_t(&p.rot.map(|c| c.eps), &r));
+    let t = p.trans.map(|c| c.re);
+    Screw {
+        w,
+        v: p.trans.map(|c| c.eps) - w.cross(&t),
+    }
+}
+
+/// A beam's [`BeamPartials`] at the poses of `at`.
+fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) -> BeamPartials<T> {
+    let id = |x: D1<T>| x;
+    let elastic = end_partials(
+        at,
+        [b.body1, b.body2],
+        crate::beams::COMPONENTS,
+        |x1, x2, out| b.deformations(id, &b.local(id, x1, x2), out),
+    );
+    let ground = Pose::identity();
+    let pose = |e: Option<usize>| e.map_or(ground, |e| at.poses[e]);
+    let (x1, x2) = (pose(b.body1), pose(b.body2));
+    let here = b.local(id, &x1, &x2);
+    let mut slices: Vec<SlicePartials<T>> = (crate::beams::SLICES.iter())
+        .map(|&(xi, _)| SlicePartials {
+            pose: b.slice(id, &here, xi).map(|c| c.re),
+            ends: Vec::with_capacity(2),
+        })
+        .collect();
+    for (end, body) in [b.body1, b.body2].into_iter().enumerate() {
+        let Some(body) = body else { continue };
+        let mut maps = vec![[Screw::zero(); 6]; slices.len()];
+        for k in 0..6 {
+            let u = unit_twist(k);
+            let local = if end == 0 {
+                b.local(id, &nudged(&x1, &u), &x2)
+            } else {
+                b.local(id, &x1, &nudged(&x2, &u))
+            };
+            for (m, &(xi, _)) in maps.iter_mut().zip(&crate::beams::SLICES) {
+                m[k] = twist_of(&b.slice(id, &local, xi));
+            }
+        }
+        for (s, m) in slices.iter_mut().zip(maps) {
+            s.ends.push((body, m));
+        }
+    }
+    BeamPartials { elastic, slices }
 }

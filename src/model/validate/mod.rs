@@ -9,7 +9,7 @@
 //!
 //! [`validate`] runs the stages in the order of the file's dependencies, each a submodule named
 //! for what it validates: [`syntax`], [`parameters`], [`header`], [`bodies`], [`joints`],
-//! [`tree`], [`forces`], [`cuts`], [`mobility`], [`ports`], [`loads`], [`analysis`],
+//! [`tree`], [`forces`], [`beams`], [`cuts`], [`mobility`], [`ports`], [`loads`], [`analysis`],
 //! [`requirements`]. The first error
 //! stops validation, so this order is also the order in which errors are reported. Two stages
 //! keep a part with checks of its own apart: [`inertia`] (of [`bodies`]) and [`cases`] (of
@@ -17,6 +17,7 @@
 //! [`per_coordinate::Each`] and [`locate`] (where a message points).
 
 mod analysis;
+mod beams;
 mod bodies;
 mod cases;
 mod couplers;
@@ -62,6 +63,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     // Force elements, cut joints and couplers share one namespace (with the joints).
     let mut elements = HashSet::new();
     let forces = forces::forces(&ctx, &raw.forces, &body_names, &tree.names, &mut elements)?;
+    let beams = beams::beams(&ctx, &raw.beams, &body_names, &tree.names, &mut elements)?;
     let mut constraints = cuts::constraints(
         &ctx,
         &raw.constraints,
@@ -119,6 +121,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         order,
         coordinates: tree.coordinates,
         forces,
+        beams,
         constraints,
         ports,
         loads,

@@ -52,14 +52,14 @@ pub(super) fn element_name(
     let taken = if joint_names.contains_key(&n) {
         Some("a joint")
     } else if !elements.insert(n.clone()) {
-        Some("another force element, cut joint or coupler")
+        Some("another force element, beam, cut joint or coupler")
     } else {
         None
     };
     if let Some(by) = taken {
         return Err(ctx.err(
             name.span(),
-            format!("duplicate name '{n}': {by} has it (joints, force elements, cut joints and couplers share names)"),
+            format!("duplicate name '{n}': {by} has it (joints, force elements, beams, cut joints and couplers share names)"),
         ));
     }
     Ok(n)
