@@ -96,6 +96,9 @@ pub(super) struct FirstOrderForm<'a> {
     condition: f64,
     /// The pencil itself, `[M̂, Ĉ, K̂]`, where each root is refined.
     pencil: [&'a DMatrix<f64>; 3],
+    /// The roots `λ` of the form's eigenvalues (`1/μ` where `swapped`), for the gaps
+    /// [`FirstOrderForm::refined`] reads.
+    lambdas: Vec<C64>,
     /// The form is of `μ²K̂ + μĈ + M̂` (its roots are `1/λ`).
     swapped: bool,
     eigen: Eigen,
@@ -135,11 +138,15 @@ impl<'a> FirstOrderForm<'a> {
         let eigen = Eigen::new(a).ok_or(ModalError::NoConvergence {
             what: "eigenvalues of the first-order form",
         })?;
+        let lambdas = (eigen.values().into_iter())
+            .map(|v| if swapped { 1.0 / v } else { v })
+            .collect();
         Ok(FirstOrderForm {
             n,
             divisor: m,
             condition,
             pencil,
+            lambdas,
             swapped,
             eigen,
         })
@@ -197,9 +204,8 @@ impl<'a> FirstOrderForm<'a> {
     /// vectors need not belong together: the step then moved a double root off the imaginary
     /// axis) is left as the form gives it, and so is one whose step exceeds `1e-6 |λ|`.
     fn refined(&self, root: Root) -> Root {
-        let apart = (self.eigen.values().iter())
-            .map(|&v| if self.swapped { 1.0 / v } else { v })
-            .filter(|v| (v - root.lambda).norm() > 0.0 && (v.conj() - root.lambda).norm() > 0.0)
+        let apart = (self.lambdas.iter())
+            .filter(|&&v| (v - root.lambda).norm() > 0.0 && (v.conj() - root.lambda).norm() > 0.0)
             .all(|v| (v - root.lambda).norm() > 1e-4 * root.lambda.norm());
         if !apart {
             return root;
