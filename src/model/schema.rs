@@ -106,6 +106,8 @@ pub struct FileSchema {
     #[serde(default)]
     pub beams: Vec<Spanned<BeamSchema>>,
     #[serde(default)]
+    pub shafts: Vec<Spanned<ShaftSchema>>,
+    #[serde(default)]
     pub constraints: Vec<Spanned<ConstraintSchema>>,
     #[serde(default)]
     pub ports: Vec<Spanned<PortSchema>>,
@@ -183,6 +185,68 @@ pub struct BeamSchema {
     pub reference: Option<SVec>,
     pub outer_diameter: Option<SNum>,
     pub inner_diameter: Option<SNum>,
+    #[serde(rename = "E")]
+    pub youngs: Option<SNum>,
+    #[serde(rename = "G")]
+    pub shear_modulus: Option<SNum>,
+    pub nu: Option<SNum>,
+    pub density: Option<SNum>,
+    pub shear_coefficient: Option<SNum>,
+    #[serde(rename = "EA")]
+    pub ea: Option<SNum>,
+    #[serde(rename = "GJ")]
+    pub gj: Option<SNum>,
+    #[serde(rename = "EI")]
+    pub ei: Option<SNums>,
+    #[serde(rename = "kGA")]
+    pub kga: Option<SNums>,
+    #[serde(rename = "rhoA")]
+    pub rho_a: Option<SNum>,
+    #[serde(rename = "rhoI")]
+    pub rho_i: Option<SNums>,
+}
+
+/// One `[[shafts]]` entry: a straight line of beam elements meshed from stations, its nodes
+/// generated as bodies on joints (`validate::shafts` writes them out as the other tables).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShaftSchema {
+    pub name: Spanned<String>,
+    /// The first node's point, m.
+    pub start: SVec,
+    /// The direction the stations follow from `start` (any length).
+    pub axis: SVec,
+    pub reference: Option<SVec>,
+    /// The body the nodes' joints hang from (default `ground`).
+    pub parent: Option<Spanned<String>>,
+    /// A body that is the first (last) node instead of a generated one: a hub, a clamp.
+    pub start_body: Option<Spanned<String>>,
+    pub end_body: Option<Spanned<String>>,
+    /// The rate at which the nodes spin about the axis (a drive, usually `"speed"`).
+    pub spin: Option<SNum>,
+    /// Torsional stiffness from the parent to the first node's frame about the axis, N·m/rad.
+    pub coupling: Option<SNum>,
+    /// Material shared by the stations (each station may give its own).
+    #[serde(rename = "E")]
+    pub youngs: Option<SNum>,
+    #[serde(rename = "G")]
+    pub shear_modulus: Option<SNum>,
+    pub nu: Option<SNum>,
+    pub density: Option<SNum>,
+    pub shear_coefficient: Option<SNum>,
+    pub stations: Spanned<Vec<Spanned<StationSchema>>>,
+}
+
+/// One station of a shaft: a length of uniform (or linearly tapered) section, meshed into
+/// `elements` equal beam elements. The section keys are those of `[[beams]]`; a diameter may
+/// be a pair `[start, end]` for a taper.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StationSchema {
+    pub length: SNum,
+    pub elements: Option<Spanned<i64>>,
+    pub outer_diameter: Option<SNums>,
+    pub inner_diameter: Option<SNums>,
     #[serde(rename = "E")]
     pub youngs: Option<SNum>,
     #[serde(rename = "G")]

@@ -36,6 +36,7 @@ mod per_coordinate;
 mod ports;
 mod redundancy;
 mod requirements;
+mod shafts;
 mod syntax;
 mod tree;
 
@@ -50,12 +51,13 @@ use std::ops::Range;
 /// Validates the model `text` (named `file` in messages) with the nominal values of the
 /// parameters in `overrides` replaced.
 pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R<Model> {
-    let raw = syntax::parse(text, file)?;
+    let mut raw = syntax::parse(text, file)?;
     let mut ctx = Ctx::new(text, file);
     let (parameters, derived) = parameters::parameters(&ctx, &raw.parameters, overrides)?;
     ctx.declare(&parameters);
     let derived = parameters::derived(&ctx, &derived)?;
     ctx.derive(&derived);
+    shafts::expand(&ctx, &mut raw)?;
     let header = header::header(&ctx, &raw)?;
     let (body_names, bodies) = bodies::bodies(&ctx, &raw.bodies)?;
     let tree = joints::joints(&ctx, &raw.joints, &body_names, &bodies)?;

@@ -1,0 +1,304 @@
+//! `[[shafts]]`: a shaft meshed from stations is the same model as its bodies, joints and beams
+//! written out by hand, on both evaluation routes:
+//!
+//! * the shipped Friswell 5.9.1 rotor (one shaft table, disks `fixed` to nodes, the twist held
+//!   by the shaft's coupling) against the same rotor written node by node (disks as the nodes'
+//!   own mass, the twist held by a joint stiffness): every root at rest and at 4000 rpm;
+//! * Friswell Example 5.9.2 (anisotropic bearings) at the book's frequencies;
+//! * a tapered station against the stepped stations of its elements' midpoint diameters;
+//! * a blade meshed from a hub body (`start_body`) at the published rotating-cantilever
+//!   frequencies;
+//! * bad shafts refused at the field they come from.
+
+mod common;
+
+use common::solve;
+use modaltol::compiled::Compiled;
+use std::f64::consts::PI;
+
+fn model(text: &str) -> Compiled {
+    Compiled::from_str(text, "shaft.toml").unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// The roots `λ` (upper half plane, by imaginary part) at `speed`.
+fn roots(m: &Compiled, speed: f64, direct: bool) -> Vec<(f64, f64)> {
+    let pt = solve(m, speed, direct);
+    let mut out: Vec<(f64, f64)> = (pt.modes.iter())
+        .map(|m| (m.root.lambda.re, m.root.lambda.im))
+        .collect();
+    out.sort_by(|a, b| a.1.total_cmp(&b.1));
+    out
+}
+
+/// Every root of `a` within `tol` (relative to the largest) of the root of `b` in its place.
+fn same_roots(a: &[(f64, f64)], b: &[(f64, f64)], tol: f64, what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: number of roots");
+    let scale = a.iter().map(|r| r.0.hypot(r.1)).fold(0.0, f64::max);
+    for (x, y) in a.iter().zip(b) {
+        let d = (x.0 - y.0).hypot(x.1 - y.1);
+        assert!(d <= tol * scale, "{what}: {x:?} vs {y:?}");
+    }
+}
+
+/// Friswell 5.9.1 written node by node: each node a massless frame on a free joint and a
+/// spinning node on a driven revolute, the disks the nodes' own mass, the twist held by node
+/// 0's free joint.
+fn friswell_by_hand() -> String {
+    let disk = |m: &str, d: &str| {
+        format!(
+            "mass = \"{m}\"\ninertia = [\"{m}*({d}^2 + bore^2)/8\", \
+             \"{m}*({d}^2 + bore^2)/16 + {m}*width^2/12\", \"{m}*({d}^2 + bore^2)/16 + {m}*width^2/12\"]\n"
+        )
+    };
+    let text = common::example_text("friswell_5_9_1.toml");
+    let mut out = text[..text.find("\n[[shafts]]").unwrap()].to_string();
+    for k in 0..=6 {
+        let x = 0.25 * k as f64;
+        let mass = match k {
+            2 => disk("disk1", "D1"),
+            4 => disk("disk2", "D2"),
+            _ => "mass = 0\n".into(),
+        };
+        let stiffness = match k {
+            0 => "stiffness = [0, 0, 0, \"k_coupling\", 0, 0]\n",
+            _ => "",
+        };
+        out += &format!(
+            "[[bodies]]\nname = \"t{k}\"\nmass = 0\ncm = [{x}, 0, 0]\n\
+             [[bodies]]\nname = \"n{k}\"\n{mass}cm = [{x}, 0, 0]\n\
+             [[joints]]\nname = \"f{k}\"\ntype = \"free\"\nparent = \"ground\"\nchild = \"t{k}\"\n\
+             at = [{x}, 0, 0]\n{stiffness}\
+             [[joints]]\nname = \"s{k}\"\ntype = \"revolute\"\nparent = \"t{k}\"\nchild = \"n{k}\"\n\
+             at = [{x}, 0, 0]\naxis = [1, 0, 0]\ndrive = \"speed\"\n"
+        );
+    }
+    for k in 0..6 {
+        out += &format!(
+            "[[beams]]\nname = \"e{k}\"\nbody1 = \"n{k}\"\npoint1 = [{}, 0, 0]\nbody2 = \"n{}\"\n\
+             point2 = [{}, 0, 0]\nreference = [0, 1, 0]\nouter_diameter = \"d\"\nE = \"E\"\n\
+             G = \"G\"\ndensity = \"rho\"\n",
+            0.25 * k as f64,
+            k + 1,
+            0.25 * (k + 1) as f64
+        );
+    }
+    for k in [0, 6] {
+        out += &format!(
+            "[[forces]]\nname = \"bearing{k}\"\ntype = \"bushing\"\nbody1 = \"ground\"\n\
+             body2 = \"n{k}\"\npoint1 = [{}, 0, 0]\n\
+             stiffness = [\"k_thrust\", \"k_bearing\", \"k_bearing\", 0, 0, 0]\n",
+            0.25 * k as f64
+        );
+    }
+    out
+}
+
+#[test]
+fn a_meshed_rotor_is_the_rotor_written_node_by_node() {
+    let meshed = common::example("friswell_5_9_1.toml");
+    let by_hand = model(&friswell_by_hand());
+    for speed in [0.0, 4000.0 * PI / 30.0] {
+        for direct in [false, true] {
+            same_roots(
+                &roots(&meshed, speed, direct),
+                &roots(&by_hand, speed, direct),
+                1e-12,
+                &format!("{speed} rad/s, direct {direct}"),
+            );
+        }
+    }
+}
+
+#[test]
+fn friswell_example_5_9_2_anisotropic_bearings_at_the_book_frequencies() {
+    // kyy = 0.8 kxx: the bending pairs split at rest (Friswell et al. 2010, Example 5.9.2;
+    // 650.41 rad/s is the free-free torsion, untouched).
+    let text = common::example_text("friswell_5_9_1.toml").replace(
+        "stiffness = [\"k_thrust\", \"k_bearing\", \"k_bearing\", 0, 0, 0]",
+        "stiffness = [\"k_thrust\", \"k_bearing\", \"0.8*k_bearing\", 0, 0, 0]",
+    );
+    assert_eq!(text.matches("0.8*k_bearing").count(), 2, "test setup");
+    let m = model(&text);
+    for direct in [false, true] {
+        let w: Vec<f64> = roots(&m, 0.0, direct).iter().map(|r| r.1).collect();
+        for x in [82.65, 86.66, 254.52, 274.31, 650.41, 679.49] {
+            let off = w.iter().map(|y| (y - x).abs() / x).fold(1.0, f64::min);
+            assert!(off <= 1e-4, "direct {direct}: {x} is {off:e} from {w:?}");
+        }
+    }
+}
+
+/// A tube cantilever along z from ground of `stations` (each `length, elements, diameter`).
+fn cantilever(stations: &str) -> String {
+    format!(
+        "name = \"cantilever\"\ngravity = [0, 0, 0]\n\
+         [[shafts]]\nname = \"c\"\nstart = [0, 0, 0]\naxis = [0, 0, 2]\nstart_body = \"ground\"\n\
+         E = 2e11\nnu = 0.3\ndensity = 7800\nstations = [{stations}]\n"
+    )
+}
+
+#[test]
+fn a_tapered_station_is_the_stepped_shaft_of_its_midpoints() {
+    let tapered = model(&cantilever(
+        "{ length = 0.8, elements = 4, outer_diameter = [0.06, 0.04], inner_diameter = [0.02, 0.01] }",
+    ));
+    let stepped = (0..4)
+        .map(|k| {
+            let f = (k as f64 + 0.5) / 4.0;
+            format!(
+                "{{ length = 0.2, outer_diameter = {}, inner_diameter = {} }}",
+                0.06 + (0.04 - 0.06) * f,
+                0.02 + (0.01 - 0.02) * f
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let stepped = model(&cantilever(&stepped));
+    for direct in [false, true] {
+        same_roots(
+            &roots(&tapered, 0.0, direct),
+            &roots(&stepped, 0.0, direct),
+            1e-12,
+            "taper",
+        );
+    }
+    // A uniform "taper" is the uniform shaft, and the taper moves the frequencies.
+    let uniform = model(&cantilever(
+        "{ length = 0.8, elements = 4, outer_diameter = 0.05, inner_diameter = 0.015 }",
+    ));
+    let flat = model(&cantilever(
+        "{ length = 0.8, elements = 4, outer_diameter = [0.05, 0.05], inner_diameter = [0.015, 0.015] }",
+    ));
+    same_roots(
+        &roots(&uniform, 0.0, false),
+        &roots(&flat, 0.0, false),
+        1e-12,
+        "flat",
+    );
+    assert!(roots(&tapered, 0.0, false)[0].1 > 1.05 * roots(&uniform, 0.0, false)[0].1);
+}
+
+#[test]
+fn a_blade_meshed_from_its_hub_flaps_at_the_published_frequencies() {
+    // The uniform cantilever of `tests/beams.rs` (ρA = 1, EI = 1 flapwise, L = 1) on a hub
+    // spinning about z, now one shaft table from the hub: its first two flap frequencies at
+    // the nondimensional speeds 0 and 4 (Wright et al. 1982; Hodges & Rutkowski 1981).
+    let m = model(
+        "name = \"blade\"\ngravity = [0, 0, 0]\n\
+         [[bodies]]\nname = \"hub\"\nmass = 0\ncm = [0, 0, 0]\n\
+         [[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\nchild = \"hub\"\n\
+         at = [0, 0, 0]\naxis = [0, 0, 1]\ndrive = \"speed\"\n\
+         [[shafts]]\nname = \"blade\"\nstart = [0, 0, 0]\naxis = [1, 0, 0]\nreference = [0, 0, 1]\n\
+         parent = \"hub\"\nstart_body = \"hub\"\n\
+         stations = [{ length = 1, elements = 12, EA = 1e7, GJ = 100, EI = [4, 1], rhoA = 1, \
+         rhoI = [1e-4, 0, 0] }]\n",
+    );
+    for (speed, published) in [(0.0, [3.5160, 22.0346]), (4.0, [5.5850, 24.2735])] {
+        for direct in [false, true] {
+            let w: Vec<f64> = roots(&m, speed, direct).iter().map(|r| r.1).collect();
+            for x in published {
+                let off = w.iter().map(|y| (y - x).abs() / x).fold(1.0, f64::min);
+                assert!(off <= 1e-3, "λ = {speed}: {x} is {off:e} from {w:?}");
+            }
+        }
+    }
+}
+
+/// A cantilever of one station, for the bad-input cases.
+const ONE: &str = r#"name = "one"
+[[shafts]]
+name = "s"
+start = [0, 0, 0]
+axis = [1, 0, 0]
+E = 2e11
+nu = 0.3
+density = 7800
+start_body = "ground"
+
+[[shafts.stations]]
+length = 0.5
+elements = 3
+outer_diameter = 0.05
+inner_diameter = 0.02
+"#;
+
+#[test]
+fn bad_shafts_are_refused_at_their_field() {
+    assert!(Compiled::from_str(ONE, "ok.toml").is_ok());
+    let cases: [(&str, &str, &str, &str); 12] = [
+        ("length = 0.5", "length = 0", "length", "must be positive"),
+        (
+            "length = 0.5",
+            "length = \"speed\"",
+            "length",
+            "must not depend on the speed",
+        ),
+        ("elements = 3", "elements = 0", "elements", "whole number"),
+        (
+            "elements = 3",
+            "elements = 20000",
+            "elements",
+            "whole number",
+        ),
+        (
+            "axis = [1, 0, 0]",
+            "axis = [0, 0, 0]",
+            "axis",
+            "axis is zero",
+        ),
+        (
+            "axis = [1, 0, 0]",
+            "axis = [1, 0]",
+            "axis",
+            "expected 3 components",
+        ),
+        (
+            "outer_diameter = 0.05",
+            "outer_diameter = [0.05, 0.04, 0.03]",
+            "outer_diameter",
+            "not 3 values",
+        ),
+        (
+            "inner_diameter = 0.02",
+            "inner_diameter = 0.05",
+            "inner_diameter",
+            "not below the outer",
+        ),
+        (
+            "density = 7800",
+            "density = 7800\ncoupling = 1",
+            "coupling",
+            "spinning shaft",
+        ),
+        (
+            "start_body = \"ground\"",
+            "start_body = \"hub\"",
+            "start_body",
+            "unknown body 'hub'",
+        ),
+        (
+            "inner_diameter = 0.02",
+            "inner_diameter = 0.02\nEA = 1e8",
+            "[[shafts.stations]]",
+            "both as a tube",
+        ),
+        (
+            "name = \"s\"",
+            "name = \"s s\"",
+            "name = \"s s\"",
+            "letters, digits",
+        ),
+    ];
+    for (from, to, at, message) in cases {
+        assert!(ONE.contains(from), "test setup: {from}");
+        let text = ONE.replacen(from, to, 1);
+        let e = Compiled::from_str(&text, "bad.toml").expect_err(&format!("{to}: refused"));
+        let want = text[..text.find(at).unwrap()].matches('\n').count() + 1;
+        assert_eq!(e.line, Some(want), "{to}: {e}");
+        assert!(e.message.contains(message), "{to}: {e}");
+    }
+    // No stations at all.
+    let text = ONE[..ONE.find("[[shafts.stations]]").unwrap()].to_string() + "stations = []\n";
+    let e = Compiled::from_str(&text, "bad.toml").expect_err("no stations");
+    assert!(e.message.contains("no stations"), "{e}");
+}
