@@ -83,6 +83,7 @@ fn the_drawn_joints_and_centres_of_mass_are_the_equilibriums() {
         ("rotor_on_rubber_mounts.toml", 100.0),
         ("conical_pendulum.toml", 7.0),
         ("rotating_blade.toml", 20.0),
+        ("friswell_5_9_1.toml", 400.0),
     ] {
         let m = example(name);
         let model = m.model();
@@ -143,6 +144,7 @@ fn a_modes_body_and_port_motions_are_the_kinematics_of_its_shape() {
         ("spinning_spatial_fourbar.toml", 3.0),
         ("governor.toml", 1.6),
         ("rotating_blade.toml", 20.0),
+        ("friswell_5_9_1.toml", 400.0),
     ] {
         let m = example(name);
         let model = m.model();
@@ -234,6 +236,7 @@ fn an_animation_frame_is_the_mechanism_posed_along_the_shape_to_second_order() {
         ("governor.toml", 1.6),
         ("fourbar_diagonal_spring.toml", 0.0),
         ("rotating_blade.toml", 20.0),
+        ("friswell_5_9_1.toml", 400.0),
     ] {
         let m = example(name);
         let model = m.model();
@@ -305,7 +308,7 @@ fn page_frame(data: &serde_json::Value, m: usize, phase: f64) -> Vec<[f64; 3]> {
     let re: Vec<f64> = mode["re"].as_array().unwrap().iter().map(num).collect();
     let im: Vec<f64> = mode["im"].as_array().unwrap().iter().map(num).collect();
     let (c, s) = (phase.cos(), phase.sin());
-    (0..anchor.len())
+    let mut out: Vec<[f64; 3]> = (0..anchor.len())
         .map(|i| {
             let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
             if anchor[i] == 0 {
@@ -333,7 +336,49 @@ fn page_frame(data: &serde_json::Value, m: usize, phase: f64) -> Vec<[f64; 3]> {
                 y.map(|v| v / n)
             }
         })
-        .collect()
+        .collect();
+    // Inside a beam's curve: the Hermite combination of its nodes' motions and its tangents'
+    // turns, `H₁ δa + H₂ L (ωₐ × tₐ) + H₃ δb + H₄ L (ω_b × t_b)`.
+    let index = |v: &serde_json::Value| v.as_u64().unwrap() as usize;
+    for curve in data["scene"]["beams"].as_array().unwrap() {
+        let points: Vec<usize> = curve["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(index)
+            .collect();
+        let length = num(&curve["length"]);
+        let n = points.len();
+        let turn = |k: usize| -> [f64; 3] {
+            let Some(b) = curve["nodes"][k].as_u64().map(|b| b as usize) else {
+                return [0.0; 3];
+            };
+            let w = [3, 4, 5].map(|j| re[6 * b + j] * c - im[6 * b + j] * s);
+            let t = index(&curve["tangents"][k]);
+            let u = [x[3 * t], x[3 * t + 1], x[3 * t + 2]];
+            [
+                w[1] * u[2] - w[2] * u[1],
+                w[2] * u[0] - w[0] * u[2],
+                w[0] * u[1] - w[1] * u[0],
+            ]
+        };
+        let (ta, tb) = (turn(0), turn(1));
+        let (a, b) = (points[0], points[n - 1]);
+        for (k, &p) in points.iter().enumerate().take(n - 1).skip(1) {
+            let xi = k as f64 / (n - 1) as f64;
+            let h = [
+                1.0 - 3.0 * xi * xi + 2.0 * xi.powi(3),
+                xi - 2.0 * xi * xi + xi.powi(3),
+                3.0 * xi * xi - 2.0 * xi.powi(3),
+                xi.powi(3) - xi * xi,
+            ];
+            out[p] = [0, 1, 2].map(|j| {
+                let (da, db) = (out[a][j] - x[3 * a + j], out[b][j] - x[3 * b + j]);
+                x[3 * p + j] + h[0] * da + h[1] * length * ta[j] + h[2] * db + h[3] * length * tb[j]
+            });
+        }
+    }
+    out
 }
 
 #[test]
@@ -344,6 +389,7 @@ fn the_pages_data_poses_the_frames_of_the_drawing() {
     for (name, speed) in [
         ("rotor_on_rubber_mounts.toml", 100.0),
         ("spinning_spatial_fourbar.toml", 3.0),
+        ("friswell_5_9_1.toml", 400.0),
     ] {
         let m = example(name);
         let (p, pt) = solved(&m, speed);

@@ -8,7 +8,8 @@
 //! mechanism's size): each body's centre of mass moves by `Re(a d e^{iφ})` and the body turns by
 //! `Re(a ω e^{iφ})` (the mode's [`PhysicalShape`], exact partial velocities), so a point `x` of
 //! body `b` moves by `Re(a (d_b + ω_b × (x − c_b)) e^{iφ})` and a direction `u` turns by
-//! `Re(a ω_b e^{iφ}) × u` (kept unit): the pose at `q + a Re(v e^{iφ})` to `O(a²)`
+//! `Re(a ω_b e^{iφ}) × u` (kept unit), a point inside a beam's curve by the curve's Hermite
+//! combination of its nodes' motions: the pose at `q + a Re(v e^{iφ})` to `O(a²)`
 //! ([`ModeMotion::frame`]), and a whirling mode whirls. This is what the page carries: the
 //! equilibrium once, and per mode six complex numbers a body, from which its script poses every
 //! frame itself, so the page grows with the bodies times the modes it animates, not with its
@@ -28,7 +29,9 @@ pub use svg::svg;
 use crate::mechanics::System;
 use crate::modal::C64;
 use crate::model::{FieldError, Model};
-use crate::scene::{Anchor, P3, PhysicalShape, Posed, Scene, describe, physical_shapes};
+use crate::scene::{
+    Along, Anchor, P3, PhysicalShape, Posed, Scene, describe, hermite, physical_shapes,
+};
 use crate::sweep::Point;
 
 /// What a drawing shows: the mechanism at a point's equilibrium and each mode's motion.
@@ -70,6 +73,9 @@ fn cross(a: &[C64; 3], b: &P3) -> [C64; 3] {
 /// move by `motion` (per body: displacement and rotation, complex).
 fn moved(scene: &Scene, motion: &[[[C64; 3]; 2]], anchor: &Anchor, x: &P3) -> [C64; 3] {
     let zero = [C64::new(0.0, 0.0); 3];
+    if let Some(along) = anchor.along {
+        return moved_along(scene, motion, &along);
+    }
     let Some(b) = anchor.body else {
         return zero;
     };
@@ -81,6 +87,30 @@ fn moved(scene: &Scene, motion: &[[[C64; 3]; 2]], anchor: &Anchor, x: &P3) -> [C
         let turned = cross(w, &[x[0] - c[0], x[1] - c[1], x[2] - c[2]]);
         [d[0] + turned[0], d[1] + turned[1], d[2] + turned[2]]
     }
+}
+
+/// The first-order motion of a point inside a beam's curve: the curve's Hermite combination
+/// ([`crate::scene::CurveMark`]) of its nodes' motions and of its tangents' turns,
+/// `H₁ δa + H₂ L (ωₐ × tₐ) + H₃ δb + H₄ L (ω_b × t_b)`.
+fn moved_along(scene: &Scene, motion: &[[[C64; 3]; 2]], along: &Along) -> [C64; 3] {
+    let c = &scene.beams[along.beam];
+    let h = hermite(along.xi);
+    let ends = [c.points[0], c.points[c.points.len() - 1]];
+    let mut out = [C64::new(0.0, 0.0); 3];
+    for k in 0..2 {
+        let Some(b) = c.nodes[k] else { continue };
+        let node = Anchor {
+            body: Some(b),
+            direction: false,
+            along: None,
+        };
+        let at = moved(scene, motion, &node, &ends[k]);
+        let turn = cross(&motion[b][1], &c.tangents[k]);
+        for i in 0..3 {
+            out[i] += at[i] * h[2 * k] + turn[i] * (h[2 * k + 1] * c.length);
+        }
+    }
+    out
 }
 
 impl ModeMotion {

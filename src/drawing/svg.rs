@@ -62,6 +62,7 @@ impl Projection {
 
 /// The colours of the layers: the mechanism, the mode's extremes, its quarter periods.
 const INK: &str = "#333";
+const BEAM: &str = "#8c564b";
 const EXTREMES: [&str; 2] = ["#1f77b4", "#d62728"];
 const QUARTERS: &str = "#9467bd";
 
@@ -166,7 +167,7 @@ fn heading(s: &mut String, d: &Drawing, mode: Option<&ModeMotion>) {
             "{}: equilibrium grey, extremes blue (φ = 0) and red (φ = π), quarter periods dashed",
             m.label
         ),
-        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; ports: orange arrows. Units: m".into(),
+        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; beams: brown curves; ports: orange arrows. Units: m".into(),
     };
     let _ = writeln!(
         s,
@@ -252,6 +253,26 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
                 &format!(r#"stroke="{link}" stroke-width="{width}" stroke-linecap="round"{dash}"#),
             );
         }
+    }
+    // The beams' curves, in every layer: a mode bends them.
+    let beam = match layer {
+        Layer::Main { .. } => BEAM,
+        _ => link,
+    };
+    for c in &sc.beams {
+        let points: Vec<String> = (c.points.iter())
+            .map(|x| {
+                let (a, b) = pr.at(x);
+                format!("{a},{b}")
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            r#"<polyline class="beam" data-name="{}" points="{}" fill="none" stroke="{beam}" stroke-width="{}" stroke-linecap="round"{dash}/>"#,
+            esc(&c.name),
+            points.join(" "),
+            width + 1.0
+        );
     }
     let Layer::Main { labels } = layer else {
         // A mode's layers: the links, and the centres of mass of the extremes.

@@ -2,7 +2,8 @@
 // by yaw and pitch, a mode animated over its period. Reads the drawing from #data: the scene's
 // vectors are indices into D.x; a mode's frame at phase φ moves every point x of body b by
 // Re((d_b + ω_b × (x − c_b)) e^{iφ}) and turns every direction u by Re(ω_b e^{iφ}) × u (kept
-// unit), as ModeMotion::frame does in src/drawing/mod.rs.
+// unit), and a point inside a beam's curve by the Hermite combination of its nodes' motions, as
+// ModeMotion::frame does in src/drawing/mod.rs.
 "use strict";
 const D = JSON.parse(document.getElementById("data").textContent);
 const canvas = document.getElementById("view"), ctx = canvas.getContext("2d");
@@ -18,7 +19,7 @@ const S = D.scene, X = D.x, A = D.anchor;
 // The vectors at phase φ of mode m (the equilibrium where m is null), 3 numbers each.
 function posed(m, phi) {
   if (!m) return X;
-  const c = Math.cos(phi), s = Math.sin(phi), out = new Float64Array(X.length);
+  const c = Math.cos(phi), s = Math.sin(phi), co = c, out = new Float64Array(X.length);
   for (let i = 0; i < A.length; i++) {
     const x = [X[3 * i], X[3 * i + 1], X[3 * i + 2]];
     let y = x;
@@ -32,6 +33,27 @@ function posed(m, phi) {
     }
     out[3 * i] = y[0]; out[3 * i + 1] = y[1]; out[3 * i + 2] = y[2];
   }
+  // A beam's curve inside the element: H1 δa + H2 L (ωa × ta) + H3 δb + H4 L (ωb × tb).
+  for (const c of S.beams) {
+    const n = c.points.length, a = c.points[0], b = c.points[n - 1];
+    const turn = (k, t) => {
+      const node = c.nodes[k];
+      if (node === null) return [0, 0, 0];
+      const at = j => m.re[6 * node + 3 + j] * co - m.im[6 * node + 3 + j] * s;
+      const w = [at(0), at(1), at(2)], u = [X[3 * t], X[3 * t + 1], X[3 * t + 2]];
+      return [w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]];
+    };
+    const ta = turn(0, c.tangents[0]), tb = turn(1, c.tangents[1]);
+    for (let k = 1; k < n - 1; k++) {
+      const x = k / (n - 1), x2 = x * x, x3 = x2 * x;
+      const h = [1 - 3 * x2 + 2 * x3, x - 2 * x2 + x3, 3 * x2 - 2 * x3, x3 - x2];
+      for (let j = 0; j < 3; j++) {
+        const da = out[3 * a + j] - X[3 * a + j], db = out[3 * b + j] - X[3 * b + j];
+        out[3 * c.points[k] + j] = X[3 * c.points[k] + j] + h[0] * da + h[1] * c.length * ta[j]
+          + h[2] * db + h[3] * c.length * tb[j];
+      }
+    }
+  }
   return out;
 }
 function pointIndices() {
@@ -40,6 +62,7 @@ function pointIndices() {
   for (const j of S.joints) out.push(j.at);
   for (const l of S.cuts.concat(S.elements)) { out.push(l.ends[0]); out.push(l.ends[1]); }
   for (const p of S.ports) out.push(p.at);
+  for (const c of S.beams) for (const p of c.points) out.push(p);
   return out;
 }
 const centre = [0, 1, 2].map(k => {
@@ -74,6 +97,11 @@ function drawScene(P, faint) {
   const v = i => [P[3 * i], P[3 * i + 1], P[3 * i + 2]];
   const ink = faint ? "#c8c8c8" : "#333";
   for (const b of S.bodies) for (const l of b.links) seg(v(b.cm), v(l), ink, faint ? 2 : 3);
+  for (const c of S.beams) {
+    for (let k = 1; k < c.points.length; k++) {
+      seg(v(c.points[k - 1]), v(c.points[k]), faint ? "#c8c8c8" : "#8c564b", faint ? 2 : 4);
+    }
+  }
   if (faint) return;
   const L = 0.06 * D.size;
   const along = (p, a, t) => [p[0] + t * a[0], p[1] + t * a[1], p[2] + t * a[2]];

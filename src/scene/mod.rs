@@ -4,7 +4,9 @@
 //! A [`Scene`] places every element of the model at the coordinates `q`: each body's centre
 //! of mass with the points it is joined at (its joints, cut joints, force elements and ports:
 //! drawn as links from the centre of mass), each tree joint at its point with its axes, each cut
-//! joint and force element between its two points, each port at its point with its direction.
+//! joint and force element between its two points, each port at its point with its direction,
+//! each beam element as its deflected curve ([`CurveMark`]: the cubic Hermite interpolation of
+//! its two nodes' points and turned tangents, the element's shape functions without shear).
 //! Everything comes from the bodies' poses ([`crate::mechanics::kinematics::poses`]), so what is
 //! drawn is what the equations see.
 //!
@@ -80,6 +82,39 @@ pub struct PortMark<P = P3> {
     pub rotation: bool,
 }
 
+/// A beam element drawn as its curve: `p(ξ) = H₁ a + H₂ L tₐ + H₃ b + H₄ L t_b` over
+/// [`CURVE_POINTS`] equally spaced `ξ` from node a to node b, with `a`, `b` the nodes' points,
+/// `tₐ`, `t_b` the element's axis as drawn turned with each node's body and `L` its length as
+/// drawn (so a straight unstrained element is its chord, and a rigid motion moves the curve
+/// rigidly).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CurveMark<P = P3> {
+    pub name: String,
+    /// The nodes' bodies (`None`: the ground): the curve moves with them.
+    pub nodes: [Option<usize>; 2],
+    /// `L`, m.
+    pub length: f64,
+    /// `tₐ`, `t_b`: unit directions, each turned with its node's body.
+    pub tangents: [P; 2],
+    /// The curve's points, the first and the last at the nodes.
+    pub points: Vec<P>,
+}
+
+/// The number of points a beam element is drawn through.
+pub const CURVE_POINTS: usize = 9;
+
+/// The cubic Hermite functions `[H₁, H₂, H₃, H₄]` at `ξ ∈ [0, 1]` (value at a, slope at a,
+/// value at b, slope at b).
+pub fn hermite(xi: f64) -> [f64; 4] {
+    let (x2, x3) = (xi * xi, xi * xi * xi);
+    [
+        1.0 - 3.0 * x2 + 2.0 * x3,
+        xi - 2.0 * x2 + x3,
+        3.0 * x2 - 2.0 * x3,
+        x3 - x2,
+    ]
+}
+
 /// The mechanism placed at one configuration (see the module documentation).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Scene<P = P3> {
@@ -88,14 +123,24 @@ pub struct Scene<P = P3> {
     pub cuts: Vec<LinkMark<P>>,
     pub elements: Vec<LinkMark<P>>,
     pub ports: Vec<PortMark<P>>,
+    pub beams: Vec<CurveMark<P>>,
 }
 
 /// Where a vector of a scene comes from: the body whose pose placed it (`None`: the ground),
-/// and whether it is a direction (it turns with the body) or a point (it moves with it).
+/// and whether it is a direction (it turns with the body) or a point (it moves with it); a
+/// point of a beam's curve inside the element moves with both nodes (`along`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Anchor {
     pub body: Option<usize>,
     pub direction: bool,
+    pub along: Option<Along>,
+}
+
+/// A point of beam `beam`'s curve at `ξ`, strictly inside the element.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Along {
+    pub beam: usize,
+    pub xi: f64,
 }
 
 /// A vector of a scene with its [`Anchor`].
@@ -108,8 +153,8 @@ struct Placed {
 impl<P> Scene<P> {
     /// The same scene with every vector (point or direction) `p` replaced by `f(p)`, called in
     /// one fixed order (bodies: centre of mass, axes, links; joints: point, axes; cut joints and
-    /// force elements: ends; ports: point, direction), so that scenes of one mechanism map
-    /// alike.
+    /// force elements: ends; ports: point, direction; beams: tangents, points), so that scenes
+    /// of one mechanism map alike.
     pub fn map<Q>(&self, f: &mut impl FnMut(&P) -> Q) -> Scene<Q> {
         let link = |l: &LinkMark<P>, f: &mut dyn FnMut(&P) -> Q| LinkMark {
             name: l.name.clone(),
@@ -145,12 +190,22 @@ impl<P> Scene<P> {
                 rotation: p.rotation,
             })
             .collect();
+        let beams = (self.beams.iter())
+            .map(|c| CurveMark {
+                name: c.name.clone(),
+                nodes: c.nodes,
+                length: c.length,
+                tangents: [f(&c.tangents[0]), f(&c.tangents[1])],
+                points: c.points.iter().map(&mut *f).collect(),
+            })
+            .collect();
         Scene {
             bodies,
             joints,
             cuts,
             elements,
             ports,
+            beams,
         }
     }
 }
@@ -186,7 +241,8 @@ impl Scene {
         let joints = self.joints.iter().map(|j| j.at);
         let links = (self.cuts.iter().chain(&self.elements)).flat_map(|l| l.ends);
         let ports = self.ports.iter().map(|p| p.at);
-        bodies.chain(joints).chain(links).chain(ports)
+        let beams = self.beams.iter().flat_map(|c| c.points.iter().copied());
+        bodies.chain(joints).chain(links).chain(ports).chain(beams)
     }
 
     /// The diagonal of the box around every point drawn, with the origin (m): the scale of the
@@ -212,6 +268,7 @@ fn point(body: Option<usize>, x: &V3<f64>) -> Placed {
         anchor: Anchor {
             body,
             direction: false,
+            along: None,
         },
     }
 }
@@ -223,6 +280,7 @@ fn direction(body: Option<usize>, u: &V3<f64>) -> Placed {
         anchor: Anchor {
             body,
             direction: true,
+            along: None,
         },
     }
 }
@@ -241,6 +299,7 @@ fn placed(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene<Placed> {
     let cuts = at.cuts();
     let elements = at.elements();
     let ports = at.ports();
+    let beams = at.beams();
     let pose = &at.pose;
     let bodies = (sys.bodies.iter().zip(&model.bodies).enumerate())
         .map(|(b, (body, mb))| BodyMark {
@@ -256,6 +315,7 @@ fn placed(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene<Placed> {
         cuts,
         elements,
         ports,
+        beams,
     }
 }
 
@@ -305,13 +365,14 @@ impl Placer<'_> {
                 }),
             );
             let mut axes = Vec::new();
-            if axis != unused {
+            // An axis a type ignores (a fixed joint's) may be absent: zero, not drawn.
+            if axis != unused && j.geometry.axis.norm() > 0.0 {
                 axes.push(direction(
                     j.parent,
                     &(self.pose_of(j.parent).rot * j.geometry.axis),
                 ));
             }
-            if axis2 != unused {
+            if axis2 != unused && j.geometry.axis2.norm() > 0.0 {
                 axes.push(direction(Some(j.child), &(child.rot * j.geometry.axis2)));
             }
             self.attach(j.parent, at);
@@ -396,5 +457,50 @@ impl Placer<'_> {
             });
         }
         ports
+    }
+
+    fn beams(&mut self) -> Vec<CurveMark<Placed>> {
+        let mut beams = Vec::with_capacity(self.sys.beams.len());
+        for (i, (e, mb)) in self.sys.beams.iter().zip(&self.model.beams).enumerate() {
+            let nodes = [e.body1, e.body2];
+            let ends = [
+                self.pose_of(e.body1).apply(&e.point1),
+                self.pose_of(e.body2).apply(&e.point2),
+            ];
+            let axis = e.axes.column(0).into_owned();
+            let tangents = [0, 1].map(|k| self.pose_of(nodes[k]).rot * axis);
+            let points = (0..CURVE_POINTS)
+                .map(|k| {
+                    let xi = k as f64 / (CURVE_POINTS - 1) as f64;
+                    let h = hermite(xi);
+                    let x = ends[0] * h[0]
+                        + tangents[0] * (h[1] * e.length)
+                        + ends[1] * h[2]
+                        + tangents[1] * (h[3] * e.length);
+                    match k {
+                        0 => point(nodes[0], &ends[0]),
+                        _ if k == CURVE_POINTS - 1 => point(nodes[1], &ends[1]),
+                        _ => Placed {
+                            x: p3(&x),
+                            anchor: Anchor {
+                                body: None,
+                                direction: false,
+                                along: Some(Along { beam: i, xi }),
+                            },
+                        },
+                    }
+                })
+                .collect();
+            self.attach(nodes[0], point(nodes[0], &ends[0]));
+            self.attach(nodes[1], point(nodes[1], &ends[1]));
+            beams.push(CurveMark {
+                name: mb.name.clone(),
+                nodes,
+                length: e.length,
+                tangents: [0, 1].map(|k| direction(nodes[k], &tangents[k])),
+                points,
+            });
+        }
+        beams
     }
 }
