@@ -4,7 +4,8 @@
 //! A design is admissible when every number of the model that does not depend on the speed
 //! evaluates to a finite value, no body has negative mass, every inertia is symmetric and
 //! positive semi-definite, and every beam's section is physical (positive stiffnesses,
-//! diameters and densities, an inner diameter below the outer one). (Numbers that depend on
+//! diameters and densities, an inner diameter below the outer one) and keeps its direction
+//! (its nodes do not meet or cross). (Numbers that depend on
 //! the speed are checked where they are evaluated, speed by speed, and a failure there fails
 //! that speed with its reason.) A sample that is not admissible is a sample of a mechanism that
 //! cannot exist: it counts as failed, with the reason, instead of entering the statistics with
@@ -37,6 +38,28 @@ impl std::fmt::Display for Element<'_> {
             name => write!(f, "{} '{name}'", self.0),
         }
     }
+}
+
+/// The length of beam `beam` along its nominal chord at the design `p`, where that is not
+/// positive: its nodes meet or cross (a station's length toleranced through zero), which the
+/// element would read as a beam turned end for end. Points that depend on the speed are
+/// checked where they are evaluated.
+fn reversed(beam: &super::Beam, p: &[f64], nominal: &[f64]) -> Option<f64> {
+    let chord = |p: &[f64]| -> Option<[f64; 3]> {
+        let mut c = [0.0; 3];
+        for (k, x) in c.iter_mut().enumerate() {
+            let (a, b) = (&beam.point1[k], &beam.point2[k]);
+            if a.expr.uses_speed() || b.expr.uses_speed() {
+                return None;
+            }
+            *x = b.eval(p, 0.0).ok()? - a.eval(p, 0.0).ok()?;
+        }
+        Some(c)
+    };
+    let (now, then) = (chord(p)?, chord(nominal)?);
+    let norm = then.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let along = (0..3).map(|k| now[k] * then[k]).sum::<f64>() / norm;
+    (along <= 0.0).then_some(along)
 }
 
 /// A beam section's defect at the design `p`, if any, as `(defect, value)`: a stiffness,
@@ -244,9 +267,19 @@ impl Model {
                 }
             }
         }
+        let nominal = (!self.beams.is_empty()).then(|| self.nominal());
         for b in &self.beams {
             if let Some((reason, value)) = section_defect(b, p) {
                 return Err(Defect { reason, value });
+            }
+            if let Some(along) = nominal.as_ref().and_then(|n| reversed(b, p, n)) {
+                return Err(Defect {
+                    reason: format!(
+                        "beam '{}': its nodes meet or cross (a length its tolerance makes zero or negative; m)",
+                        b.name
+                    ),
+                    value: along,
+                });
             }
         }
         Ok(())

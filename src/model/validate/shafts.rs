@@ -26,6 +26,10 @@ use toml::Spanned;
 /// mistyped count can ask of memory and time (a 10 000-element model has 60 000 coordinates).
 const MAX_ELEMENTS: i64 = 10_000;
 
+/// Longest text of a node's arc length (an expression is at most 4096 bytes; the rest of a
+/// position's text is the start and the axis).
+const MAX_ARC_TEXT: usize = 3000;
+
 /// Longest shaft name: the generated names add up to `_<k>_frame` to it.
 const MAX_SHAFT_NAME: usize = 48;
 
@@ -33,17 +37,24 @@ const MAX_SHAFT_NAME: usize = 48;
 /// they stand for.
 pub(super) fn expand(ctx: &Ctx, raw: &mut FileSchema) -> R<()> {
     let shafts = std::mem::take(&mut raw.shafts);
+    // Counted before anything is generated, so a mistyped count costs nothing.
     let mut total = 0;
     for s in &shafts {
-        total += mesh(ctx, s.get_ref(), raw)?;
-        if total > MAX_ELEMENTS as usize {
-            return Err(ctx.err(
-                s.span(),
-                format!(
-                    "the shafts have {total} elements together; at most {MAX_ELEMENTS} are allowed"
-                ),
-            ));
+        let owner = format!("shaft '{}'", s.get_ref().name.get_ref());
+        for (i, st) in s.get_ref().stations.get_ref().iter().enumerate() {
+            total += elements(ctx, &owner, i, st)?;
+            if total > MAX_ELEMENTS as usize {
+                return Err(ctx.err(
+                    st.span(),
+                    format!(
+                        "the shafts have more than {MAX_ELEMENTS} elements together (here {total})"
+                    ),
+                ));
+            }
         }
+    }
+    for s in &shafts {
+        mesh(ctx, s.get_ref(), raw)?;
     }
     Ok(())
 }
@@ -96,11 +107,42 @@ fn mesh(ctx: &Ctx, s: &ShaftSchema, raw: &mut FileSchema) -> R<usize> {
             ));
         }
         ctx.field(c, format!("{owner} coupling"))?;
+        if let Some(b) = &s.start_body {
+            return Err(ctx.err(
+                c.span(),
+                format!("{owner}: the coupling holds the first generated node's frame, and `start_body` '{}' is the first node: hold the twist at that body instead", b.get_ref()),
+            ));
+        }
+    }
+    if s.spin.is_some() {
+        for b in [&s.start_body, &s.end_body].into_iter().flatten() {
+            if b.get_ref() == "ground" {
+                return Err(ctx.err(
+                    b.span(),
+                    format!("{owner}: its nodes spin, and the ground does not: a spinning shaft ends on a body that turns with it (a driven hub), or on a generated node held by a bearing"),
+                ));
+            }
+        }
+    }
+    if let (Some(a), Some(b)) = (&s.start_body, &s.end_body) {
+        let count: i64 = (stations.iter())
+            .map(|st| st.get_ref().elements.as_ref().map_or(1, |n| *n.get_ref()))
+            .sum();
+        if a.get_ref() == b.get_ref() && count == 1 {
+            return Err(ctx.err(
+                b.span(),
+                format!(
+                    "{owner}: its one element would join '{}' to itself; a beam joins two bodies",
+                    b.get_ref()
+                ),
+            ));
+        }
     }
     // Each node's arc length from `start`, and where it sits: station, element of it (from 1)
     // and the station's count.
     let mut arcs: Vec<(String, usize, usize, usize)> = vec![("0".into(), 0, 0, 1)];
-    let mut before = String::from("0");
+    // The arc length before the station: the numbers summed, the expressions' text added.
+    let (mut number, mut text_before) = (0.0, String::new());
     for (i, st) in stations.iter().enumerate() {
         let st_ref = st.get_ref();
         let n = elements(ctx, &owner, i, st)?;
@@ -128,9 +170,19 @@ fn mesh(ctx: &Ctx, s: &ShaftSchema, raw: &mut FileSchema) -> R<usize> {
         }
         let l = text(st_ref.length.get_ref());
         for k in 1..=n {
-            arcs.push((format!("{before} + {l}*{k}/{n}"), i, k, n));
+            let arc = format!("{number:e}{text_before} + {l}*{k}/{n}");
+            if arc.len() > MAX_ARC_TEXT {
+                return Err(ctx.err(
+                    st_ref.length.span(),
+                    format!("{owner} station {}: the lengths given as expressions up to here add up to {} bytes of text, more than {MAX_ARC_TEXT}; give the stations' lengths as numbers, or fewer stations with expressions", i + 1, arc.len()),
+                ));
+            }
+            arcs.push((arc, i, k, n));
         }
-        before = format!("{before} + {l}");
+        match st_ref.length.get_ref() {
+            Num::Value(v) => number += v,
+            Num::Expr(_) => text_before = format!("{text_before} + {l}"),
+        }
     }
     let start = s.start.get_ref();
     let point = |k: usize| -> SVec {
@@ -327,16 +379,28 @@ fn section(
 ) -> R<BeamSchema> {
     let t = st.get_ref();
     // A station given by section properties takes no material from the shaft.
-    let properties = t.ea.is_some() || t.gj.is_some() || t.ei.is_some() || t.rho_a.is_some();
+    let properties = t.ea.is_some()
+        || t.gj.is_some()
+        || t.ei.is_some()
+        || t.kga.is_some()
+        || t.rho_a.is_some()
+        || t.rho_i.is_some();
     let or = |a: &Option<SNum>, b: &Option<SNum>| match properties {
         true => a.clone(),
         false => a.clone().or_else(|| b.clone()),
     };
+    taper_ends(ctx, owner, t)?;
     beam.outer_diameter = diameter(ctx, owner, &t.outer_diameter, fraction)?;
     beam.inner_diameter = diameter(ctx, owner, &t.inner_diameter, fraction)?;
     beam.youngs = or(&t.youngs, &s.youngs);
-    beam.shear_modulus = or(&t.shear_modulus, &s.shear_modulus);
-    beam.nu = or(&t.nu, &s.nu);
+    // G and ν say one thing: a station that gives either takes neither from the shaft.
+    if t.shear_modulus.is_some() || t.nu.is_some() {
+        beam.shear_modulus = t.shear_modulus.clone();
+        beam.nu = t.nu.clone();
+    } else {
+        beam.shear_modulus = or(&t.shear_modulus, &s.shear_modulus);
+        beam.nu = or(&t.nu, &s.nu);
+    }
     beam.density = or(&t.density, &s.density);
     beam.shear_coefficient = or(&t.shear_coefficient, &s.shear_coefficient);
     beam.ea = t.ea.clone();
@@ -346,6 +410,47 @@ fn section(
     beam.rho_a = t.rho_a.clone();
     beam.rho_i = t.rho_i.clone();
     Ok(beam)
+}
+
+/// A diameter's values at the station's two ends (nominal; `None` where it depends on the
+/// speed, or is not given).
+fn ends(ctx: &Ctx, owner: &str, d: &Option<SNums>) -> R<Option<[f64; 2]>> {
+    let Some(d) = d else { return Ok(None) };
+    let value = |n: &SNum| -> R<Option<f64>> {
+        let f = ctx.field(n, format!("{owner} diameter"))?;
+        ctx.nominal(&f)
+    };
+    Ok(match d.get_ref() {
+        Nums::One(n) => value(&Spanned::new(d.span(), n.clone()))?.map(|v| [v, v]),
+        Nums::Many(e) if e.len() == 2 => value(&e[0])?.zip(value(&e[1])?).map(|(a, b)| [a, b]),
+        Nums::Many(_) => None,
+    })
+}
+
+/// A taper is checked at both ends, not only at the elements' midpoints: the outer diameter
+/// positive, the inner one not negative and below the outer.
+fn taper_ends(ctx: &Ctx, owner: &str, t: &StationSchema) -> R<()> {
+    let outer = ends(ctx, owner, &t.outer_diameter)?;
+    let inner = ends(ctx, owner, &t.inner_diameter)?;
+    for (k, side) in ["start", "end"].iter().enumerate() {
+        let bad_outer = outer.is_some_and(|o| o[k].is_nan() || o[k] <= 0.0);
+        let bad_inner = inner
+            .is_some_and(|i| i[k].is_nan() || i[k] < 0.0 || outer.is_some_and(|o| i[k] >= o[k]));
+        let (what, d, v) = match (bad_outer, bad_inner) {
+            (true, _) => ("outer", &t.outer_diameter, outer.map(|o| o[k])),
+            (_, true) => ("inner", &t.inner_diameter, inner.map(|i| i[k])),
+            _ => continue,
+        };
+        let span = d.as_ref().map_or(0..0, |d| d.span());
+        return Err(ctx.err(
+            span,
+            format!(
+                "{owner}: {what} diameter {} at the station's {side}: the outer one must be positive, the inner one not negative and not below the outer one",
+                v.unwrap_or(f64::NAN)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A diameter: one value, or `[start, end]` interpolated linearly at `fraction`.
