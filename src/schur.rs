@@ -255,6 +255,7 @@ impl Eigen {
             && let Some((values, left, right)) = linalg::eigen_dense(&a)
             && finite(&left)
             && finite(&right)
+            && pairs_hold(&a, &values, &right)
         {
             Route::Dense {
                 values,
@@ -298,6 +299,44 @@ impl Eigen {
         };
         DVector::from_iterator(v.len(), v.iter().zip(d).map(|(z, d)| z / *d))
     }
+}
+
+/// Largest backward error `‖A x − λ x‖ / (‖A‖_F ‖x‖)` accepted from the dense eigensolver: a
+/// backward stable one leaves a few `n ε`.
+const PAIR_RESIDUAL: f64 = 1e-10;
+
+/// Does every pair of the dense route (`dgeev`'s layout) satisfy `A x = λ x` to
+/// [`PAIR_RESIDUAL`]? A library's eigensolver is checked, not trusted: faer's symmetric one
+/// returned pairs that did not belong together on a graded matrix (see
+/// [`linalg::symmetric_definite`]); where this fails, the Schur substitution takes over.
+fn pairs_hold(a: &DMatrix<f64>, values: &[C64], right: &DMatrix<f64>) -> bool {
+    let n = a.nrows();
+    let norm = a.norm();
+    let ar = a * right;
+    let mut k = 0;
+    while k < n {
+        let l = values[k];
+        // A real root's vector is column k; a complex pair's, columns k (real) and k + 1 (imag).
+        let (re, im) = if l.im == 0.0 {
+            (k, None)
+        } else {
+            (k, Some(k + 1))
+        };
+        let mut r2 = 0.0;
+        let mut x2 = 0.0;
+        for i in 0..n {
+            let x = C64::new(right[(i, re)], im.map_or(0.0, |j| right[(i, j)]));
+            let ax = C64::new(ar[(i, re)], im.map_or(0.0, |j| ar[(i, j)]));
+            r2 += (ax - l * x).norm_sqr();
+            x2 += x.norm_sqr();
+        }
+        let r = r2.sqrt();
+        if r.is_nan() || r > PAIR_RESIDUAL * norm * x2.sqrt() {
+            return false;
+        }
+        k += if im.is_some() { 2 } else { 1 };
+    }
+    true
 }
 
 /// Balances `a` in place by a diagonal similarity `D⁻¹ A D` of powers of two (exact), making
