@@ -8,10 +8,17 @@
 //! * a tapered station against the stepped stations of its elements' midpoint diameters;
 //! * a blade meshed from a hub body (`start_body`) at the published rotating-cantilever
 //!   frequencies;
+//! * the rigid-segment blade (`examples/rotating_blade.toml`'s chain) converging, at second
+//!   order in the segment length, to the beam blade of `examples/rotating_blade_beams.toml`;
+//! * the governor on a flexible spindle (`examples/governor_on_flexible_spindle.toml`): its
+//!   collar mode is the rigid governor's, its spindle's modes above it;
 //! * a cantilever of 60 elements (a 360-coordinate pencil whose reduced matrix spans eight
 //!   decades) at the closed-form matrices' frequencies, both planes' roots together;
 //! * bad shafts refused at the field they come from.
 
+#[path = "../examples/common/chain.rs"]
+#[allow(dead_code)]
+mod chain;
 mod common;
 
 use common::solve;
@@ -255,6 +262,83 @@ fn a_finely_meshed_cantilever_keeps_its_repeated_roots() {
                 "direct {direct}: root {k} is {} against {x}",
                 w[k]
             );
+        }
+    }
+}
+
+/// The flap frequencies of `m` at `speed`, ascending: the modes whose translations are along z
+/// (out of the plane of rotation).
+fn flap(m: &Compiled, speed: f64) -> Vec<f64> {
+    let pt = solve(m, speed, false);
+    let names: Vec<&str> = (pt.linear.independent.iter())
+        .map(|&i| m.model().coordinates[i].name.as_str())
+        .collect();
+    let mut out: Vec<f64> = (pt.modes.iter())
+        .filter(|mode| {
+            let moves = |axis: &str| -> f64 {
+                (mode.root.right.iter().zip(&names))
+                    .filter(|(_, n)| n.ends_with(axis))
+                    .map(|(v, _)| v.norm_sqr())
+                    .sum()
+            };
+            let z = moves(".z");
+            z > 0.99 * (z + moves(".x") + moves(".y"))
+        })
+        .map(|mode| mode.natural_frequency)
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out
+}
+
+#[test]
+fn the_rigid_segment_blade_converges_to_the_beam_blade() {
+    // Hencky's chain of n rigid segments (springs EI/h) is a second-order finite-difference
+    // model of the Euler–Bernoulli blade: its first two flap frequencies approach the beam
+    // elements' (whose own error at 12 elements is below 1e-6) with errors falling about
+    // fourfold as n doubles, at rest and spinning.
+    let beam = common::example("rotating_blade_beams.toml");
+    for speed in [0.0, 10.0, 20.0] {
+        let reference = flap(&beam, speed);
+        let errors: Vec<[f64; 2]> = [10, 20, 40, 80]
+            .iter()
+            .map(|&n| {
+                let w: Vec<f64> = roots(&model(&chain::chain(n)), speed, false)
+                    .iter()
+                    .map(|r| r.1)
+                    .collect();
+                [0, 1].map(|k| ((w[k] - reference[k]) / reference[k]).abs())
+            })
+            .collect();
+        for k in 0..2 {
+            for pair in errors.windows(2) {
+                let ratio = pair[0][k] / pair[1][k];
+                assert!(
+                    (3.0..5.0).contains(&ratio),
+                    "{speed} rad/s, flap mode {}: errors {errors:?}",
+                    k + 1
+                );
+            }
+            assert!(errors[3][k] < 2e-3, "{speed} rad/s: {errors:?}");
+        }
+    }
+}
+
+#[test]
+fn the_governor_on_its_flexible_spindle_keeps_the_rigid_governors_collar_mode() {
+    // The governor's arms hinged on a spindle node and its collar sliding on another, the
+    // nodes riding on the turning carrier: the collar mode is the rigid governor's (whose
+    // spindle is driven, so its mass does not enter), moved only by the spindle's compliance
+    // (its gravity sag, its tilt under the arms' reactions); and the spindle's own bending
+    // modes lie above it.
+    let rigid = common::example("governor.toml");
+    let flexible = common::example("governor_on_flexible_spindle.toml");
+    for speed in [1.0, 3.0] {
+        let want = roots(&rigid, speed, false)[0];
+        for direct in [false, true] {
+            let got = roots(&flexible, speed, direct);
+            let gap = (got[0].0 - want.0).hypot(got[0].1 - want.1) / want.0.hypot(want.1);
+            assert!(gap < 1e-5, "{speed} rad/s: {:?} vs {want:?}", got[0]);
+            assert!(got[1].1 > 100.0, "{speed} rad/s: {got:?}");
         }
     }
 }

@@ -1,0 +1,93 @@
+"""ROSS side by side with modaltol on Friswell et al. (2010) Example 5.9.1.
+
+ROSS's `rotor_example()` is the same rotor as `examples/friswell_5_9_1.toml` (six Timoshenko
+elements, two disks, bearings of 1 MN/m). This prints its six lowest natural frequencies at 0
+and 4000 rpm, the time of its first modal point (imports and set-up excluded), of a warm one
+(best of 20), and of a 20-speed sweep (the cost of a Campbell diagram, per speed), then runs
+`modaltol modal` on the example at the same speeds and prints its frequencies and its time per
+point from `modaltol sweep` (the process's total, parse and recording included, divided by
+the number of speeds).
+
+Outside the test suite: ROSS needs Python >= 3.13.
+
+    python3.13 -m venv /tmp/rossv && /tmp/rossv/bin/pip install ross-rotordynamics
+    cargo build --release
+    /tmp/rossv/bin/python benches/ross_friswell.py [target/release/modaltol]
+"""
+
+import json
+import subprocess
+import sys
+import time
+
+import numpy as np
+import ross as rs
+
+MODALTOL = sys.argv[1] if len(sys.argv) > 1 else "target/release/modaltol"
+EXAMPLE = "examples/friswell_5_9_1.toml"
+SPEEDS = [0.0, 4000 * np.pi / 30]
+
+
+def best(f, rounds):
+    out = float("inf")
+    for _ in range(rounds):
+        t = time.perf_counter()
+        f()
+        out = min(out, time.perf_counter() - t)
+    return out
+
+
+def ross() -> None:
+    rotor = rs.rotor_example()
+    t = time.perf_counter()
+    modal = rotor.run_modal(speed=SPEEDS[1])
+    first = time.perf_counter() - t
+    for speed in SPEEDS:
+        modal = rotor.run_modal(speed=speed)
+        print(f"ROSS {rs.__version__} at {speed:.2f} rad/s: wd =", np.round(modal.wd[:6], 2))
+    warm = best(lambda: rotor.run_modal(speed=SPEEDS[1]), 20)
+    sweep = np.linspace(0, SPEEDS[1], 20)
+    campbell = best(lambda: rotor.run_campbell(sweep), 3) / len(sweep)
+    print(
+        f"ROSS: first modal point {1e3 * first:.1f} ms, warm {1e3 * warm:.2f} ms (best of 20), "
+        f"Campbell {1e3 * campbell:.2f} ms a speed (20 speeds, best of 3)"
+    )
+
+
+def modaltol() -> None:
+    for speed in SPEEDS:
+        out = subprocess.run(
+            [MODALTOL, "modal", EXAMPLE, "--speed", str(speed), "--format", "json"],
+            capture_output=True,
+            check=True,
+            text=True,
+        ).stdout
+        wd = sorted(m["damped_frequency"] for m in json.loads(out)["modes"])
+        wd = [w for w in wd if w > 10][:6]
+        print(f"modaltol at {speed:.2f} rad/s: wd =", np.round(wd, 2))
+    one = best(
+        lambda: subprocess.run(
+            [MODALTOL, "modal", EXAMPLE, "--speed", str(SPEEDS[1])],
+            capture_output=True,
+            check=True,
+        ),
+        10,
+    )
+    speeds = f"0:{SPEEDS[1]:.6f}:{SPEEDS[1] / 19 - 1e-9:.9f}"
+    sweep = best(
+        lambda: subprocess.run(
+            [MODALTOL, "sweep", EXAMPLE, "--speed", speeds, "--format", "csv"],
+            capture_output=True,
+            check=True,
+        ),
+        5,
+    )
+    print(
+        f"modaltol: one modal point {1e3 * one:.1f} ms (the whole process, best of 10), "
+        f"sweep {1e3 * sweep / 20:.2f} ms a speed (20 speeds, the whole process, best of 5)"
+    )
+
+
+if __name__ == "__main__":
+    ross()
+    modaltol()
