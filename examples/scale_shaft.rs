@@ -15,7 +15,7 @@ use std::time::Instant;
 
 /// The Friswell rotor in `n` elements (`n` a multiple of 6).
 fn rotor(n: usize) -> String {
-    assert!(n % 6 == 0 && n > 0, "n must be a positive multiple of 6");
+    assert!(n.is_multiple_of(6) && n > 0, "n must be a positive multiple of 6");
     let third = n / 3;
     let disk = |name: &str, outer: f64, node: usize, x: f64| {
         format!(
