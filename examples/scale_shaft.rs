@@ -37,7 +37,6 @@ fn rotor(n: usize) -> String {
     format!(
         "name = \"friswell_{n}\"\ngravity = [0, 0, 0]\n\
          [parameters]\nd = 0.05\nE = 211e9\nG = 81.2e9\nrho = 7810\nwidth = 0.07\nbore = 0.05\n\
-         pi = 3.141592653589793\n\
          [[shafts]]\nname = \"shaft\"\nstart = [0, 0, 0]\naxis = [1, 0, 0]\nspin = \"speed\"\n\
          coupling = 1\nE = \"E\"\nG = \"G\"\ndensity = \"rho\"\n\
          stations = [{{ length = 1.5, elements = {n}, outer_diameter = \"d\" }}]\n{}{}{}{}",
