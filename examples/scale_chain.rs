@@ -45,6 +45,10 @@ use modaltol::table::Row;
 use modaltol::table::{Detail, McStat};
 use std::time::Instant;
 
+#[path = "common/measure.rs"]
+mod measure;
+use measure::{exponent, peak_mb};
+
 #[path = "common/chain.rs"]
 mod common_chain;
 use common_chain::{Coupling, chain, chain_family, chain_toleranced, with_joint_dampers};
@@ -76,18 +80,6 @@ fn toleranced(n: usize, k: usize, args: &[String]) -> String {
         Some(c) => chain_family(n, k, c),
         None => chain_toleranced(n, k),
     }
-}
-
-/// Peak resident memory of this process (MB), from `/proc/self/status`.
-fn peak_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
 /// Measures one n in this process: `cold swept sensitivities` (s) and the peak memory after
@@ -127,16 +119,6 @@ fn measure(n: usize) -> [f64; 5] {
         t.elapsed().as_secs_f64()
     });
     [cold, swept, sens, cold_peak, peak_mb()]
-}
-
-/// Least-squares slope of `ln y` over `ln x`.
-fn exponent(x: &[f64], y: &[f64]) -> f64 {
-    let (lx, ly): (Vec<f64>, Vec<f64>) = x.iter().zip(y).map(|(a, b)| (a.ln(), b.ln())).unzip();
-    let k = lx.len() as f64;
-    let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
-    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let sxx: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
-    sxy / sxx
 }
 
 /// `tolerances n [--monte-carlo] [--no-quadrature] k …` (see the module documentation).

@@ -13,9 +13,16 @@ use modaltol::compiled::Compiled;
 use modaltol::sweep::{Options, Sweep, initial_guess, point};
 use std::time::Instant;
 
+#[path = "common/measure.rs"]
+mod measure;
+use measure::{exponent, peak_mb};
+
 /// The Friswell rotor in `n` elements (`n` a multiple of 6).
 fn rotor(n: usize) -> String {
-    assert!(n.is_multiple_of(6) && n > 0, "n must be a positive multiple of 6");
+    assert!(
+        n.is_multiple_of(6) && n > 0,
+        "n must be a positive multiple of 6"
+    );
     let third = n / 3;
     let disk = |name: &str, outer: f64, node: usize, x: f64| {
         format!(
@@ -47,18 +54,6 @@ fn rotor(n: usize) -> String {
     )
 }
 
-/// Peak resident memory of this process (MB), from `/proc/self/status`.
-fn peak_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
-
 /// One n in this process: `[cold, swept]` (s) and the peak memory (MB).
 fn measure(n: usize) -> [f64; 3] {
     let text = rotor(n);
@@ -84,16 +79,6 @@ fn measure(n: usize) -> [f64; 3] {
         t.elapsed().as_secs_f64() / 19.0
     });
     [cold, swept, peak_mb()]
-}
-
-/// Least-squares slope of `ln y` over `ln x`.
-fn exponent(x: &[f64], y: &[f64]) -> f64 {
-    let (lx, ly): (Vec<f64>, Vec<f64>) = x.iter().zip(y).map(|(a, b)| (a.ln(), b.ln())).unzip();
-    let k = lx.len() as f64;
-    let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
-    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let sxx: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
-    sxy / sxx
 }
 
 fn main() {

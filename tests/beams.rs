@@ -502,32 +502,6 @@ fn blade(n: usize) -> Compiled {
     model(&text)
 }
 
-/// The flapwise frequencies of the blade at `speed`, ascending: the modes whose translations
-/// are out of the plane of rotation (along z; their rotations may carry some twist, which the
-/// torsional inertia couples to flapping on a spinning hub).
-fn flapwise(m: &Compiled, speed: f64, direct: bool) -> Vec<f64> {
-    let pt = solve(m, speed, direct);
-    let names: Vec<&str> = (pt.linear.independent.iter())
-        .map(|&i| m.model().coordinates[i].name.as_str())
-        .collect();
-    let mut out: Vec<f64> = (pt.modes.iter())
-        .filter(|mode| {
-            let x = &mode.root.right;
-            let moves = |axis: &str| -> f64 {
-                (x.iter().zip(&names))
-                    .filter(|(_, n)| n.ends_with(axis))
-                    .map(|(v, _)| v.norm_sqr())
-                    .sum()
-            };
-            let z = moves(".z");
-            z > 0.99 * (z + moves(".x") + moves(".y"))
-        })
-        .map(|mode| mode.natural_frequency)
-        .collect();
-    out.sort_by(f64::total_cmp);
-    out
-}
-
 #[test]
 fn a_rotating_blade_flaps_at_the_published_frequencies() {
     // Uniform cantilever on a hub of zero radius, flapwise, nondimensional (Wright, Smith,
@@ -546,7 +520,7 @@ fn a_rotating_blade_flaps_at_the_published_frequencies() {
         let m = blade(n);
         for (speed, published) in table {
             for direct in [false, true] {
-                let w = flapwise(&m, speed, direct);
+                let w = common::flapwise(&m, speed, direct);
                 for (k, x) in published.iter().enumerate() {
                     assert!(
                         ((w[k] - x) / x).abs() <= 1e-3,
@@ -560,7 +534,10 @@ fn a_rotating_blade_flaps_at_the_published_frequencies() {
     }
     // Southwell's coefficients, ω² = ω₀² + S Ω² for small Ω: 1.1933 and 6.4782.
     let m = blade(16);
-    let (w0, w) = (flapwise(&m, 0.0, false), flapwise(&m, 0.05, false));
+    let (w0, w) = (
+        common::flapwise(&m, 0.0, false),
+        common::flapwise(&m, 0.05, false),
+    );
     for (k, s) in [1.1933, 6.4782].into_iter().enumerate() {
         let measured = (w[k] * w[k] - w0[k] * w0[k]) / (0.05 * 0.05);
         assert!(

@@ -194,3 +194,30 @@ axis = [0.2, 0.3, 1]
 "#
     )
 }
+
+/// The flapwise frequencies of a blade spinning about z at `speed`, ascending: the modes whose
+/// translations (coordinates `….x`, `….y`, `….z`) are out of the plane of rotation, along z
+/// (their rotations may carry some twist, which the torsional inertia couples to flapping on a
+/// spinning hub).
+pub fn flapwise(m: &Compiled, speed: f64, direct: bool) -> Vec<f64> {
+    let pt = solve(m, speed, direct);
+    let names: Vec<&str> = (pt.linear.independent.iter())
+        .map(|&i| m.model().coordinates[i].name.as_str())
+        .collect();
+    let mut out: Vec<f64> = (pt.modes.iter())
+        .filter(|mode| {
+            let x = &mode.root.right;
+            let moves = |axis: &str| -> f64 {
+                (x.iter().zip(&names))
+                    .filter(|(_, n)| n.ends_with(axis))
+                    .map(|(v, _)| v.norm_sqr())
+                    .sum()
+            };
+            let z = moves(".z");
+            z > 0.99 * (z + moves(".x") + moves(".y"))
+        })
+        .map(|mode| mode.natural_frequency)
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out
+}
