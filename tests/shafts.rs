@@ -5,6 +5,9 @@
 //!   by the shaft's coupling) against the same rotor written node by node (disks as the nodes'
 //!   own mass, the twist held by a joint stiffness): every root at rest and at 4000 rpm;
 //! * Friswell Example 5.9.2 (anisotropic bearings) at the book's frequencies;
+//! * the same rotor seen from the ground (spinning nodes) and from a frame turning with it
+//!   (nodes on a driven carrier): every root the same, shifted by the speed where it whirls
+//!   (the frame-consistency test that catches spurious spin softening);
 //! * a tapered station against the stepped stations of its elements' midpoint diameters;
 //! * a blade meshed from a hub body (`start_body`) at the published rotating-cantilever
 //!   frequencies;
@@ -135,6 +138,50 @@ fn friswell_example_5_9_2_anisotropic_bearings_at_the_book_frequencies() {
         for x in [82.65, 86.66, 254.52, 274.31, 650.41, 679.49] {
             let off = w.iter().map(|y| (y - x).abs() / x).fold(1.0, f64::min);
             assert!(off <= 1e-4, "direct {direct}: {x} is {off:e} from {w:?}");
+        }
+    }
+}
+
+#[test]
+fn a_rotor_seen_from_the_ground_and_from_its_turning_frame_has_the_same_roots() {
+    // In the frame turning at Ω an axisymmetric rotor's whirl at ω is seen at |ω ∓ Ω| (forward
+    // and backward), its axial and torsional modes at ω. Built both ways from the same file:
+    // the example's spinning nodes, and its nodes on a carrier driven at the speed (the spin
+    // then a drive of the frame, the twist held to the carrier by the same coupling).
+    let fixed = common::example("friswell_5_9_1.toml");
+    let text = common::example_text("friswell_5_9_1.toml")
+        .replace(
+            "spin = \"speed\"\ncoupling = \"k_coupling\"\n",
+            "parent = \"carrier\"\n",
+        )
+        .replacen(
+            "\n[[shafts]]\n",
+            "\n[[bodies]]\nname = \"carrier\"\nmass = 0\ncm = [0, 0, 0]\n\
+             [[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\n\
+             child = \"carrier\"\nat = [0, 0, 0]\naxis = [1, 0, 0]\ndrive = \"speed\"\n\
+             [[forces]]\nname = \"twist\"\ntype = \"rotational_spring_damper\"\n\
+             body1 = \"carrier\"\nbody2 = \"shaft_0\"\naxis = [1, 0, 0]\n\
+             stiffness = \"k_coupling\"\n[[shafts]]\n",
+            1,
+        );
+    assert!(text.contains("parent = \"carrier\""), "test setup");
+    let turning = model(&text);
+    for speed in [100.0, 4000.0 * PI / 30.0] {
+        for direct in [false, true] {
+            let a: Vec<f64> = roots(&fixed, speed, direct).iter().map(|r| r.1).collect();
+            let b: Vec<f64> = roots(&turning, speed, direct).iter().map(|r| r.1).collect();
+            assert_eq!(a.len(), b.len());
+            for w in &b {
+                let off = (a.iter())
+                    .flat_map(|x| [(x - speed).abs(), x + speed, *x])
+                    .map(|x| (x - w).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    off <= 1e-9 * w.max(1.0),
+                    "{speed} rad/s, direct {direct}: {w} seen turning is {off:e} from every \
+                     root seen from the ground shifted by the speed"
+                );
+            }
         }
     }
 }
