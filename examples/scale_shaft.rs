@@ -109,8 +109,15 @@ fn main() {
         let text = String::from_utf8_lossy(&out.stdout);
         let v: Vec<f64> = text
             .split_whitespace()
-            .map(|x| x.parse().unwrap())
+            .filter_map(|x| x.parse().ok())
             .collect();
+        if v.len() != 3 {
+            println!(
+                "| {n} | failed: {} |",
+                String::from_utf8_lossy(&out.stderr).trim()
+            );
+            continue;
+        }
         println!(
             "| {n} | {} | {:.1} ms | {:.2} ms | {:.0} MB |",
             6 * (n + 1),
