@@ -301,6 +301,8 @@ fn unit_twist<T: Real>(k: usize) -> Screw<T> {
 ///   moved by its twist at once (shallow trees: a few coordinates);
 /// * per end body: the gradient with respect to a twist of that body alone, six evaluations
 ///   per end, whatever the depth (the coordinates' derivatives are then `s_i` paired with it).
+///   Values that a common rigid motion of both ends leaves unchanged (a beam's deformations)
+///   have opposite gradients at the two ends: six evaluations in all.
 #[derive(Debug, Clone)]
 pub enum EndPartials<T: Real> {
     /// For each value, `(coordinate, ∂f/∂q_i)`.
@@ -365,11 +367,13 @@ struct Moving<'a, T: Real> {
     twist: &'a [Option<Screw<T>>],
 }
 
-/// [`EndPartials`] of `f` (which pushes `values` values) between the bodies `ends`.
+/// [`EndPartials`] of `f` (which pushes `values` values) between the bodies `ends`; `objective`:
+/// `f` is unchanged by a common rigid motion of both ends.
 fn end_partials<T: Real>(
     at: &Moving<'_, T>,
     ends: [Option<usize>; 2],
     values: usize,
+    objective: bool,
     f: impl Fn(&Pose<D1<T>>, &Pose<D1<T>>, &mut Vec<D1<T>>),
 ) -> EndPartials<T> {
     let Moving {
@@ -387,8 +391,12 @@ fn end_partials<T: Real>(
     let moving_ends: Vec<usize> = (0..2)
         .filter(|&e| movers.iter().any(|&i| moves(i, ends[e])))
         .collect();
+    // Values that a common rigid motion of both ends leaves unchanged have opposite gradients
+    // at the two ends: six evaluations give both.
+    let paired = objective && moving_ends.len() == 2;
+    let per_body = if paired { 6 } else { 6 * moving_ends.len() };
     let mut buf = Vec::with_capacity(values);
-    if movers.len() <= 6 * moving_ends.len() {
+    if movers.len() <= per_body {
         let mut out = vec![Vec::with_capacity(movers.len()); values];
         for &i in &movers {
             let s = twist[i].as_ref().expect("a mover has a twist");
@@ -404,7 +412,12 @@ fn end_partials<T: Real>(
         return EndPartials::Coordinates(out);
     }
     let mut out = vec![Vec::with_capacity(2); values];
-    for &e in &moving_ends {
+    let evaluated = if paired {
+        &moving_ends[1..]
+    } else {
+        &moving_ends[..]
+    };
+    for &e in evaluated {
         let b = ends[e].expect("a moving end is a body");
         let mut g = vec![Screw::zero(); values];
         for k in 0..6 {
@@ -420,6 +433,11 @@ fn end_partials<T: Real>(
             }
         }
         for (o, gc) in out.iter_mut().zip(g) {
+            if paired {
+                let mut opposite = Screw::zero();
+                opposite.add_scaled(&gc, cst(-1.0));
+                o.push((ends[0].expect("a moving end is a body"), opposite));
+            }
             o.push((b, gc));
         }
     }
@@ -467,9 +485,13 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         .iter()
         .map(|e| {
             let g = &e.geometry;
-            end_partials(&at, [g.body1, g.body2], e.free.len(), |x1, x2, out| {
-                e.kind.deformation(g, x1, x2, out)
-            })
+            end_partials(
+                &at,
+                [g.body1, g.body2],
+                e.free.len(),
+                false,
+                |x1, x2, out| e.kind.deformation(g, x1, x2, out),
+            )
         })
         .collect();
     let beams = (partial.beams.iter())
@@ -480,7 +502,7 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
     for c in &partial.constraints {
         let g = &c.geometry;
         let rows = c.rows();
-        end_partials(&at, [g.body1, g.body2], rows, |x1, x2, out| {
+        end_partials(&at, [g.body1, g.body2], rows, false, |x1, x2, out| {
             c.values(g, x1, x2, out)
         })
         .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
@@ -523,10 +545,12 @@ fn twist_of<T: Real>(p: &Pose<D1<T>>) -> Screw<T> {
 /// A beam's [`BeamPartials`] at the poses of `at`.
 fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) -> BeamPartials<T> {
     let id = |x: D1<T>| x;
+    // The deformations are objective ([`crate::beams`]).
     let elastic = end_partials(
         at,
         [b.body1, b.body2],
         crate::beams::COMPONENTS,
+        true,
         |x1, x2, out| b.deformations(id, &b.local(id, x1, x2), out),
     );
     let ground = Pose::identity();
@@ -539,8 +563,15 @@ fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) 
             ends: Vec::with_capacity(2),
         })
         .collect();
+    // A common rigid motion of both ends moves every slice rigidly with it (the element frame
+    // is objective): a slice's twist from a unit twist `u` of the first end is `u` less its
+    // twist from `u` of the second, so with two moving ends only the second is evaluated.
+    let both = b.body1.is_some() && b.body2.is_some();
     for (end, body) in [b.body1, b.body2].into_iter().enumerate() {
         let Some(body) = body else { continue };
+        if both && end == 0 {
+            continue;
+        }
         let mut maps = vec![[Screw::zero(); 6]; slices.len()];
         for k in 0..6 {
             let u = unit_twist(k);
@@ -554,6 +585,14 @@ fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) 
             }
         }
         for (s, m) in slices.iter_mut().zip(maps) {
+            if both {
+                let first: [Screw<T>; 6] = std::array::from_fn(|k| {
+                    let mut t = unit_twist(k);
+                    t.add_scaled(&m[k], cst(-1.0));
+                    t
+                });
+                s.ends.push((b.body1.expect("both ends are bodies"), first));
+            }
             s.ends.push((body, m));
         }
     }
