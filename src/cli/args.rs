@@ -401,10 +401,11 @@ pub(crate) struct AnalyzeArgs {
     #[arg(long)]
     pub(crate) no_monte_carlo: bool,
     /// Requested error of the quadrature's mean and σ, relative to the output's σ at that
-    /// speed (or 2 % of its largest σ over the speeds, if larger); the grid along each
-    /// line, or the rule across the lines, is refined until the error estimate meets it or the
-    /// rule's largest stage or --quadrature-nodes is reached; rows that miss it say so
-    /// (within_request).
+    /// speed (or 2 % of its largest σ over the speeds, if larger; an output the tolerances do
+    /// not move, as the ζ of an undamped mode, is asked for what the evaluation resolves:
+    /// 1e-8 of its size, of 1 for ζ); the grid along each line, or the rule across the lines,
+    /// is refined until the error estimate meets it or the rule's largest stage or
+    /// --quadrature-nodes is reached; rows that miss it say so (within_request).
     #[arg(long, default_value_t = 1e-3, value_name = "REL")]
     pub(crate) quadrature_tolerance: f64,
     /// The most nodes the quadrature sweeps per tolerance case (a node is a design swept

@@ -93,8 +93,10 @@ use yields::{Requirements, evaluate_yield, final_yield};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QuadOptions {
     /// Requested error of mean and σ, relative to the larger of the output's σ at that speed
-    /// and 2 % of its largest σ over the speeds; also the absolute target for probabilities
-    /// (times 5). Refinement stops there or at the largest grid.
+    /// and 2 % of its largest σ over the speeds (where that spread is below what the
+    /// evaluation resolves, 10⁻⁸ of the output's size or of 1 for a damping ratio, that
+    /// resolution instead); also the absolute target for probabilities (times 5). Refinement
+    /// stops there or at the largest grid.
     pub tolerance: f64,
     /// The most nodes (designs swept across the speeds, as a Monte Carlo sample is) a case may
     /// take; `None`: the rule's own budget (a tenth of the default Monte Carlo for five or more
@@ -299,7 +301,7 @@ fn integrate(study: &Study, spread: &Spread, options: QuadOptions, run: &Run) ->
                 .fold(0.0, f64::max);
             (*parts, worst)
         });
-        match next_stage(&result, yield_error, rule, stage, tolerance) {
+        match next_stage(&result, &study.outputs, yield_error, rule, stage, tolerance) {
             Some(next) => stage = next,
             None => break,
         }
@@ -312,7 +314,7 @@ fn integrate(study: &Study, spread: &Spread, options: QuadOptions, run: &Run) ->
         run.pool
             .install(|| final_yield(&store, rule, stage, &nominal, &reqs))
     });
-    let met = within(&result.stats, tolerance);
+    let met = within(&result.stats, &study.outputs, tolerance);
     for (row, within) in result.stats.iter_mut().zip(met) {
         for (stat, ok) in row.iter_mut().zip(within) {
             if let (Some(stat), Some(ok)) = (stat, ok) {

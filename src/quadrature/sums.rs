@@ -5,6 +5,7 @@ use super::control::Control;
 use super::line::{Context, Sums};
 use super::rules::{Rule, Stage, Transverse};
 use super::{NodeData, Probability, QuadStat, Reference};
+use crate::output::{Output, Quantity};
 use crate::table::Event;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -322,12 +323,13 @@ pub(super) fn sorted_quantile(atoms: &[(f64, f64)], total: f64, q: f64) -> f64 {
 /// is `tol` (absolute).
 pub(super) fn next_stage(
     eval: &Evaluation,
+    outs: &[Output],
     yields: Option<(ErrorParts, f64)>,
     rule: &Rule,
     stage: Stage,
     tol: f64,
 ) -> Option<Stage> {
-    let targets = targets(&eval.stats, tol);
+    let targets = targets(&eval.stats, outs, tol);
     // The worst share of each part, and how many of the rows that miss would still miss
     // after each refinement as predicted: the grid's error falls 16-fold per halving (the
     // cubic interpolants), the transverse rule's √2-fold per doubling (the Monte Carlo rate,
@@ -383,12 +385,28 @@ pub(super) fn next_stage(
     }
 }
 
-/// Per speed and output (`stats[speed][output]`), the error the request `tol` allows: `tol`
-/// times the larger of the row's σ and 2 % of the output's largest σ over the speeds; `None`
-/// where there is no statistic.
-fn targets(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<f64>>> {
-    let outs = stats.first().map_or(0, |r| r.len());
-    let largest: Vec<f64> = (0..outs)
+/// What the evaluation resolves of a row of `output`: ten times its precision
+/// ([`EVAL_PRECISION`]) in the output's own scale, its size (`|mean| + σ`) and, for a damping
+/// ratio, 1 besides (ζ is a ratio of the root's parts, known to the root's relative precision
+/// whatever its value).
+fn resolution(output: &Output, stat: &QuadStat) -> f64 {
+    let unit = if output.quantity == Quantity::DampingRatio {
+        1.0
+    } else {
+        0.0
+    };
+    10.0 * EVAL_PRECISION * (stat.mean.abs() + stat.std + unit)
+}
+
+/// Per speed and output (`stats[speed][output]`, the outputs `outs`), the error the request
+/// `tol` allows: `tol` times the larger of the row's σ and 2 % of the output's largest σ over
+/// the speeds; where that spread is itself below the row's [`resolution`] (an output the
+/// variables do not move, as the ζ of an undamped mode, rounding about zero at every node), the
+/// resolution, so that such a row is not refined to the budget and flagged for its rounding;
+/// `None` where there is no statistic.
+fn targets(stats: &[Vec<Option<QuadStat>>], outs: &[Output], tol: f64) -> Vec<Vec<Option<f64>>> {
+    let n = stats.first().map_or(0, |r| r.len());
+    let largest: Vec<f64> = (0..n)
         .map(|o| {
             stats
                 .iter()
@@ -401,18 +419,29 @@ fn targets(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<f64>>> {
         .map(|row| {
             row.iter()
                 .zip(&largest)
-                .map(|(s, &largest)| s.map(|s| tol * s.std.max(0.02 * largest)))
+                .zip(outs)
+                .map(|((s, &largest), o)| {
+                    s.map(|s| {
+                        let (spread, floor) = (s.std.max(0.02 * largest), resolution(o, &s));
+                        if spread > floor { tol * spread } else { floor }
+                    })
+                })
                 .collect()
         })
         .collect()
 }
 
-/// Per speed and output (`stats[speed][output]`), whether both error estimates meet the
-/// requested accuracy `tol` ([`targets`]); `None` where there is no statistic.
-pub(super) fn within(stats: &[Vec<Option<QuadStat>>], tol: f64) -> Vec<Vec<Option<bool>>> {
+/// Per speed and output (`stats[speed][output]`, the outputs `outs`), whether both error
+/// estimates meet the requested accuracy `tol` ([`targets`]); `None` where there is no
+/// statistic.
+pub(super) fn within(
+    stats: &[Vec<Option<QuadStat>>],
+    outs: &[Output],
+    tol: f64,
+) -> Vec<Vec<Option<bool>>> {
     stats
         .iter()
-        .zip(targets(stats, tol))
+        .zip(targets(stats, outs, tol))
         .map(|(row, targets)| {
             row.iter()
                 .zip(targets)
