@@ -7,7 +7,9 @@
 //!   Nelson's fixed-frame model) has `Ĉ = Ω G` and no spin softening in `K̂`;
 //! * under an axial load the stiffness gains exactly the consistent geometric stiffness of
 //!   the solved axial force, not the string term alone;
-//! * Friswell et al. (2010) Example 5.9.1 whirls at ROSS's published frequencies.
+//! * Friswell et al. (2010) Example 5.9.1 whirls at ROSS's published frequencies;
+//! * material damping `β` gives `Ĉ = β K̂` and `ζ = βω/2` at rest, and on a spinning rotor the
+//!   internal-damping instability from exactly the speed where it meets its forward whirl.
 
 mod common;
 
@@ -211,6 +213,120 @@ fn an_inclined_clamped_beam_linearises_to_the_closed_form_matrices() {
         same(&lin.k, &to_global(&whole[0], &e), 1e-11, "K");
         same(&lin.m, &to_global(&whole[1], &e), 1e-11, "M");
         assert!(lin.c.amax() == 0.0, "C at rest");
+    }
+}
+
+/// Stiffness-proportional material damping on the inclined clamped beam: `Ĉ = β K̂` (the
+/// closed-form stiffness) on both routes, `M̂` and `K̂` unchanged, and every mode damped at
+/// `ζ = β ω_n / 2` (proportional damping: the undamped modes decouple `Ĉ` too).
+#[test]
+fn material_damping_is_beta_times_the_stiffness() {
+    let (n, length, beta) = (2, 1.3, 2.0e-4);
+    let d = nalgebra::Vector3::new(0.3, -0.5, 0.8).normalize();
+    let (dir, reference) = ([d.x, d.y, d.z], [0.2, 0.9, 0.1]);
+    let text = format!(
+        "name = \"damped\"\ngravity = [0, 0, 0]\n{}",
+        line(
+            Line {
+                n,
+                start: [0.1, 0.2, -0.3],
+                dir,
+                length,
+                reference,
+                nodes: Nodes::Free,
+                clamped: true
+            },
+            &format!("{PROPERTIES}\nbeta = {beta}")
+        )
+    );
+    let m = model(&text);
+    let e = axes(dir, reference);
+    let whole = assemble(&element(&properties(), length / n as f64), n, true);
+    let k = to_global(&whole[0], &e);
+    for direct in [false, true] {
+        let pt = solve(&m, 0.0, direct);
+        let lin = &pt.linear;
+        same(&lin.k, &k, 1e-11, "K");
+        same(&lin.m, &to_global(&whole[1], &e), 1e-11, "M");
+        same(&lin.c, &(&k * beta), 1e-11, "C");
+        for mode in &pt.modes {
+            let (wn, zeta) = (mode.natural_frequency, mode.damping_ratio);
+            assert!(
+                (zeta - beta * wn / 2.0).abs() <= 1e-9 * zeta.max(1e-12),
+                "ω_n {wn}: ζ {zeta} against βω_n/2 = {}",
+                beta * wn / 2.0
+            );
+        }
+    }
+}
+
+/// Internal damping destabilises a rotor above its first forward critical speed: damping that
+/// turns with the shaft resists the rate of its deformation seen from the shaft, which for a
+/// forward circular whirl at ω is proportional to ω − Ω. On the Friswell rotor (axisymmetric,
+/// isotropic undamped bearings) with `β` on the shaft, the least-damped root near the first
+/// critical crosses into the right half-plane exactly where the speed equals its own frequency
+/// (Ω = ω_fw(Ω), the first forward critical speed: the shape is then frozen in the shaft and
+/// nothing damps it), found here by bisection on both routes; below it every root is damped.
+#[test]
+fn internal_damping_destabilises_the_rotor_from_its_first_forward_critical_speed() {
+    let text = common::example_text("friswell_5_9_1.toml").replacen(
+        "density = \"rho\"\n",
+        "density = \"rho\"\nbeta = 2e-4\n",
+        1,
+    );
+    assert!(text.contains("beta = 2e-4"), "the shaft is damped");
+    let m = model(&text);
+    // The root near the first critical with the largest real part `(Re λ, Im λ)`, and the
+    // largest real part of all the others.
+    let roots = |w: f64, direct: bool| {
+        let pt = solve(&m, w, direct);
+        let near = |r: &modaltol::modal::Mode| (r.root.lambda.im - 87.0).abs() < 20.0;
+        let worst = |f: &dyn Fn(&modaltol::modal::Mode) -> bool| {
+            pt.modes
+                .iter()
+                .filter(|r| f(r))
+                .map(|r| (r.root.lambda.re, r.root.lambda.im))
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .unwrap()
+        };
+        (worst(&near), worst(&|r| !near(r)).0)
+    };
+    // (The torsional mode on the soft coupling twists no element: undamped, Re λ is rounding
+    // about zero.)
+    let (below, others) = roots(60.0, false);
+    assert!(below.0 < 0.0 && others <= 1e-9, "{below:?} {others}");
+    // The onset on the recorded route by regula falsi with the Illinois modification (Re λ is
+    // smooth in Ω).
+    let (mut a, mut b) = ((60.0, below.0), (120.0, roots(120.0, false).0.0));
+    assert!(b.1 > 0.0, "unstable above the critical speed");
+    let mut side = 0;
+    let onset = loop {
+        let x = (a.0 * b.1 - b.0 * a.1) / (b.1 - a.1);
+        let (((re, w), _), width) = (roots(x, false), b.0 - a.0);
+        if re.abs() <= 1e-12 * w || width <= 1e-10 * x {
+            break x;
+        }
+        if re > 0.0 {
+            b = (x, re);
+            if side == 1 {
+                a.1 *= 0.5;
+            }
+            side = 1;
+        } else {
+            a = (x, re);
+            if side == -1 {
+                b.1 *= 0.5;
+            }
+            side = -1;
+        }
+    };
+    // There, on both routes: the whirl at the speed, and neutrally stable.
+    for direct in [false, true] {
+        let ((re, w), _) = roots(onset, direct);
+        assert!(
+            (w - onset).abs() <= 1e-7 * onset && re.abs() <= 1e-9 * w,
+            "onset at Ω = {onset} rad/s: root {re} + {w}i (direct: {direct})"
+        );
     }
 }
 
@@ -585,7 +701,7 @@ fn refused(from: &str, to: &str) -> (usize, usize, String) {
 
 #[test]
 fn bad_beams_are_refused_with_their_place() {
-    let cases: [(&str, &str, &str, &str); 9] = [
+    let cases: [(&str, &str, &str, &str); 10] = [
         (
             "outer_diameter = 0.05",
             "outer_diameter = 0",
@@ -619,6 +735,12 @@ fn bad_beams_are_refused_with_their_place() {
             "density = 7800\nEA = 1e8",
             "[[beams]]",
             "both as a tube",
+        ),
+        (
+            "density = 7800",
+            "density = 7800\nbeta = -1e-4",
+            "beta",
+            "must be zero or positive",
         ),
     ];
     for (from, to, at, message) in cases {

@@ -21,13 +21,7 @@ use modaltol::sobol::SobolOptions;
 use modaltol::table::{Method, Row, Target};
 
 /// The row of `method` for output (`quantity`, `mode`) at `speed` in case 0.
-fn row(
-    a: &Analysis,
-    method: Method,
-    quantity: Quantity,
-    mode: Option<usize>,
-    speed: f64,
-) -> &Row {
+fn row(a: &Analysis, method: Method, quantity: Quantity, mode: Option<usize>, speed: f64) -> &Row {
     a.rows
         .iter()
         .find(|r| {

@@ -105,6 +105,9 @@ pub struct Element<T> {
     pub axes: M3<T>,
     pub length: T,
     pub section: Section<T>,
+    /// Stiffness-proportional material damping `β` (s), where given: the component forces
+    /// are `k (e + β ė)` ([`Element::forces`]).
+    pub beta: Option<T>,
 }
 
 /// The element at one configuration, in its own frame: the node `a`'s position, the chord
@@ -158,6 +161,7 @@ impl<T: Real> Element<T> {
             axes: self.axes.map(f),
             length: f(self.length),
             section: self.section.map(f),
+            beta: self.beta.map(f),
         }
     }
 
@@ -175,6 +179,16 @@ impl<T: Real> Element<T> {
             three * s.ei[0] / (l * (one + s.phi[0])),
             s.ei[0] / l,
         ]
+    }
+
+    /// The component forces `k (e + β ė)` from the deformations `e` and, where the element is
+    /// damped, their rates `ė`.
+    pub fn forces(&self, e: &[T], rates: Option<&[T]>) -> [T; COMPONENTS] {
+        let k = self.stiffness();
+        std::array::from_fn(|c| match (self.beta, rates) {
+            (Some(beta), Some(r)) => k[c] * (e[c] + beta * r[c]),
+            _ => k[c] * e[c],
+        })
     }
 
     /// The element at the poses of its two bodies, over any scalar `U` the element's numbers

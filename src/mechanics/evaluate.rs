@@ -267,6 +267,7 @@ fn beam<T: Real>(b: &Beam, p: &[T], w: T) -> Result<beams::Element<T>, FieldErro
         axes,
         length,
         section,
+        beta: (b.damping.as_ref()).map(|f| f.eval(p, w)).transpose()?,
     })
 }
 

@@ -191,6 +191,9 @@ pub struct Beam {
     pub point2: [Field; 3],
     pub reference: [Field; 3],
     pub section: BeamSection,
+    /// Stiffness-proportional material damping `β` (s): each deformation component's force is
+    /// `k (e + β ė)`. `None`: undamped.
+    pub damping: Option<Field>,
 }
 
 /// How a beam's section is given (SI units).

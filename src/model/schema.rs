@@ -204,6 +204,9 @@ pub struct BeamSchema {
     pub rho_a: Option<SNum>,
     #[serde(rename = "rhoI")]
     pub rho_i: Option<SNums>,
+    /// Stiffness-proportional material damping: each deformation's force is
+    /// `k (e + β ė)`, s.
+    pub beta: Option<SNum>,
 }
 
 /// One `[[shafts]]` entry: a straight line of beam elements meshed from stations, its nodes
@@ -234,6 +237,7 @@ pub struct ShaftSchema {
     pub nu: Option<SNum>,
     pub density: Option<SNum>,
     pub shear_coefficient: Option<SNum>,
+    pub beta: Option<SNum>,
     pub stations: Spanned<Vec<Spanned<StationSchema>>>,
 }
 
@@ -266,6 +270,7 @@ pub struct StationSchema {
     pub rho_a: Option<SNum>,
     #[serde(rename = "rhoI")]
     pub rho_i: Option<SNums>,
+    pub beta: Option<SNum>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -295,8 +295,8 @@ pub fn evaluate_with<T: Real>(
     let mut wrench = inertia_wrenches(sys, j, &motion);
     subtract_loads(sys, j, &mut wrench);
     let (element_force, mut direct) = element_forces(l, j, &motion, &mut wrench);
-    beam_inertia(l, j, &motion, &mut wrench);
-    let beam_force = beam_forces(sys, j, &mut wrench);
+    let rates = beam_inertia(l, j, &motion, &mut wrench);
+    let beam_force = beam_forces(sys, j, &rates, &mut wrench);
     let phi = constraint_values(sys, &j.pose, q);
     // The wrench on each body and those below it (children before parents).
     for jt in sys.joints.iter().rev() {
@@ -366,12 +366,13 @@ fn inertia_wrenches<T: Real>(
 /// its elements' end bodies ([`SlicePartials::transmit`]). A slice's pose is evaluated over
 /// second-order dual numbers in time from its end bodies' poses and their rates
 /// (`Ȧ = A ω̃`, `Ä = A (α̃ + ω̃²)`), which gives its `ω`, `α` and the acceleration of its centre.
+/// Returns the deformation rates `ė` of each damped beam (from the same pass).
 fn beam_inertia<T: Real>(
     l: &Lifted<T>,
     j: &Partials<T>,
     motion: &[Motion<T>],
     wrench: &mut [Screw<T>],
-) {
+) -> Vec<Option<Vec<T>>> {
     let sys = &l.base;
     let moving = |b: Option<usize>| -> Pose<D2<T>> {
         let Some(b) = b else {
@@ -387,8 +388,14 @@ fn beam_inertia<T: Real>(
         }
     };
     let id = |x: D2<T>| x;
+    let mut rates = Vec::with_capacity(sys.beams.len());
     for ((beam, time), bp) in sys.beams.iter().zip(&l.time.beams).zip(&j.beams) {
         let here = time.local(id, &moving(beam.body1), &moving(beam.body2));
+        rates.push(beam.beta.is_some().then(|| {
+            let mut e = Vec::with_capacity(crate::beams::COMPONENTS);
+            time.deformations(id, &here, &mut e);
+            e.iter().map(|c| c.v1).collect()
+        }));
         for (slice, &(xi, w)) in bp.slices.iter().zip(&crate::beams::SLICES) {
             let pose = time.slice(id, &here, xi);
             let r = pose.rot.map(|c| c.re);
@@ -408,6 +415,7 @@ fn beam_inertia<T: Real>(
             slice.transmit(&w, wrench);
         }
     }
+    rates
 }
 
 /// `[v]×`.
@@ -416,12 +424,14 @@ fn skew<T: Real>(v: &V3<T>) -> M3<T> {
     M3::new(z, -v.z, v.y, v.z, z, -v.x, -v.y, v.x, z)
 }
 
-/// The beams' elastic forces `f_c = k_c e_c` (the elements are unloaded as drawn), applied to
-/// their end bodies where their derivatives are per body; the rest are added per coordinate by
-/// the caller. Returns each beam's component forces.
+/// The beams' component forces `f_c = k_c (e_c + β ė_c)` (the elements are unloaded as drawn;
+/// `rates`: each damped beam's `ė`), applied to their end bodies where their derivatives are
+/// per body; the rest are added per coordinate by the caller. Returns each beam's component
+/// forces.
 fn beam_forces<T: Real>(
     sys: &System<T>,
     j: &Partials<T>,
+    rates: &[Option<Vec<T>>],
     wrench: &mut [Screw<T>],
 ) -> Vec<[T; crate::beams::COMPONENTS]> {
     let id = |x: T| x;
@@ -429,15 +439,14 @@ fn beam_forces<T: Real>(
     let pose = |b: Option<usize>| b.map_or(&ground, |b| &j.pose[b]);
     let mut out = Vec::with_capacity(sys.beams.len());
     let mut e = Vec::with_capacity(crate::beams::COMPONENTS);
-    for (beam, bp) in sys.beams.iter().zip(&j.beams) {
+    for ((beam, bp), rate) in sys.beams.iter().zip(&j.beams).zip(rates) {
         e.clear();
         beam.deformations(
             id,
             &beam.local(id, pose(beam.body1), pose(beam.body2)),
             &mut e,
         );
-        let k = beam.stiffness();
-        let f: [T; crate::beams::COMPONENTS] = std::array::from_fn(|c| k[c] * e[c]);
+        let f = beam.forces(&e, rate.as_deref());
         if let EndPartials::Bodies(g) = &bp.elastic {
             for (fc, ends) in f.iter().zip(g) {
                 for (b, gc) in ends {

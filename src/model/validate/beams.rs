@@ -66,6 +66,9 @@ pub(super) fn beams(
             point2,
             reference,
             section: section(ctx, &item, s)?,
+            damping: (s.beta.as_ref())
+                .map(|b| sized(ctx, b, format!("{owner} beta"), true))
+                .transpose()?,
         });
     }
     Ok(out)

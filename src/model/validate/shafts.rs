@@ -310,6 +310,7 @@ fn mesh(ctx: &Ctx, s: &ShaftSchema, raw: &mut FileSchema) -> R<usize> {
                 kga: None,
                 rho_a: None,
                 rho_i: None,
+                beta: None,
             },
         )?;
         raw.beams.push(Spanned::new(stations[station].span(), beam));
@@ -409,6 +410,7 @@ fn section(
     beam.kga = t.kga.clone();
     beam.rho_a = t.rho_a.clone();
     beam.rho_i = t.rho_i.clone();
+    beam.beta = or(&t.beta, &s.beta);
     Ok(beam)
 }
 
