@@ -215,7 +215,9 @@ impl Program {
         // A coordinate's three lanes side by side: an operation depends on the rates of the
         // coordinates whose positions it depends on, so its lane range stays narrow (the
         // governor's pass is 43 % fewer lane operations than with `[q_R, q̇_R, q̈_R]` in blocks,
-        // the 12-arm governor's 80 %).
+        // the 12-arm governor's 80 %). Where the equations are banded (a meshed shaft), the
+        // coordinates that never meet in a row share lanes, each coordinate's three lanes
+        // packed as a group (`Tape::seeding_in_groups`).
         let seeds: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
@@ -228,7 +230,7 @@ impl Program {
             })
             .collect();
         // Derivatives of F and Φ_R; the drive rows are values only.
-        let linear = full.seeding(&seeds, 3 * nf, differentiated);
+        let linear = full.seeding_in_groups(&seeds, (3 * nf, 3), differentiated);
         let program = Program {
             driven: OnceLock::new(),
             parametric: Parametric::default(),

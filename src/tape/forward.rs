@@ -24,7 +24,7 @@ impl Tape {
         work: &mut Forward<S>,
     ) -> (Vec<S>, Vec<S>) {
         let (values, rows) = self.forward_rows(fixed, x, seeding, work);
-        let mut derivs = Vec::with_capacity(rows.len() * seeding.lanes);
+        let mut derivs = Vec::with_capacity(rows.len() * rows.lanes);
         for k in 0..rows.len() {
             derivs.extend_from_slice(rows.row(k));
         }
@@ -40,7 +40,7 @@ impl Tape {
         seeding: &Seeding,
         work: &'w mut Forward<S>,
     ) -> (Vec<S>, Rows<'w, S>) {
-        if !seeding.blocks.is_empty() {
+        let (values, rows) = if !seeding.blocks.is_empty() {
             let (nd, lanes) = (seeding.differentiated, seeding.lanes);
             let mut derivs = vec![S::from(0.0); nd * lanes];
             let mut values = Vec::new();
@@ -53,22 +53,22 @@ impl Tape {
                 }
                 values = v;
             }
-            return (
-                values,
-                Rows {
-                    start: (0..nd).map(|r| r * lanes).collect(),
-                    lanes,
-                    tan: Cow::Owned(derivs),
-                },
-            );
-        }
-        let stride = seeding.lanes + CHUNK - 1;
-        if seeding.slots.reuse {
-            self.forward_with::<S, true>(fixed, x, seeding, work, stride);
+            let rows = Rows {
+                start: (0..nd).map(|r| r * lanes).collect(),
+                lanes,
+                tan: Cow::Owned(derivs),
+            };
+            (values, rows)
         } else {
-            self.forward_with::<S, false>(fixed, x, seeding, work, stride);
-        }
-        self.read_outputs(&work.val, &work.tan, seeding, stride)
+            let stride = seeding.lanes + CHUNK - 1;
+            if seeding.slots.reuse {
+                self.forward_with::<S, true>(fixed, x, seeding, work, stride);
+            } else {
+                self.forward_with::<S, false>(fixed, x, seeding, work, stride);
+            }
+            self.read_outputs(&work.val, &work.tan, seeding, stride)
+        };
+        (values, rows.unpacked(seeding))
     }
 
     /// [`Tape::forward`] with rows shared or not (two compiled loops: the small programs'
@@ -175,7 +175,26 @@ pub struct Rows<'w, S: Clone> {
     tan: Cow<'w, [S]>,
 }
 
-impl<S: Clone> Rows<'_, S> {
+impl<'w, S: Clone> Rows<'w, S> {
+    /// The rows of a packed pass along its seeding's lanes (as they are where not packed).
+    pub(super) fn unpacked(self, seeding: &Seeding) -> Rows<'w, S>
+    where
+        S: Real,
+    {
+        let Some(p) = &seeding.packing else {
+            return self;
+        };
+        let mut tan = vec![S::from(0.0); self.len() * p.lanes];
+        for (k, out) in tan.chunks_exact_mut(p.lanes).enumerate() {
+            p.unpack(k, self.row(k), out);
+        }
+        Rows {
+            start: (0..self.len()).map(|k| k * p.lanes).collect(),
+            lanes: p.lanes,
+            tan: Cow::Owned(tan),
+        }
+    }
+
     /// Number of differentiated outputs.
     pub fn len(&self) -> usize {
         self.start.len()

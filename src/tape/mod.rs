@@ -29,6 +29,7 @@ mod forward;
 mod hyper;
 mod native;
 mod op;
+mod packing;
 mod passes;
 mod pattern;
 mod reverse;

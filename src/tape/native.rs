@@ -273,7 +273,8 @@ impl Tape {
                 self.ops.as_ptr(),
             );
         }
-        self.read_outputs(&work.val, &work.tan, seeding, pass.stride)
+        let (values, rows) = self.read_outputs(&work.val, &work.tan, seeding, pass.stride);
+        (values, rows.unpacked(seeding))
     }
 
     /// [`Tape::eval`] over `f64` through `pass` (from [`Tape::compile_eval`] on this program).

@@ -5,6 +5,7 @@
 //! [`Tape::forward`] and the compiled passes of [`native`](super::native) run a program along a
 //! seeding; making it is kept apart from running it, which happens many times.
 
+use super::packing::Packing;
 use super::{Op, Tape, Term};
 use std::sync::{Arc, Weak};
 
@@ -21,12 +22,37 @@ impl Tape {
     /// until the wrenches come back from the tip, and a lane per coordinate: one buffer over
     /// all lanes grows with the square of the number of bodies, about 1 GB at a thousand.) The
     /// values are evaluated once per block; the lane work is the same.
+    ///
+    /// Lanes that no differentiated output moves along together share a lane of the pass
+    /// ([`packing`](super::packing)): a banded Jacobian's pass carries the lanes of a band.
+    /// The derivatives come back along the lanes asked for.
     pub fn seeding(
         &self,
         seeds: &[(usize, usize)],
         lanes: usize,
         differentiated: usize,
     ) -> Seeding {
+        self.seeding_in_groups(seeds, (lanes, 1), differentiated)
+    }
+
+    /// [`Tape::seeding`] with the lanes in groups of `group` consecutive lanes, packed as
+    /// groups (see [`packing`](super::packing)).
+    pub fn seeding_in_groups(
+        &self,
+        seeds: &[(usize, usize)],
+        (lanes, group): (usize, usize),
+        differentiated: usize,
+    ) -> Seeding {
+        // Lanes that never meet in a differentiated output share a lane of the pass.
+        let packing = self.packing(seeds, (lanes, group), differentiated);
+        let packed_seeds;
+        let (seeds, lanes) = match &packing {
+            Some(p) => {
+                packed_seeds = p.seeds(seeds);
+                (&packed_seeds[..], p.packed)
+            }
+            None => (seeds, lanes),
+        };
         let mut whole = self.seeding_of(seeds, lanes, differentiated, lanes <= BLOCK);
         if lanes > BLOCK {
             whole.blocks = (0..lanes.div_ceil(BLOCK))
@@ -41,23 +67,24 @@ impl Tape {
                 })
                 .collect();
         }
+        whole.packing = packing;
         whole
     }
 
-    /// One block of [`Tape::seeding`] (its tangent rows allocated when `rows`).
-    fn seeding_of(
-        &self,
-        seeds: &[(usize, usize)],
-        lanes: usize,
-        differentiated: usize,
-        rows: bool,
-    ) -> Seeding {
+    /// The lanes of each input (by input index) of the seeds `(input, lane)`.
+    pub(super) fn input_lanes(&self, seeds: &[(usize, usize)], lanes: usize) -> Vec<Vec<u32>> {
         let inputs = seeds.iter().map(|s| s.0 + 1).max().unwrap_or(0);
         let mut input_lanes = vec![Vec::new(); inputs];
         for &(k, l) in seeds {
             assert!(l < lanes, "a seed's lane is one of the seeding's lanes");
             input_lanes[k].push(l as u32);
         }
+        input_lanes
+    }
+
+    /// The hull `(first, end)` of the lanes each operation depends on (`(0, 0)`: none), for
+    /// the lanes `input_lanes` of the inputs.
+    pub(super) fn hulls(&self, input_lanes: &[Vec<u32>]) -> Vec<(u32, u32)> {
         let mut range = vec![(0u32, 0u32); self.ops.len()];
         for (i, op) in self.ops.iter().enumerate().skip(self.n_static) {
             range[i] = match *op {
@@ -87,6 +114,19 @@ impl Tape {
                 range[i] = (0, 0);
             }
         }
+        range
+    }
+
+    /// One block of [`Tape::seeding`] (its tangent rows allocated when `rows`).
+    fn seeding_of(
+        &self,
+        seeds: &[(usize, usize)],
+        lanes: usize,
+        differentiated: usize,
+        rows: bool,
+    ) -> Seeding {
+        let input_lanes = self.input_lanes(seeds, lanes);
+        let mut range = self.hulls(&input_lanes);
         // The operations the differentiated outputs need.
         let live = self.live(&(0..differentiated).collect::<Vec<_>>());
         // As (first lane, width).
@@ -111,6 +151,7 @@ impl Tape {
             differentiated,
             slots,
             blocks: Vec::new(),
+            packing: None,
         }
     }
 
@@ -212,12 +253,14 @@ pub struct Seeding {
     /// The blocks of at most [`BLOCK`] lanes the lanes are split into (none when they are
     /// that few; then `slots` are this seeding's own rows).
     pub(super) blocks: Vec<Seeding>,
+    /// Where the lanes travel in a packed pass (the lanes above are the packed ones).
+    pub(super) packing: Option<Packing>,
 }
 
 impl Seeding {
-    /// Number of lanes.
+    /// Number of lanes (the derivatives' directions; a packed pass carries fewer).
     pub fn lanes(&self) -> usize {
-        self.lanes
+        self.packing.as_ref().map_or(self.lanes, |p| p.lanes)
     }
 
     /// The seeds `(input, lane)`.
