@@ -169,7 +169,7 @@ impl Factor {
     /// where a dropped direction moves the multipliers rather than the coordinates: redundant
     /// cut joints, which the solve reports by name rather than solving around.
     fn pseudo(j: DMatrix<f64>, nf: usize) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
-        let svd = crate::linalg::svd(j, true, true)?;
+        let svd = crate::linalg::svd_real(j, true, true)?;
         let (u, vt) = (svd.u?, svd.v_t?);
         let top = svd.singular_values.max();
         if !top.is_finite() {

@@ -20,7 +20,7 @@ mod rank;
 mod solve;
 
 pub use bounded::{
-    Definite, DenseEigen, SWEEPS_PER_ROW, WELL_CONDITIONED, eigen_dense, schur, svd,
+    Definite, DenseEigen, SWEEPS_PER_ROW, WELL_CONDITIONED, eigen_dense, schur, svd, svd_real,
     symmetric_definite, symmetric_eigen,
 };
 pub use rank::{dependent_rows, dependent_rows_after, pivot_columns};
@@ -270,5 +270,54 @@ mod tests {
         assert!(pivot_columns(&a).is_none());
         let a = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.1, 0.0, 0.0, 3.0]);
         assert_eq!(pivot_columns(&a), Some(vec![0, 2]));
+    }
+
+    /// The blocked SVD against nalgebra's on matrices from its threshold up: a graded matrix
+    /// (singular values from 1 to 1e-9), a rank-deficient one and a wide one give the same
+    /// singular values (to 1e-12 of the largest), factors that reproduce the matrix, and the
+    /// same least-squares solution (as `solve` reads it).
+    #[test]
+    fn the_blocked_svd_agrees_with_nalgebras() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let n = bounded::BLOCKED_SVD_FROM + 9;
+        let mut random =
+            |r: usize, c: usize| DMatrix::from_fn(r, c, |_, _| rng.random_range(-1.0..1.0));
+        let graded = {
+            let (q1, q2) = (random(n, n).qr().q(), random(n, n).qr().q());
+            let d = DMatrix::from_diagonal(&DVector::from_fn(n, |i, _| {
+                10f64.powf(-9.0 * i as f64 / (n - 1) as f64)
+            }));
+            q1 * d * q2.transpose()
+        };
+        let deficient = {
+            let b = random(n, n - 5);
+            &b * b.transpose()
+        };
+        for a in [graded, deficient, random(n, n + 17), random(n + 17, n)] {
+            let fast = bounded::blocked_svd(&a, true, true).expect("the blocked route holds");
+            let slow = svd(a.clone(), true, true).expect("decomposes");
+            let top = slow.singular_values.max();
+            for (x, y) in fast.singular_values.iter().zip(slow.singular_values.iter()) {
+                assert!((x - y).abs() <= 1e-12 * top, "{x} against {y}");
+            }
+            let (u, vt) = (fast.u.clone().unwrap(), fast.v_t.clone().unwrap());
+            let back = &u * DMatrix::from_diagonal(&fast.singular_values) * &vt;
+            assert!((back - &a).norm() <= 1e-12 * a.norm());
+            let b = DVector::from_fn(a.nrows(), |i, _| (i as f64).sin());
+            let (xf, xs) = (
+                fast.solve(&b, 1e-10 * top).unwrap(),
+                slow.solve(&b, 1e-10 * top).unwrap(),
+            );
+            assert!(
+                (&xf - &xs).norm() <= 1e-8 * xs.norm(),
+                "{}",
+                (&xf - &xs).norm() / xs.norm()
+            );
+            // Without vectors: the same values, no factors.
+            let bare = svd_real(a, false, false).expect("decomposes");
+            assert!(bare.u.is_none() && bare.v_t.is_none());
+            assert_eq!(bare.singular_values, fast.singular_values);
+        }
     }
 }

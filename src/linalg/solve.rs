@@ -1,7 +1,7 @@
 //! Solves: forward-mode Jacobians, the pivoted elimination over any [`Real`], Newton's LU
 //! factorisation and least squares.
 
-use super::svd;
+use super::svd_real;
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::{ComplexField, DMatrix, DVector};
 use num_dual::Dual;
@@ -199,7 +199,7 @@ pub fn least_squares(a: DMatrix<f64>, b: DVector<f64>) -> Vec<f64> {
             }
         }
     }
-    match svd(a, true, true).map(|svd| svd.solve(&b, 1e-12)) {
+    match svd_real(a, true, true).map(|svd| svd.solve(&b, 1e-12)) {
         Some(Ok(l)) if l.iter().all(|v| v.is_finite()) => l.iter().copied().collect(),
         _ => vec![0.0; m],
     }

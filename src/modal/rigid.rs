@@ -71,7 +71,7 @@ impl<'a> RigidTest<'a> {
     /// An orthonormal basis (columns) of `K̂`'s null space: its right singular vectors whose
     /// singular values are at most `ZERO_ROOT² K_s`; `None` where the decomposition fails.
     pub(super) fn null_space(&self) -> Option<DMatrix<f64>> {
-        let svd = linalg::svd(self.k.clone(), false, true)?;
+        let svd = linalg::svd_real(self.k.clone(), false, true)?;
         let vt = svd.v_t?;
         let floor = ZERO_ROOT * ZERO_ROOT * self.stiffness;
         let rows: Vec<usize> = (0..svd.singular_values.len())
