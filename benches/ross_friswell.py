@@ -13,6 +13,10 @@ Outside the test suite: ROSS needs Python >= 3.13.
     python3.13 -m venv /tmp/rossv && /tmp/rossv/bin/pip install ross-rotordynamics
     cargo build --release
     /tmp/rossv/bin/python benches/ross_friswell.py [target/release/modaltol]
+
+With `--mesh n …` it prints instead ROSS's warm modal point (best of 7, 4000 rpm) of the same
+rotor meshed into n elements (n a multiple of 6, the disks on nodes n/3 and 2n/3), the rotor
+`cargo run --release --example scale_shaft -- n` times in modaltol.
 """
 
 import json
@@ -23,7 +27,8 @@ import time
 import numpy as np
 import ross as rs
 
-MODALTOL = sys.argv[1] if len(sys.argv) > 1 else "target/release/modaltol"
+ARGS = sys.argv[1:]
+MODALTOL = ARGS[0] if ARGS and ARGS[0] != "--mesh" else "target/release/modaltol"
 EXAMPLE = "examples/friswell_5_9_1.toml"
 SPEEDS = [0.0, 4000 * np.pi / 30]
 
@@ -37,22 +42,35 @@ def best(f, rounds):
     return out
 
 
-def friswell_5_9_1():
+def friswell_5_9_1(elements=6):
     """Example 5.9.1 built in ROSS as the book gives it (ROSS's `rotor_example()` is another
     rotor): six elements of 0.25 m, Ø 50 mm, steel; disks on nodes 2 and 4; bearings of 1 MN/m
-    on nodes 0 and 6."""
+    on nodes 0 and 6. `elements` (a multiple of 6) meshes the same shaft finer."""
+    n = elements
     steel = rs.Material(name="Steel_5_9_1", rho=7810, E=211e9, G_s=81.2e9)
     shaft = [
-        rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,
+        rs.ShaftElement(L=1.5 / n, idl=0.0, odl=0.05, material=steel, shear_effects=True,
                         rotary_inertia=True, gyroscopic=True)
-        for _ in range(6)
+        for _ in range(n)
     ]
     disks = [
-        rs.DiskElement.from_geometry(n=2, material=steel, width=0.07, i_d=0.05, o_d=0.28),
-        rs.DiskElement.from_geometry(n=4, material=steel, width=0.07, i_d=0.05, o_d=0.35),
+        rs.DiskElement.from_geometry(n=n // 3, material=steel, width=0.07, i_d=0.05, o_d=0.28),
+        rs.DiskElement.from_geometry(n=2 * n // 3, material=steel, width=0.07, i_d=0.05,
+                                     o_d=0.35),
     ]
-    bearings = [rs.BearingElement(n=n, kxx=1e6, kyy=1e6, cxx=0) for n in (0, 6)]
+    bearings = [rs.BearingElement(n=k, kxx=1e6, kyy=1e6, cxx=0) for k in (0, n)]
     return rs.Rotor(shaft, disks, bearings)
+
+
+def mesh(sizes) -> None:
+    speed = SPEEDS[1]
+    for n in sizes:
+        rotor = friswell_5_9_1(n)
+        rotor.run_modal(speed=speed)
+        calls = iter(speed * (1 - 1e-6 * np.arange(1, 100)))
+        warm = best(lambda: rotor.run_modal(speed=next(calls)), 7)
+        wd = rotor.run_modal(speed=speed).wd[:6]
+        print(f"ROSS, {n} elements: warm modal point {1e3 * warm:.2f} ms, wd =", np.round(wd, 2))
 
 
 def ross() -> None:
@@ -116,5 +134,8 @@ def modaltol() -> None:
 
 
 if __name__ == "__main__":
-    ross()
-    modaltol()
+    if "--mesh" in sys.argv:
+        mesh([int(a) for a in sys.argv[sys.argv.index("--mesh") + 1:]])
+    else:
+        ross()
+        modaltol()
