@@ -63,16 +63,16 @@ pub fn svd<T: ComplexField<RealField = f64>>(
 
 /// Size (the smaller dimension) from which [`svd_real`] takes faer's blocked SVD: below it
 /// nalgebra's is as fast, and the small models' results stay as they were.
-pub const BLOCKED_SVD_FROM: usize = 64;
+pub(super) const BLOCKED_SVD_FROM: usize = 64;
 
 /// Largest `‖A − U Σ Vᵀ‖_F / ‖A‖_F` accepted from the blocked SVD (a backward stable one
 /// leaves a few `n ε`).
 const SVD_RESIDUAL: f64 = 1e-11;
 
-/// [`svd`] of a real matrix, from [`BLOCKED_SVD_FROM`] rows and columns by faer's blocked
+/// [`svd`] of a real matrix, from `BLOCKED_SVD_FROM` (64) rows and columns by faer's blocked
 /// bidiagonalisation and divide and conquer (the unblocked Householder sweeps of nalgebra's
 /// took a fifth of a 96-element shaft's modal point), checked, not trusted: where its factors
-/// do not reproduce the matrix to [`SVD_RESIDUAL`] or its singular values are not finite,
+/// do not reproduce the matrix to `SVD_RESIDUAL` or its singular values are not finite,
 /// non-negative and sorted, nalgebra's decomposition is taken instead.
 pub fn svd_real(a: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64, Dyn, Dyn>> {
     let (m, n) = a.shape();

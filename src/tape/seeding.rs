@@ -24,7 +24,7 @@ impl Tape {
     /// values are evaluated once per block; the lane work is the same.
     ///
     /// Lanes that no differentiated output moves along together share a lane of the pass
-    /// ([`packing`](super::packing)): a banded Jacobian's pass carries the lanes of a band.
+    /// (`tape::packing`): a banded Jacobian's pass carries the lanes of a band.
     /// The derivatives come back along the lanes asked for.
     pub fn seeding(
         &self,
@@ -36,7 +36,7 @@ impl Tape {
     }
 
     /// [`Tape::seeding`] with the lanes in groups of `group` consecutive lanes, packed as
-    /// groups (see [`packing`](super::packing)).
+    /// groups (see `tape::packing`).
     pub fn seeding_in_groups(
         &self,
         seeds: &[(usize, usize)],
