@@ -72,16 +72,17 @@ impl Tape {
                     forward_avx2(self, fixed, x, seeding, work, stride)
                 };
             } else {
-                self.forward_baseline(fixed, x, seeding, work, stride);
+                self.forward_pass(fixed, x, seeding, work, stride);
             }
             self.read_outputs(&work.val, &work.tan, seeding, stride)
         };
         (values, rows.unpacked(seeding))
     }
 
-    /// The pass of [`Tape::forward_rows`] with rows shared or not, for the baseline
-    /// instruction set.
-    fn forward_baseline<S: Real>(
+    /// The pass of [`Tape::forward_rows`] with rows shared or not (inlined into each
+    /// instruction set's copy).
+    #[inline(always)]
+    fn forward_pass<S: Real>(
         &self,
         fixed: &[S],
         x: &[S],
@@ -192,7 +193,7 @@ impl Tape {
     }
 }
 
-/// [`Tape::forward_baseline`] compiled for AVX2: the lane loops' chunks of four `f64` are one
+/// [`Tape::forward_pass`] compiled for AVX2: the lane loops' chunks of four `f64` are one
 /// instruction each instead of two. No multiply–add is contracted (Rust contracts none, and
 /// FMA is not enabled), so the results are the baseline's to the bit.
 ///
@@ -208,11 +209,7 @@ unsafe fn forward_avx2<S: Real>(
     work: &mut Forward<S>,
     stride: usize,
 ) {
-    if seeding.slots.reuse {
-        tape.forward_with::<S, true>(fixed, x, seeding, work, stride);
-    } else {
-        tape.forward_with::<S, false>(fixed, x, seeding, work, stride);
-    }
+    tape.forward_pass(fixed, x, seeding, work, stride);
 }
 
 /// The derivatives of a forward pass's differentiated outputs (see [`Tape::forward_rows`]):
@@ -499,7 +496,7 @@ mod tests {
             let seeding = tape.seeding(&seeds, n, n);
             let stride = seeding.lanes + CHUNK - 1;
             let (mut base, mut wide) = (Forward::default(), Forward::default());
-            tape.forward_baseline(&[], &x0, &seeding, &mut base, stride);
+            tape.forward_pass(&[], &x0, &seeding, &mut base, stride);
             // SAFETY: the processor has AVX2, just checked.
             unsafe { forward_avx2(&tape, &[], &x0, &seeding, &mut wide, stride) };
             let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
