@@ -80,12 +80,19 @@ type FirstOrder = (
     Vec<(f64, Result<Vec<f64>, Missing>)>,
 );
 
-/// Reorders the modes of `q` to match the shapes of `reference` (most similar first).
+/// Reorders the modes of `q` to match those of `reference` ([`crate::modal::match_modes`]).
 pub fn match_modes(reference: &Point, mut q: Point) -> Point {
     if q.modes.len() != reference.modes.len() {
         return q;
     }
-    let order = crate::modal::match_shapes(&reference.shapes, &q.shapes);
+    let order = crate::modal::match_modes(
+        (
+            &reference.modes,
+            &reference.shapes,
+            &reference.linear.m_full,
+        ),
+        (&q.modes, &q.shapes),
+    );
     q.modes = crate::modal::permute(std::mem::take(&mut q.modes), &order);
     q.shapes = crate::modal::permute(std::mem::take(&mut q.shapes), &order);
     q
@@ -221,8 +228,14 @@ impl DesignPoint<'_> {
                     .iter()
                     .map(|v| v.modes[k].d_product - 0.5 * sum * v.modes[k].d_sum)
                     .collect();
+                // A repeated root's discriminant where its cluster moves as one.
+                let split = (s.variables.iter()).any(|v| v.modes[k].status != Status::Ok);
                 let g = match smooth[k] {
-                    Smoothness::Rigid | Smoothness::Repeated { .. } => Err(Missing::Mode {
+                    Smoothness::Rigid => Err(Missing::Mode {
+                        mode: k,
+                        why: smooth[k],
+                    }),
+                    Smoothness::Repeated { .. } if split => Err(Missing::Mode {
                         mode: k,
                         why: smooth[k],
                     }),

@@ -72,6 +72,7 @@
 //! probabilistic algorithms for verification of polynomial identities*, J. ACM 27 (1980).
 
 mod augmented;
+mod cluster;
 mod colouring;
 mod mixed;
 mod root;
@@ -85,16 +86,19 @@ use crate::implicit;
 use crate::jet::Jet;
 use crate::linearize::Linearization;
 use crate::mechanics::ports::ports_at;
+use crate::modal::cluster::{Places, of_modes};
 use crate::modal::{C64, Root, Smoothness, smoothness};
 use crate::output::{Missing, Output, Quantity};
 use crate::pair;
 use crate::program::{Tier, Workspace};
 use crate::sensitivity::{DesignPoint, TransferAt};
 use crate::sweep::{Point, PointError};
+use cluster::ClusterTerms;
 use colouring::Colouring;
 use nalgebra::{Complex, DMatrix};
 use num_dual::{Dual2_64, HyperDual64};
 use root::{Along, RootTerms, Triple};
+use std::rc::Rc;
 
 /// Scalar of the mixed (pair) passes.
 type Hd = HyperDual64;
@@ -393,29 +397,74 @@ fn reverse_cost(roots: usize, directions: usize, nf: usize) -> f64 {
     (roots * (directions.div_ceil(crate::program::BATCH) + 1)) as f64 * sweep + 1.0
 }
 
+/// A root's expansion: a simple root's (`root.rs`), or a repeated root's cluster's, each
+/// member's (`cluster.rs`). `None` where the derivative does not exist: a variable, or a pair,
+/// that splits the cluster.
+trait Expanded {
+    fn lambda(&self) -> C64;
+    fn first(&self, a: usize) -> Option<C64>;
+    fn diagonal(&self, a: usize) -> Option<C64>;
+    fn mixed(&self, ab: (usize, usize), second: Option<Triple<'_>>) -> Option<C64>;
+}
+
+impl Expanded for RootTerms {
+    fn lambda(&self) -> C64 {
+        RootTerms::lambda(self)
+    }
+    fn first(&self, a: usize) -> Option<C64> {
+        Some(self.first[a])
+    }
+    fn diagonal(&self, a: usize) -> Option<C64> {
+        Some(self.diagonal[a])
+    }
+    fn mixed(&self, ab: (usize, usize), second: Option<Triple<'_>>) -> Option<C64> {
+        Some(RootTerms::mixed(self, ab, second))
+    }
+}
+
+impl Expanded for ClusterTerms {
+    fn lambda(&self) -> C64 {
+        ClusterTerms::lambda(self)
+    }
+    fn first(&self, a: usize) -> Option<C64> {
+        ClusterTerms::first(self, a)
+    }
+    fn diagonal(&self, a: usize) -> Option<C64> {
+        ClusterTerms::diagonal(self, a)
+    }
+    fn mixed(&self, ab: (usize, usize), second: Option<Triple<'_>>) -> Option<C64> {
+        ClusterTerms::mixed(self, ab, second)
+    }
+}
+
 /// A mode's second root: the first's conjugate (derivatives conjugated), or its own terms.
 enum Partner {
     Conjugate,
-    Own(Box<RootTerms>),
+    Own(Rc<dyn Expanded>),
 }
 
-/// The roots that need terms of their own: each simple mode's root, and its partner where that
-/// is not the conjugate; and per mode whether the partner is the conjugate.
-fn wanted_roots<'p>(pt: &'p Point, smooth: &[Smoothness]) -> (Vec<&'p Root>, Vec<bool>) {
+/// A mode's two roots' expansions, or why it has none.
+type ModeTerms = Result<(Rc<dyn Expanded>, Partner), Missing>;
+
+/// The roots that need terms of their own as simple roots: each simple mode's root, and its
+/// partner where that is not the conjugate, and a repeated mode's roots that are in no
+/// cluster (`places`, [`cluster::of_modes`]); and per mode whether the partner is the
+/// conjugate.
+fn wanted_roots<'p>(
+    pt: &'p Point,
+    smooth: &[Smoothness],
+    places: &Places,
+) -> (Vec<&'p Root>, Vec<bool>) {
     let mut wanted: Vec<&Root> = Vec::new();
-    let conjugate: Vec<bool> = pt
-        .modes
-        .iter()
-        .zip(smooth)
-        .map(|(md, &why)| {
-            let (r, q) = (&md.root, &md.partner);
-            let conjugate = q.lambda == r.lambda.conj()
-                && q.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
-                && q.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj());
-            if why == Smoothness::Simple {
-                wanted.push(r);
-                if !conjugate {
-                    wanted.push(q);
+    let conjugate: Vec<bool> = (pt.modes.iter().zip(smooth).zip(places))
+        .map(|((md, &why), &(in_r, in_q))| {
+            let conjugate = md.partner_is_conjugate();
+            if matches!(why, Smoothness::Simple | Smoothness::Repeated { .. }) {
+                if in_r.is_none() {
+                    wanted.push(&md.root);
+                }
+                if !conjugate && in_q.is_none() {
+                    wanted.push(&md.partner);
                 }
             }
             conjugate
@@ -424,34 +473,44 @@ fn wanted_roots<'p>(pt: &'p Point, smooth: &[Smoothness]) -> (Vec<&'p Root>, Vec
     (wanted, conjugate)
 }
 
-/// The roots' terms of every simple mode, or why the mode's roots have none, in the pencil
-/// `nominal` whose roots `wanted` are (the reduced one, or the augmented one: `augmented.rs`);
-/// `pairs`, where given, each wanted root's `yᵀP_ab x` for every pair
-/// ([`mixed::pencil_pairs`]).
+/// The roots' terms of every simple or repeated mode, or why the mode's roots have none, in
+/// the pencil `nominal` whose roots `wanted` are (the reduced one, or the augmented one:
+/// `augmented.rs`); `pairs`, where given, each wanted root's `yᵀP_ab x` for every pair
+/// ([`mixed::pencil_pairs`]); `clusters` the repeated roots' clusters' terms, where they have
+/// them, at `places`.
 fn root_terms(
     smooth: &[Smoothness],
     (nominal, along): (Triple<'_>, &[Along<'_>]),
-    (wanted, conjugate): (&[&Root], Vec<bool>),
+    (wanted, conjugate, places): (&[&Root], Vec<bool>, &Places),
     pairs: Option<PencilPairs>,
-) -> Vec<Result<(RootTerms, Partner), Missing>> {
+    clusters: &[Option<Rc<ClusterTerms>>],
+) -> Vec<ModeTerms> {
     let mut terms = RootTerms::all(wanted, nominal, along, pairs).into_iter();
-    smooth
-        .iter()
-        .zip(conjugate)
+    let mut take = |place: Option<usize>| -> Option<Rc<dyn Expanded>> {
+        match place {
+            Some(g) => clusters[g].clone().map(|c| c as Rc<dyn Expanded>),
+            None => terms
+                .next()
+                .flatten()
+                .map(|t| Rc::new(t) as Rc<dyn Expanded>),
+        }
+    };
+    (smooth.iter().zip(conjugate).zip(places))
         .enumerate()
-        .map(|(i, (&why, conjugate))| {
-            if why != Smoothness::Simple {
+        .map(|(i, ((&why, conjugate), &(in_r, in_q)))| {
+            if !matches!(why, Smoothness::Simple | Smoothness::Repeated { .. }) {
                 return Err(Missing::Mode { mode: i, why });
             }
-            let first = terms.next().flatten();
+            let first = take(in_r);
             let partner = if conjugate {
                 Some(Partner::Conjugate)
             } else {
-                terms.next().flatten().map(|t| Partner::Own(Box::new(t)))
+                take(in_q).map(Partner::Own)
             };
-            first
-                .zip(partner)
-                .ok_or(Missing::SingularExpansion { mode: i })
+            first.zip(partner).ok_or(match why {
+                Smoothness::Simple => Missing::SingularExpansion { mode: i },
+                _ => Missing::Mode { mode: i, why },
+            })
         })
         .collect()
 }
@@ -510,19 +569,15 @@ fn outputs_at<J: Jet>(
         .zip(smooth)
         .enumerate()
         .map(|(i, (md, &why))| {
-            let not = Missing::Mode { mode: i, why };
-            match why {
-                Smoothness::Rigid => {
-                    return [
-                        Err(not.clone()),
-                        Err(Missing::RigidDamping { mode: i }),
-                        Err(not),
-                    ];
-                }
-                Smoothness::Repeated { .. } => {
-                    return [Err(not.clone()), Err(not.clone()), Err(not)];
-                }
-                _ => {}
+            // A repeated root's members have values where its cluster moves as one (`roots`
+            // says why not otherwise); a rigid-body mode has none.
+            if why == Smoothness::Rigid {
+                let not = Missing::Mode { mode: i, why };
+                return [
+                    Err(not.clone()),
+                    Err(Missing::RigidDamping { mode: i }),
+                    Err(not),
+                ];
             }
             // Coalescing roots are not differentiable one by one; their sum and product
             // are, and for one degree of freedom come straight from the matrices.
@@ -619,16 +674,18 @@ fn put(
 type Parts = (C64, Vec<C64>);
 
 /// The two roots of a mode with the terms `roots` (see [`root_terms`]), their parts given by
-/// `parts(terms)` (the partner's the conjugates where it is the root's conjugate).
+/// `parts(terms)` (the partner's the conjugates where it is the root's conjugate); where a
+/// part does not exist (a split cluster), the mode's reason `why`.
 fn pair(
-    roots: &Result<(RootTerms, Partner), Missing>,
-    parts: &dyn Fn(&RootTerms) -> Vec<C64>,
+    roots: &ModeTerms,
+    why: Missing,
+    parts: &dyn Fn(&dyn Expanded) -> Option<Vec<C64>>,
 ) -> Result<(Parts, Parts), Missing> {
     let (r, q) = roots.as_ref().map_err(Clone::clone)?;
-    let first: Parts = (r.lambda(), parts(r));
+    let first: Parts = (r.lambda(), parts(r.as_ref()).ok_or(why.clone())?);
     let second: Parts = match q {
         Partner::Conjugate => (first.0.conj(), first.1.iter().map(|z| z.conj()).collect()),
-        Partner::Own(q) => (q.lambda(), parts(q)),
+        Partner::Own(q) => (q.lambda(), parts(q.as_ref()).ok_or(why)?),
     };
     Ok((first, second))
 }
@@ -677,14 +734,30 @@ impl DesignPoint<'_> {
         let smooth = smoothness(&pt.modes);
         let shared = (smooth.as_slice(), outs);
         let lin = &pt.linear;
-        let (wanted, conjugate) = wanted_roots(pt, &smooth);
+        // Repeated roots as clusters (`cluster.rs`), the other roots one by one.
+        let (clusters, places) = of_modes(&pt.modes, &smooth, (&lin.m, &lin.c, &lin.k));
+        let (wanted, conjugate) = wanted_roots(pt, &smooth, &places);
+        // Each cluster's `y_iᵀ·x_j` as a root of its own (`i·k + j`), for reverse mode's
+        // contractions `y_iᵀP_ab x_j`.
+        let synthetic: Vec<Root> = (clusters.iter().flatten())
+            .flat_map(|cl| {
+                let k = cl.size();
+                (0..k * k).map(move |ij| Root {
+                    lambda: cl.lambda,
+                    right: cl.right.column(ij % k).into_owned(),
+                    left: cl.left.column(ij / k).into_owned(),
+                })
+            })
+            .collect();
+        let synthetic_refs: Vec<&Root> = synthetic.iter().collect();
         // Reverse mode can pay only where the pairs outnumber its least cost (one batch of
         // products a root, a transfer function's responses counted as a root).
         let worth = match route {
             MixedRoute::Passes => false,
             MixedRoute::Reverse => true,
             MixedRoute::Fastest => {
-                let least = reverse_cost(wanted.len() + usize::from(tf.is_some()), 1, nf);
+                let roots = wanted.len() + synthetic.len() + usize::from(tf.is_some());
+                let least = reverse_cost(roots, 1, nf);
                 (nv * nv.saturating_sub(1) / 2) as f64 > least
             }
         };
@@ -720,10 +793,18 @@ impl DesignPoint<'_> {
             .then(|| augmented::roots(lin, &wanted))
             .flatten();
         let extended: Option<Vec<&Root>> = extended.as_ref().map(|r| r.iter().collect());
+        let extended_synthetic = (constrained && reverse_possible)
+            .then(|| augmented::roots(lin, &synthetic_refs))
+            .flatten();
         let mut program_roots = if constrained {
-            extended.clone()
+            (extended.clone())
+                .zip(extended_synthetic.as_ref())
+                .map(|(mut roots, more)| {
+                    roots.extend(more);
+                    roots
+                })
         } else {
-            Some(wanted.clone())
+            Some(wanted.iter().chain(&synthetic_refs).copied().collect())
         };
         if let (Some(roots), Some(responses)) = (program_roots.as_mut(), &responses) {
             roots.push(&responses.root);
@@ -733,6 +814,7 @@ impl DesignPoint<'_> {
         let transfer_pairs = pairs
             .as_mut()
             .and_then(|pairs| responses.as_ref().and_then(|_| pairs.pop()));
+        let cluster_pairs = (pairs.as_mut()).map(|p| p.split_off(p.len() - synthetic.len()));
         let whole = (tf.is_some() || one_dof) && pairs.is_none();
         // Where reverse mode gave every root's `yᵀP_ab x`, the diagonal too: the passes along
         // each variable then need first derivatives only, and the roots are taken in the
@@ -758,21 +840,59 @@ impl DesignPoint<'_> {
                 let terms = responses.terms(&along, pairs);
                 (h, terms.ok_or(Missing::TransferUnbounded))
             });
-        let roots = root_terms(&smooth, (nominal, &along), (roots_in, conjugate), pairs);
+        // Each cluster's terms in the pencil the roots are taken in.
+        let mut at = 0;
+        let cluster_terms: Vec<Option<Rc<ClusterTerms>>> = (clusters.iter())
+            .map(|cl| {
+                let cl = cl.as_ref().ok()?;
+                let k = cl.size();
+                let range = at..at + k * k;
+                at += k * k;
+                let bases = match &extended_synthetic {
+                    Some(ext) if augmented => {
+                        let ext = &ext[range.clone()];
+                        let n = ext[0].right.len();
+                        (
+                            DMatrix::from_fn(n, k, |r, j| ext[j].right[r]),
+                            DMatrix::from_fn(n, k, |r, i| ext[i * k].left[r]),
+                        )
+                    }
+                    _ => (cl.right.clone(), cl.left.clone()),
+                };
+                let pairs = cluster_pairs.as_ref().map(|p| p[range].to_vec());
+                ClusterTerms::new(cl.lambda, bases, nominal, &along, pairs).map(Rc::new)
+            })
+            .collect();
+        let roots = root_terms(
+            &smooth,
+            (nominal, &along),
+            (roots_in, conjugate, &places),
+            pairs,
+            &cluster_terms,
+        );
         let Hessians {
             gradients: mut grad,
             outputs: mut hess,
             discriminant_gradients: mut dgrad,
             discriminant: mut dhess,
         } = Hessians::zeros(nv, outs.len(), nm);
-        let pair_of = |i: usize, parts: &dyn Fn(&RootTerms) -> Vec<C64>| pair(&roots[i], parts);
+        let pair_of = |i: usize, parts: &dyn Fn(&dyn Expanded) -> Option<Vec<C64>>| {
+            pair(
+                &roots[i],
+                Missing::Mode {
+                    mode: i,
+                    why: smooth[i],
+                },
+                parts,
+            )
+        };
         for a in 0..nv {
             let single = whole.then(|| &singles[a]);
             let h = transfer_jet(tf, single, transfer_terms.as_ref(), |t| {
                 vec![t.first[a], t.second[(a, a)]]
             });
             let (o, d) = outputs_at::<Dual2_64>(pt, shared, (single, h), |i| {
-                pair_of(i, &|t| vec![t.first[a], t.diagonal[a]])
+                pair_of(i, &|t| Some(vec![t.first(a)?, t.diagonal(a)?]))
                     .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
             });
             for (jets, g, h) in [(&o, &mut grad, &mut hess), (&d, &mut dgrad, &mut dhess)] {
@@ -808,7 +928,7 @@ impl DesignPoint<'_> {
                 });
                 let (o, d) = outputs_at::<Hd>(pt, shared, (lin.as_ref(), h), |i| {
                     pair_of(i, &|t| {
-                        vec![t.first[a], t.first[b], t.mixed((a, b), second)]
+                        Some(vec![t.first(a)?, t.first(b)?, t.mixed((a, b), second)?])
                     })
                     .map(|((l1, p1), (l2, p2))| (complex_jet(l1, &p1), complex_jet(l2, &p2)))
                 });

@@ -54,6 +54,7 @@
 //! better conditioned, both divide by `K̂` instead and solve for `1/λ` (see
 //! [`linalg::symmetric_definite`] and `first_order_modes`).
 
+pub mod cluster;
 mod first_order;
 mod pairing;
 mod rigid;
@@ -61,7 +62,7 @@ mod smoothness;
 mod tracking;
 
 pub use smoothness::{SIMPLE_GAP, Smoothness, smoothness};
-pub use tracking::{match_shapes, permute, similarities, similarity};
+pub use tracking::{match_modes, match_shapes, permute, similarities, similarity};
 
 use crate::linalg;
 use crate::pair;
@@ -118,6 +119,17 @@ pub struct Mode {
     /// ζ = −(λ₁+λ₂)/(2ω_n).
     pub damping_ratio: f64,
     pub class: ModeClass,
+}
+
+impl Mode {
+    /// Is the partner the root's conjugate, vectors and all (bitwise): its derivatives are
+    /// then the root's conjugated.
+    pub fn partner_is_conjugate(&self) -> bool {
+        let (r, p) = (&self.root, &self.partner);
+        p.lambda == r.lambda.conj()
+            && p.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
+            && p.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj())
+    }
 }
 
 /// Why the modal solve failed.

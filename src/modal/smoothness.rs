@@ -14,7 +14,8 @@ pub enum Smoothness {
     /// has a kink there; the pair's sum and product stay smooth.
     Coalescing,
     /// A root coincides with a root of another mode (0-based index), as two modes of a
-    /// symmetric rotor at rest do: neither is differentiable.
+    /// symmetric rotor at rest do: neither is differentiable by itself. Where the variables
+    /// move the repeated root as one, each member is ([`crate::modal::cluster`]).
     Repeated { other: usize },
     /// A rigid-body mode (a zero root): no frequency or damping ratio to differentiate.
     Rigid,
@@ -31,7 +32,8 @@ impl std::fmt::Display for Smoothness {
             Smoothness::Repeated { other } => {
                 write!(
                     f,
-                    "a root of it is repeated in mode {} (a double root)",
+                    "a root of it is repeated in mode {} (a double root that the variables \
+                     split, or only nearly repeated)",
                     other + 1
                 )
             }

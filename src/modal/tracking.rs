@@ -1,6 +1,7 @@
 //! Modes followed across speeds and samples by the similarity of their shapes.
 
-use super::C64;
+use super::cluster::groups;
+use super::{C64, Mode};
 use nalgebra::{DMatrix, DVector};
 
 /// |aᴴ b| / (|a| |b|): 1 for parallel vectors.
@@ -63,17 +64,23 @@ pub fn permute<T>(items: Vec<T>, order: &[usize]) -> Vec<T> {
 /// largest similarity first): tracks modes across speeds and matches a sample's modes to the
 /// nominal ones.
 pub fn match_shapes(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
-    let n = prev.len();
-    let s = similarities(prev, cur);
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * cur.len());
+    greedy(&similarities(prev, cur))
+}
+
+/// For each row of the similarities `s` (reference × current), the column it is matched to:
+/// greedy on the largest similarity first, each column taken once (`usize::MAX` where none is
+/// left).
+fn greedy(s: &DMatrix<f64>) -> Vec<usize> {
+    let (n, m) = s.shape();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(n * m);
     for i in 0..n {
-        for j in 0..cur.len() {
+        for j in 0..m {
             pairs.push((s[(i, j)], i, j));
         }
     }
     pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut out = vec![usize::MAX; n];
-    let mut used = vec![false; n];
+    let mut used = vec![false; m];
     for (_, i, j) in pairs {
         if out[i] == usize::MAX && !used[j] {
             out[i] = j;
@@ -81,6 +88,56 @@ pub fn match_shapes(prev: &[DVector<C64>], cur: &[DVector<C64>]) -> Vec<usize> {
         }
     }
     out
+}
+
+/// [`similarity`] in the metric of the mass matrix `mass` (symmetric, positive semi-definite):
+/// `|aᴴMb| / √(aᴴMa · bᴴMb)`, every vector of `a` (rows) with every vector of `b` (columns).
+/// An undamped system's modes are orthogonal in it, however unlike their coordinates' units
+/// and inertias: a shaft's bending modes share translations in metres with rotations in
+/// radians, and two of its modes a decade apart can be 0.96 alike in the plain metric.
+fn similarities_in(mass: &DMatrix<f64>, a: &[DVector<C64>], b: &[DVector<C64>]) -> DMatrix<f64> {
+    let weighted = |v: &DVector<C64>| -> DVector<C64> {
+        let (re, im) = (mass * v.map(|z| z.re), mass * v.map(|z| z.im));
+        re.zip_map(&im, C64::new)
+    };
+    let ma: Vec<DVector<C64>> = a.iter().map(weighted).collect();
+    let norm = |v: &DVector<C64>, mv: &DVector<C64>| v.dotc(mv).norm().sqrt();
+    let na: Vec<f64> = a.iter().zip(&ma).map(|(v, mv)| norm(v, mv)).collect();
+    let nb: Vec<f64> = b.iter().map(|v| norm(v, &weighted(v))).collect();
+    DMatrix::from_fn(a.len(), b.len(), |i, j| {
+        ma[i].dotc(&b[j]).norm() / (na[i] * nb[j]).max(f64::MIN_POSITIVE)
+    })
+}
+
+/// The modes `cur` matched to the modes `reference` (with their shapes in the free coordinates
+/// and the reference's mass matrix over them): for each reference mode, the index of its match
+/// in `cur`. Shapes decide, compared in the mass metric (`similarities_in`), except within a
+/// cluster of repeated reference roots ([`super::cluster::groups`]): there the reference's
+/// shapes are any basis of the eigenspace, so the cluster's matches are told apart by their
+/// values instead, taken by the members in the order of ω_d, then of the root's real part.
+/// So a member of a double root is the lower or the upper of the pair the perturbation makes
+/// of it, in a sample as in a finite difference.
+pub fn match_modes(
+    (reference, shapes, mass): (&[Mode], &[DVector<C64>], &DMatrix<f64>),
+    (cur, cur_shapes): (&[Mode], &[DVector<C64>]),
+) -> Vec<usize> {
+    let mut order = greedy(&similarities_in(mass, shapes, cur_shapes));
+    let roots: Vec<C64> = reference.iter().map(|m| m.root.lambda).collect();
+    for members in groups(&roots) {
+        let mut matched: Vec<usize> = members.iter().map(|&i| order[i]).collect();
+        if matched.iter().any(|&j| j >= cur.len()) {
+            continue;
+        }
+        let key = |j: usize| (cur[j].damped_frequency, cur[j].root.lambda.re);
+        matched.sort_by(|&a, &b| {
+            let ((fa, ra), (fb, rb)) = (key(a), key(b));
+            fa.total_cmp(&fb).then(ra.total_cmp(&rb)).then(a.cmp(&b))
+        });
+        for (&i, j) in members.iter().zip(matched) {
+            order[i] = j;
+        }
+    }
+    order
 }
 
 #[cfg(test)]

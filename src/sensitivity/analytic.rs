@@ -17,8 +17,9 @@ impl DesignPoint<'_> {
         let (pt, tf) = (self.point, self.transfer);
         let nominal = tf.and_then(|t| nominal_transfer(pt, &t));
         let mut variables = Vec::with_capacity(wrt.len());
-        let roots = RootDerivatives::new(&pt.modes, &pt.linear.m, &pt.linear.c);
         let smooth = smoothness(&pt.modes);
+        let lin = &pt.linear;
+        let roots = RootDerivatives::new(&pt.modes, &smooth, (&lin.m, &lin.c, &lin.k));
         for DualLinearization {
             param: b,
             linear: lin,

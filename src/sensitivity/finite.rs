@@ -6,7 +6,7 @@ use super::{
     nominal_transfer,
 };
 use crate::compiled::Compiled;
-use crate::modal::similarities;
+use crate::modal::match_modes;
 use crate::sweep::{Options, Point, PointError, point};
 
 /// Quantities per mode in [`fd_quantities`].
@@ -16,7 +16,8 @@ const NQ: usize = 7;
 const FD_STEP: f64 = 1e-4;
 
 /// Quantities compared by finite differences at one perturbed point: per mode
-/// `[Re λ, Im λ, ω_d, ω_n, ζ, λ₁+λ₂, λ₁λ₂]` (modes matched to the nominal ones by shape), then `|H|`,
+/// `[Re λ, Im λ, ω_d, ω_n, ζ, λ₁+λ₂, λ₁λ₂]` (modes matched to the nominal ones by
+/// [`match_modes`]), then `|H|`,
 /// `arg H`, then the coordinates; and whether every mode kept its class.
 fn fd_quantities(
     model: &Compiled,
@@ -28,12 +29,17 @@ fn fd_quantities(
     let q = point(model, p, pt.speed, &pt.equilibrium.q, opt)?;
     let mut out = Vec::new();
     let mut same_class = true;
-    let s = similarities(&pt.shapes, &q.shapes);
-    for (k, m0) in pt.modes.iter().enumerate() {
-        let i = (0..q.shapes.len())
-            .max_by(|&i, &j| s[(k, i)].total_cmp(&s[(k, j)]))
-            .unwrap_or(0);
-        let m = &q.modes[i];
+    let order = match_modes(
+        (&pt.modes, &pt.shapes, &pt.linear.m_full),
+        (&q.modes, &q.shapes),
+    );
+    for (m0, &i) in pt.modes.iter().zip(&order) {
+        let Some(m) = q.modes.get(i) else {
+            // No mode of the perturbed point left to match (it has fewer).
+            same_class = false;
+            out.extend([f64::NAN; NQ]);
+            continue;
+        };
         same_class &= m.class == m0.class;
         out.extend([
             m.root.lambda.re,

@@ -1,23 +1,30 @@
 //! The roots' derivatives along a direction of the matrices: `dλ = −yᵀ(λ²M' + λC' + K')x /
-//! yᵀ(2λM + C)x` for every root of a point at once, and a mode's derivatives from its roots'.
+//! yᵀ(2λM + C)x` for every simple root of a point at once, the members of a repeated root's
+//! cluster from the cluster's projection ([`crate::modal::cluster`]), and a mode's derivatives
+//! from its roots'.
 
 use super::{ModeSensitivity, Status};
+use crate::modal::cluster::{Cluster, as_one, of_modes};
 use crate::modal::{C64, Mode, Root, Smoothness};
 use crate::pair;
 use nalgebra::{DMatrix, DVector};
 
-/// Derivatives of a mode from the derivatives of its two roots; `invariants`, when given, are
+/// Derivatives of a mode from the derivatives of its two roots (`None` where they do not
+/// exist along this direction: a repeated root that it splits); `invariants`, when given, are
 /// the exact derivatives of `λ₁ + λ₂` and `λ₁ λ₂` (used instead of the roots' sums). `Ok` only
-/// where the mode's roots are simple ([`Smoothness::Simple`]: not coalescing, not repeated in
-/// another mode, not a rigid-body mode) and the derivatives finite.
+/// where the mode's roots are simple ([`Smoothness::Simple`]) or repeated and moving as one
+/// along the direction, and the derivatives finite.
 pub(super) fn mode_derivative(
     m: &Mode,
     smooth: Smoothness,
-    (d1, d2): (C64, C64),
+    roots: Option<(C64, C64)>,
     invariants: Option<(f64, f64)>,
 ) -> ModeSensitivity {
     let (l1, l2) = (m.root.lambda, m.partner.lambda);
-    let status = if smooth != Smoothness::Simple || !d1.re.is_finite() || !d2.re.is_finite() {
+    let nan = C64::new(f64::NAN, f64::NAN);
+    let (d1, d2) = roots.unwrap_or((nan, nan));
+    let differentiable = matches!(smooth, Smoothness::Simple | Smoothness::Repeated { .. });
+    let status = if !differentiable || !d1.re.is_finite() || !d2.re.is_finite() {
         Status::NotDifferentiable
     } else {
         Status::Ok
@@ -66,43 +73,64 @@ fn bilinear(y: &DVector<C64>, a: &DMatrix<f64>, x: &DVector<C64>) -> C64 {
         .sum()
 }
 
-/// [`eigenvalue_derivative`] for all the roots of a point at once. The roots' right vectors
-/// are the columns of one matrix, so that a design variable costs three real matrix products
-/// (`M'X`, `C'X`, `K'X`, blocked) and O(n) per root, where a root at a time is a pass over
-/// three matrices each (memory-bound, and 2n roots); the denominators `yᵀ(2λM + C)x` do not
-/// depend on the variable and are computed once. A conjugate partner's derivative is the
-/// conjugate, bitwise.
-pub(super) struct RootDerivatives<'a> {
-    /// Per mode, its root and the partner (`None` when it is the root's conjugate).
-    roots: Vec<(&'a Root, Option<&'a Root>)>,
-    /// Real and imaginary parts of the distinct roots' right vectors, as columns.
+/// [`eigenvalue_derivative`] for all the simple roots of a point at once, and the projections
+/// of the repeated roots' clusters. The simple roots' right vectors are the columns of one
+/// matrix, so that a design variable costs three real matrix products (`M'X`, `C'X`, `K'X`,
+/// blocked) and O(n) per root, where a root at a time is a pass over three matrices each
+/// (memory-bound, and 2n roots); the denominators `yᵀ(2λM + C)x` do not depend on the variable
+/// and are computed once. A conjugate partner's derivative is the conjugate, bitwise.
+pub(super) struct RootDerivatives {
+    /// Per mode, where its root is and where its partner is (`None` when it is the root's
+    /// conjugate).
+    places: Vec<(Place, Option<Place>)>,
+    /// The simple roots in column order.
+    simple: Vec<Root>,
+    /// Real and imaginary parts of the simple roots' right vectors, as columns.
     xr: DMatrix<f64>,
     xi: DMatrix<f64>,
-    /// `yᵀ(2λM + C)x` per distinct root.
+    /// `yᵀ(2λM + C)x` per simple root.
     den: Vec<C64>,
+    /// The repeated roots' clusters (`None` where the roots are not one repeated root).
+    clusters: Vec<Option<Cluster>>,
 }
 
-impl<'a> RootDerivatives<'a> {
-    pub(super) fn new(modes: &'a [Mode], m: &DMatrix<f64>, c: &DMatrix<f64>) -> Self {
-        let roots: Vec<(&Root, Option<&Root>)> = modes
-            .iter()
-            .map(|md| {
-                let (r, p) = (&md.root, &md.partner);
-                let conjugate = p.lambda == r.lambda.conj()
-                    && p.right.iter().zip(&r.right).all(|(a, b)| *a == b.conj())
-                    && p.left.iter().zip(&r.left).all(|(a, b)| *a == b.conj());
-                (r, (!conjugate).then_some(p))
+/// Where a root's derivative comes from.
+#[derive(Debug, Clone, Copy)]
+enum Place {
+    /// A simple root: its column.
+    Simple(usize),
+    /// A member of a cluster of repeated roots.
+    Member(usize),
+}
+
+impl RootDerivatives {
+    /// The roots of `modes` (each mode's smoothness `smooth`) of the pencil `(m, c, k)`.
+    pub(super) fn new(
+        modes: &[Mode],
+        smooth: &[Smoothness],
+        (m, c, k): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    ) -> Self {
+        let (clusters, in_cluster) = of_modes(modes, smooth, (m, c, k));
+        let mut simple: Vec<Root> = Vec::new();
+        let mut place = |r: &Root, cluster: Option<usize>| match cluster {
+            Some(g) => Place::Member(g),
+            None => {
+                simple.push(r.clone());
+                Place::Simple(simple.len() - 1)
+            }
+        };
+        let places = (modes.iter().zip(&in_cluster))
+            .map(|(md, &(r, p))| {
+                let partner = (!md.partner_is_conjugate()).then_some(&md.partner);
+                (place(&md.root, r), partner.map(|q| place(q, p)))
             })
             .collect();
-        let distinct: Vec<&Root> = roots
-            .iter()
-            .flat_map(|&(r, p)| std::iter::once(r).chain(p))
-            .collect();
+        let clusters = clusters.into_iter().map(Result::ok).collect();
         let n = m.nrows();
-        let xr = DMatrix::from_fn(n, distinct.len(), |i, k| distinct[k].right[i].re);
-        let xi = DMatrix::from_fn(n, distinct.len(), |i, k| distinct[k].right[i].im);
+        let xr = DMatrix::from_fn(n, simple.len(), |i, k| simple[k].right[i].re);
+        let xi = DMatrix::from_fn(n, simple.len(), |i, k| simple[k].right[i].im);
         let (mr, mi, cr, ci) = (m * &xr, m * &xi, c * &xr, c * &xi);
-        let den = distinct
+        let den = simple
             .iter()
             .enumerate()
             .map(|(k, r)| {
@@ -115,36 +143,53 @@ impl<'a> RootDerivatives<'a> {
                     .sum()
             })
             .collect();
-        RootDerivatives { roots, xr, xi, den }
+        RootDerivatives {
+            places,
+            simple,
+            xr,
+            xi,
+            den,
+            clusters,
+        }
     }
 
-    /// `(dλ_root, dλ_partner)` per mode along `(M', C', K')`.
+    /// `(dλ_root, dλ_partner)` per mode along `(M', C', K')`; `None` where a root is repeated
+    /// and the direction splits its cluster, or the cluster is not one repeated root.
     pub(super) fn along(
         &self,
         (dm, dc, dk): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
-    ) -> Vec<(C64, C64)> {
+    ) -> Vec<Option<(C64, C64)>> {
         let prod = |a: &DMatrix<f64>| (a * &self.xr, a * &self.xi);
         let ((mr, mi), (cr, ci), (kr, ki)) = (prod(dm), prod(dc), prod(dk));
         let n = dm.nrows();
-        let mut k = 0;
-        let mut next = |r: &Root| {
-            let l = r.lambda;
-            let num: C64 = (0..n)
-                .map(|i| {
-                    let at =
-                        |re: &DMatrix<f64>, im: &DMatrix<f64>| C64::new(re[(i, k)], im[(i, k)]);
-                    r.left[i] * (l * l * at(&mr, &mi) + l * at(&cr, &ci) + at(&kr, &ki))
-                })
-                .sum();
-            let d = -num / self.den[k];
-            k += 1;
-            d
+        let simple: Vec<C64> = (self.simple.iter().enumerate())
+            .map(|(k, r)| {
+                let l = r.lambda;
+                let num: C64 = (0..n)
+                    .map(|i| {
+                        let at =
+                            |re: &DMatrix<f64>, im: &DMatrix<f64>| C64::new(re[(i, k)], im[(i, k)]);
+                        r.left[i] * (l * l * at(&mr, &mi) + l * at(&cr, &ci) + at(&kr, &ki))
+                    })
+                    .sum();
+                -num / self.den[k]
+            })
+            .collect();
+        let members: Vec<Option<C64>> = (self.clusters.iter())
+            .map(|cl| {
+                cl.as_ref()
+                    .and_then(|cl| as_one(&cl.derivative((dm, dc, dk))))
+            })
+            .collect();
+        let at = |p: Place| match p {
+            Place::Simple(k) => Some(simple[k]),
+            Place::Member(g) => members[g],
         };
-        self.roots
+        self.places
             .iter()
             .map(|&(r, p)| {
-                let d1 = next(r);
-                (d1, p.map_or(d1.conj(), &mut next))
+                let d1 = at(r)?;
+                Some((d1, p.map_or(Some(d1.conj()), at)?))
             })
             .collect()
     }
