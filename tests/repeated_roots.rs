@@ -175,8 +175,91 @@ fn a_variable_that_breaks_the_symmetry_leaves_the_double_roots_rows_with_their_r
     let model = Compiled::from_str(&text, "anisotropic.toml").unwrap_or_else(|e| panic!("{e}"));
     let (pt, lm) = local(&model, 0.0, true);
     let outs = members(&pt, &lm);
+    // Every bending pair is split, conservatively (undamped): a first-order split each, whose
+    // mean motion and split match the members at re-solved points.
+    let smooth = smoothness(&pt.modes);
+    let pairs = smooth
+        .iter()
+        .filter(|s| matches!(s, Smoothness::Repeated { .. }))
+        .count()
+        / 2;
+    assert_eq!(lm.splits.len(), pairs, "{:?}", lm.splits);
+    let p = model.model().nominal();
+    let vars = model.model().toleranced();
+    let opt = Options {
+        no_branch_switch: true,
+        ..Default::default()
+    };
+    // The members' ω_d at the point moved by `step` along the variables' direction `dir`.
+    let members_at = |dir: &[f64], step: f64| -> Vec<[f64; 2]> {
+        let mut pp = p.clone();
+        for (a, &i) in vars.iter().enumerate() {
+            pp[i] += step * dir[a] * p[i];
+        }
+        let q = match_modes(
+            &pt,
+            point(&model, &pp, 0.0, &pt.equilibrium.q, &opt).unwrap(),
+        );
+        (lm.splits.iter())
+            .map(|sp| sp.modes.map(|m| q.modes[m].damped_frequency))
+            .collect()
+    };
+    // Steps of 1 % and ½ %: the roots carry absolute rounding of about 1e-9 rad/s (the form
+    // spans ω² up to 2.7e9), which smaller steps would divide into the differences.
+    let h = 1e-2;
+    let nv = vars.len();
+    for a in 0..nv {
+        for b in a..nv {
+            // Along `e_a + e_b` (each variable relative to its value): the mean moves by
+            // `gᵀd h`, the half split is `√(dᵀQd) h` to O(h²) (after extrapolation: O(h⁴)
+            // and O(h²)).
+            let dir: Vec<f64> = (0..nv)
+                .map(|c| f64::from(u8::from(c == a)) + f64::from(u8::from(c == b)))
+                .collect();
+            let d: Vec<f64> = (0..nv).map(|c| dir[c] * p[vars[c]]).collect();
+            // Central differences of the mean at `h` and `h/2`, and the half split over the
+            // step at both, each Richardson-extrapolated.
+            let at = |step: f64| (members_at(&dir, step), members_at(&dir, -step));
+            let ((up, down), (up2, down2)) = (at(h), at(h / 2.0));
+            for (k, sp) in lm.splits.iter().enumerate() {
+                let mean = |m: [f64; 2]| (m[0] + m[1]) / 2.0;
+                let central =
+                    |u: [f64; 2], d: [f64; 2], step: f64| (mean(u) - mean(d)) / (2.0 * step);
+                let dmean =
+                    (4.0 * central(up2[k], down2[k], h / 2.0) - central(up[k], down[k], h)) / 3.0;
+                let half = |u: [f64; 2], step: f64| (u[1] - u[0]) / (2.0 * step);
+                let half = 2.0 * half(up2[k], h / 2.0) - half(up[k], h);
+                let g: f64 = (0..nv).map(|c| sp.mean[c] * d[c]).sum();
+                let q = (&sp.split * nalgebra::DVector::from_column_slice(&d))
+                    .dot(&nalgebra::DVector::from_column_slice(&d));
+                // Relative, above an absolute floor of 1e-6 rad/s a unit of relative change:
+                // the differences' rounding (1e-9 rad/s over steps of 1e-2).
+                let scale = g.abs().max(q.max(0.0).sqrt()).max(1.0);
+                assert!(
+                    (dmean - g).abs() <= 1e-6 * scale,
+                    "pair {k} along {a}+{b}: mean {dmean} against {g}"
+                );
+                assert!(
+                    (half - q.max(0.0).sqrt()).abs() <= 1e-3 * scale,
+                    "pair {k} along {a}+{b}: half split {half} against {}",
+                    q.max(0.0).sqrt()
+                );
+            }
+        }
+    }
+    // The Taylor methods: first order fills the members' rows from the split (ω_d, and ζ,
+    // which stays zero), second order keeps the reason.
+    let case = modaltol::model::Case::from_parameters(model.model());
+    let spread = modaltol::tolerance::Spread::new(&model, &case, &vars);
+    let stats = modaltol::taylor::Taylor::at(&lm, &spread);
     for &k in &outs {
         let o = &lm.outputs[k];
+        let (stat, _) = stats[k]
+            .first_order
+            .as_ref()
+            .unwrap_or_else(|e| panic!("{o:?}: {e}"));
+        assert!(stat.mean.is_finite() && stat.std.is_finite(), "{o:?}");
+        assert!(stats[k].second_order.is_err(), "{o:?}");
         for (what, missing) in [
             ("gradient", lm.grad[k].as_ref().err()),
             ("Hessian", lm.hess[k].as_ref().err()),
@@ -194,15 +277,12 @@ fn a_variable_that_breaks_the_symmetry_leaves_the_double_roots_rows_with_their_r
         }
     }
     // Variable by variable: the symmetric ones move each pair as one, `k_z` splits them.
-    let p = model.model().nominal();
-    let vars = model.model().toleranced();
     let s = DesignPoint::new(&model, &p, &pt)
         .sensitivities(&vars, Derivatives::Exact)
         .expect("sensitivities");
     let kz = (model.model().parameters.iter())
         .position(|q| q.name == "k_z")
         .unwrap();
-    let smooth = smoothness(&pt.modes);
     for v in &s.variables {
         for (m, ms) in v.modes.iter().enumerate() {
             if matches!(smooth[m], Smoothness::Repeated { .. })

@@ -241,6 +241,60 @@ pub fn as_one(t: &DMatrix<C64>) -> Option<C64> {
     (off <= AS_ONE * t.norm()).then_some(mean)
 }
 
+/// A double root that the variables split, where it stays on the imaginary axis (a
+/// conservative pair: an undamped rotor with one bearing's stiffness toleranced apart): to first
+/// order its members' ω_d are `ω₀ + gᵀδb ± √(δbᵀQδb)`.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// The two members' modes in index order: the lower member first (the order in which a
+    /// sample's matches are taken, [`super::match_modes`]).
+    pub modes: [usize; 2],
+    /// `g`: the gradient of the members' mean ω_d.
+    pub mean: Vec<f64>,
+    /// `Q`: the half split's square `((ω₊ − ω₋)/2)²` as a quadratic form in the variables
+    /// (symmetric, positive semi-definite).
+    pub split: DMatrix<f64>,
+}
+
+/// The first-order split of a conservative double root from its projections `t` (one 2×2 `T_a`
+/// per variable): the members' mean's gradient `g = Im tr(T_a)/2` and the quadratic form `Q` of
+/// `−Δ`, `Δ = (tr G/2)² − det G` the discriminant of `G = Σ T_a δb_a`; `None` where the pair
+/// is not conservative to rounding (a member would leave the imaginary axis: `Re tr T_a ≠ 0`,
+/// or `Δ` not real and non-positive), or not a pair.
+pub fn conservative_split(t: &[DMatrix<C64>]) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    if t.iter().any(|ta| ta.shape() != (2, 2)) {
+        return None;
+    }
+    let p = t.len();
+    let size: Vec<f64> = t.iter().map(|ta| ta.norm()).collect();
+    // Each variable judged against its own size (the variables' units differ).
+    if (t.iter().zip(&size)).any(|(ta, &n)| ta.trace().re.abs() > AS_ONE * n) {
+        return None;
+    }
+    let d = DMatrix::from_fn(p, p, |a, b| {
+        let (x, y) = (&t[a], &t[b]);
+        x.trace() * y.trace() / 4.0
+            - (x[(0, 0)] * y[(1, 1)] + y[(0, 0)] * x[(1, 1)]
+                - x[(0, 1)] * y[(1, 0)]
+                - y[(0, 1)] * x[(1, 0)])
+                / 2.0
+    });
+    let scale = |a: usize, b: usize| (size[a] * size[b]).max(f64::MIN_POSITIVE);
+    if (0..p).any(|a| (0..p).any(|b| d[(a, b)].im.abs() > AS_ONE * scale(a, b))) {
+        return None;
+    }
+    let q = DMatrix::from_fn(p, p, |a, b| -(d[(a, b)].re + d[(b, a)].re) / 2.0);
+    // Positive semi-definite, judged on the form scaled by the variables' sizes.
+    let unit = |a: usize| if size[a] > 0.0 { 1.0 / size[a] } else { 0.0 };
+    let scaled = DMatrix::from_fn(p, p, |a, b| q[(a, b)] * unit(a) * unit(b));
+    let lowest = scaled.symmetric_eigenvalues().min();
+    if lowest < -AS_ONE * scaled.amax().max(f64::MIN_POSITIVE) {
+        return None;
+    }
+    let mean = t.iter().map(|ta| ta.trace().im / 2.0).collect();
+    Some((mean, q))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -271,6 +325,27 @@ mod tests {
         let (a, b) = (ev[0], ev[1]);
         let (hi, lo) = if a.norm() > b.norm() { (a, b) } else { (b, a) };
         assert!((hi - exact).norm() < 1e-12 * exact.norm() && lo.norm() < 1e-12);
+        // Undamped, the split is conservative: stiffening one plane by δ₁ and both by δ₂
+        // moves the members' ω by ω' δ₂ ± ω' δ₁/2 about ω' δ₁/2, `ω' = 1/(2mω)` (ω² = k/m).
+        let c0 = DMatrix::zeros(2, 2);
+        let w = C64::new(0.0, 5.0);
+        let cl = Cluster::new(&[w, w], (&m, &c0, &k)).expect("a cluster");
+        let t = [
+            cl.derivative((&zero, &zero, &one)),
+            cl.derivative((&zero, &zero, &both)),
+        ];
+        let (g, q) = conservative_split(&t).expect("a conservative pair");
+        let dw = 1.0 / (2.0 * 2.0 * 5.0);
+        assert!(
+            (g[0] - dw / 2.0).abs() < 1e-14 && (g[1] - dw).abs() < 1e-14,
+            "{g:?}"
+        );
+        // ((ω₊ − ω₋)/2)² = (ω' δ₁/2)²: only the first variable splits.
+        let expected = DMatrix::from_row_slice(2, 2, &[dw * dw / 4.0, 0.0, 0.0, 0.0]);
+        assert!((&q - expected).amax() < 1e-15, "{q}");
+        // Damped, it is not conservative.
+        let t = [cl.derivative((&zero, &one, &zero))];
+        assert!(conservative_split(&t).is_none());
         assert_eq!(
             groups(&[l, C64::new(1.0, 0.0), l * (1.0 + 1e-12)]),
             vec![vec![0, 2]]

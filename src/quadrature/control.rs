@@ -280,6 +280,7 @@ mod tests {
             grad: vec![Ok(vec![0.4, 100.0, 0.3])],
             hess: vec![Ok(h.clone())],
             disc: Vec::new(),
+            splits: Vec::new(),
         };
         let locals = [Some(lm)];
         let jac = DMatrix::from_row_slice(2, 2, &[0.5, 0.0, 0.2, 0.3]);

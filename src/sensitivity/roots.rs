@@ -153,6 +153,30 @@ impl RootDerivatives {
         }
     }
 
+    /// Each cluster's projection `T_a` along `(M', C', K')` (`None` where the roots are not
+    /// one repeated root).
+    pub(super) fn projections(
+        &self,
+        mats: (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    ) -> Vec<Option<DMatrix<C64>>> {
+        (self.clusters.iter())
+            .map(|cl| cl.as_ref().map(|cl| cl.derivative(mats)))
+            .collect()
+    }
+
+    /// The number of clusters ([`RootDerivatives::projections`]' length).
+    pub(super) fn projections_count(&self) -> usize {
+        self.clusters.len()
+    }
+
+    /// The modes whose root (not a partner) is a member of cluster `g`, in index order.
+    pub(super) fn members(&self, g: usize) -> Vec<usize> {
+        (self.places.iter().enumerate())
+            .filter(|(_, (r, _))| matches!(r, Place::Member(h) if *h == g))
+            .map(|(i, _)| i)
+            .collect()
+    }
+
     /// `(dλ_root, dλ_partner)` per mode along `(M', C', K')`; `None` where a root is repeated
     /// and the direction splits its cluster, or the cluster is not one repeated root.
     pub(super) fn along(
@@ -175,11 +199,8 @@ impl RootDerivatives {
                 -num / self.den[k]
             })
             .collect();
-        let members: Vec<Option<C64>> = (self.clusters.iter())
-            .map(|cl| {
-                cl.as_ref()
-                    .and_then(|cl| as_one(&cl.derivative((dm, dc, dk))))
-            })
+        let members: Vec<Option<C64>> = (self.projections((dm, dc, dk)).iter())
+            .map(|t| t.as_ref().and_then(as_one))
             .collect();
         let at = |p: Place| match p {
             Place::Simple(k) => Some(simple[k]),

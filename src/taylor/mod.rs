@@ -8,11 +8,12 @@
 mod table;
 pub mod yields;
 
+use crate::modal::cluster::Split;
 use crate::output::Missing;
 use crate::output::Quantity;
 use crate::propagate::{Estimate, Propagation, Run, Study, Termination};
 use crate::tolerance::{
-    LocalModel, Spread, Stat, discriminant, first_order, invariant, second_order,
+    LocalModel, Spread, Stat, discriminant, first_order, invariant, second_order, split_first_order,
 };
 
 /// First-order variance shares: each variable's share of the variance.
@@ -41,7 +42,12 @@ impl Taylor {
             .enumerate()
             .map(|(k, o)| {
                 let v = lm.value[k];
-                let first = lm.grad[k].clone().map(|g| first_order(v, &g, s));
+                let first = match (&lm.grad[k], split_of(lm, o.mode)) {
+                    (Err(why), Some((split, upper))) => {
+                        split_member(v, o.quantity, split, upper, s).ok_or(why.clone())
+                    }
+                    (grad, _) => grad.clone().map(|g| first_order(v, &g, s)),
+                };
                 let second = lm.grad[k]
                     .clone()
                     .and_then(|g| lm.hess[k].clone().map(|h| second_order(v, &g, &h, s)));
@@ -62,6 +68,37 @@ impl Taylor {
                 }
             })
             .collect()
+    }
+}
+
+/// The split double root (with whether it is the upper member) that mode `mode` belongs to.
+fn split_of(lm: &LocalModel, mode: Option<usize>) -> Option<(&Split, bool)> {
+    let m = mode?;
+    (lm.splits.iter())
+        .find(|sp| sp.modes.contains(&m))
+        .map(|sp| (sp, sp.modes[1] == m))
+}
+
+/// First order at a member of a split conservative double root: its ω_d by
+/// [`split_first_order`]; its ζ stays zero to first order (the pair stays on the imaginary
+/// axis), with no spread. `None` where the split's distribution is not the normal one's.
+fn split_member(
+    value: f64,
+    quantity: Quantity,
+    split: &Split,
+    upper: bool,
+    s: &Spread,
+) -> Option<(Stat, Shares)> {
+    match quantity {
+        Quantity::DampedFrequency => split_first_order(value, split, upper, s),
+        Quantity::DampingRatio => Some((
+            Stat {
+                mean: value,
+                std: 0.0,
+            },
+            vec![0.0; split.mean.len()],
+        )),
+        _ => None,
     }
 }
 
