@@ -262,7 +262,11 @@ pub struct Split {
 /// is not conservative to rounding (a member would leave the imaginary axis: `Re tr T_a ≠ 0`,
 /// or `Δ` not real and non-positive), or not a pair.
 pub fn conservative_split(t: &[DMatrix<C64>]) -> Option<(Vec<f64>, DMatrix<f64>)> {
-    if t.iter().any(|ta| ta.shape() != (2, 2)) {
+    // Not a pair, or a projection that overflowed: no split claimed (and no eigenvalues of a
+    // non-finite form asked for).
+    if t.iter()
+        .any(|ta| ta.shape() != (2, 2) || ta.iter().any(|z| !z.is_finite()))
+    {
         return None;
     }
     let p = t.len();
@@ -345,6 +349,10 @@ mod tests {
         assert!((&q - expected).amax() < 1e-15, "{q}");
         // Damped, it is not conservative.
         let t = [cl.derivative((&zero, &one, &zero))];
+        assert!(conservative_split(&t).is_none());
+        // An overflowed projection claims no split.
+        let mut t = [cl.derivative((&zero, &zero, &one))];
+        t[0][(0, 1)] = C64::new(f64::NAN, 0.0);
         assert!(conservative_split(&t).is_none());
         assert_eq!(
             groups(&[l, C64::new(1.0, 0.0), l * (1.0 + 1e-12)]),
