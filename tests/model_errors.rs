@@ -283,7 +283,7 @@ fn force_elements_take_the_fields_their_type_declares() {
         &e,
         line_of(&text, "torsion_bar"),
         None,
-        "unknown type 'torsion_bar' (expected spring_damper, rotational_spring_damper, bushing or spherical_spring_damper)",
+        "unknown type 'torsion_bar' (expected spring_damper, rotational_spring_damper, bushing, spherical_spring_damper or bearing)",
     );
     let (text, e) = with(
         "type = \"bushing\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\nstiffness = [1, 2, 3, 4, 5]\n",
@@ -337,6 +337,65 @@ fn force_elements_take_the_fields_their_type_declares() {
         line_of(&text, "[[forces]]"),
         None,
         "its two points coincide in the reference configuration",
+    );
+    // Matrices: square over the components, rows of the right length, not mixed with values,
+    // and only where a matrix means something.
+    let bearing = "type = \"bearing\"\nbody1 = \"ground\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\naxis = [0, 1, 0]\n";
+    let (text, e) = with(&format!("{bearing}stiffness = [[1, 2, 0], [3, 4, 0]]\n"));
+    check(
+        &e,
+        line_of(&text, "stiffness = [["),
+        None,
+        "force 'f' stiffness: a matrix over the 3 components needs 3 rows of 3, got 2 rows",
+    );
+    let (text, e) = with(&format!(
+        "{bearing}damping = [[1, 2, 0], [3, 4], [0, 0, 1]]\n"
+    ));
+    check(
+        &e,
+        line_of(&text, "damping = [["),
+        None,
+        "force 'f' damping: row 2 of the matrix has 2 entries, not 3 (one per component)",
+    );
+    let (text, e) = with(&format!("{bearing}stiffness = [1, [2, 3]]\n"));
+    check(
+        &e,
+        line_of(&text, "stiffness = [1"),
+        None,
+        "a list of values or a matrix (a list of rows), not a mix of the two",
+    );
+    let (text, e) = with(&format!("{bearing}axis2 = [0, 2, 0]\n"));
+    check(
+        &e,
+        line_of(&text, "axis2"),
+        None,
+        "force 'f': its axis2 [0.0, 2.0, 0.0] is zero or parallel to its axis [0.0, 1.0, 0.0]",
+    );
+    let (text, e) = with(
+        "type = \"bushing\"\nbody1 = \"shaft\"\nbody2 = \"rod\"\npoint1 = [0, 0, 0]\naxis2 = [1, 0, 0]\n",
+    );
+    check(
+        &e,
+        line_of(&text, "axis2"),
+        None,
+        "force 'f': a bushing has no axis, so no 'axis2'",
+    );
+    let (text, e) = with(&format!(
+        "{bearing}stiffness = [[1, 2, 0], [3, 4, 0], [0, 0, \"m/0\"]]\n"
+    ));
+    check(
+        &e,
+        line_of(&text, "stiffness = [["),
+        None,
+        "stiffness[2][2]",
+    );
+    let hinge = BASE.replacen("damping = 3", "damping = [[3]]", 1);
+    let e = Model::from_str(&hinge, "bad.toml").expect_err("a matrix on a joint");
+    check(
+        &e,
+        line_of(&hinge, "damping = [[3]]"),
+        None,
+        "a matrix is taken by a force element's stiffness and damping only",
     );
 }
 

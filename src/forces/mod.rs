@@ -10,6 +10,10 @@
 //! ```
 //!
 //! so the tangent stiffness is symmetric at rest and exact everywhere, whatever the measure.
+//! Where the stiffness and damping are given as matrices over the components,
+//! `f = K (e − e0) + C ė + f0`: the same virtual work, but a `K` that is not symmetric (a
+//! journal bearing's cross-coupling `kxy ≠ kyx`) is a circulatory force, with no potential,
+//! and its tangent stiffness is not symmetric either.
 //! A type whose dampers act on the relative angular velocity rather than on `ė` says so
 //! ([`Damps`]); its springs and preloads act as above.
 //! The free value `e0` defaults to the deformation in the reference configuration (the element
@@ -20,6 +24,7 @@
 //! Adding a type is one file here implementing [`ForceType`] and one line in `force_types!`
 //! (below); the model parser reads the type's name, components and fields from that trait.
 
+pub mod bearing;
 pub mod bushing;
 pub mod rotational;
 pub mod spherical;
@@ -91,6 +96,7 @@ kinds! {
         Rotational => rotational::Rotational,
         Bushing => bushing::Bushing,
         Spherical => spherical::Spherical,
+        Bearing => bearing::Bearing,
     }
     /// See [`ForceType::COMPONENTS`].
     fn components() -> &'static [ComponentSpec] = COMPONENTS;

@@ -2,8 +2,8 @@
 //! by item; and [`System::map`], the same system over another scalar.
 
 use super::{
-    BodyData, ConstraintData, CouplerData, ForceData, JointData, JointElement, LoadData, PortData,
-    System,
+    BodyData, ConstraintData, CouplerData, Cross, ForceData, JointData, JointElement, LoadData,
+    PortData, System,
 };
 use crate::model::{
     Beam, BeamSection, Body, Constraint, Coupler, Field, FieldError, ForceElement, Load, LoadKind,
@@ -238,6 +238,18 @@ fn force<T: Real>(e: &ForceElement, p: &[T], w: T) -> Result<ForceData<T>, Field
             .map(|f| or_zero(f, p, w))
             .collect::<Result<Vec<T>, _>>()
     };
+    let cross = e
+        .cross
+        .iter()
+        .map(|x| {
+            Ok(Cross {
+                row: x.row,
+                col: x.col,
+                stiffness: or_zero(&x.stiffness, p, w)?,
+                damping: or_zero(&x.damping, p, w)?,
+            })
+        })
+        .collect::<Result<_, FieldError>>()?;
     Ok(ForceData {
         kind: e.kind,
         stiffness: each(&e.stiffness)?,
@@ -245,6 +257,7 @@ fn force<T: Real>(e: &ForceElement, p: &[T], w: T) -> Result<ForceData<T>, Field
         preload: each(&e.preload)?,
         free,
         geometry,
+        cross,
     })
 }
 
@@ -449,6 +462,14 @@ impl<T: Real> ForceData<T> {
             damping: each(&self.damping),
             free: each(&self.free),
             preload: each(&self.preload),
+            cross: (self.cross.iter())
+                .map(|x| Cross {
+                    row: x.row,
+                    col: x.col,
+                    stiffness: f(x.stiffness),
+                    damping: f(x.damping),
+                })
+                .collect(),
         }
     }
 }

@@ -47,7 +47,8 @@ pub struct JointElement<T> {
 }
 
 /// A force element (geometry in the reference configuration) with its per-component spring
-/// rates, damping, free values and preloads.
+/// rates, damping, free values and preloads, and the off-diagonal terms of its stiffness and
+/// damping matrices.
 #[derive(Debug, Clone)]
 pub struct ForceData<T> {
     pub kind: forces::Kind,
@@ -56,6 +57,18 @@ pub struct ForceData<T> {
     pub damping: Vec<T>,
     pub free: Vec<T>,
     pub preload: Vec<T>,
+    pub cross: Vec<Cross<T>>,
+}
+
+/// An off-diagonal term of a force element's stiffness and damping matrices: component
+/// `row`'s force per unit of component `col`'s deformation from its free value (`stiffness`)
+/// and per unit of its rate (`damping`).
+#[derive(Debug, Clone, Copy)]
+pub struct Cross<T> {
+    pub row: usize,
+    pub col: usize,
+    pub stiffness: T,
+    pub damping: T,
 }
 
 #[derive(Debug, Clone)]

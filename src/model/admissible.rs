@@ -176,6 +176,7 @@ impl Model {
                     .chain(&s.damping)
                     .chain(&s.free)
                     .chain(&s.preload)
+                    .chain(s.cross.iter().flat_map(|x| [&x.stiffness, &x.damping]))
                     .flatten()
                     .map(|f| (e, f)),
             );

@@ -109,6 +109,19 @@ pub struct ForceElement {
     /// Per component; `None`: the deformation in the reference configuration.
     pub free: Vec<Option<Field>>,
     pub preload: Vec<Option<Field>>,
+    /// The off-diagonal terms of the stiffness and damping matrices, where they are given
+    /// as matrices (each pair of components once, `None`: zero).
+    pub cross: Vec<CrossField>,
+}
+
+/// An off-diagonal term of a force element's stiffness and damping matrices (see
+/// [`crate::mechanics::Cross`]).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CrossField {
+    pub row: usize,
+    pub col: usize,
+    pub stiffness: Option<Field>,
+    pub damping: Option<Field>,
 }
 
 /// A cut joint closing a kinematic loop; its type ([`crate::cuts`]) gives its equations.

@@ -43,11 +43,54 @@ impl<'de> Deserialize<'de> for Num {
 pub type SNum = Spanned<Num>;
 
 /// A number or expression, or a list of them: one value per coordinate of a joint (a single
-/// value serves a one-coordinate joint, and for spring rates and damping every coordinate).
+/// value serves a one-coordinate joint, and for spring rates and damping every coordinate);
+/// or a list of lists, a matrix by rows (a force element's stiffness and damping).
 #[derive(Debug, Clone)]
 pub enum Nums {
     One(Num),
     Many(Vec<SNum>),
+    Rows(Vec<Spanned<Vec<SNum>>>),
+}
+
+/// An entry of a [`Nums`] list: a value, or a row of a matrix.
+enum Entry {
+    Value(Num),
+    Row(Vec<SNum>),
+}
+
+impl<'de> Deserialize<'de> for Entry {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Entry;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, an expression string, or a list of them (a matrix's row)")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Entry, E> {
+                Ok(Entry::Value(Num::Value(v as f64)))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Entry, E> {
+                Ok(Entry::Value(Num::Value(v as f64)))
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<Entry, E> {
+                Ok(Entry::Value(Num::Value(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Entry, E> {
+                Ok(Entry::Value(Num::Expr(v.to_string())))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Entry, A::Error> {
+                let mut out = Vec::new();
+                while let Some(x) = seq.next_element::<SNum>()? {
+                    out.push(x);
+                }
+                Ok(Entry::Row(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 impl<'de> Deserialize<'de> for Nums {
@@ -71,11 +114,21 @@ impl<'de> Deserialize<'de> for Nums {
                 Ok(Nums::One(Num::Expr(v.to_string())))
             }
             fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Nums, A::Error> {
-                let mut out = Vec::new();
-                while let Some(x) = seq.next_element::<SNum>()? {
-                    out.push(x);
+                let (mut values, mut rows) = (Vec::new(), Vec::new());
+                while let Some(x) = seq.next_element::<Spanned<Entry>>()? {
+                    let span = x.span();
+                    match x.into_inner() {
+                        Entry::Value(v) => values.push(Spanned::new(span, v)),
+                        Entry::Row(r) => rows.push(Spanned::new(span, r)),
+                    }
                 }
-                Ok(Nums::Many(out))
+                match (values.is_empty(), rows.is_empty()) {
+                    (_, true) => Ok(Nums::Many(values)),
+                    (true, false) => Ok(Nums::Rows(rows)),
+                    (false, false) => Err(serde::de::Error::custom(
+                        "a list of values or a matrix (a list of rows), not a mix of the two",
+                    )),
+                }
             }
         }
         d.deserialize_any(V)
@@ -164,6 +217,7 @@ pub struct ForceSchema {
     pub body2: Spanned<String>,
     pub point2: Option<SVec>,
     pub axis: Option<SVec>,
+    pub axis2: Option<SVec>,
     pub stiffness: Option<SNums>,
     pub damping: Option<SNums>,
     #[serde(alias = "free_length")]

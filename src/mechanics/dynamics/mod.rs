@@ -237,8 +237,9 @@ fn moving_poses<T: Real>(
 
 /// The torque (ground axes) of an element whose dampers act on the relative angular velocity
 /// ([`Damps::RelativeAngularVelocity`]): `R₁ C ω` with `ω = R₁ᵀR₂ ω₂ − ω₁` from the bodies'
-/// angular velocities in their own axes and `C` diagonal in body 1's axes. It resists on body 2
-/// and drives body 1: the residual `r_i` gains `(R₁ C ω)·(J_ω₂,i − J_ω₁,i) = ∂(½ ωᵀCω)/∂q̇_i`.
+/// angular velocities in their own axes and `C` in body 1's axes. It resists on body 2 and
+/// drives body 1: the residual `r_i` gains `(R₁ C ω)·(J_ω₂,i − J_ω₁,i)`, which for a symmetric
+/// `C` is `∂(½ ωᵀCω)/∂q̇_i`.
 fn relative_damping_torque<T: Real>(
     el: &ForceData<T>,
     pose: &[Pose<T>],
@@ -253,11 +254,14 @@ fn relative_damping_torque<T: Real>(
         Some(b) => (mulv_t(&pose[b].rot, &w2) - motion[b].w, Some(&pose[b].rot)),
         None => (w2, None),
     };
-    let cw = V3::new(
+    let mut cw = V3::new(
         el.damping[0] * w.x,
         el.damping[1] * w.y,
         el.damping[2] * w.z,
     );
+    for x in &el.cross {
+        cw[x.row] += x.damping * w[x.col];
+    }
     match r1 {
         Some(r1) => mulv(r1, &cw),
         None => cw,
@@ -517,20 +521,30 @@ fn element_forces<'j, T: Real>(
     let sys = &l.base;
     let mut element_force = Vec::new();
     let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.pose, motion));
-    let mut e = deformation.iter();
     // Derivatives per coordinate, paired with the forces after the projection.
     let mut direct = Vec::new();
     for (el, partials) in sys.forces.iter().zip(&j.de) {
         let first = element_force.len();
+        let d = &deformation[first..first + el.free.len()];
         let damps = el.kind.damps();
-        for c in 0..el.free.len() {
-            let d = e.next().expect("one deformation per component");
-            let spring = el.stiffness[c] * (d.re - el.free[c]);
-            let f = match damps {
-                Damps::DeformationRate => spring + el.damping[c] * d.eps,
-                Damps::RelativeAngularVelocity => spring,
+        // The dampers on the deformation's rates (else on the relative angular velocity).
+        let rates = damps == Damps::DeformationRate;
+        for (c, dc) in d.iter().enumerate() {
+            let spring = el.stiffness[c] * (dc.re - el.free[c]);
+            let f = if rates {
+                spring + el.damping[c] * dc.eps
+            } else {
+                spring
             };
             element_force.push(f + el.preload[c]);
+        }
+        for x in &el.cross {
+            let spring = x.stiffness * (d[x.col].re - el.free[x.col]);
+            element_force[first + x.row] += if rates {
+                spring + x.damping * d[x.col].eps
+            } else {
+                spring
+            };
         }
         if damps == Damps::RelativeAngularVelocity {
             let torque = relative_damping_torque(el, &j.pose, motion);

@@ -1,14 +1,14 @@
 //! Force elements of a model file: type, bodies, points, axis and the per-component fields the
 //! type ([`crate::forces::ForceType`]) declares.
 
-use super::geometry::{Item, coincident, known, least_aligned, vector};
+use super::geometry::{Item, coincident, known, least_aligned, parallel, vector};
 use super::names::{article, body_ref, element_name, type_named};
 use super::per_coordinate::{Each, indexed};
 use super::{Ctx, R};
 use crate::forces::{Geometry, Kind};
 use crate::joints::Use;
 use crate::model::schema::ForceSchema;
-use crate::model::{Field, ForceElement};
+use crate::model::{CrossField, Field, ForceElement};
 use std::collections::{HashMap, HashSet};
 use toml::Spanned;
 
@@ -18,6 +18,7 @@ struct ComponentFields {
     damping: Vec<Option<Field>>,
     free: Vec<Option<Field>>,
     preload: Vec<Option<Field>>,
+    cross: Vec<CrossField>,
 }
 
 /// Parses and checks the `[[forces]]` tables; `elements` collects their names (names are
@@ -63,6 +64,7 @@ pub(super) fn forces(
             damping: fields.damping,
             free: fields.free,
             preload: fields.preload,
+            cross: fields.cross,
         });
     }
     Ok(out)
@@ -103,8 +105,19 @@ fn geometry(
                 format!("{}: its axis must not depend on the speed", item.owner),
             ));
         }
-        least_aligned(ctx, item, &axis)?
+        match &s.axis2 {
+            Some(_) => second_axis(ctx, item, s, &axis)?,
+            None => least_aligned(ctx, item, &axis)?,
+        }
     };
+    if use_axis == Use::Unused
+        && let Some(a2) = &s.axis2
+    {
+        return Err(ctx.err(
+            a2.span(),
+            format!("{}: {} has no axis, so no 'axis2'", item.owner, item.kind),
+        ));
+    }
     Ok(Geometry {
         body1,
         point1,
@@ -113,6 +126,29 @@ fn geometry(
         axis,
         reference,
     })
+}
+
+/// The element's `axis2`: the direction its type measures from about `axis` (a bearing's `x`),
+/// not depending on the speed and not parallel to the axis.
+fn second_axis(ctx: &Ctx, item: &Item, s: &ForceSchema, axis: &[Field; 3]) -> R<[Field; 3]> {
+    let a2 = vector(ctx, item, &s.axis2, Use::Required, "axis2")?;
+    let span = s.axis2.as_ref().map_or(item.span.clone(), |a| a.span());
+    let (Some(a), Some(b)) = (known(ctx, axis)?, known(ctx, &a2)?) else {
+        return Err(ctx.err(
+            span,
+            format!("{}: its axis2 must not depend on the speed", item.owner),
+        ));
+    };
+    if parallel(a, b) != Some(false) {
+        return Err(ctx.err(
+            span,
+            format!(
+                "{}: its axis2 {b:?} is zero or parallel to its axis {a:?}; give a direction across the axis",
+                item.owner
+            ),
+        ));
+    }
+    Ok(a2)
 }
 
 /// Stiffness, damping, free value and preload per component, checked at the nominal values.
@@ -124,15 +160,39 @@ fn component_fields(ctx: &Ctx, item: &Item, s: &ForceSchema, kind: Kind) -> R<Co
         per: "component",
         what: &what,
     };
-    let stiffness = each.read(ctx, &s.stiffness, "stiffness", true)?;
-    let damping = each.read(ctx, &s.damping, "damping", true)?;
+    let (stiffness, cross_k) = each.read_matrix(ctx, &s.stiffness, "stiffness")?;
+    let (damping, cross_c) = each.read_matrix(ctx, &s.damping, "damping")?;
     let free = each.read(ctx, &s.free, "free", false)?;
     let preload = each.read(ctx, &s.preload, "preload", false)?;
+    let mut cross: Vec<CrossField> = Vec::new();
+    for (is_damping, (row, col, f)) in
+        (cross_k.into_iter().map(|x| (false, x))).chain(cross_c.into_iter().map(|x| (true, x)))
+    {
+        let at = match cross.iter().position(|x| (x.row, x.col) == (row, col)) {
+            Some(at) => at,
+            None => {
+                cross.push(CrossField {
+                    row,
+                    col,
+                    stiffness: None,
+                    damping: None,
+                });
+                cross.len() - 1
+            }
+        };
+        let slot = if is_damping {
+            &mut cross[at].damping
+        } else {
+            &mut cross[at].stiffness
+        };
+        *slot = Some(f);
+    }
     for x in stiffness
         .iter()
         .chain(&damping)
         .chain(&free)
         .chain(&preload)
+        .chain(cross.iter().flat_map(|x| [&x.stiffness, &x.damping]))
         .flatten()
     {
         ctx.nominal(x)?;
@@ -142,5 +202,6 @@ fn component_fields(ctx: &Ctx, item: &Item, s: &ForceSchema, kind: Kind) -> R<Co
         damping,
         free,
         preload,
+        cross,
     })
 }

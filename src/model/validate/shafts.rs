@@ -273,6 +273,7 @@ fn mesh(ctx: &Ctx, s: &ShaftSchema, raw: &mut FileSchema) -> R<usize> {
                     body2: named(&here, frame),
                     point2: None,
                     axis: Some(s.axis.clone()),
+                    axis2: None,
                     stiffness: Some(Spanned::new(c.span(), Nums::One(c.get_ref().clone()))),
                     damping: None,
                     free: None,
@@ -425,7 +426,7 @@ fn ends(ctx: &Ctx, owner: &str, d: &Option<SNums>) -> R<Option<[f64; 2]>> {
     Ok(match d.get_ref() {
         Nums::One(n) => value(&Spanned::new(d.span(), n.clone()))?.map(|v| [v, v]),
         Nums::Many(e) if e.len() == 2 => value(&e[0])?.zip(value(&e[1])?).map(|(a, b)| [a, b]),
-        Nums::Many(_) => None,
+        Nums::Many(_) | Nums::Rows(_) => None,
     })
 }
 
@@ -473,6 +474,10 @@ fn diameter(ctx: &Ctx, owner: &str, d: &Option<SNums>, fraction: f64) -> R<Optio
                 "{owner}: a diameter is one value or a pair [start, end] for a taper, not {} values",
                 ends.len()
             ),
+        )),
+        Nums::Rows(_) => Err(ctx.err(
+            d.span(),
+            format!("{owner}: a diameter is one value or a pair [start, end] for a taper, not a matrix"),
         )),
     }
 }
