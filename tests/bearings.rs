@@ -320,3 +320,107 @@ damping = [["cxx", "cxy", 0], ["cyx", "cyy", 0], [0, 0, 0]]
     }
     assert_eq!(compared, 8 * pt.modes.len());
 }
+
+/// The journal in a bearing whose `kxx` is `kxx` (an expression), the table `table` given.
+fn tabled(kxx: &str, table: &str) -> Compiled {
+    journal(
+        [0.2, 0.0, 0.0],
+        &format!(
+            r#"
+[parameters.scale]
+value = 1.0
+tolerance = "5%"
+[parameters.gear]
+value = 1.0
+tolerance = "5%"
+
+{table}
+
+[[forces]]
+name = "bearing"
+type = "bearing"
+body1 = "ground"
+body2 = "journal"
+point1 = [0, 0, 0]
+axis = [0, 0, 1]
+stiffness = [["{kxx}", 2e5, 0], [-3e5, 1.5e6, 0], [0, 0, 5e6]]
+damping = 50
+"#
+        ),
+    )
+}
+
+#[test]
+fn a_table_and_an_expression_of_speed_agree_where_they_are_the_same_function() {
+    // A table of the line k = 1e6 (1 + speed/200) is that line, inside the table and beyond
+    // it (where the table continues by its end slope).
+    let line = tabled(
+        "scale*kxx(gear*speed)",
+        "[[tables]]\nname = \"kxx\"\nx = [0, 100, 250, 300]\ny = [1e6, 1.5e6, 2.25e6, 2.5e6]",
+    );
+    let expression = tabled("scale*1e6*(1 + gear*speed/200)", "");
+    // A curved table is, at each speed, the bearing with the interpolated number written in.
+    let curve_table =
+        "[[tables]]\nname = \"kxx\"\nx = [0, 100, 250, 300]\ny = [1e6, 1.8e6, 2.0e6, 3.5e6]";
+    let curved = tabled("scale*kxx(gear*speed)", curve_table);
+    let table = modaltol::model::table::Table::new(
+        "kxx",
+        vec![0.0, 100.0, 250.0, 300.0],
+        vec![1e6, 1.8e6, 2.0e6, 3.5e6],
+    )
+    .unwrap();
+    for w in [0.0, 37.5, 100.0, 180.0, 300.0, 420.0] {
+        for direct in [false, true] {
+            same_roots(
+                &roots(&solve(&line, w, direct)),
+                &roots(&solve(&expression, w, direct)),
+                1e-12,
+            );
+            let written = tabled(&format!("{:e}", table.eval(w)), "");
+            same_roots(
+                &roots(&solve(&curved, w, direct)),
+                &roots(&solve(&written, 0.0, direct)),
+                1e-12,
+            );
+        }
+    }
+}
+
+#[test]
+fn sensitivities_through_a_table_equal_finite_differences() {
+    let m = tabled(
+        "scale*kxx(gear*speed)",
+        "[[tables]]\nname = \"kxx\"\nx = [0, 100, 250, 300]\ny = [1e6, 1.8e6, 2.0e6, 3.5e6]",
+    );
+    let wrt = m.model().toleranced();
+    let p = m.model().nominal();
+    let mut sweep = Sweep::new(&m, p.clone(), Options::default());
+    for w in [60.0, 180.0, 350.0] {
+        let pt = sweep.step(w).unwrap();
+        let a = DesignPoint::new(&m, &p, &pt).analytic(&wrt).unwrap();
+        let f = DesignPoint::new(&m, &p, &pt)
+            .finite_difference(&wrt)
+            .unwrap();
+        for (va, vf) in a.variables.iter().zip(&f.variables) {
+            let name = &m.model().parameters[va.param].name;
+            let mut moved = false;
+            for (k, (ma, mf)) in va.modes.iter().zip(&vf.modes).enumerate() {
+                let wn = pt.modes[k].natural_frequency;
+                let (x, y) = (ma.d_damped_frequency, mf.d_damped_frequency);
+                assert!(
+                    agree(x, y, 1e-9 * wn),
+                    "Ω = {w} mode {} dω_d/d{name}: AD {x} FD {y}",
+                    k + 1
+                );
+                let (x, y) = (ma.d_damping_ratio, mf.d_damping_ratio);
+                assert!(
+                    agree(x, y, 1e-9),
+                    "Ω = {w} mode {} dζ/d{name}: AD {x} FD {y}",
+                    k + 1
+                );
+                moved |= x.abs() > 1e-9;
+            }
+            assert!(moved, "Ω = {w}: nothing moves with {name}");
+        }
+    }
+}

@@ -434,3 +434,61 @@ fn a_coordinate_named_twice_as_independent_is_refused_for_every_example() {
         }
     }
 }
+
+#[test]
+fn tables_are_checked_where_they_are_written() {
+    let with = |table: &str| {
+        let text = format!("{BASE}\n[[tables]]\n{table}");
+        let e = Model::from_str(&text, "bad.toml").expect_err("the model should be rejected");
+        (text, e)
+    };
+    let (text, e) = with("name = \"kxx\"\nx = [0, 200, 100]\ny = [1, 2, 3]\n");
+    check(
+        &e,
+        line_of(&text, "x = [0, 200"),
+        None,
+        "table 'kxx': x must increase strictly, but x[2] = 100 follows x[1] = 200",
+    );
+    let (text, e) = with("name = \"kxx\"\nx = [0, 100]\ny = [1, 2, 3]\n");
+    check(
+        &e,
+        line_of(&text, "y = [1, 2, 3]"),
+        None,
+        "x has 2 values and y 3",
+    );
+    let (text, e) = with("name = \"m\"\nx = [0, 100]\ny = [1, 2]\n");
+    check(
+        &e,
+        line_of(&text, "name = \"m\""),
+        None,
+        "table name 'm' is already taken by a parameter",
+    );
+    let (text, e) = with("name = \"sqrt\"\nx = [0, 100]\ny = [1, 2]\n");
+    check(
+        &e,
+        line_of(&text, "name = \"sqrt\""),
+        None,
+        "table name 'sqrt' is already taken by a built-in function or reserved name",
+    );
+    // A call with two arguments, and of a table that is not there.
+    let table = "[[tables]]\nname = \"c\"\nx = [0, 100]\ny = [1, 2]\n";
+    let text = format!(
+        "{}\n{table}",
+        BASE.replacen("damping = 3", "damping = \"c(speed, 2)\"", 1)
+    );
+    let e = Model::from_str(&text, "bad.toml").unwrap_err();
+    check(
+        &e,
+        line_of(&text, "damping = \"c("),
+        None,
+        "table 'c' takes one argument",
+    );
+    let text = BASE.replacen("damping = 3", "damping = \"c(speed)\"", 1);
+    let e = Model::from_str(&text, "bad.toml").unwrap_err();
+    check(
+        &e,
+        line_of(&text, "damping = \"c("),
+        None,
+        "unknown function 'c' (known: sqrt sin cos tan asin acos atan atan2 exp ln abs, and the model's [[tables]])",
+    );
+}

@@ -11,9 +11,12 @@
 //! ```
 //!
 //! Names are model parameters, the constant `pi`, or the reserved symbol `speed` (the operating
-//! speed in rad/s). Functions: `sqrt sin cos tan asin acos atan atan2 exp ln abs`.
+//! speed in rad/s). Functions: `sqrt sin cos tan asin acos atan atan2 exp ln abs`, and the
+//! model's tables (`[[tables]]`, [`Table`]), each a function of one argument.
 
+use super::table::Table;
 use crate::real::{Real, cst, re};
+use std::sync::Arc;
 
 /// Deepest nesting the parser accepts (guards the stack against hostile input).
 pub const MAX_DEPTH: usize = 64;
@@ -103,6 +106,8 @@ pub enum Expr {
     Neg(Box<Expr>),
     Bin(BinOp, Box<Expr>, Box<Expr>),
     Call(Func, Vec<Expr>),
+    /// A table of the model called with an argument.
+    Table(Arc<Table>, Box<Expr>),
 }
 
 /// Why an expression could not be evaluated.
@@ -128,6 +133,16 @@ impl Expr {
         src: &str,
         lookup: &dyn Fn(&str) -> Option<Expr>,
     ) -> Result<Expr, ParseError> {
+        Expr::parse_in(src, lookup, &|_| None)
+    }
+
+    /// Parses `src` as [`Expr::parse_with`], with `tables` mapping a function's name to a
+    /// table of the model.
+    pub fn parse_in(
+        src: &str,
+        lookup: &dyn Fn(&str) -> Option<Expr>,
+        tables: &dyn Fn(&str) -> Option<Arc<Table>>,
+    ) -> Result<Expr, ParseError> {
         if src.len() > MAX_LEN {
             return Err(ParseError {
                 offset: 0,
@@ -143,6 +158,7 @@ impl Expr {
             pos: 0,
             depth: 0,
             lookup,
+            tables,
         };
         let e = p.expr()?;
         if p.pos < p.toks.len() {
@@ -160,6 +176,7 @@ impl Expr {
             Expr::Neg(a) => a.terms(),
             Expr::Bin(_, a, b) => a.terms() + b.terms(),
             Expr::Call(_, args) => args.iter().map(Expr::terms).sum(),
+            Expr::Table(_, a) => a.terms(),
         }
     }
 
@@ -175,6 +192,7 @@ impl Expr {
                     walk(b, out);
                 }
                 Expr::Call(_, args) => args.iter().for_each(|a| walk(a, out)),
+                Expr::Table(_, a) => walk(a, out),
             }
         }
         let mut out = Vec::new();
@@ -192,6 +210,7 @@ impl Expr {
             Expr::Neg(a) => a.uses_speed(),
             Expr::Bin(_, a, b) => a.uses_speed() || b.uses_speed(),
             Expr::Call(_, args) => args.iter().any(Expr::uses_speed),
+            Expr::Table(_, a) => a.uses_speed(),
         }
     }
 
@@ -236,6 +255,7 @@ impl Expr {
                     BinOp::Pow => pow(a, b)?,
                 }
             }
+            Expr::Table(t, a) => t.eval(a.eval_inner(p, speed)?),
             Expr::Call(f, args) => {
                 let x = args[0].eval_inner(p, speed)?;
                 let dom = |ok: bool| {
@@ -374,6 +394,7 @@ struct Parser<'a> {
     pos: usize,
     depth: usize,
     lookup: &'a dyn Fn(&str) -> Option<Expr>,
+    tables: &'a dyn Fn(&str) -> Option<Arc<Table>>,
 }
 
 impl Parser<'_> {
@@ -462,12 +483,26 @@ impl Parser<'_> {
                 Err(self.err_here(&format!("unexpected '{c}' where a value was expected")))
             }
             Tok::Name(name) => {
+                if self.peek_op() == Some('(')
+                    && let Some(table) = (self.tables)(&name)
+                {
+                    self.pos += 1;
+                    let arg = self.expr()?;
+                    if self.peek_op() == Some(',') {
+                        return Err(ParseError {
+                            offset: off,
+                            message: format!("table '{name}' takes one argument"),
+                        });
+                    }
+                    self.expect(')')?;
+                    return Ok(Expr::Table(table, Box::new(arg)));
+                }
                 if self.peek_op() == Some('(') {
                     let Some(f) = Func::from_name(&name) else {
                         return Err(ParseError {
                             offset: off,
                             message: format!(
-                                "unknown function '{name}' (known: sqrt sin cos tan asin acos atan atan2 exp ln abs)"
+                                "unknown function '{name}' (known: sqrt sin cos tan asin acos atan atan2 exp ln abs, and the model's [[tables]])"
                             ),
                         });
                     };

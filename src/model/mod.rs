@@ -10,6 +10,7 @@ pub mod expr;
 pub mod judged;
 pub mod schema;
 mod symmetry;
+pub mod table;
 mod validate;
 
 mod analysis;

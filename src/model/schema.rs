@@ -161,6 +161,8 @@ pub struct FileSchema {
     #[serde(default)]
     pub shafts: Vec<Spanned<ShaftSchema>>,
     #[serde(default)]
+    pub tables: Vec<Spanned<TableSchema>>,
+    #[serde(default)]
     pub constraints: Vec<Spanned<ConstraintSchema>>,
     #[serde(default)]
     pub ports: Vec<Spanned<PortSchema>>,
@@ -223,6 +225,15 @@ pub struct ForceSchema {
     #[serde(alias = "free_length")]
     pub free: Option<SNums>,
     pub preload: Option<SNums>,
+}
+
+/// One `[[tables]]` entry: a function of one argument tabulated at increasing `x`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableSchema {
+    pub name: Spanned<String>,
+    pub x: Spanned<Vec<f64>>,
+    pub y: Spanned<Vec<f64>>,
 }
 
 /// One `[[beams]]` entry: a Timoshenko beam element between two bodies, its section given by

@@ -38,15 +38,18 @@ mod redundancy;
 mod requirements;
 mod shafts;
 mod syntax;
+mod tables;
 mod tree;
 
 pub(super) use locate::error_at;
 
 use super::schema::{Num, SNum, SVec};
+use super::table::Table;
 use super::{Expr, Field, Model, ModelError, Parameter, Site};
 use locate::{abbreviate, line_starts, locate_line};
 use std::collections::HashSet;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// Validates the model `text` (named `file` in messages) with the nominal values of the
 /// parameters in `overrides` replaced.
@@ -55,6 +58,8 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     let mut ctx = Ctx::new(text, file);
     let (parameters, derived) = parameters::parameters(&ctx, &raw.parameters, overrides)?;
     ctx.declare(&parameters);
+    let derived_names: Vec<String> = derived.iter().map(|d| d.name.clone()).collect();
+    ctx.tables = tables::tables(&ctx, &raw.tables, &derived_names)?;
     let derived = parameters::derived(&ctx, &derived)?;
     ctx.derive(&derived);
     shafts::expand(&ctx, &mut raw)?;
@@ -147,6 +152,8 @@ struct Ctx<'a> {
     /// The derived parameters' names, expressions as written and expressions put in place of
     /// their names.
     derived: Vec<(String, String, Expr)>,
+    /// The model's tables, which expressions may call (none until the tables stage has run).
+    tables: Vec<Arc<Table>>,
     /// Byte offset of each line's start: every field's site is located by bisection (counting
     /// lines from the top for each of a large model's thousands of fields was quadratic).
     line_starts: Vec<usize>,
@@ -173,6 +180,7 @@ impl<'a> Ctx<'a> {
             params: Vec::new(),
             values: Vec::new(),
             derived: Vec::new(),
+            tables: Vec::new(),
             line_starts: line_starts(text),
         }
     }
@@ -181,6 +189,11 @@ impl<'a> Ctx<'a> {
     fn declare(&mut self, parameters: &[Parameter]) {
         self.params = parameters.iter().map(|p| p.name.clone()).collect();
         self.values = parameters.iter().map(|p| p.value).collect();
+    }
+
+    /// The table named `name`, if the model has one.
+    fn table(&self, name: &str) -> Option<Arc<Table>> {
+        self.tables.iter().find(|t| t.name == name).cloned()
     }
 
     /// From now on, expressions may also refer to the `derived` parameters (their
@@ -247,7 +260,7 @@ impl<'a> Ctx<'a> {
                         .find(|d| d.0 == name)
                         .map(|d| d.2.clone()),
                 };
-                Expr::parse_with(s, &lookup).map_err(|e| {
+                Expr::parse_in(s, &lookup, &|name| self.table(name)).map_err(|e| {
                     // The string starts one byte after its opening quote.
                     let off = span.start + 1 + e.offset;
                     error_at(

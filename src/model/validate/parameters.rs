@@ -19,7 +19,7 @@ use toml::Spanned;
 
 /// A derived parameter as written: its name, its expression and where that is.
 pub(super) struct RawDerived {
-    name: String,
+    pub(super) name: String,
     text: String,
     span: Range<usize>,
 }
@@ -90,7 +90,7 @@ pub(super) fn derived(ctx: &Ctx, raw: &[RawDerived]) -> R<Vec<Derived>> {
                 }
             };
             let what = format!("parameter '{}'", d.name);
-            let e = Expr::parse_with(&d.text, &lookup).map_err(|e| {
+            let e = Expr::parse_in(&d.text, &lookup, &|name| ctx.table(name)).map_err(|e| {
                 ctx.err(
                     d.span.start + 1 + e.offset..d.span.end,
                     format!("{what}: bad expression \"{}\": {}", d.text, e.message),
@@ -172,7 +172,7 @@ fn cycle(ctx: &Ctx, raw: &[RawDerived], done: &[Option<Expr>]) -> Vec<usize> {
             Some(Expr::Num(0.0))
         };
         // Parsed once before without an error, so only the uses matter.
-        let _ = Expr::parse_with(&raw[k].text, &lookup);
+        let _ = Expr::parse_in(&raw[k].text, &lookup, &|name| ctx.table(name));
         used.into_inner().into_iter().find(|&j| done[j].is_none())
     };
     let Some(start) = done.iter().position(Option::is_none) else {
