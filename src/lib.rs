@@ -103,3 +103,4 @@ pub mod tape;
 pub mod taylor;
 pub mod threads;
 pub mod tolerance;
+pub mod whirl;

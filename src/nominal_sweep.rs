@@ -6,6 +6,7 @@ use crate::frf::{Complex, NoTransfer, transfer_defect};
 use crate::model::Transfer;
 use crate::sensitivity::{Derivatives, DesignPoint, Sensitivity, TransferAt, nominal_transfer};
 use crate::sweep::{Options, Point, PointError, Sweep};
+use crate::whirl::{self, Whirl};
 
 /// Transfer function and sensitivities at one speed, for the optional sweep columns.
 #[derive(Debug, Clone, Default)]
@@ -14,6 +15,9 @@ pub struct SweepExtras {
     /// Why the transfer function asked for has no finite value, where it has none.
     pub transfer_defect: Option<NoTransfer>,
     pub sensitivity: Option<Sensitivity>,
+    /// Each mode's whirl ([`crate::whirl`]; empty where the model has no spinning part or
+    /// does not evaluate).
+    pub whirl: Vec<Option<Whirl>>,
 }
 
 /// A sweep at the nominal parameters (continuation from speed to speed, see [`Sweep`]) with
@@ -52,12 +56,13 @@ impl<'a> NominalSweep<'a> {
         let mut result = self.sweep.step(speed);
         let mut extras = SweepExtras::default();
         if let Ok(pt) = &result {
+            let p = self.model.model().nominal();
+            extras.whirl = whirl::of_point(self.model.model(), &p, pt).unwrap_or_default();
             let t = self.transfer.map(|t| TransferAt::at_speed(&t, speed));
             extras.transfer = t.and_then(|t| nominal_transfer(pt, &t));
             extras.transfer_defect =
                 t.and_then(|t| transfer_defect(&pt.linear, t.omega, extras.transfer.as_ref()));
             if !self.wrt.is_empty() {
-                let p = self.model.model().nominal();
                 let (wrt, how, workspace) = (&self.wrt, self.derivatives, self.sweep.workspace());
                 let at = DesignPoint::new(self.model, &p, pt)
                     .with_transfer(t)

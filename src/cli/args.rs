@@ -175,7 +175,9 @@ pub(crate) enum Command {
     /// damping ratio), damped_frequency, natural_frequency (rad/s), damping_ratio (empty for a
     /// rigid mode), eigen_re, eigen_im (the reported root, 1/s), eigen2_re, eigen2_im (its
     /// partner root), tuning_order (ω_d/Ω: the engine order the mode sits at, as an absorber
-    /// is tuned; empty at Ω = 0); with --transfer: transfer_magnitude (output unit per input unit, e.g.
+    /// is tuned; empty at Ω = 0), whirl (forward|backward|mixed, from the orbits of the
+    /// spinning parts' centres; empty where nothing spins or nothing whirls, as at rest or in
+    /// an axial or torsional mode); with --transfer: transfer_magnitude (output unit per input unit, e.g.
     /// rad/(N·m) or m/N), transfer_phase (rad); with --sensitivity, for every design variable P:
     /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with
     /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status

@@ -29,9 +29,7 @@ pub use svg::svg;
 use crate::mechanics::System;
 use crate::modal::C64;
 use crate::model::{FieldError, Model};
-use crate::scene::{
-    Along, Anchor, P3, PhysicalShape, Posed, Scene, describe, hermite, physical_shapes,
-};
+use crate::scene::{Along, Anchor, P3, PhysicalShape, Scene, describe, hermite, physical_shapes};
 use crate::sweep::Point;
 
 /// What a drawing shows: the mechanism at a point's equilibrium and each mode's motion.
@@ -178,15 +176,11 @@ impl Drawing {
             .map(|s| s.iter().copied().collect())
             .collect();
         let physical = physical_shapes(&sys, q, free, &shapes);
-        let at = Posed {
-            model,
-            sys: &sys,
-            q,
-            free,
-        };
+        let lambdas: Vec<C64> = pt.modes.iter().map(|m| m.root.lambda).collect();
+        let whirls = crate::whirl::whirls(&sys, q, free, &lambdas, &shapes);
         let modes = (pt.modes.iter().zip(&shapes).zip(&physical).enumerate())
             .map(|(k, ((m, v), shape))| {
-                let what = describe(at, v, shape);
+                let what = describe(model, free, v, whirls[k]);
                 let label = if m.damped_frequency.is_finite() && m.damped_frequency > 0.0 {
                     format!(
                         "mode {} ({what}): ω_d = {:.4} rad/s, ζ = {:.4}",

@@ -8,6 +8,7 @@ use crate::modal::C64;
 use crate::model::{FieldError, Model};
 use crate::scene::{PhysicalShape, physical_shape};
 use crate::sweep::{Point, PointError};
+use crate::whirl::{self, Whirl};
 use nalgebra::DMatrix;
 use serde_json::{Value, json};
 use std::fmt::Write;
@@ -38,7 +39,8 @@ pub fn display_shape(shape: &[C64]) -> Vec<C64> {
 }
 
 /// Header of the modes table (`modal --format csv`): the mode's frequencies, damping ratio,
-/// its two roots, then its shape in the free coordinates, scaled by [`display_shape`]
+/// its two roots, its `whirl` ([`crate::whirl`]: forward, backward, mixed or empty), then its
+/// shape in the free coordinates, scaled by [`display_shape`]
 /// (`shape_re:<joint>`, `shape_im:<joint>`), the displacement of each body's centre of mass
 /// with that scaling (`cm_re:<body>.x` … `cm_im:<body>.z`, m per unit of the largest
 /// coordinate, ground axes) and of each port along its direction (`port_re:<port>`,
@@ -46,6 +48,7 @@ pub fn display_shape(shape: &[C64]) -> Vec<C64> {
 /// note, or why it failed).
 pub fn modes_header(model: &Model) -> Vec<String> {
     let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
+    h.push("whirl".into());
     for &i in &model.free() {
         let c = &model.coordinates[i].name;
         h.push(format!("shape_re:{c}"));
@@ -99,6 +102,7 @@ pub fn modes_rows(
     p: &Point,
 ) -> Result<Vec<Vec<String>>, FieldError> {
     let bodies = body_shapes(model, params, p)?;
+    let whirls = whirl::of_point(model, params, p)?;
     Ok(p.modes
         .iter()
         .zip(&p.shapes)
@@ -106,6 +110,7 @@ pub fn modes_rows(
         .enumerate()
         .map(|(i, ((m, shape), b))| {
             let mut r = mode_cells(p.speed, i, m);
+            r.push(whirls[i].map_or("", Whirl::as_str).into());
             let shape: Vec<C64> = shape.iter().copied().collect();
             for z in display_shape(&shape) {
                 r.push(z.re.to_string());
@@ -172,6 +177,7 @@ pub fn modal_json(
         })
         .collect();
     let bodies = body_shapes(model, params, p).ok();
+    let whirls = whirl::of_point(model, params, p).unwrap_or_default();
     let pair = |z: &C64| json!({"re": z.re, "im": z.im});
     let motion = |i: usize| -> Value {
         let Some(b) = bodies.as_ref().and_then(|b| b.get(i)) else {
@@ -197,6 +203,7 @@ pub fn modal_json(
             json!({"mode": i + 1, "status": m.class.as_str(),
                    "damped_frequency": m.damped_frequency, "natural_frequency": m.natural_frequency,
                    "damping_ratio": m.damping_ratio,
+                   "whirl": whirls.get(i).copied().flatten().map(Whirl::as_str),
                    "eigenvalue": {"re": m.root.lambda.re, "im": m.root.lambda.im},
                    "partner_eigenvalue": {"re": m.partner.lambda.re, "im": m.partner.lambda.im},
                    "shape": model.free().iter().zip(display_shape(p.shapes[i].as_slice())).map(|(&c, z)| json!({"coordinate": model.coordinates[c].name, "re": z.re, "im": z.im, "unit": model.coordinates[c].unit.symbol()})).collect::<Vec<_>>(),
@@ -241,7 +248,12 @@ fn write_matrix(out: &mut String, name: &str, m: &DMatrix<f64>) {
 }
 
 /// The `modal` result as a text table.
-pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>) -> String {
+pub fn modal_table(
+    model: &Model,
+    params: &[f64],
+    speed: f64,
+    result: &Result<Point, PointError>,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "model: {}    speed: {speed:?} rad/s", model.name);
     let p = match result {
@@ -269,20 +281,22 @@ pub fn modal_table(model: &Model, speed: f64, result: &Result<Point, PointError>
     let _ = writeln!(s, "\nmodes (rad/s):");
     let _ = writeln!(
         s,
-        "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}",
+        "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}  whirl",
         "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue"
     );
+    let whirls = whirl::of_point(model, params, p).unwrap_or_default();
     for (i, m) in p.modes.iter().enumerate() {
         let _ = writeln!(
             s,
-            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i",
+            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i  {}",
             i + 1,
             m.class.as_str(),
             m.damped_frequency,
             m.natural_frequency,
             fixed(m.damping_ratio, 6),
             m.root.lambda.re,
-            m.root.lambda.im
+            m.root.lambda.im,
+            whirls.get(i).copied().flatten().map_or("", Whirl::as_str)
         );
     }
     write_shapes(&mut s, model, p);

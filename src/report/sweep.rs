@@ -8,6 +8,7 @@ use crate::model::Model;
 use crate::nominal_sweep::SweepExtras;
 use crate::sensitivity::Status as SensStatus;
 use crate::sweep::{Point, PointError};
+use crate::whirl::Whirl;
 
 /// Optional column groups of the sweep CSV.
 #[derive(Debug, Clone, Default)]
@@ -22,6 +23,7 @@ pub struct SweepColumns {
 pub fn sweep_header(model: &Model, cols: &SweepColumns) -> Vec<String> {
     let mut h: Vec<String> = MODE_COLUMNS.iter().map(|s| s.to_string()).collect();
     h.push("tuning_order".into());
+    h.push("whirl".into());
     if cols.transfer {
         h.push("transfer_magnitude".into());
         h.push("transfer_phase".into());
@@ -70,6 +72,8 @@ pub fn sweep_rows(
             .map(|(i, m)| {
                 let mut r = mode_cells(speed, i, m);
                 r.push(opt((speed != 0.0).then(|| m.damped_frequency / speed)));
+                let whirl = extras.whirl.get(i).copied().flatten();
+                r.push(whirl.map_or("", Whirl::as_str).into());
                 if cols.transfer {
                     r.push(opt(extras.transfer.map(|h| h.magnitude())));
                     r.push(opt(extras.transfer.map(|h| h.phase())));

@@ -5,10 +5,10 @@
 use super::Scene;
 use crate::mechanics::System;
 use crate::mechanics::dynamics::partials_for;
-use crate::mechanics::kinematics::poses;
 use crate::modal::C64;
 use crate::model::Model;
 use crate::real::{V3, lift1};
+use crate::whirl::Whirl;
 
 /// A mode's shape mapped onto the bodies and ports (see the module documentation), for a shape
 /// `v` in the free coordinates: per unit of `v`.
@@ -132,18 +132,9 @@ pub fn mac(a: &[C64], b: &[C64]) -> f64 {
     }
 }
 
-/// A short description of the mode `v` of the mechanism `at`: its dominant coordinate and,
-/// where a driven revolute joint spins at this speed, its whirl about that joint's axis: the
-/// orbit of the body that moves most across the axis turns with the spin (`forward whirl`) or
-/// against it (`backward whirl`); nothing where the orbit is (nearly) a line. `shape` is the
-/// mode's [`physical_shape`].
-pub fn describe(at: Posed<'_>, v: &[C64], shape: &PhysicalShape) -> String {
-    let Posed {
-        model,
-        sys,
-        q,
-        free,
-    } = at;
+/// A short description of the mode `v` over the free coordinates of `model`: its dominant
+/// coordinate and its whirl ([`crate::whirl`]), where it has one.
+pub fn describe(model: &Model, free: &[usize], v: &[C64], whirl: Option<Whirl>) -> String {
     let Some((k, _)) = v
         .iter()
         .enumerate()
@@ -152,77 +143,22 @@ pub fn describe(at: Posed<'_>, v: &[C64], shape: &PhysicalShape) -> String {
         return String::new();
     };
     let name = model.coordinates[free[k]].name.clone();
-    let pose = poses(sys, q);
-    let spin = sys.joints.iter().find_map(|j| {
-        let c = j.coords.start;
-        let omega = sys.drive.get(c).copied().flatten()?;
-        (j.kind == crate::joints::Kind::Revolute && omega != 0.0).then(|| {
-            let axis = j
-                .parent
-                .map_or(j.geometry.axis, |p| pose[p].rot * j.geometry.axis);
-            (axis, omega)
-        })
-    });
-    let Some((axis, omega)) = spin else {
-        return name;
-    };
-    let e1 = crate::rigid::perpendicular(&axis, &least_aligned(&axis));
-    let e2 = axis.cross(&e1);
-    let across = |d: &[C64; 3], e: &V3<f64>| d[0] * e.x + d[1] * e.y + d[2] * e.z;
-    let Some((u, w)) = shape
-        .displacement
-        .iter()
-        .map(|d| (across(d, &e1), across(d, &e2)))
-        .max_by(|a, b| {
-            (a.0.norm_sqr() + a.1.norm_sqr()).total_cmp(&(b.0.norm_sqr() + b.1.norm_sqr()))
-        })
-    else {
-        return name;
-    };
-    // The orbit Re(u e^{iωt}) e₁ + Re(w e^{iωt}) e₂ turns about the axis with the sign of
-    // Im(u w̄); a line where that is small against the orbit's size.
-    let turn = (u * w.conj()).im;
-    let size = u.norm_sqr() + w.norm_sqr();
-    if size == 0.0 || turn.abs() < 0.1 * size {
-        return name;
+    match whirl {
+        Some(w) => format!("{name}, {} whirl", w.as_str()),
+        None => name,
     }
-    let forward = (turn > 0.0) == (omega > 0.0);
-    format!(
-        "{name}, {} whirl",
-        if forward { "forward" } else { "backward" }
-    )
-}
-
-/// The coordinate axis least aligned with `a`.
-fn least_aligned(a: &V3<f64>) -> V3<f64> {
-    let k = (0..3)
-        .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
-        .unwrap_or(0);
-    let mut e = V3::zeros();
-    e[k] = 1.0;
-    e
 }
 
 /// [`describe`] for every mode of the point `pt` of `model` solved with parameters `p` (empty
 /// where the model does not evaluate there).
 pub fn descriptions(model: &Model, p: &[f64], pt: &crate::sweep::Point) -> Vec<String> {
-    let Ok(sys) = System::new(model, p, pt.speed) else {
+    let Ok(whirls) = crate::whirl::of_point(model, p, pt) else {
         return Vec::new();
     };
-    let (q, free) = (&pt.equilibrium.q, &pt.linear.free);
-    let shapes: Vec<Vec<C64>> = (pt.shapes.iter())
-        .map(|s| s.iter().copied().collect())
-        .collect();
-    let physical = physical_shapes(&sys, q, free, &shapes);
-    (shapes.iter().zip(&physical))
-        .map(|(v, shape)| {
-            let at = Posed {
-                model,
-                sys: &sys,
-                q,
-                free,
-            };
-            describe(at, v, shape)
+    (pt.shapes.iter().zip(whirls))
+        .map(|(v, w)| {
+            let v: Vec<C64> = v.iter().copied().collect();
+            describe(model, &pt.linear.free, &v, w)
         })
         .collect()
 }

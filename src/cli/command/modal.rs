@@ -37,7 +37,7 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
             "{}",
             serde_json::to_string_pretty(&report::modal_json(m.model(), p, speed, &result))?
         )?,
-        Format::Table => write!(w, "{}", report::modal_table(m.model(), speed, &result))?,
+        Format::Table => write!(w, "{}", report::modal_table(m.model(), p, speed, &result))?,
         Format::Csv => {
             let rows = match &result {
                 Ok(pt) => {
