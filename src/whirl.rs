@@ -10,8 +10,9 @@
 //! `Re(u e^{iω_d t}) e₁ + Re(w e^{iω_d t}) e₂` (`u = d·e₁`, `w = d·e₂`) turns about `n` with the
 //! sign of `Im(u w̄)`, and `κ = 2 Im(u w̄)/(|u|² + |w|²)` is the ratio of its minor to its major
 //! axis with that sign (ROSS's `kappa`): `+1` a forward circle, `−1` a backward one, `0` a line.
-//! The body's tilt `r = J_ω v` across the axis is an orbit too (the axis' tip circles with it),
-//! so a rigid rotor's conical mode, whose centre stands still, whirls as its tilt turns.
+//! The orbits read are the centres' translations, as rotordynamics reads a shaft's nodes; where
+//! no centre translates, their tilts `r = J_ω v` across the axis (the axis' tip circles with
+//! them), so a rigid rotor's conical mode, whose centre stands still, whirls as its tilt turns.
 //!
 //! A mode is **forward** where every orbit it moves (by more than 10⁻³ of its largest motion,
 //! rotations counted at the model's size) turns forward, **backward** where every one turns
@@ -155,7 +156,7 @@ pub fn whirls<V: AsRef<[C64]>>(
         })
         .collect();
     // Per mode: each centre's (u, w), and the mode's largest motion.
-    let orbits: Vec<(Vec<(C64, C64)>, f64)> = shapes
+    let orbits: Vec<Orbits> = shapes
         .iter()
         .map(|v| {
             let v = v.as_ref();
@@ -175,20 +176,23 @@ pub fn whirls<V: AsRef<[C64]>>(
                 .map(|(d, r)| norm(d) + size * size * norm(r))
                 .fold(0.0f64, f64::max);
             let across = |d: &[C64; 3], e: &V3<f64>| d[0] * e.x + d[1] * e.y + d[2] * e.z;
-            // Each centre's translation, and its tilt at the model's size.
-            let uw = (centres.iter())
-                .flat_map(|c| {
-                    let (d, r) = &motions[c.body];
-                    [
-                        (across(d, &c.e1), across(d, &c.e2)),
-                        (across(r, &c.e1) * size, across(r, &c.e2) * size),
-                    ]
-                })
-                .collect();
-            (uw, largest)
+            // The centres' translations, else (where none moves) their tilts at the model's
+            // size.
+            let orbit = |x: &[C64; 3], c: &Centre, scale: f64| {
+                (across(x, &c.e1) * scale, across(x, &c.e2) * scale)
+            };
+            Orbits {
+                shifts: (centres.iter())
+                    .map(|c| orbit(&motions[c.body].0, c, 1.0))
+                    .collect(),
+                tilts: (centres.iter())
+                    .map(|c| orbit(&motions[c.body].1, c, size))
+                    .collect(),
+                largest,
+            }
         })
         .collect();
-    let mut out: Vec<Option<Whirl>> = orbits.iter().map(|(uw, m)| one(uw, *m)).collect();
+    let mut out: Vec<Option<Whirl>> = orbits.iter().map(one).collect();
     // Repeated roots: the extreme combinations of each pair.
     for a in 0..lambdas.len() {
         for b in a + 1..lambdas.len() {
@@ -203,14 +207,27 @@ pub fn whirls<V: AsRef<[C64]>>(
     out
 }
 
-/// The whirl of one mode from its orbits' `(u, w)` and its largest motion (squared).
-fn one(uw: &[(C64, C64)], largest: f64) -> Option<Whirl> {
+/// A mode's orbits `(u, w)` at the centres, their translations and tilts, and its largest
+/// motion (squared).
+struct Orbits {
+    shifts: Vec<(C64, C64)>,
+    tilts: Vec<(C64, C64)>,
+    largest: f64,
+}
+
+impl Orbits {
+    /// Do the centres translate (else only their tilts are read)?
+    fn shift(&self) -> bool {
+        self.shifts.iter().any(|o| moves(o, self.largest))
+    }
+}
+
+/// The whirl of one mode.
+fn one(o: &Orbits) -> Option<Whirl> {
+    let (uw, largest) = (if o.shift() { &o.shifts } else { &o.tilts }, o.largest);
     let mut seen = (false, false);
-    for (u, w) in uw {
+    for (u, w) in uw.iter().filter(|o| moves(o, largest)) {
         let s = u.norm_sqr() + w.norm_sqr();
-        if s <= MOVES * largest || s == 0.0 {
-            continue;
-        }
         match Whirl::of_sign(2.0 * (u * w.conj()).im / s) {
             Some(Whirl::Forward) => seen.0 = true,
             Some(_) => seen.1 = true,
@@ -225,13 +242,24 @@ fn one(uw: &[(C64, C64)], largest: f64) -> Option<Whirl> {
     }
 }
 
+/// Does the orbit `(u, w)` move, against a mode's largest motion (squared)?
+fn moves((u, w): &(C64, C64), largest: f64) -> bool {
+    let s = u.norm_sqr() + w.norm_sqr();
+    s > MOVES * largest && s > 0.0
+}
+
 /// A repeated root's two members: the most forward and the most backward combination of
 /// their shapes, `μ` the extreme values of `cᴴGc / cᴴSc` with `G = Σ (B − Bᴴ)/2i`,
 /// `B_kj = u_j w̄_k`, and `S = Σ (ūu + w̄w)` over the centres both move.
-fn pair(a: &(Vec<(C64, C64)>, f64), b: &(Vec<(C64, C64)>, f64)) -> [Option<Whirl>; 2] {
-    let largest = a.1.max(b.1);
+fn pair(a: &Orbits, b: &Orbits) -> [Option<Whirl>; 2] {
+    let largest = a.largest.max(b.largest);
+    let (ua, ub) = if a.shift() || b.shift() {
+        (&a.shifts, &b.shifts)
+    } else {
+        (&a.tilts, &b.tilts)
+    };
     let (mut g, mut s) = ([[C64::new(0.0, 0.0); 2]; 2], [[C64::new(0.0, 0.0); 2]; 2]);
-    for (x, y) in a.0.iter().zip(&b.0) {
+    for (x, y) in ua.iter().zip(ub) {
         let (u, w) = ([x.0, y.0], [x.1, y.1]);
         if u.iter().chain(&w).map(C64::norm_sqr).sum::<f64>() <= MOVES * largest {
             continue;
