@@ -103,6 +103,9 @@ pub fn whirls<V: AsRef<[C64]>>(
     if driven.iter().all(|&c| sys.drive[c] == Some(0.0)) {
         return none;
     }
+    if sys.bodies.is_empty() {
+        return none;
+    }
     let coords: Vec<usize> = free.iter().chain(&driven).copied().collect();
     let j = partials_for(&sys.map(lift1), q, &coords);
     let nb = sys.bodies.len();
@@ -111,10 +114,9 @@ pub fn whirls<V: AsRef<[C64]>>(
     let cms: Vec<V3<f64>> = (0..nb)
         .map(|b| j.pose[b].apply(&sys.bodies[b].cm))
         .collect();
-    let size = (cms.iter())
-        .flat_map(|a| cms.iter().map(move |b| (a - b).norm()))
-        .fold(0.0f64, f64::max)
-        .max(1e-3);
+    // (The diagonal of the centres of mass' bounding box.)
+    let (lo, hi) = (cms.iter()).fold((cms[0], cms[0]), |(lo, hi), c| (lo.inf(c), hi.sup(c)));
+    let size = (hi - lo).norm().max(1e-3);
     let mut centres = Vec::new();
     for b in 0..nb {
         let w: V3<f64> = driven.iter().map(|&c| j.jw(sys, c, b) * rate(c)).sum();
@@ -288,7 +290,7 @@ fn pair(a: &Orbits, b: &Orbits) -> [Option<Whirl>; 2] {
 }
 
 /// The coordinate axis least aligned with `a`.
-pub fn least_aligned(a: &V3<f64>) -> V3<f64> {
+fn least_aligned(a: &V3<f64>) -> V3<f64> {
     let k = (0..3)
         .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
         .unwrap_or(0);
