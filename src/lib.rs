@@ -23,8 +23,9 @@
 //! 9. [`compiled`]: a model with its [`compiled::Route`] (recorded or direct) chosen once.
 //! 10. [`pair`], [`modal`], [`output`], [`frf`]: damped modes, the pair maps, the outputs, |H|.
 //! 11. [`sweep`]: a point (equilibrium, linearisation, modes) and the continuation over speeds;
-//!     a point is the unit everything above consumes. [`scene`]: the mechanism placed at a
-//!     configuration, and its modes as motions of the bodies and ports (for drawing).
+//!     a point is the unit everything above consumes. [`whirl`]: each mode's whirl from the
+//!     orbits of the spinning parts. [`scene`]: the mechanism placed at a configuration, and
+//!     its modes as motions of the bodies and ports (for drawing).
 //! 12. [`sensitivity`], [`hessian`]: exact first and second derivatives through the move of
 //!     the equilibrium; [`nominal_sweep`]: the nominal sweep with, at each speed, its transfer
 //!     function and sensitivities (the `sweep` command's table).

@@ -26,6 +26,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["compiled"], false),
     (&["pair", "modal", "output", "frf"], true),
     (&["sweep"], false),
+    (&["whirl"], false),
     (&["scene"], false),
     (&["sensitivity", "hessian", "nominal_sweep"], true),
     (&["tolerance", "margins"], false),

@@ -27,6 +27,9 @@
 
 use crate::real::{Real, cst};
 
+/// The most points a table takes: each call of it records a few operations per interval.
+pub const MAX_POINTS: usize = 1000;
+
 /// A table's two lists: the argument's values and the function's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Column {
@@ -61,6 +64,13 @@ impl Table {
         }
         if x.len() < 2 {
             return Err((Column::X, "a table needs at least two points".into()));
+        }
+        if x.len() > MAX_POINTS {
+            let e = format!(
+                "{} points; a table takes at most {MAX_POINTS} (every call evaluates each interval)",
+                x.len()
+            );
+            return Err((Column::X, e));
         }
         if let Some((i, v)) = (x.iter().chain(&y).enumerate()).find(|(_, v)| !v.is_finite()) {
             let (list, name, at) = if i < x.len() {
@@ -237,6 +247,8 @@ mod tests {
         assert!(e(vec![0.0, 2.0, 1.0], vec![1.0; 3]).contains("x[2] = 1 follows x[1] = 2"));
         assert!(e(vec![0.0, 0.0], vec![1.0; 2]).contains("increase strictly"));
         assert!(e(vec![0.0], vec![1.0]).contains("at least two points"));
+        let many: Vec<f64> = (0..=MAX_POINTS).map(|i| i as f64).collect();
+        assert!(e(many.clone(), many).contains("1001 points; a table takes at most 1000"));
         assert!(e(vec![0.0, 1.0], vec![1.0]).contains("one value of y per x"));
         assert!(e(vec![0.0, 1.0], vec![1.0, f64::NAN]).contains("y[1] = NaN is not finite"));
     }
