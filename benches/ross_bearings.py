@@ -127,4 +127,5 @@ def main():
           f"whirl labels the same at {same} of {labels} modes at speed")
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -38,14 +38,18 @@ impl<T: Real> Complex<T> {
 /// `H(jω)` from `input` to `output`: a generalised force on a free coordinate or a force or
 /// torque at a port in, the coordinate's value or the port's displacement or rotation out
 /// (`b_outᵀ R (K̂ − ω² M̂ + jω Ĉ)⁻¹ Rᵀ b_in`, with `b` a unit vector for a coordinate and the
-/// port's vector otherwise). `None` when a coordinate is not free, the linearisation has no
-/// vectors for the ports, or the dynamic stiffness is singular (undamped resonance).
+/// port's vector otherwise). An unbalance in gives the response itself: its load `Ω² f` at its
+/// body's spin rate `Ω` (the excitation frequency in place of `omega`, which may move with the
+/// parameters, and does so exactly here). `None` when a coordinate is not free, the
+/// linearisation has no vectors for the ports, an unbalance is an output, or the dynamic
+/// stiffness is singular (undamped resonance).
 pub fn transfer<T: Real>(
     lin: &Linearization<T>,
     input: Channel,
     output: Channel,
     omega: f64,
 ) -> Option<Complex<T>> {
+    let zero = cst::<T>(0.0);
     let reduced = |c: Channel| -> Option<Vec<T>> {
         match c {
             Channel::Coordinate(c) => {
@@ -53,12 +57,22 @@ pub fn transfer<T: Real>(
                 Some(lin.basis.row(i).iter().copied().collect())
             }
             Channel::Port(k) => lin.ports.get(k).cloned(),
+            Channel::Unbalance(_) => None,
         }
     };
-    let (bi, bo) = (reduced(input)?, reduced(output)?);
+    let bo = reduced(output)?;
+    // The load (real and imaginary parts) and the excitation frequency.
+    let (bi, bi_im, w) = match input {
+        Channel::Unbalance(k) => {
+            let u = lin.unbalances.get(k)?;
+            let s2 = u.spin * u.spin;
+            let scale = |v: &[T]| v.iter().map(|&x| x * s2).collect::<Vec<T>>();
+            (scale(&u.re), scale(&u.im), u.spin)
+        }
+        c => (reduced(c)?, vec![zero; bo.len()], cst::<T>(omega)),
+    };
     let n = lin.m.nrows();
-    let w = cst::<T>(omega);
-    let mut z = DMatrix::from_element(2 * n, 2 * n, cst::<T>(0.0));
+    let mut z = DMatrix::from_element(2 * n, 2 * n, zero);
     for r in 0..n {
         for c in 0..n {
             let a = lin.k[(r, c)] - w * w * lin.m[(r, c)];
@@ -69,20 +83,30 @@ pub fn transfer<T: Real>(
             z[(r + n, c)] = b;
         }
     }
-    let mut rhs = DMatrix::from_element(2 * n, 1, cst::<T>(0.0));
+    let mut rhs = DMatrix::from_element(2 * n, 1, zero);
     for k in 0..n {
         rhs[(k, 0)] = bi[k];
+        rhs[(k + n, 0)] = bi_im[k];
     }
+    let load: Vec<T> = bi.iter().chain(&bi_im).copied().collect();
     let x = solve(&z, &rhs)?;
-    if !resolved(lin, omega, &bi, &x) {
+    if !resolved(lin, re(w), &load, &x) {
         return None;
     }
-    let (mut re, mut im) = (cst::<T>(0.0), cst::<T>(0.0));
+    let (mut hr, mut hi) = (zero, zero);
     for k in 0..n {
-        re += bo[k] * x[(k, 0)];
-        im += bo[k] * x[(k + n, 0)];
+        hr += bo[k] * x[(k, 0)];
+        hi += bo[k] * x[(k + n, 0)];
     }
-    Some(Complex { re, im })
+    Some(Complex { re: hr, im: hi })
+}
+
+/// The frequency (rad/s) at which `input` excites: `omega`, or an unbalance's spin rate.
+pub fn excitation<T: Real>(lin: &Linearization<T>, input: Channel, omega: f64) -> f64 {
+    match input {
+        Channel::Unbalance(k) => lin.unbalances.get(k).map_or(omega, |u| re(u.spin)),
+        _ => omega,
+    }
 }
 
 /// The relative accuracy below which `H` is not given: a response `x = Z⁻¹b` that large is

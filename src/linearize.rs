@@ -15,6 +15,7 @@
 
 use crate::linalg::{jacobian, pivot_columns, solve};
 use crate::mechanics::dynamics::{Lifted, evaluate_rows, evaluate_with, mass_matrix, partials_for};
+use crate::mechanics::ports::{UnbalanceLoad, Vectors};
 use crate::real::{D1, Real, cst, lift1};
 use nalgebra::DMatrix;
 
@@ -53,6 +54,8 @@ pub struct Linearization<T: Real> {
     /// `Rᵀ b` for each of the model's ports (see [`crate::mechanics::ports`]): its force
     /// vector in the independent coordinates; empty until [`Linearization::with_ports`].
     pub ports: Vec<Vec<T>>,
+    /// Each of the model's unbalances' load, reduced to the independent coordinates likewise.
+    pub unbalances: Vec<UnbalanceLoad<T>>,
 }
 
 impl<T: Real> Linearization<T> {
@@ -75,6 +78,7 @@ impl<T: Real> Linearization<T> {
                 .iter()
                 .map(|b| b.iter().map(|&v| f(v)).collect())
                 .collect(),
+            unbalances: self.unbalances.iter().map(|u| u.map(f)).collect(),
         }
     }
 
@@ -101,27 +105,48 @@ impl<T: Real> Linearization<T> {
                 .ports
                 .iter()
                 .zip(&other.ports)
-                .map(|(a, b)| a.iter().zip(b).map(|(&x, &y)| f(x, y)).collect())
+                .map(|(a, b)| zip_vec(a, b, f))
+                .collect(),
+            unbalances: (self.unbalances.iter())
+                .zip(&other.unbalances)
+                .map(|(a, b)| UnbalanceLoad {
+                    re: zip_vec(&a.re, &b.re, f),
+                    im: zip_vec(&a.im, &b.im, f),
+                    spin: f(a.spin, b.spin),
+                })
                 .collect(),
         }
     }
 
-    /// Attaches the ports' vectors `b` over the free coordinates, reduced to `Rᵀ b`.
-    pub fn with_ports(mut self, full: Vec<Vec<T>>) -> Self {
-        self.ports = full
-            .iter()
-            .map(|b| {
-                (0..self.basis.ncols())
-                    .map(|k| {
-                        b.iter()
-                            .enumerate()
-                            .fold(cst::<T>(0.0), |s, (i, &v)| s + self.basis[(i, k)] * v)
-                    })
-                    .collect()
+    /// Attaches the ports' vectors `b` and the unbalances' loads over the free coordinates,
+    /// reduced to `Rᵀ b`.
+    pub fn with_ports(mut self, full: Vectors<T>) -> Self {
+        let reduce = |b: &[T]| -> Vec<T> {
+            (0..self.basis.ncols())
+                .map(|k| {
+                    b.iter()
+                        .enumerate()
+                        .fold(cst::<T>(0.0), |s, (i, &v)| s + self.basis[(i, k)] * v)
+                })
+                .collect()
+        };
+        let ports = full.ports.iter().map(|b| reduce(b)).collect();
+        let unbalances = (full.unbalances.iter())
+            .map(|u| UnbalanceLoad {
+                re: reduce(&u.re),
+                im: reduce(&u.im),
+                spin: u.spin,
             })
             .collect();
+        self.ports = ports;
+        self.unbalances = unbalances;
         self
     }
+}
+
+/// `f` of two vectors' numbers, pairwise.
+fn zip_vec<T: Copy, U: Copy, V>(a: &[T], b: &[U], f: impl Fn(T, U) -> V) -> Vec<V> {
+    a.iter().zip(b).map(|(&x, &y)| f(x, y)).collect()
 }
 
 /// Chooses independent coordinates: the user's, or by complete pivoting on `Φ_{q_R}` (the
@@ -256,5 +281,6 @@ pub fn reduce<T: Real>(
         k_full,
         phi: phi_r.clone(),
         ports: Vec::new(),
+        unbalances: Vec::new(),
     })
 }

@@ -34,6 +34,7 @@
 
 use crate::mechanics::System;
 use crate::mechanics::dynamics::partials_for;
+use crate::mechanics::ports::{least_aligned, rides_spin, steady_twist};
 use crate::modal::C64;
 use crate::real::{V3, lift1};
 
@@ -119,23 +120,13 @@ pub fn whirls<V: AsRef<[C64]>>(
     let size = (hi - lo).norm().max(1e-3);
     let mut centres = Vec::new();
     for b in 0..nb {
-        let w: V3<f64> = driven.iter().map(|&c| j.jw(sys, c, b) * rate(c)).sum();
-        let v: V3<f64> = driven.iter().map(|&c| j.jv(sys, c, b) * rate(c)).sum();
+        let (w, v) = steady_twist(sys, &j, &driven, rate, b);
         let spin = w.norm();
         if spin == 0.0 || v.norm() > 1e-9 * spin * size {
             continue;
         }
         // Translations riding on a spinning drive: the orbit is seen from the rotating frame.
-        let rides = free.iter().any(|&f| {
-            let parent = sys.joints[sys.coord_joint[f]].parent;
-            j.jv(sys, f, b).norm() > 0.0
-                && parent.is_some_and(|p| {
-                    driven
-                        .iter()
-                        .any(|&d| rate(d) != 0.0 && j.jw(sys, d, b).norm() > 0.0 && sys.moves(d, p))
-                })
-        });
-        if rides {
+        if rides_spin(sys, &j, (free, &driven), |d| rate(d) != 0.0, b) {
             continue;
         }
         let n = w / spin;
@@ -287,16 +278,6 @@ fn pair(a: &Orbits, b: &Orbits) -> [Option<Whirl>; 2] {
     let (hi, lo) = ((qb + root) / (2.0 * qa), (qb - root) / (2.0 * qa));
     // κ = 2μ, as for one orbit.
     [Whirl::of_sign(2.0 * hi), Whirl::of_sign(2.0 * lo)]
-}
-
-/// The coordinate axis least aligned with `a`.
-fn least_aligned(a: &V3<f64>) -> V3<f64> {
-    let k = (0..3)
-        .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
-        .unwrap_or(0);
-    let mut e = V3::zeros();
-    e[k] = 1.0;
-    e
 }
 
 /// [`whirls`] of every mode of the point `pt` of `model` solved with parameters `p`.

@@ -19,7 +19,8 @@ mod common;
 use common::{roots, same_roots, solve};
 use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
-use modaltol::sensitivity::DesignPoint;
+use modaltol::model::Channel;
+use modaltol::sensitivity::{DesignPoint, TransferAt};
 use modaltol::sweep::{Options, Sweep};
 
 fn model(text: &str) -> Compiled {
@@ -441,13 +442,26 @@ fn the_friswell_bearings_example_solves_alike_and_differentiates_exactly() {
     let wrt = m.model().toleranced();
     let p = m.model().nominal();
     let pt = solve(&m, 150.0, false);
-    let a = DesignPoint::new(&m, &p, &pt).analytic(&wrt).unwrap();
-    let f = DesignPoint::new(&m, &p, &pt)
-        .finite_difference(&wrt)
-        .unwrap();
+    // The unbalance response at disk 1 too.
+    let unbalance = m
+        .model()
+        .analysis
+        .transfer
+        .map(|t| TransferAt::at_speed(&t, 150.0));
+    assert!(matches!(unbalance.unwrap().input, Channel::Unbalance(_)));
+    let design = DesignPoint::new(&m, &p, &pt).with_transfer(unbalance);
+    let a = design.analytic(&wrt).unwrap();
+    let f = design.finite_difference(&wrt).unwrap();
+    let h = a.transfer_magnitude.unwrap();
+    assert!(h > 1e-7 && h < 1e-4, "|X| = {h} m");
     for (va, vf) in a.variables.iter().zip(&f.variables) {
         let name = &m.model().parameters[va.param].name;
         let b = p[va.param].abs();
+        let (x, y) = (
+            va.d_transfer_magnitude.unwrap(),
+            vf.d_transfer_magnitude.unwrap(),
+        );
+        assert!(agree(x, y, 1e-8 * h / b), "d|X|/d{name}: AD {x} FD {y}");
         // The lateral modes below 1000 rad/s.
         for (k, (ma, mf)) in va.modes.iter().zip(&vf.modes).enumerate() {
             let mode = &pt.modes[k];

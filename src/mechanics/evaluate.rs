@@ -3,7 +3,7 @@
 
 use super::{
     BodyData, ConstraintData, CouplerData, Cross, ForceData, JointData, JointElement, LoadData,
-    PortData, System,
+    PortData, System, UnbalanceData,
 };
 use crate::model::{
     Beam, BeamSection, Body, Constraint, Coupler, Field, FieldError, ForceElement, Load, LoadKind,
@@ -41,6 +41,16 @@ impl<T: Real> System<T> {
         let loads = (model.loads.iter())
             .map(|load| load_data(load, p, w))
             .collect::<Result<_, _>>()?;
+        let unbalances = (model.unbalances.iter())
+            .map(|u| {
+                Ok(UnbalanceData {
+                    body: u.body,
+                    point: v3(&u.point, p, w)?,
+                    magnitude: u.magnitude.eval(p, w)?,
+                    phase: u.phase.eval(p, w)?,
+                })
+            })
+            .collect::<Result<_, FieldError>>()?;
         let couplers = (model.couplers.iter())
             .map(|c| coupler(c, p, w))
             .collect::<Result<_, _>>()?;
@@ -58,6 +68,7 @@ impl<T: Real> System<T> {
             beams,
             constraints,
             ports,
+            unbalances,
             loads,
             couplers,
             drive,
@@ -110,6 +121,14 @@ impl<T: Real> System<T> {
                     point: v(&port.point),
                     direction: v(&port.direction),
                     rotation: port.rotation,
+                })
+                .collect(),
+            unbalances: (self.unbalances.iter())
+                .map(|u| UnbalanceData {
+                    body: u.body,
+                    point: v(&u.point),
+                    magnitude: f(u.magnitude),
+                    phase: f(u.phase),
                 })
                 .collect(),
             loads: self.loads.iter().map(|l| l.map(f)).collect(),

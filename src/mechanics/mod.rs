@@ -117,6 +117,16 @@ pub struct PortData<T> {
     pub rotation: bool,
 }
 
+/// An unbalance (see [`crate::model::Unbalance`]) with its numbers evaluated: its point as
+/// drawn, `m e` (kg·m) and its phase (rad).
+#[derive(Debug, Clone)]
+pub struct UnbalanceData<T> {
+    pub body: usize,
+    pub point: V3<T>,
+    pub magnitude: T,
+    pub phase: T,
+}
+
 /// A coupler `a q₁ + b q₂ = c` (see [`crate::model::Coupler`]) with its numbers evaluated.
 #[derive(Debug, Clone)]
 pub struct CouplerData<T> {
@@ -160,6 +170,7 @@ pub struct System<T> {
     pub beams: Vec<crate::beams::Element<T>>,
     pub constraints: Vec<ConstraintData<T>>,
     pub ports: Vec<PortData<T>>,
+    pub unbalances: Vec<UnbalanceData<T>>,
     pub loads: Vec<LoadData<T>>,
     pub couplers: Vec<CouplerData<T>>,
     /// Constant speed of each driven coordinate (`None` for free ones).

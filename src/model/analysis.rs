@@ -176,6 +176,9 @@ pub enum Channel {
     /// A [`crate::model::Port`] (index into [`crate::model::Model::ports`]): a force or torque in, a displacement or
     /// rotation out.
     Port(usize),
+    /// An [`crate::model::Unbalance`] (index into [`crate::model::Model::unbalances`]): its
+    /// rotating force in (an input only); `H` is then the response itself, not per unit load.
+    Unbalance(usize),
 }
 
 /// A transfer function `H(jω)` from `input` to `output` at the excitation frequency

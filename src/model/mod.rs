@@ -149,6 +149,21 @@ pub struct Port {
     pub rotation: bool,
 }
 
+/// An unbalance (`[[unbalances]]`): a mass `m` at a distance `e` from the spin axis of a
+/// spinning body, given as `magnitude = m e` (kg·m) at `point` (on the axis, reference
+/// configuration) and an angle `phase` (rad) about the spin from the body's reference
+/// direction. It turns with the body: a force of amplitude `m e Ω²` at the spin rate `Ω`,
+/// `F = m e Ω² e^{iφ} (e₁ − i e₂)` across the spin axis `n` (`e₂ = n × e₁`), ROSS's
+/// `run_unbalance_response`. A transfer function's input, never its output.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Unbalance {
+    pub name: String,
+    pub body: usize,
+    pub point: [Field; 3],
+    pub magnitude: Field,
+    pub phase: Field,
+}
+
 /// A coupler (`[[couplers]]`): the linear relation `a q₁ + b q₂ = c` between two free joint
 /// coordinates (a gear pair, a rack and pinion, a belt), imposed like a cut joint's equation.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -276,6 +291,9 @@ pub struct Model {
     pub ports: Vec<Port>,
     /// Applied loads (`[[loads]]`), in file order.
     pub loads: Vec<Load>,
+    /// Unbalances (`[[unbalances]]`), in file order: inputs of transfer functions.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unbalances: Vec<Unbalance>,
     /// Couplers between joint coordinates (`[[couplers]]`), in file order: their equations
     /// follow the cut joints'.
     pub couplers: Vec<Coupler>,
@@ -287,6 +305,10 @@ pub struct Model {
     /// The yield target and cost model of tolerance allocation (`[allocation]`).
     pub allocation: Allocation,
 }
+
+/// Why an unbalance's transfer function takes no `order`.
+pub const UNBALANCE_ORDER: &str = "an unbalance excites at its own body's spin rate (which may \
+    be any multiple of the speed): `order` does not apply";
 
 impl Case {
     /// The case made of the tolerances declared on the parameters themselves.
@@ -423,16 +445,16 @@ impl Model {
         self.coordinates.iter().position(|c| c.name == name)
     }
 
-    /// The transfer-function end named `name`: a free coordinate, or a port.
+    /// The transfer-function end named `name`: a free coordinate, a port or an unbalance.
     pub fn channel(&self, name: &str) -> Option<Channel> {
         match self.coordinate(name) {
             Some(c) if !self.coordinates[c].driven => Some(Channel::Coordinate(c)),
             Some(_) => None,
-            None => self
-                .ports
-                .iter()
-                .position(|p| p.name == name)
-                .map(Channel::Port),
+            None => (self.ports.iter().position(|p| p.name == name))
+                .map(Channel::Port)
+                .or_else(|| {
+                    (self.unbalances.iter().position(|u| u.name == name)).map(Channel::Unbalance)
+                }),
         }
     }
 
@@ -441,26 +463,30 @@ impl Model {
         match c {
             Channel::Coordinate(i) => &self.coordinates[i].name,
             Channel::Port(i) => &self.ports[i].name,
+            Channel::Unbalance(i) => &self.unbalances[i].name,
         }
     }
 
-    /// The units of a transfer-function end: of its response and of its excitation.
+    /// The units of a transfer-function end: of its response and of its excitation (an
+    /// unbalance's excitation is the response's own scale: `H` is the response).
     pub fn channel_units(&self, c: Channel) -> (&'static str, &'static str) {
         use crate::joints::Unit;
         let unit = match c {
             Channel::Coordinate(i) => self.coordinates[i].unit,
             Channel::Port(i) if self.ports[i].rotation => Unit::Angle,
-            Channel::Port(_) => Unit::Length,
+            Channel::Port(_) | Channel::Unbalance(_) => Unit::Length,
         };
         (unit.symbol(), unit.force_symbol())
     }
 
     /// The unit of `|H|` of a transfer function: response per excitation, e.g. `m/N` or
-    /// `rad/(N·m)`.
+    /// `rad/(N·m)`; the response's own unit where an unbalance excites (`m`).
     pub fn transfer_unit(&self, t: &Transfer) -> String {
         let (response, _) = self.channel_units(t.output);
         let (_, excitation) = self.channel_units(t.input);
-        if excitation.contains('·') {
+        if matches!(t.input, Channel::Unbalance(_)) {
+            response.to_string()
+        } else if excitation.contains('·') {
             format!("{response}/({excitation})")
         } else {
             format!("{response}/{excitation}")
@@ -469,7 +495,7 @@ impl Model {
 
     /// The input and output of a frequency response, `input=NAME,output=NAME` (or `model`):
     /// as [`Model::parse_transfer`], refusing `order`, which means nothing for a response over
-    /// a range of excitation frequencies.
+    /// a range of excitation frequencies, and an unbalance, which excites at its spin only.
     pub fn parse_response(&self, spec: &str) -> Result<Transfer, String> {
         if spec
             .split(',')
@@ -481,11 +507,21 @@ impl Model {
                     .into(),
             );
         }
-        self.parse_transfer(spec)
+        let t = self.parse_transfer(spec)?;
+        if let Channel::Unbalance(i) = t.input {
+            return Err(format!(
+                "'{}' is an unbalance: it excites at its body's spin only, so it has no \
+                 response over a range of frequencies (use it in `sweep --transfer` or \
+                 `[analysis] transfer`, the response along the speeds)",
+                self.unbalances[i].name
+            ));
+        }
+        Ok(t)
     }
 
     /// A transfer function from a spec `input=NAME,output=NAME[,order=X]` (names of free
-    /// coordinates or ports), or `model` for the model's `[analysis] transfer`.
+    /// coordinates, ports or, as the input, an unbalance), or `model` for the model's
+    /// `[analysis] transfer`.
     pub fn parse_transfer(&self, spec: &str) -> Result<Transfer, String> {
         if spec == "model" {
             return self
@@ -493,7 +529,7 @@ impl Model {
                 .transfer
                 .ok_or_else(|| "the model declares no [analysis] transfer".to_string());
         }
-        let (mut input, mut output, mut order) = (None, None, 1.0);
+        let (mut input, mut output, mut order) = (None, None, None);
         for part in spec.split(',') {
             let (k, v) = part
                 .split_once('=')
@@ -501,7 +537,7 @@ impl Model {
             let channel = |v: &str| {
                 self.channel(v.trim()).ok_or_else(|| {
                     format!(
-                        "'{}' is neither a free joint coordinate nor a port",
+                        "'{}' is neither a free joint coordinate, a port nor an unbalance",
                         v.trim()
                     )
                 })
@@ -510,20 +546,33 @@ impl Model {
                 "input" => input = Some(channel(v)?),
                 "output" => output = Some(channel(v)?),
                 "order" => {
-                    order = v
-                        .trim()
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|o| o.is_finite() && *o >= 0.0)
-                        .ok_or_else(|| format!("order '{v}' must be a number ≥ 0"))?
+                    order = Some(
+                        v.trim()
+                            .parse::<f64>()
+                            .ok()
+                            .filter(|o| o.is_finite() && *o >= 0.0)
+                            .ok_or_else(|| format!("order '{v}' must be a number ≥ 0"))?,
+                    )
                 }
                 _ => return Err(format!("unknown key '{k}' (input, output, order)")),
             }
         }
+        let input = input.ok_or("needs input=NAME (a free coordinate, a port or an unbalance)")?;
+        let output = output.ok_or("needs output=NAME (a free coordinate or a port)")?;
+        if let Channel::Unbalance(i) = output {
+            return Err(format!(
+                "'{}' is an unbalance: a force in, it has no response to read (output a port \
+                 or a free coordinate)",
+                self.unbalances[i].name
+            ));
+        }
+        if matches!(input, Channel::Unbalance(_)) && order.is_some() {
+            return Err(UNBALANCE_ORDER.into());
+        }
         Ok(Transfer {
-            input: input.ok_or("needs input=NAME (a free coordinate or a port)")?,
-            output: output.ok_or("needs output=NAME (a free coordinate or a port)")?,
-            order,
+            input,
+            output,
+            order: order.unwrap_or(1.0),
         })
     }
 

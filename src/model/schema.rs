@@ -169,6 +169,8 @@ pub struct FileSchema {
     #[serde(default)]
     pub loads: Vec<Spanned<LoadSchema>>,
     #[serde(default)]
+    pub unbalances: Vec<Spanned<UnbalanceSchema>>,
+    #[serde(default)]
     pub couplers: Vec<Spanned<CouplerSchema>>,
     pub analysis: Option<Spanned<AnalysisSchema>>,
     #[serde(default)]
@@ -370,6 +372,16 @@ pub struct PortSchema {
     pub body: Spanned<String>,
     pub point: Option<SVec>,
     pub direction: SVec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnbalanceSchema {
+    pub name: Spanned<String>,
+    pub body: Spanned<String>,
+    pub point: Option<SVec>,
+    pub magnitude: SNum,
+    pub phase: Option<SNum>,
 }
 
 #[derive(Debug, Deserialize)]

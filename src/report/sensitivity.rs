@@ -3,7 +3,7 @@
 //! [`Sensitivity`] and share what is left empty where a derivative does not exist.
 
 use super::{fixed, message, opt};
-use crate::frf::{NoTransfer, transfer_defect};
+use crate::frf::{NoTransfer, excitation, transfer_defect};
 use crate::model::Model;
 use crate::sensitivity::{Sensitivity, Status as SensStatus, TransferAt, nominal_transfer};
 use crate::sweep::Point;
@@ -44,7 +44,10 @@ pub const SENSITIVITY_HEADER: [&str; 19] = [
 
 /// Why the transfer function `t` has no finite value at the point `pt`, where it has none.
 pub fn transfer_defect_at(pt: &Point, t: Option<&TransferAt>) -> Option<NoTransfer> {
-    t.and_then(|t| transfer_defect(&pt.linear, t.omega, nominal_transfer(pt, t).as_ref()))
+    t.and_then(|t| {
+        let omega = excitation(&pt.linear, t.input, t.omega);
+        transfer_defect(&pt.linear, omega, nominal_transfer(pt, t).as_ref())
+    })
 }
 
 /// The result of `sensitivity` at one point, as its CSV rows, JSON document and text table

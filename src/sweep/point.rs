@@ -17,6 +17,18 @@ pub enum PointError {
     Linearize(#[from] LinearizeError),
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
+    #[error("{0}")]
+    Unbalance(String),
+}
+
+impl From<crate::mechanics::ports::PortError> for PointError {
+    fn from(e: crate::mechanics::ports::PortError) -> Self {
+        use crate::mechanics::ports::PortError;
+        match e {
+            PortError::Field(f) => PointError::Field(f),
+            other => PointError::Unbalance(other.to_string()),
+        }
+    }
 }
 
 /// Everything computed at one speed.

@@ -7,6 +7,7 @@ use super::{Ctx, R};
 use crate::model::schema::{AnalysisSchema, TransferSchema};
 use crate::model::{
     Analysis, Channel, Coordinate, Parameter, Port, Sampling, SpeedRange, Transfer,
+    UNBALANCE_ORDER, Unbalance,
 };
 use std::ops::Range;
 use toml::Spanned;
@@ -15,8 +16,7 @@ use toml::Spanned;
 pub(super) fn analysis(
     ctx: &Ctx,
     raw: Option<&Spanned<AnalysisSchema>>,
-    coords: &[Coordinate],
-    ports: &[Port],
+    channels: Channels,
     params: &[Parameter],
 ) -> R<Analysis> {
     let mut a = Analysis {
@@ -36,7 +36,7 @@ pub(super) fn analysis(
         );
     }
     if let Some(t) = &s.transfer {
-        a.transfer = Some(transfer(ctx, t.get_ref(), raw.span(), coords, ports)?);
+        a.transfer = Some(transfer(ctx, t.get_ref(), raw.span(), &channels)?);
     }
     if let Some(n) = &s.samples {
         if let Err(e) = crate::settings::samples(*n.get_ref()) {
@@ -54,28 +54,31 @@ pub(super) fn analysis(
     Ok(a)
 }
 
+/// What a transfer function's ends may name.
+pub(super) struct Channels<'a> {
+    pub coords: &'a [Coordinate],
+    pub ports: &'a [Port],
+    pub unbalances: &'a [Unbalance],
+}
+
 /// The transfer function: its order (at `table`, the `[analysis]` table, when the error has no
 /// place of its own), then its input and output channels.
-fn transfer(
-    ctx: &Ctx,
-    t: &TransferSchema,
-    table: Range<usize>,
-    coords: &[Coordinate],
-    ports: &[Port],
-) -> R<Transfer> {
-    let coord = |n: &Spanned<String>| {
+fn transfer(ctx: &Ctx, t: &TransferSchema, table: Range<usize>, ch: &Channels) -> R<Transfer> {
+    let channel = |n: &Spanned<String>| {
         let name = n.get_ref();
-        match coords.iter().position(|c| &c.name == name) {
-            Some(c) if !coords[c].driven => Ok(Channel::Coordinate(c)),
-            _ => ports
-                .iter()
-                .position(|p| &p.name == name)
+        match ch.coords.iter().position(|c| &c.name == name) {
+            Some(c) if !ch.coords[c].driven => Ok(Channel::Coordinate(c)),
+            _ => (ch.ports.iter().position(|p| &p.name == name))
                 .map(Channel::Port)
+                .or_else(|| {
+                    (ch.unbalances.iter().position(|u| &u.name == name)).map(Channel::Unbalance)
+                })
                 .ok_or_else(|| {
                     ctx.err(
                         n.span(),
                         format!(
-                            "analysis transfer: '{name}' is neither a free joint coordinate nor a port"
+                            "analysis transfer: '{name}' is neither a free joint coordinate, a \
+                             port nor an unbalance"
                         ),
                     )
                 }),
@@ -88,9 +91,23 @@ fn transfer(
             "analysis transfer: order must be finite and ≥ 0",
         ));
     }
+    let (input, output) = (channel(&t.input)?, channel(&t.output)?);
+    if let (Channel::Unbalance(_), Some(o)) = (input, &t.order) {
+        return Err(ctx.err(o.span(), format!("analysis transfer: {UNBALANCE_ORDER}")));
+    }
+    if let Channel::Unbalance(_) = output {
+        return Err(ctx.err(
+            t.output.span(),
+            format!(
+                "analysis transfer: '{}' is an unbalance: a force in, it has no response to \
+                 read (output a port or a free coordinate)",
+                t.output.get_ref()
+            ),
+        ));
+    }
     Ok(Transfer {
-        input: coord(&t.input)?,
-        output: coord(&t.output)?,
+        input,
+        output,
         order,
     })
 }

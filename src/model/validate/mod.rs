@@ -40,6 +40,7 @@ mod shafts;
 mod syntax;
 mod tables;
 mod tree;
+mod unbalances;
 
 pub(super) use locate::error_at;
 
@@ -99,11 +100,25 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
     )?;
     let ports = ports::ports(&ctx, &raw.ports, &body_names, &tree.coordinates)?;
     let loads = loads::loads(&ctx, &raw.loads, &body_names, &tree.coordinates)?;
+    let unbalances = unbalances::unbalances(
+        &ctx,
+        &raw.unbalances,
+        &unbalances::Known {
+            body_names: &body_names,
+            bodies: &bodies,
+            coordinates: &tree.coordinates,
+            ports: &ports,
+            joints: &tree.joints,
+        },
+    )?;
     let analysis = analysis::analysis(
         &ctx,
         raw.analysis.as_ref(),
-        &tree.coordinates,
-        &ports,
+        analysis::Channels {
+            coords: &tree.coordinates,
+            ports: &ports,
+            unbalances: &unbalances,
+        },
         &parameters,
     )?;
     let equations: usize = constraints
@@ -132,6 +147,7 @@ pub(super) fn validate(text: &str, file: &str, overrides: &[(String, f64)]) -> R
         constraints,
         ports,
         loads,
+        unbalances,
         couplers,
         independent,
         analysis,
