@@ -304,7 +304,9 @@ fn frf_columns_and_unknown_joint() {
         "1:2:1",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("'nope' is neither a free joint coordinate nor a port"));
+    assert!(
+        stderr(&o).contains("'nope' is neither a free joint coordinate, a port nor an unbalance")
+    );
 }
 
 #[test]
