@@ -14,6 +14,7 @@ use crate::compiled::Compiled;
 use crate::model::Case;
 use crate::montecarlo::{CaseShard, McOptions, MonteCarlo, Split};
 use crate::output::Output;
+use crate::peaks::{PeakRow, peaks};
 use crate::propagate::{Propagation, Run, Study, Tabulate, Termination};
 use crate::quadrature::{QuadOptions, Quadrature};
 use crate::sobol::{Sobol, SobolOptions};
@@ -89,6 +90,10 @@ pub struct Analysis {
     /// Per case: the quadrature's rule in words and its number of swept nodes.
     pub quadrature_rules: Vec<(String, usize)>,
     pub monte_carlo_seconds: Option<f64>,
+    /// The peaks of the model's transfer function along the speeds (`[analysis] transfer`;
+    /// none without one), located between the swept speeds, with their first-order spread per
+    /// case ([`crate::peaks`]).
+    pub peaks: Vec<PeakRow>,
     /// Speeds whose nominal point or local model failed, with the reason.
     pub failures: Vec<(f64, String)>,
     /// The nominal points (for plots), `None` where they failed.
@@ -160,6 +165,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         .iter()
         .map(|c| Spread::new(model, c, &study.vars))
         .collect();
+    let peaks = response_peaks(model, &study, &spreads);
     let study_seconds = t0.elapsed().as_secs_f64();
     let mut stages = Stages {
         study: &study,
@@ -221,6 +227,7 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         quadrature_seconds,
         quadrature_rules: tables.quadrature_rules,
         monte_carlo_seconds,
+        peaks,
         failures,
         nominal,
         samples_done: tables.samples_done,
@@ -228,6 +235,24 @@ pub fn analyze(model: &Compiled, opt: &AnalyzeOptions, progress: Progress) -> An
         shard_states,
         termination,
     }
+}
+
+/// The peaks of the model's transfer function along the nominal sweep, with each case's
+/// first-order spread (none without a transfer function).
+fn response_peaks(model: &Compiled, study: &Study, spreads: &[Spread]) -> Vec<PeakRow> {
+    let Some(transfer) = model.model().analysis.transfer else {
+        return Vec::new();
+    };
+    let p = model.model().nominal();
+    peaks(model, &p, &study.nominal, &transfer, &study.vars)
+        .into_iter()
+        .map(|r| {
+            r.map(|peak| {
+                let cases = spreads.iter().map(|s| peak.first_order(s)).collect();
+                (peak, cases)
+            })
+        })
+        .collect()
 }
 
 /// The methods' runs over the cases, and what they have written so far.

@@ -49,28 +49,24 @@ pub fn transfer<T: Real>(
     output: Channel,
     omega: f64,
 ) -> Option<Complex<T>> {
+    transfer_at(lin, input, output, cst::<T>(omega))
+}
+
+/// [`transfer`] at an excitation frequency `omega` over `T`: where it moves with what `T`
+/// differentiates along (`order × speed`, with the speed a jet, [`crate::peaks`]).
+pub fn transfer_at<T: Real>(
+    lin: &Linearization<T>,
+    input: Channel,
+    output: Channel,
+    omega: T,
+) -> Option<Complex<T>> {
     let zero = cst::<T>(0.0);
-    let reduced = |c: Channel| -> Option<Vec<T>> {
-        match c {
-            Channel::Coordinate(c) => {
-                let i = lin.free.iter().position(|&f| f == c)?;
-                Some(lin.basis.row(i).iter().copied().collect())
-            }
-            Channel::Port(k) => lin.ports.get(k).cloned(),
-            Channel::Unbalance(_) => None,
-        }
-    };
-    let bo = reduced(output)?;
-    // The load (real and imaginary parts) and the excitation frequency.
-    let (bi, bi_im, w) = match input {
-        Channel::Unbalance(k) => {
-            let u = lin.unbalances.get(k)?;
-            let s2 = u.spin * u.spin;
-            let scale = |v: &[T]| v.iter().map(|&x| x * s2).collect::<Vec<T>>();
-            (scale(&u.re), scale(&u.im), u.spin)
-        }
-        c => (reduced(c)?, vec![zero; bo.len()], cst::<T>(omega)),
-    };
+    let Loads {
+        output: bo,
+        re: bi,
+        im: bi_im,
+        omega: w,
+    } = loads(lin, input, output, omega)?;
     let n = lin.m.nrows();
     let mut z = DMatrix::from_element(2 * n, 2 * n, zero);
     for r in 0..n {
@@ -99,6 +95,51 @@ pub fn transfer<T: Real>(
         hi += bo[k] * x[(k + n, 0)];
     }
     Some(Complex { re: hr, im: hi })
+}
+
+/// What a transfer function contracts, in the linearisation's reduced coordinates: the
+/// output's vector, the load's real and imaginary parts and the excitation's frequency.
+pub struct Loads<T> {
+    pub output: Vec<T>,
+    pub re: Vec<T>,
+    pub im: Vec<T>,
+    pub omega: T,
+}
+
+/// The [`Loads`] of the transfer function from `input` to `output` excited at `omega` (an
+/// unbalance's at its spin rate, `Ω² f`); `None` where [`transfer`] has none for want of them.
+pub fn loads<T: Real>(
+    lin: &Linearization<T>,
+    input: Channel,
+    output: Channel,
+    omega: T,
+) -> Option<Loads<T>> {
+    let reduced = |c: Channel| -> Option<Vec<T>> {
+        match c {
+            Channel::Coordinate(c) => {
+                let i = lin.free.iter().position(|&f| f == c)?;
+                Some(lin.basis.row(i).iter().copied().collect())
+            }
+            Channel::Port(k) => lin.ports.get(k).cloned(),
+            Channel::Unbalance(_) => None,
+        }
+    };
+    let bo = reduced(output)?;
+    let (re, im, omega) = match input {
+        Channel::Unbalance(k) => {
+            let u = lin.unbalances.get(k)?;
+            let s2 = u.spin * u.spin;
+            let scale = |v: &[T]| v.iter().map(|&x| x * s2).collect::<Vec<T>>();
+            (scale(&u.re), scale(&u.im), u.spin)
+        }
+        c => (reduced(c)?, vec![cst::<T>(0.0); bo.len()], omega),
+    };
+    Some(Loads {
+        output: bo,
+        re,
+        im,
+        omega,
+    })
 }
 
 /// The frequency (rad/s) at which `input` excites: `omega`, or an unbalance's spin rate.

@@ -30,7 +30,9 @@
 //!     the equilibrium; [`nominal_sweep`]: the nominal sweep with, at each speed, its transfer
 //!     function and sensitivities (the `sweep` command's table).
 //! 13. [`tolerance`]: local models (values, gradients, Hessians) and the spread of a case;
-//!     [`margins`]: the requirements' margins at a point.
+//!     [`margins`]: the requirements' margins at a point. [`peaks`]: a transfer function's
+//!     peaks along the speed and their speeds, located between the swept speeds, with their
+//!     exact derivatives.
 //! 14. [`sampling`]: the design-variable map and the sample sweep (samples and nodes).
 //! 15. [`table`]: the rows of the result's tables (`tolerance.csv`, `probabilities.csv`,
 //!     `yield.csv`, `sobol.csv`), each method's own fields in one enum, put in order once.
@@ -81,6 +83,7 @@ pub mod montecarlo;
 pub mod nominal_sweep;
 pub mod output;
 pub mod pair;
+pub mod peaks;
 pub mod plots;
 pub mod program;
 pub mod propagate;

@@ -27,6 +27,7 @@ pub fn is_result_file(name: &str) -> bool {
             | "yield.csv"
             | "limits.csv"
             | "sobol.csv"
+            | "peaks.csv"
             | "report.html"
             | "mechanism.html"
             | "summary.json"
@@ -142,7 +143,8 @@ pub fn write(
 }
 
 /// The tables: `tolerance.csv` (`partial`: of a run cut short), `probabilities.csv`, and where
-/// the model has them `yield.csv`, `limits.csv` and `sobol.csv`.
+/// the model has them `yield.csv`, `limits.csv`, `peaks.csv` (a transfer function's peaks
+/// along the speed) and `sobol.csv`.
 fn write_tables(
     model: &Model,
     a: &Analysis,
@@ -168,6 +170,12 @@ fn write_tables(
         dir.write(
             "limits.csv",
             &csv_bytes(&report::LIMITS_HEADER, &report::limit_rows(model, a)),
+        )?;
+    }
+    if model.analysis.transfer.is_some() {
+        dir.write(
+            "peaks.csv",
+            &csv_bytes(&report::PEAK_HEADER, &report::peak_rows(model, a)),
         )?;
     }
     if !a.sobol.is_empty() {

@@ -30,6 +30,7 @@ const LAYERS: &[(&[&str], bool)] = &[
     (&["scene"], false),
     (&["sensitivity", "hessian", "nominal_sweep"], true),
     (&["tolerance", "margins"], false),
+    (&["peaks"], false),
     (&["sampling"], false),
     (&["table"], false),
     (&["propagate"], false),

@@ -670,30 +670,9 @@ speeds = [4.52, 4.58]
 /// `∫ f(z) φ(z) dz` over `[−8, 8]` by 5-point Gauss–Legendre on 160 panels (an integrand
 /// smooth in `z`: converged far below 10⁻¹⁰).
 fn normal_integral(f: impl Fn(f64) -> f64) -> f64 {
-    const X: [f64; 5] = [
-        -0.906_179_845_938_664,
-        -0.538_469_310_105_683_1,
-        0.0,
-        0.538_469_310_105_683_1,
-        0.906_179_845_938_664,
-    ];
-    const W: [f64; 5] = [
-        0.236_926_885_056_189_1,
-        0.478_628_670_499_366_5,
-        0.568_888_888_888_888_9,
-        0.478_628_670_499_366_5,
-        0.236_926_885_056_189_1,
-    ];
-    let (panels, lo, hi) = (160, -8.0, 8.0);
-    let h = (hi - lo) / panels as f64;
-    let phi = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
-    (0..panels)
-        .flat_map(|k| {
-            X.iter()
-                .zip(&W)
-                .map(move |(x, w)| (lo + h * (k as f64 + 0.5 * (1.0 + x)), 0.5 * h * w))
-        })
-        .map(|(z, w)| w * phi(z) * f(z))
+    common::normal_rule(160, 8.0)
+        .into_iter()
+        .map(|(z, w)| w * f(z))
         .sum()
 }
 

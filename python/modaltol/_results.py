@@ -56,13 +56,16 @@ class Analysis:
     columns of ``limits.csv`` (what the design meets at the target yield: the highest speed up
     to which each requirement holds, ``reach``, and the worst margin met, ``margin_at_target``);
     ``summary`` is its ``summary.json``; ``sobol`` has the columns of ``sobol.csv`` (with
-    ``analyze(sobol=N)``; empty otherwise)."""
+    ``analyze(sobol=N)``; empty otherwise); ``peaks`` has the columns of ``peaks.csv`` (where
+    the transfer function peaks along the speed, located between the swept speeds, with σ by
+    first order; empty without ``[analysis] transfer``)."""
 
     tolerance: pd.DataFrame
     probabilities: pd.DataFrame
     yield_: pd.DataFrame
     limits: pd.DataFrame
     sobol: pd.DataFrame
+    peaks: pd.DataFrame
     summary: dict[str, Any]
 
     def answer(self) -> pd.DataFrame:
@@ -106,6 +109,7 @@ def _analysis(d: dict[str, Any]) -> Analysis:
         yield_=_frame(d["yield"]),
         limits=_frame(d["limits"]),
         sobol=_frame(d["sobol"]),
+        peaks=_frame(d["peaks"]),
         summary=json.loads(d["summary"]),
     )
 

@@ -182,6 +182,7 @@ def test_analyze_is_the_cli_analysis(cli: Path, tmp_path: Path, pendulum: modalt
         "--samples", "300", "--seed", "7", "--case", "L3", "--case", "L6")
     assert_same_table(res.tolerance, read_csv(tmp_path / "cli" / "tolerance.csv"))
     assert_same_table(res.probabilities, read_csv(tmp_path / "cli" / "probabilities.csv"))
+    assert_same_table(res.peaks, read_csv(tmp_path / "cli" / "peaks.csv"))
     # The result directory written from Python is the CLI's: the same files, the tables and
     # plots byte for byte (report.html and summary.json differ only in their wall times).
     py_files = sorted(f.name for f in (tmp_path / "py").iterdir())

@@ -224,14 +224,18 @@ pub(crate) enum Command {
     /// added to the speeds analysed, and a range beyond --speed is refused. And
     /// a specification section at the top of the report; with --sobol, DIR/sobol.csv (case, target, speed,
     /// quantity, mode, variable, first, first_ci_low, first_ci_high, total, total_ci_low,
-    /// total_ci_high, derivative_bound, rows); DIR/summary.json (cases, wall times of the
+    /// total_ci_high, derivative_bound, rows); for a model with a transfer function ([analysis]
+    /// transfer), DIR/peaks.csv (case, kind = maximum|resonance, speed, speed_std, magnitude,
+    /// magnitude_std, unit, mode, message: where |H| peaks along the speed, located between the
+    /// swept speeds, with σ by first order; a resonance is an undamped mode at the excitation
+    /// frequency, its |H| unbounded and left empty); DIR/summary.json (cases, wall times of the
     /// Taylor methods, the
     /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
     /// rows without a value grouped with their reasons under "unfilled"),
     /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
     /// probabilities, variance shares, a Campbell diagram with engine orders 1–3 and the
     /// critical speeds marked) and DIR/report.html (a summary of σ by method at the largest σ,
-    /// the critical speeds and the |H| peak, then the plots). --speed-unit and
+    /// the critical speeds, the |H| peak and the response peaks, then the plots). --speed-unit and
     /// --frequency-unit show the plots and report in rpm or Hz. Without MODEL, runs the
     /// governor example built into the binary.
     Analyze(AnalyzeArgs),

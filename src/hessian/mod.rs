@@ -196,6 +196,16 @@ impl Expansion<'_> {
     /// by two chord steps with Newton's Jacobian on `[q_R; λ]`, then the generic linearisation
     /// over the jets, which carries the move of the equilibrium and of the independent basis.
     fn linearization<J: Jet>(&self, seeded: &[J]) -> Result<Linearization<J>, PointError> {
+        self.linearization_at(seeded, J::from(self.pt.speed))
+    }
+
+    /// [`Expansion::linearization`] at the speed `speed`, a jet itself where the derivatives
+    /// along the speed are asked ([`DesignPoint::linearization_over`]).
+    fn linearization_at<J: Jet>(
+        &self,
+        seeded: &[J],
+        speed: J,
+    ) -> Result<Linearization<J>, PointError> {
         let Expansion {
             model,
             lu,
@@ -205,7 +215,7 @@ impl Expansion<'_> {
         let eq = &pt.equilibrium;
         let free = &pt.linear.free;
         let nf = free.len();
-        let equations = model.at(seeded, J::from(pt.speed), (Tier::Few, workspace))?;
+        let equations = model.at(seeded, speed, (Tier::Few, workspace))?;
         let mut z: Vec<J> = (free.iter().map(|&i| eq.q[i]))
             .chain(eq.lambda.iter().copied())
             .map(J::from)
@@ -230,13 +240,7 @@ impl Expansion<'_> {
         let lambda = &z[nf..];
         Ok(equations
             .linearize(&q, lambda, &pt.linear.independent, None)?
-            .with_ports(ports_at(
-                model.model(),
-                seeded,
-                J::from(pt.speed),
-                &q,
-                free,
-            )?))
+            .with_ports(ports_at(model.model(), seeded, speed, &q, free)?))
     }
 }
 
@@ -703,6 +707,26 @@ pub enum MixedRoute {
 }
 
 impl DesignPoint<'_> {
+    /// The linearisation (ports and unbalances included) over the jets `p` and `speed`, seeded
+    /// by the caller along any parameters and the speed itself: the equilibrium expanded by two
+    /// chord steps, so first derivatives and the second ones of a `Dual2` or hyper-dual seed
+    /// are exact (the derivatives along the speed carry the equilibrium's move with it, the
+    /// drive's rate and the excitation's frequency).
+    pub fn linearization_over<J: Jet>(
+        &self,
+        p: &[J],
+        speed: J,
+    ) -> Result<Linearization<J>, PointError> {
+        let lent = self.workspace();
+        let x = Expansion {
+            model: self.model,
+            lu: self.point.equilibrium.factor(),
+            pt: self.point,
+            workspace: &lent,
+        };
+        x.linearization_at(p, speed)
+    }
+
     /// Gradients and Hessians of `outs` (see [`crate::output::outputs`]) and of each mode's
     /// discriminant with respect to the parameters `vars`, at the design point (see the module
     /// documentation for the passes).

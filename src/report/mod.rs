@@ -17,6 +17,7 @@ mod check;
 mod frf;
 mod html;
 mod modal;
+mod peaks;
 mod sensitivity;
 mod summary;
 mod sweep;
@@ -35,6 +36,7 @@ pub use modal::{
     body_shapes, display_shape, modal_json, modal_table, modes_failed_rows, modes_header,
     modes_rows,
 };
+pub use peaks::{PEAK_HEADER, peak_rows};
 pub use sensitivity::{SENSITIVITY_HEADER, SensitivityReport, elasticity, transfer_defect_at};
 pub use summary::{paper_timings, summary_json};
 pub use sweep::{SweepColumns, sweep_header, sweep_rows};

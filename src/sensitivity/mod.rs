@@ -41,6 +41,7 @@ mod roots;
 mod shift;
 
 pub use roots::eigenvalue_derivative;
+pub(crate) use roots::{RootDerivatives, mode_derivative};
 
 use crate::compiled::Compiled;
 use crate::frf::{Complex, transfer};

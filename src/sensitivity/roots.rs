@@ -14,7 +14,7 @@ use nalgebra::{DMatrix, DVector};
 /// the exact derivatives of `λ₁ + λ₂` and `λ₁ λ₂` (used instead of the roots' sums). `Ok` only
 /// where the mode's roots are simple ([`Smoothness::Simple`]) or repeated and moving as one
 /// along the direction, and the derivatives finite.
-pub(super) fn mode_derivative(
+pub(crate) fn mode_derivative(
     m: &Mode,
     smooth: Smoothness,
     roots: Option<(C64, C64)>,
@@ -79,7 +79,7 @@ fn bilinear(y: &DVector<C64>, a: &DMatrix<f64>, x: &DVector<C64>) -> C64 {
 /// blocked) and O(n) per root, where a root at a time is a pass over three matrices each
 /// (memory-bound, and 2n roots); the denominators `yᵀ(2λM + C)x` do not depend on the variable
 /// and are computed once. A conjugate partner's derivative is the conjugate, bitwise.
-pub(super) struct RootDerivatives {
+pub(crate) struct RootDerivatives {
     /// Per mode, where its root is and where its partner is (`None` when it is the root's
     /// conjugate).
     places: Vec<(Place, Option<Place>)>,
@@ -105,7 +105,7 @@ enum Place {
 
 impl RootDerivatives {
     /// The roots of `modes` (each mode's smoothness `smooth`) of the pencil `(m, c, k)`.
-    pub(super) fn new(
+    pub(crate) fn new(
         modes: &[Mode],
         smooth: &[Smoothness],
         (m, c, k): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
@@ -155,7 +155,7 @@ impl RootDerivatives {
 
     /// Each cluster's projection `T_a` along `(M', C', K')` (`None` where the roots are not
     /// one repeated root).
-    pub(super) fn projections(
+    pub(crate) fn projections(
         &self,
         mats: (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
     ) -> Vec<Option<DMatrix<C64>>> {
@@ -170,7 +170,7 @@ impl RootDerivatives {
     }
 
     /// The modes whose root (not a partner) is a member of cluster `g`, in index order.
-    pub(super) fn members(&self, g: usize) -> Vec<usize> {
+    pub(crate) fn members(&self, g: usize) -> Vec<usize> {
         (self.places.iter().enumerate())
             .filter(|(_, (r, _))| matches!(r, Place::Member(h) if *h == g))
             .map(|(i, _)| i)
@@ -179,7 +179,7 @@ impl RootDerivatives {
 
     /// `(dλ_root, dλ_partner)` per mode along `(M', C', K')`; `None` where a root is repeated
     /// and the direction splits its cluster, or the cluster is not one repeated root.
-    pub(super) fn along(
+    pub(crate) fn along(
         &self,
         (dm, dc, dk): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
     ) -> Vec<Option<(C64, C64)>> {

@@ -112,6 +112,10 @@ pub(crate) fn analysis_dict<'py>(
         table(py, &report::SOBOL_HEADER, &report::sobol_rows(m, a))?,
     )?;
     d.set_item(
+        "peaks",
+        table(py, &report::PEAK_HEADER, &report::peak_rows(m, a))?,
+    )?;
+    d.set_item(
         "summary",
         serde_json::to_string(&report::summary_json(m, a, mc, used)).expect("a JSON value"),
     )?;

@@ -65,6 +65,7 @@ pub fn report_html(
     timing_table(&mut h, model, a, mc);
     let _ = writeln!(h, "{}", first_order_table(a));
     critical_table(&mut h, a, critical, d);
+    peaks_table(&mut h, model, a, d);
     failures(&mut h, a);
     h.push_str(&unfilled_table(a));
     for line in outside_request_lines(a) {
@@ -213,6 +214,55 @@ fn critical_table(h: &mut String, a: &Analysis, critical: &[CriticalSpeed], d: D
         }
         let _ = writeln!(h, "</table>");
     }
+}
+
+/// The transfer function's peaks along the speed, located between the swept speeds, with
+/// their first-order σ under the first case (none: no section).
+fn peaks_table(h: &mut String, model: &Model, a: &Analysis, d: Display) {
+    let Some(t) = model.analysis.transfer.filter(|_| !a.peaks.is_empty()) else {
+        return;
+    };
+    let (u, unit) = (d.speed.symbol(), model.transfer_unit(&t));
+    let f = d.speed.per_rad_per_second();
+    let _ = writeln!(
+        h,
+        "<h2>Response peaks</h2><p>Where |H| peaks along the speed, found between the swept \
+         speeds (Newton on the exact derivative in speed), with σ by first order under case \
+         {} (exact gradients; <code>peaks.csv</code> has every case). A resonance is an \
+         undamped mode at the excitation frequency: |H| is unbounded there.</p>\
+         <table><tr><th>kind</th><th>speed ({u})</th><th>σ ({u})</th><th>|H| ({})</th>\
+         <th>σ ({})</th><th>mode</th></tr>",
+        esc(&a.cases[0].name),
+        esc(&unit),
+        esc(&unit)
+    );
+    let sd = |r: &Result<crate::tolerance::Stat, String>, show: &dyn Fn(f64) -> String| {
+        r.as_ref().map_or_else(|why| esc(why), |s| show(s.std))
+    };
+    for row in &a.peaks {
+        let _ = match row {
+            Ok((peak, cases)) => writeln!(
+                h,
+                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                peak.kind.as_str(),
+                peak.speed * f,
+                sd(&cases[0].speed, &|v| format!("{:.4}", v * f)),
+                peak.magnitude
+                    .map_or("unbounded".to_string(), |m| format!("{m:.4e}")),
+                (peak.magnitude).map_or(String::new(), |_| sd(&cases[0].magnitude, &|v| format!(
+                    "{v:.4e}"
+                ))),
+                peak.mode.map_or(String::new(), |k| (k + 1).to_string()),
+            ),
+            Err(e) => writeln!(
+                h,
+                "<tr><td colspan=6>not located near {:.4} {u}: {}</td></tr>",
+                e.near * f,
+                esc(&e.why)
+            ),
+        };
+    }
+    let _ = writeln!(h, "</table>");
 }
 
 /// The speeds where the nominal analysis failed, with why (none: no section).
