@@ -21,7 +21,7 @@ use modaltol::compiled::Compiled;
 use modaltol::modal::C64;
 use modaltol::model::Channel;
 use modaltol::sensitivity::{DesignPoint, TransferAt};
-use modaltol::sweep::{Options, Sweep};
+use modaltol::sweep::{BranchKind, Options, Sweep};
 
 fn model(text: &str) -> Compiled {
     Compiled::from_str(text, "bearings.toml").unwrap_or_else(|e| panic!("{e}\n{text}"))
@@ -428,8 +428,8 @@ fn sensitivities_through_a_table_equal_finite_differences() {
 
 /// The shipped example on speed-tabulated, cross-coupled bearings: both routes alike, the
 /// first forward mode destabilised by the cross-coupling between 340 and 350 rad/s (its
-/// requirement's range ends below), and every variable's sensitivities against finite
-/// differences at an operating speed.
+/// requirement's range ends below; flutter, so no stable branch is looked for), and every
+/// variable's sensitivities against finite differences at an operating speed.
 #[test]
 fn the_friswell_bearings_example_solves_alike_and_differentiates_exactly() {
     let m = common::example("friswell_bearings.toml");
@@ -438,6 +438,21 @@ fn the_friswell_bearings_example_solves_alike_and_differentiates_exactly() {
         same_roots(&roots(&a), &roots(&b), 1e-10);
         let unstable = roots(&a).iter().any(|r| r.re > 1e-9 * r.norm());
         assert_eq!(unstable, w > 345.0, "Ω = {w}");
+        // Past it the instability is flutter: the stiffness stays positive definite, no other
+        // equilibrium branches off the axis, and none is looked for.
+        assert_eq!(
+            matches!(
+                a.branch.kind,
+                BranchKind::Unstable {
+                    searched: false,
+                    flutter_only: true,
+                    ..
+                }
+            ),
+            unstable,
+            "Ω = {w}: {}",
+            a.branch
+        );
     }
     let wrt = m.model().toleranced();
     let p = m.model().nominal();

@@ -106,13 +106,19 @@ pub enum BranchKind {
     /// The equilibrium Newton reached is unstable through `mode` (0-based here, 1-based in
     /// JSON; among the point's modes) and reported as it is:
     /// `searched` says whether a stable one was looked for along the unstable modes (and none
-    /// found) or not (switching off, [`Options::no_branch_switch`](super::Options::no_branch_switch)).
+    /// found) or not (switching off, [`Options::no_branch_switch`](super::Options::no_branch_switch),
+    /// or `flutter_only`).
     Unstable {
         #[serde(serialize_with = "one_based")]
         mode: usize,
         re: f64,
         im: f64,
         searched: bool,
+        /// The stiffness `K̂`'s symmetric part is positive definite: `K̂` is regular, so no
+        /// equilibrium branches off this one, and the instability is flutter (circulatory
+        /// forces or negative damping): there is no stable equilibrium nearby to look for.
+        #[serde(skip_serializing_if = "std::ops::Not::not")]
+        flutter_only: bool,
     },
 }
 
@@ -172,6 +178,7 @@ impl std::fmt::Display for Branch {
                 re,
                 im,
                 searched,
+                flutter_only,
             } => write!(
                 f,
                 "the equilibrium reached from {} is unstable ({}); {}",
@@ -179,6 +186,9 @@ impl std::fmt::Display for Branch {
                 root(Some(mode), re, im),
                 if searched {
                     "no stable equilibrium was found along its unstable modes' shapes"
+                } else if flutter_only {
+                    "its stiffness is positive definite, so no other equilibrium branches off \
+                     it: reported as reached"
                 } else {
                     "reported as reached (no search for a stable branch)"
                 }

@@ -96,6 +96,19 @@ fn search_directions(first: &Point) -> Vec<(usize, C64, bool, Vec<f64>)> {
     out
 }
 
+/// Is the symmetric part of the stiffness `k` positive definite? Then `k` is regular
+/// (`xᵀkx > 0` for every `x ≠ 0`): the equilibrium is isolated and continues smoothly with the
+/// speed and the parameters, no branch bifurcates from it, and an instability there is flutter,
+/// driven by circulatory forces or negative damping (Kelvin–Tait–Chetaev: with the symmetric
+/// stiffness positive definite, gyroscopic and dissipative forces alone cannot destabilise;
+/// Merkin, *Gyroscopic Systems*, 1956; Kirillov, *Nonconservative Stability Problems of Modern
+/// Physics*, 2013, §1.2). A rotor whirling unstable on cross-coupled bearings is one: stepping
+/// off its axis along the whirl finds no other equilibrium, so none is looked for.
+fn positive_definite(k: &DMatrix<f64>) -> bool {
+    let sym = (k + k.transpose()) * 0.5;
+    sym.nrows() > 0 && sym.iter().all(|v| v.is_finite()) && sym.cholesky().is_some()
+}
+
 impl Solver<'_> {
     /// The point at `speed` from the guess `q0`, with more to start Newton from (see
     /// [`Start`]); past an unstable equilibrium, the stable one found by stepping along its
@@ -117,23 +130,25 @@ impl Solver<'_> {
                 re(a).total_cmp(&re(b))
             })
             .map(|k| (k, first.modes[k].root.lambda));
-        let unstable = |searched: bool| {
+        let unstable = |searched: bool, flutter_only: bool| {
             let (mode, root) = worst.unwrap_or_default();
             BranchKind::Unstable {
                 mode,
                 re: root.re,
                 im: root.im,
                 searched,
+                flutter_only,
             }
         };
         let directions = search_directions(&first);
-        if opt.no_branch_switch || directions.is_empty() {
-            first.branch.kind = unstable(false);
+        let flutter_only = positive_definite(&first.linear.k);
+        if opt.no_branch_switch || directions.is_empty() || flutter_only {
+            first.branch.kind = unstable(false, flutter_only && !opt.no_branch_switch);
             return Ok(first);
         }
         let found = self.stable_nearby(&problem, q0, &first, &directions)?;
         Ok(found.unwrap_or_else(|| {
-            first.branch.kind = unstable(true);
+            first.branch.kind = unstable(true, false);
             first
         }))
     }
