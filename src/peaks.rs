@@ -27,8 +27,13 @@
 //!   backward whirl of an isotropic rotor under unbalance) leaves `H` finite where it meets
 //!   the excitation: [`crate::frf::transfer`] resolves `H` there, and it is no resonance.
 //!
-//! To first order the peak's and its speed's σ follow from these gradients
-//! ([`crate::tolerance::first_order`]); no step size enters anywhere.
+//! A maximum's **amplification factor** `AF = Ω*/(Ω₂ − Ω₁)` (API 684's half-power method:
+//! `Ω₁ < Ω* < Ω₂` where |H| falls to the peak's `1/√2`) comes with it: each half-power speed by
+//! Newton on `|H| − g*/√2` (bracketed by the nearest swept speed below that level), its
+//! derivatives `dΩ_i/dp_a = −(g_a(Ω_i) − g*_a/√2)/g_Ω(Ω_i)`.
+//!
+//! To first order the σ of the peak, its speed and its amplification factor follow from these
+//! gradients ([`crate::tolerance::first_order`]); no step size enters anywhere.
 //!
 //! # Reference
 //! Friswell, Penny, Garvey & Lees, *Dynamics of Rotating Machines* (2010), §3.6 and §6.7 (the
@@ -95,6 +100,11 @@ pub struct Peak {
     pub d_speed: Result<Vec<f64>, String>,
     /// `d|H|/dp` at the peak per design variable (a maximum's), or why it does not exist.
     pub d_magnitude: Result<Vec<f64>, String>,
+    /// A maximum's amplification factor `Ω*/(Ω₂ − Ω₁)` by the half-power method of API 684
+    /// (`Ω₁ < Ω* < Ω₂` where |H| falls to the peak's `1/√2`) and its derivatives per design
+    /// variable, or why there is none (a resonance; a half-power speed beyond the speeds
+    /// swept).
+    pub amplification: Result<(f64, Vec<f64>), String>,
 }
 
 /// A peak that could not be located: near which swept speed, and why.
@@ -110,6 +120,7 @@ pub struct PeakFailure {
 pub struct PeakSpread {
     pub speed: Result<Stat, String>,
     pub magnitude: Result<Stat, String>,
+    pub amplification: Result<Stat, String>,
 }
 
 /// A peak of the nominal design with its first-order spread under each tolerance case (in
@@ -128,6 +139,9 @@ impl Peak {
         PeakSpread {
             speed: stat(Some(self.speed), &self.d_speed),
             magnitude: stat(self.magnitude, &self.d_magnitude),
+            amplification: (self.amplification.as_ref())
+                .map(|(af, d)| first_order(*af, d, spread).0)
+                .map_err(Clone::clone),
         }
     }
 }
@@ -144,11 +158,20 @@ pub fn peaks(
     transfer: &Transfer,
     wrt: &[usize],
 ) -> Vec<Result<Peak, PeakFailure>> {
+    let g: Vec<Option<f64>> = (points.iter())
+        .map(|pt| {
+            let pt = pt.as_ref()?;
+            let t = crate::sensitivity::TransferAt::at_speed(transfer, pt.speed);
+            transfer_fn(&pt.linear, t.input, t.output, t.omega).filter(|v| v.is_finite())
+        })
+        .collect();
     let finder = Finder {
         model,
         p,
         transfer,
         wrt,
+        points,
+        g: &g,
     };
     let mut out = Vec::new();
     // Resonances: an undamped mode crossing the excitation frequency between two speeds.
@@ -177,13 +200,6 @@ pub fn peaks(
         }
     }
     // Maxima at a swept speed above its neighbours, away from the resonances.
-    let g: Vec<Option<f64>> = (points.iter())
-        .map(|pt| {
-            let pt = pt.as_ref()?;
-            let t = crate::sensitivity::TransferAt::at_speed(transfer, pt.speed);
-            transfer_fn(&pt.linear, t.input, t.output, t.omega).filter(|v| v.is_finite())
-        })
-        .collect();
     for i in 1..points.len().saturating_sub(1) {
         let (Some(l), Some(c), Some(r)) = (g[i - 1], g[i], g[i + 1]) else {
             continue;
@@ -254,6 +270,9 @@ struct Finder<'a> {
     p: &'a [f64],
     transfer: &'a Transfer,
     wrt: &'a [usize],
+    /// The swept points and |H| at each (`None` where a point failed or |H| has no value).
+    points: &'a [Option<Point>],
+    g: &'a [Option<f64>],
 }
 
 impl Finder<'_> {
@@ -363,14 +382,101 @@ impl Finder<'_> {
                 Err(format!("{what} is not finite"))
             }
         };
+        let d_speed = finite(d_speed, "the derivative of the peak's speed");
+        let d_magnitude = finite(d_magnitude, "the derivative of the peak");
+        let amplification = match (&d_speed, &d_magnitude) {
+            (Ok(ds), Ok(dg)) => self.amplification(&pt, (g, dg), ds),
+            _ => Err("the peak has no derivative".into()),
+        };
         Ok(Peak {
             kind: PeakKind::Maximum,
             speed: pt.speed,
             magnitude: Some(g),
             mode: None,
-            d_speed: finite(d_speed, "the derivative of the peak's speed"),
-            d_magnitude: finite(d_magnitude, "the derivative of the peak"),
+            d_speed,
+            d_magnitude,
+            amplification,
         })
+    }
+
+    /// API 684's amplification factor `AF = Ω*/(Ω₂ − Ω₁)` of the maximum at `peak` (|H| = `g`,
+    /// its derivatives `dg`, those of its speed `ds`), with its derivatives: each half-power
+    /// speed `Ω_i` solves `h(Ω) = |H|(Ω) − g/√2 = 0`, so `dΩ_i/dp = −(g_p(Ω_i) − g_p/√2)/g_Ω(Ω_i)`.
+    fn amplification(
+        &self,
+        peak: &Point,
+        (g, dg): (f64, &[f64]),
+        ds: &[f64],
+    ) -> Result<(f64, Vec<f64>), String> {
+        let half = g * std::f64::consts::FRAC_1_SQRT_2;
+        let below = self.half_power(peak, half, dg, false)?;
+        let above = self.half_power(peak, half, dg, true)?;
+        let (w, band) = (peak.speed, above.0 - below.0);
+        let af = w / band;
+        let d = (0..self.wrt.len())
+            .map(|a| af * (ds[a] / w - (above.1[a] - below.1[a]) / band))
+            .collect();
+        Ok((af, d))
+    }
+
+    /// The half-power speed on one side of the maximum at `peak` (above it with `up`), where
+    /// |H| = `half`, and its derivatives (see [`Finder::amplification`]); bracketed by the
+    /// nearest swept speed on that side below `half`.
+    fn half_power(
+        &self,
+        peak: &Point,
+        half: f64,
+        dg: &[f64],
+        up: bool,
+    ) -> Result<(f64, Vec<f64>), String> {
+        let side = if up { "above" } else { "below" };
+        let outside = || {
+            format!(
+                "|H| does not fall to the peak's 1/√2 {side} it within the speeds swept (the \
+                 half-power speed {side} the peak is needed for the amplification factor)"
+            )
+        };
+        let order: Vec<usize> = if up {
+            (0..self.points.len()).collect()
+        } else {
+            (0..self.points.len()).rev().collect()
+        };
+        let beyond = |s: f64| if up { s > peak.speed } else { s < peak.speed };
+        let far = (order.iter().copied())
+            .find(|&i| {
+                (self.points[i].as_ref()).is_some_and(|pt| beyond(pt.speed))
+                    && self.g[i].is_some_and(|v| v < half)
+            })
+            .ok_or_else(outside)?;
+        let far_pt = self.points[far].as_ref().expect("found with a point");
+        let bracket = if up {
+            (peak.speed, far_pt.speed)
+        } else {
+            (far_pt.speed, peak.speed)
+        };
+        let start = self.solve(0.5 * (bracket.0 + bracket.1), far_pt)?;
+        // |H| − half rises below the peak and falls above it.
+        let pt = (self.locate(start, bracket, |pt| {
+            let (v, g1, _) = self.along_speed(pt)?;
+            let h = v - half;
+            let above = (h != 0.0).then_some((h < 0.0) != up);
+            Ok((above, (g1 != 0.0).then(|| pt.speed - h / g1)))
+        }))?
+        .ok_or_else(|| format!("the half-power speed {side} the peak did not converge"))?;
+        let (_, slope, _) = self.along_speed(&pt)?;
+        let dp = DesignPoint::new(self.model, self.p, &pt);
+        let duals = dp
+            .dual_linearizations(self.wrt)
+            .map_err(|e| e.to_string())?;
+        let t = crate::sensitivity::TransferAt::at_speed(self.transfer, pt.speed);
+        let d = (duals.iter().zip(dg))
+            .map(|(d, &dga)| {
+                let h = transfer(&d.linear, t.input, t.output, t.omega)
+                    .ok_or_else(|| format!("|H| has no value at {} rad/s", pt.speed))?;
+                Ok(-(h.magnitude().eps - dga * std::f64::consts::FRAC_1_SQRT_2) / slope)
+            })
+            .collect::<Result<Vec<f64>, String>>()?;
+        Ok((pt.speed, d))
     }
 
     /// The derivative of mode `k`'s `ω_d − ω_e` at `pt` along one direction of the
@@ -490,6 +596,7 @@ impl Finder<'_> {
             mode: Some(k),
             d_speed,
             d_magnitude: Err("unbounded: a resonance".into()),
+            amplification: Err("unbounded: a resonance".into()),
         }))
     }
 

@@ -118,6 +118,27 @@ fn unbalance_peak(m: D, me: D, k: D, c: D) -> (D, D) {
     (u.sqrt(), x)
 }
 
+/// The unbalance response's amplification factor `Ω*/(Ω₂ − Ω₁)` at `[m, me, k, c]`: the
+/// half-power speeds, where `|X| = |X|*/√2`, by bisection on the closed form.
+fn unbalance_amplification([m, me, k, c]: [f64; 4]) -> f64 {
+    let x = |w: f64| me * w * w / ((k - m * w * w).powi(2) + (c * w).powi(2)).sqrt();
+    let (s, g) = unbalance_peak(D::from(m), D::from(me), D::from(k), D::from(c));
+    let half = g.re / std::f64::consts::SQRT_2;
+    let bisect = |(mut lo, mut hi): (f64, f64), rising: bool| {
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if (x(mid) < half) == rising {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let (w1, w2) = (bisect((1.0, s.re), true), bisect((s.re, 1e4), false));
+    s.re / (w2 - w1)
+}
+
 /// The force response's peak `(Ω*, |H|*)` at `order × Ω`, over dual numbers.
 fn force_peak(m: D, k: D, c: D, order: f64) -> (D, D) {
     let w2 = k / m - c * c / (m * m * 2.0);
@@ -175,10 +196,10 @@ fn the_damped_jeffcott_rotors_peaks_and_their_speeds_are_the_closed_forms() {
     close(peak.speed, s, 1e-12, "unbalance: speed of the peak");
     close(peak.magnitude.unwrap(), g, 1e-10, "unbalance: peak");
     let (ds, dg) = closed_derivatives(|[m, me, k, c]| unbalance_peak(m, me, k, c));
+    let nominal = [M, ME, K, C];
     for a in 0..4 {
         // Relative to the largest change of Ω* per relative change of a variable (Ω* does
         // not depend on me: its derivative is rounding).
-        let nominal = [M, ME, K, C];
         let scale = (0..4)
             .map(|b| (ds[b] * nominal[b]).abs())
             .fold(0.0, f64::max);
@@ -193,6 +214,32 @@ fn the_damped_jeffcott_rotors_peaks_and_their_speeds_are_the_closed_forms() {
             dg[a],
             1e-8,
             "unbalance: d|X|*/dp",
+        );
+    }
+    // The amplification factor Ω*/(Ω₂ − Ω₁) (half-power speeds, |X| = |X|*/√2), against
+    // the closed form's by bisection, and its derivatives against central differences of it.
+    let (af, d_af) = peak.amplification.as_ref().unwrap();
+    close(
+        *af,
+        unbalance_amplification(nominal),
+        1e-10,
+        "amplification factor",
+    );
+    assert!(
+        (af * 2.0 * C / (2.0 * (K * M).sqrt()) - 1.0).abs() < 0.01,
+        "about 1/(2ζ)"
+    );
+    for a in 0..4 {
+        let at = |sign: f64| {
+            let mut v = nominal;
+            v[a] *= 1.0 + sign * 1e-6;
+            unbalance_amplification(v)
+        };
+        let fd = (at(1.0) - at(-1.0)) / (2e-6 * nominal[a]);
+        assert!(
+            (d_af[a] - fd).abs() * nominal[a] <= 1e-6 * af,
+            "dAF/dp[{a}]: {} vs central differences {fd}",
+            d_af[a]
         );
     }
     // The force response at orders 1 and 2.
@@ -276,6 +323,7 @@ fn against_central_differences(model: &Compiled, speeds: &[f64], names: &[&str],
     let h = 1e-5;
     let mut fd_speed = vec![vec![0.0; wrt.len()]; found.len()];
     let mut fd_magnitude = vec![vec![0.0; wrt.len()]; found.len()];
+    let mut fd_amplification = vec![vec![0.0; wrt.len()]; found.len()];
     for (a, &b) in wrt.iter().enumerate() {
         let at = |sign: f64| {
             let mut q = p.clone();
@@ -290,6 +338,9 @@ fn against_central_differences(model: &Compiled, speeds: &[f64], names: &[&str],
             if let (Some(u), Some(d)) = (up[i].magnitude, down[i].magnitude) {
                 fd_magnitude[i][a] = (u - d) / step;
             }
+            if let (Ok(u), Ok(d)) = (&up[i].amplification, &down[i].amplification) {
+                fd_amplification[i][a] = (u.0 - d.0) / step;
+            }
         }
     }
     for (i, peak) in found.iter().enumerate() {
@@ -300,11 +351,16 @@ fn against_central_differences(model: &Compiled, speeds: &[f64], names: &[&str],
                 peak.d_magnitude.as_ref().ok(),
                 &fd_magnitude[i],
             ),
+            (
+                "amplification factor",
+                peak.amplification.as_ref().ok().map(|a| &a.1),
+                &fd_amplification[i],
+            ),
         ];
         for (what, exact, fd) in checks {
             let Some(exact) = exact else {
-                assert_eq!(what, "magnitude", "{peak:?}");
-                assert_eq!(peak.kind, PeakKind::Resonance);
+                assert_ne!(what, "speed", "{peak:?}");
+                assert_eq!(peak.kind, PeakKind::Resonance, "{what}: {peak:?}");
                 continue;
             };
             let scale = (0..wrt.len())

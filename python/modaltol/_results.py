@@ -57,8 +57,8 @@ class Analysis:
     to which each requirement holds, ``reach``, and the worst margin met, ``margin_at_target``);
     ``summary`` is its ``summary.json``; ``sobol`` has the columns of ``sobol.csv`` (with
     ``analyze(sobol=N)``; empty otherwise); ``peaks`` has the columns of ``peaks.csv`` (where
-    the transfer function peaks along the speed, located between the swept speeds, with σ by
-    first order; empty without ``[analysis] transfer``)."""
+    the transfer function peaks along the speed, located between the swept speeds, with its API
+    684 amplification factor and σ by first order; empty without ``[analysis] transfer``)."""
 
     tolerance: pd.DataFrame
     probabilities: pd.DataFrame

@@ -226,7 +226,8 @@ pub(crate) enum Command {
     /// quantity, mode, variable, first, first_ci_low, first_ci_high, total, total_ci_low,
     /// total_ci_high, derivative_bound, rows); for a model with a transfer function ([analysis]
     /// transfer), DIR/peaks.csv (case, kind = maximum|resonance, speed, speed_std, magnitude,
-    /// magnitude_std, unit, mode, message: where |H| peaks along the speed, located between the
+    /// magnitude_std, unit, amplification_factor, amplification_factor_std (API 684's
+    /// half-power method), mode, message: where |H| peaks along the speed, located between the
     /// swept speeds, with σ by first order; a resonance is an undamped mode at the excitation
     /// frequency, its |H| unbounded and left empty); DIR/summary.json (cases, wall times of the
     /// Taylor methods, the

@@ -8,9 +8,9 @@ use crate::model::Model;
 
 /// Header of `peaks.csv`: the case, the kind (`maximum` or `resonance`), the speed of the peak
 /// and its first-order σ (rad/s), |H| at the peak and its σ (in `unit`; empty at a resonance,
-/// where it is unbounded), the mode at the excitation frequency (a resonance's, 1-based), and
-/// why a value is missing.
-pub const PEAK_HEADER: [&str; 9] = [
+/// where it is unbounded), the amplification factor by API 684's half-power method and its σ,
+/// the mode at the excitation frequency (a resonance's, 1-based), and why a value is missing.
+pub const PEAK_HEADER: [&str; 11] = [
     "case",
     "kind",
     "speed",
@@ -18,6 +18,8 @@ pub const PEAK_HEADER: [&str; 9] = [
     "magnitude",
     "magnitude_std",
     "unit",
+    "amplification_factor",
+    "amplification_factor_std",
     "mode",
     "message",
 ];
@@ -33,10 +35,12 @@ pub fn peak_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
         match row {
             Ok((peak, cases)) => {
                 for (case, spread) in a.cases.iter().zip(cases) {
-                    let why: Vec<&str> = [&spread.speed, &spread.magnitude]
-                        .iter()
-                        .filter_map(|r| r.as_ref().err().map(String::as_str))
-                        .collect();
+                    let mut why: Vec<&str> =
+                        [&spread.speed, &spread.magnitude, &spread.amplification]
+                            .iter()
+                            .filter_map(|r| r.as_ref().err().map(String::as_str))
+                            .collect();
+                    why.dedup();
                     rows.push(vec![
                         case.name.clone(),
                         peak.kind.as_str().into(),
@@ -45,6 +49,8 @@ pub fn peak_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                         opt(peak.magnitude),
                         opt(spread.magnitude.as_ref().ok().map(|s| s.std)),
                         unit.clone(),
+                        opt(peak.amplification.as_ref().ok().map(|a| a.0)),
+                        opt(spread.amplification.as_ref().ok().map(|s| s.std)),
                         peak.mode.map_or(String::new(), |k| (k + 1).to_string()),
                         why.join("; "),
                     ]);
@@ -58,6 +64,8 @@ pub fn peak_rows(model: &Model, a: &Analysis) -> Vec<Vec<String>> {
                 String::new(),
                 String::new(),
                 unit.clone(),
+                String::new(),
+                String::new(),
                 String::new(),
                 f.why.clone(),
             ]),

@@ -228,10 +228,12 @@ fn peaks_table(h: &mut String, model: &Model, a: &Analysis, d: Display) {
         h,
         "<h2>Response peaks</h2><p>Where |H| peaks along the speed, found between the swept \
          speeds (Newton on the exact derivative in speed), with σ by first order under case \
-         {} (exact gradients; <code>peaks.csv</code> has every case). A resonance is an \
+         {} (exact gradients; <code>peaks.csv</code> has every case). The amplification \
+         factor is API 684's: the speed of the peak over the width between its half-power \
+         speeds. A resonance is an \
          undamped mode at the excitation frequency: |H| is unbounded there.</p>\
          <table><tr><th>kind</th><th>speed ({u})</th><th>σ ({u})</th><th>|H| ({})</th>\
-         <th>σ ({})</th><th>mode</th></tr>",
+         <th>σ ({})</th><th>amplification factor (API 684)</th><th>σ</th><th>mode</th></tr>",
         esc(&a.cases[0].name),
         esc(&unit),
         esc(&unit)
@@ -243,7 +245,8 @@ fn peaks_table(h: &mut String, model: &Model, a: &Analysis, d: Display) {
         let _ = match row {
             Ok((peak, cases)) => writeln!(
                 h,
-                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
+                 <td>{}</td><td>{}</td></tr>",
                 peak.kind.as_str(),
                 peak.speed * f,
                 sd(&cases[0].speed, &|v| format!("{:.4}", v * f)),
@@ -252,11 +255,17 @@ fn peaks_table(h: &mut String, model: &Model, a: &Analysis, d: Display) {
                 (peak.magnitude).map_or(String::new(), |_| sd(&cases[0].magnitude, &|v| format!(
                     "{v:.4e}"
                 ))),
+                (peak.amplification.as_ref())
+                    .map_or_else(|why| esc(why), |a| format!("{:.3}", a.0)),
+                (peak.amplification.as_ref()).map_or(String::new(), |_| sd(
+                    &cases[0].amplification,
+                    &|v| format!("{v:.3}")
+                )),
                 peak.mode.map_or(String::new(), |k| (k + 1).to_string()),
             ),
             Err(e) => writeln!(
                 h,
-                "<tr><td colspan=6>not located near {:.4} {u}: {}</td></tr>",
+                "<tr><td colspan=8>not located near {:.4} {u}: {}</td></tr>",
                 e.near * f,
                 esc(&e.why)
             ),
