@@ -232,34 +232,7 @@ pub fn reduce<T: Real>(
     phi_r: &DMatrix<T>,
     [m_full, c_full, k_full]: [DMatrix<T>; 3],
 ) -> Result<Linearization<T>, LinearizeError> {
-    let nf = free.len();
-    // Basis of the null space of Φ_R.
-    let basis = if phi_r.nrows() == 0 {
-        DMatrix::identity(nf, nf)
-    } else {
-        let ind: Vec<usize> = independent
-            .iter()
-            .map(|c| {
-                free.iter()
-                    .position(|f| f == c)
-                    .expect("independent ⊂ free")
-            })
-            .collect();
-        let dep: Vec<usize> = (0..nf).filter(|k| !ind.contains(k)).collect();
-        let phi_u = DMatrix::from_fn(dep.len(), dep.len(), |r, c| phi_r[(r, dep[c])]);
-        let phi_v = DMatrix::from_fn(dep.len(), ind.len(), |r, c| phi_r[(r, ind[c])]);
-        let x = solve(&phi_u, &phi_v).ok_or(LinearizeError::BadIndependent)?;
-        let mut r = DMatrix::from_element(nf, ind.len(), cst::<T>(0.0));
-        for (c, &k) in ind.iter().enumerate() {
-            r[(k, c)] = cst(1.0);
-        }
-        for (row, &k) in dep.iter().enumerate() {
-            for c in 0..ind.len() {
-                r[(k, c)] = -x[(row, c)];
-            }
-        }
-        r
-    };
+    let basis = null_basis(free, independent, phi_r)?;
     // Without constraints the basis is the identity: the matrices are their own reductions (two
     // dense products each were a tenth of a 160-segment chain's sensitivities, over duals).
     let reduce = |a: &DMatrix<T>| {
@@ -283,4 +256,40 @@ pub fn reduce<T: Real>(
         ports: Vec::new(),
         unbalances: Vec::new(),
     })
+}
+
+/// `R`, the basis of the null space of `Φ_R` (`m × n_R`, over the free coordinates `free`)
+/// by coordinate partitioning: the identity on the `independent` coordinates, `−Φ_u⁻¹ Φ_v` on
+/// the others; the identity without constraints.
+pub fn null_basis<T: Real>(
+    free: &[usize],
+    independent: &[usize],
+    phi_r: &DMatrix<T>,
+) -> Result<DMatrix<T>, LinearizeError> {
+    let nf = free.len();
+    if phi_r.nrows() == 0 {
+        return Ok(DMatrix::identity(nf, nf));
+    }
+    let ind: Vec<usize> = independent
+        .iter()
+        .map(|c| {
+            free.iter()
+                .position(|f| f == c)
+                .expect("independent ⊂ free")
+        })
+        .collect();
+    let dep: Vec<usize> = (0..nf).filter(|k| !ind.contains(k)).collect();
+    let phi_u = DMatrix::from_fn(dep.len(), dep.len(), |r, c| phi_r[(r, dep[c])]);
+    let phi_v = DMatrix::from_fn(dep.len(), ind.len(), |r, c| phi_r[(r, ind[c])]);
+    let x = solve(&phi_u, &phi_v).ok_or(LinearizeError::BadIndependent)?;
+    let mut r = DMatrix::from_element(nf, ind.len(), cst::<T>(0.0));
+    for (c, &k) in ind.iter().enumerate() {
+        r[(k, c)] = cst(1.0);
+    }
+    for (row, &k) in dep.iter().enumerate() {
+        for c in 0..ind.len() {
+            r[(k, c)] = -x[(row, c)];
+        }
+    }
+    Ok(r)
 }

@@ -335,6 +335,64 @@ fn a_residual_is_the_same_to_the_bit_before_and_after_its_own_program_is_made() 
     }
 }
 
+/// The steady-state check's probe ([`Equations::probe_linearisation`]): on the recorded route
+/// one forward pass along three fixed directions, on the direct route the linearisation's
+/// full matrices times those directions. The same `F`, `K v`, `C w`, `M u` and `Φ_R`, on the
+/// examples (a loop's constraints on the spatial four-bar, a meshed rotor's beams), and
+/// directions of unit size that depend on nothing but the number of coordinates.
+#[test]
+fn the_probed_linearisation_is_the_linearisation_along_its_directions_on_both_routes() {
+    use modaltol::equations::probe_directions;
+    let [v, w, u] = probe_directions(5);
+    assert_eq!(probe_directions(5), [v.clone(), w.clone(), u.clone()]);
+    assert!(
+        [&v, &w, &u]
+            .iter()
+            .all(|d| d.iter().all(|x| (0.5..=1.0).contains(&x.abs())))
+    );
+    assert!(v != w && w != u && v.iter().any(|x| *x < 0.0) && v.iter().any(|x| *x > 0.0));
+    let mut names: Vec<&str> = EXAMPLES.to_vec();
+    names.extend(["spinning_spatial_fourbar.toml", "friswell_5_9_1.toml"]);
+    for name in names {
+        let recorded = example(name);
+        let direct = recorded.clone().with_route(Route::Direct);
+        let workspace = Workspace::default();
+        let p = recorded.model().nominal();
+        for speed in [0.0, 1.7, 40.0] {
+            let guess = initial_guess(recorded.model(), &p, speed).unwrap();
+            let q: Vec<f64> = (guess.iter().enumerate())
+                .map(|(i, v)| v + 1e-3 * ((i * 7) % 5) as f64)
+                .collect();
+            let lambda: Vec<f64> = (0..recorded.model().n_constraints())
+                .map(|j| 3.0 - 1.3 * j as f64)
+                .collect();
+            let a = recorded.at(&p, speed, (Tier::Few, &workspace)).unwrap();
+            let d = direct.at(&p, speed, (Tier::Few, &workspace)).unwrap();
+            let free = recorded.model().free();
+            let independent = if lambda.is_empty() {
+                free.clone()
+            } else {
+                choose_independent(&d.constraint_jacobian(&q), &free, None).unwrap()
+            };
+            let pa = a.probe_linearisation(&q, &lambda, &independent).unwrap();
+            let pd = d.probe_linearisation(&q, &lambda, &independent).unwrap();
+            let same = |what: &str, x: &[f64], y: &[f64]| {
+                let scale = y.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+                assert_eq!(x.len(), y.len(), "{name} at {speed}: {what}");
+                for (x, y) in x.iter().zip(y) {
+                    assert!(close(*x, *y, scale), "{name} at {speed}: {what} {x} vs {y}");
+                }
+            };
+            same("F", &pa.residual, &pd.residual);
+            for (k, what) in ["K v", "C w", "M u"].into_iter().enumerate() {
+                same(what, &pa.products[k], &pd.products[k]);
+            }
+            assert_eq!(pa.phi.shape(), (lambda.len(), free.len()));
+            same("Φ_R", pa.phi.as_slice(), pd.phi.as_slice());
+        }
+    }
+}
+
 #[test]
 fn the_program_reproduces_the_direct_route_on_every_example() {
     for name in EXAMPLES {

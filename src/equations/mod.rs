@@ -48,6 +48,38 @@ pub struct Evaluation<S: Real = f64> {
     pub drive: Option<Vec<S>>,
 }
 
+/// `F` and the linearisation's full matrices along [`probe_directions`] at one point:
+/// what [`Equations::probe_linearisation`] returns.
+#[derive(Debug, Clone)]
+pub struct Probed<S: Real = f64> {
+    /// `F`.
+    pub residual: Vec<S>,
+    /// `K v`, `C w`, `M u` for the directions `[v, w, u]` (`K` with `λ` held).
+    pub products: [Vec<S>; 3],
+    /// `Φ_R` (constraint equations × free coordinates).
+    pub phi: DMatrix<S>,
+}
+
+/// Three fixed directions over `n` free coordinates, `[v, w, u]`, along which
+/// [`Equations::probe_linearisation`] multiplies `K`, `C` and `M`: entries of size ½ to 1 with
+/// a sign, from SplitMix64 (Steele, Lea & Flood, OOPSLA 2014) over the direction and the
+/// entry's index, so that no structure of a model lines up with them and every run is the
+/// same.
+pub fn probe_directions(n: usize) -> [Vec<f64>; 3] {
+    [1u64, 2, 3].map(|seed| {
+        (0..n as u64)
+            .map(|i| {
+                let mut z = (seed << 32 ^ i).wrapping_add(0x9E37_79B9_7F4A_7C15);
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                z ^= z >> 31;
+                let size = 0.5 + 0.5 * (z >> 11) as f64 / (1u64 << 53) as f64;
+                if z & 1 == 0 { size } else { -size }
+            })
+            .collect()
+    })
+}
+
 /// How the multipliers of an unconverged point are fitted: from `Φ_Rᵀ` (free coordinates ×
 /// constraint equations) and `−r_R`, the `λ` of `Φ_Rᵀ λ ≈ −r_R` (Newton passes a least-squares
 /// solve).
@@ -115,6 +147,35 @@ pub trait Equations<S: Real> {
         independent: &[usize],
         stiffness: Option<&DMatrix<S>>,
     ) -> Result<Linearization<S>, LinearizeError>;
+
+    /// `F` at `(q, λ)`, the linearisation's full matrices there along [`probe_directions`]
+    /// `[v, w, u]` (over the free coordinates), `[K v, C w, M u]`, and `Φ_R`. By default from
+    /// [`Equations::residual`] and [`Equations::linearize`] (the `independent` coordinates
+    /// choose its basis, not used here); a route may differentiate its equations along the
+    /// three directions at once instead of along every coordinate.
+    fn probe_linearisation(
+        &self,
+        q: &[S],
+        lambda: &[S],
+        independent: &[usize],
+    ) -> Result<Probed<S>, LinearizeError> {
+        let lin = self.linearize(q, lambda, independent, None)?;
+        let times = |a: &DMatrix<S>, x: &[f64]| -> Vec<S> {
+            (0..a.nrows())
+                .map(|r| (0..a.ncols()).fold(S::from(0.0), |s, c| s + a[(r, c)] * S::from(x[c])))
+                .collect()
+        };
+        let [v, w, u] = probe_directions(self.free().len());
+        Ok(Probed {
+            residual: self.residual(q, lambda),
+            products: [
+                times(&lin.k_full, &v),
+                times(&lin.c_full, &w),
+                times(&lin.m_full, &u),
+            ],
+            phi: lin.phi,
+        })
+    }
 }
 
 /// [`Equations::residual_at_drive_offsets`] by one evaluation of `F` per offset.

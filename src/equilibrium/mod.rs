@@ -296,7 +296,7 @@ impl<'a> Problem<'a> {
             });
         }
         if !start.steady_known {
-            self.check_steady(&it.q, &it.lambda, &it.jac, it.balance)?;
+            self.check_steady(&it.q, &it.lambda, &it.jac, it.rates.as_ref(), it.balance)?;
         }
         self.finish(speed, it, iterations, settings.drive_force)
     }

@@ -2,8 +2,11 @@
 //! linearisation may depend on the driven coordinates' values (gravity off a spin axis makes
 //! the motion unsteady though `F = 0` at the solution).
 
+use super::max_abs;
 use super::{Balance, EquilibriumError, Problem};
-use nalgebra::DMatrix;
+use crate::equations::{Probed, Rates, probe_directions};
+use crate::linearize::{LinearizeError, null_basis};
+use nalgebra::{DMatrix, DVector};
 
 impl Problem<'_> {
     /// Fails when the motion at the solution is not steady: `q_D = Ω t` turns each driven
@@ -25,21 +28,9 @@ impl Problem<'_> {
         q: &[f64],
         lambda: &[f64],
         jac: &DMatrix<f64>,
+        rates: Option<&Rates>,
         balance: Balance,
     ) -> Result<(), EquilibriumError> {
-        // Scaled by the balanced Jacobian and unknowns, in force units (α), found once and
-        // only when a drive is checked (a model whose drives are all steady by symmetry never
-        // needs it).
-        let tol = std::cell::LazyCell::new(|| {
-            let alpha = balance.alpha;
-            let x_scale = 1.0
-                + q.iter()
-                    .fold(0.0f64, |s, v| s.max(v.abs()))
-                    .max(lambda.iter().fold(0.0f64, |s, v| s.max(v.abs())) / alpha);
-            STEADY_TOLERANCE * alpha * balance.amax(jac).max(1.0) * x_scale
-        });
-        // The linearisation at the solution, made once where a drive is checked.
-        let base = std::cell::LazyCell::new(|| Steady::at(self, q, lambda, jac, balance));
         // The driven coordinates that turn, each at its speed over the fastest's: the motion
         // is `q_D + Ω_D t` for all of them at once, so the equations must not change along
         // that path (several drives at one speed may be coupled, as the nodes of a spinning
@@ -52,19 +43,39 @@ impl Problem<'_> {
         if shift.iter().all(|(_, c, _)| self.symmetric.contains(c)) {
             return Ok(());
         }
+        // Scaled by the balanced Jacobian and unknowns, in force units (α).
+        let x_scale = 1.0
+            + q.iter()
+                .fold(0.0f64, |s, v| s.max(v.abs()))
+                .max(lambda.iter().fold(0.0f64, |s, v| s.max(v.abs())) / balance.alpha);
+        let tol = STEADY_TOLERANCE * balance.alpha * balance.amax(jac).max(1.0) * x_scale;
         let names = self.turning(&shift);
-        let change = self
-            .route
-            .residual_at_drive_offsets(q, lambda, &shift, OFFSETS);
+        // The linearisation at the solution, and at each offset `F` with the linearisation
+        // along the check's directions (one pass each on the recorded route).
+        let base = Steady::at(self, q, lambda, (jac, rates), balance);
+        let probed = base.as_ref().map(|base| {
+            let mut qo = q.to_vec();
+            OFFSETS.map(|offset| {
+                for &(_, c, rate) in &shift {
+                    qo[c] = q[c] + rate * offset;
+                }
+                self.route
+                    .probe_linearisation(&qo, lambda, &base.independent)
+            })
+        });
+        let change = match &probed {
+            Some([Ok(a), Ok(b), Ok(c)]) => [a, b, c].map(|p| max_abs(&p.residual)),
+            _ => (self.route).residual_at_drive_offsets(q, lambda, &shift, OFFSETS),
+        };
         let change = change.iter().fold(0.0f64, |a, &v| a.max(v));
-        if change > *tol {
+        if change > tol {
             return Err(EquilibriumError::NoSteadyState {
                 coordinate: names,
                 sensitivity: change,
             });
         }
-        if let Some(base) = &*base {
-            self.check_steady_linearisation(base, q, lambda, &shift, &names)?;
+        if let (Some(base), Some(probed)) = (&base, probed) {
+            self.check_steady_linearisation(base, probed, &names)?;
         }
         Ok(())
     }
@@ -82,54 +93,54 @@ impl Problem<'_> {
     }
 
     /// Fails when the linearisation's full matrices `K`, `C`, `M` (over the free coordinates,
-    /// `λ` held) or its null-space basis `R` change as the driven coordinates of `shift` turn
-    /// by `OFFSETS` (see [`Problem::check_steady`]), beyond [`STEADY_TOLERANCE`] of their
+    /// `λ` held) or its null-space basis `R` change as the driven coordinates turn by `OFFSETS`
+    /// (`probed` at each; see [`Problem::check_steady`]), beyond [`STEADY_TOLERANCE`] of their
     /// scales ([`Steady`]); `names` says which turn.
+    ///
+    /// The matrices are compared by their products with fixed pseudo-random directions
+    /// (Freivalds, *Probabilistic machines can use less running time*, IFIP 1977): `A ≠ B` and
+    /// `A x = B x` only for `x` in a subspace of measure zero, and a change by a fraction `δ` of
+    /// the scale moves the product by about `δ` (the directions' entries are of size ½ to 1
+    /// with signs at random, [`probe_directions`]). One evaluation along three directions
+    /// replaces a linearisation (three lanes per coordinate) at each offset. `R` is compared
+    /// whole, from `Φ_R`.
     fn check_steady_linearisation(
         &self,
         base: &Steady,
-        q: &[f64],
-        lambda: &[f64],
-        shift: &[(usize, usize, f64)],
+        probed: [Result<Probed, LinearizeError>; 3],
         names: &str,
     ) -> Result<(), EquilibriumError> {
-        let mut qo = q.to_vec();
-        for offset in OFFSETS {
-            for &(_, c, rate) in shift {
-                qo[c] = q[c] + rate * offset;
-            }
+        for probed in probed {
             let unsteady = |change: String| EquilibriumError::UnsteadyLinearisation {
                 coordinate: names.to_string(),
                 change,
             };
-            let Ok(lin) = self.route.linearize(&qo, lambda, &base.independent, None) else {
+            let probed = probed.and_then(|p| {
+                null_basis(&self.free, &base.independent, &p.phi).map(|r| (p.products, r))
+            });
+            let Ok((products, basis)) = probed else {
                 // Φ_R lost the rank it has at the solution: the constraints turn with it.
                 return Err(unsteady(
                     "the constraint Jacobian Φ_R loses its rank".to_string(),
                 ));
             };
-            for (matrix, a, b, scale) in [
-                (
-                    "stiffness matrix K",
-                    &lin.k_full,
-                    &base.lin.k_full,
-                    base.scale.k,
-                ),
-                (
-                    "damping matrix C",
-                    &lin.c_full,
-                    &base.lin.c_full,
-                    base.scale.c,
-                ),
-                ("mass matrix M", &lin.m_full, &base.lin.m_full, base.scale.m),
+            let change = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+            };
+            let [kv, cw, mu] = &products;
+            let [bk, bc, bm] = &base.products;
+            for (matrix, change, scale) in [
+                ("stiffness matrix K", change(kv, bk), base.scale.k),
+                ("damping matrix C", change(cw, bc), base.scale.c),
+                ("mass matrix M", change(mu, bm), base.scale.m),
                 (
                     "constraints' null-space basis R",
-                    &lin.basis,
-                    &base.lin.basis,
+                    (&basis - &base.basis).amax(),
                     base.scale.basis,
                 ),
             ] {
-                let change = (a - b).amax();
                 if change.is_nan() || change > STEADY_TOLERANCE * scale {
                     return Err(unsteady(format!(
                         "its {matrix} changes by {change:.3e}, on a scale of {scale:.3e}"
@@ -152,11 +163,15 @@ const OFFSETS: [f64; 3] = [1.0, 2.5, -2.0];
 const STEADY_TOLERANCE: f64 = 1e-8;
 
 /// The linearisation at the solution that the steady-state check compares with those at other
-/// values of the driven coordinates, and the scale of each of its matrices.
+/// values of the driven coordinates: its full matrices along the check's directions, its basis
+/// and the scale of each.
 struct Steady {
     /// The independent coordinates chosen at the solution (those of the basis `R` compared).
     independent: Vec<usize>,
-    lin: crate::linearize::Linearization<f64>,
+    /// `[K v, C w, M u]` at the solution.
+    products: [Vec<f64>; 3],
+    /// `R` at the solution.
+    basis: DMatrix<f64>,
     scale: SteadyScale,
 }
 
@@ -172,44 +187,58 @@ struct SteadyScale {
 }
 
 impl Steady {
-    /// The linearisation of `problem` at the solution `(q, λ)` (Newton's Jacobian `jac`
-    /// balanced by `balance`); `None` where it fails or is not finite there (the
-    /// linearisation of the point says why, later).
+    /// The linearisation of `problem` at the solution `(q, λ)`: from Newton's Jacobian `jac`
+    /// (balanced by `balance`) and the `rates` evaluated with it where the route gave them,
+    /// else evaluated here; `None` where it fails or is not finite there (the linearisation
+    /// of the point says why, later).
     fn at(
         problem: &Problem,
         q: &[f64],
         lambda: &[f64],
-        jac: &DMatrix<f64>,
+        (jac, rates): (&DMatrix<f64>, Option<&Rates>),
         balance: Balance,
     ) -> Option<Steady> {
+        let nf = problem.free.len();
+        // `Φ_R` from the multipliers' columns of Newton's Jacobian, `[Φ_Rᵀ; 0]`.
+        let phi_r = DMatrix::from_fn(problem.m, nf, |k, j| jac[(j, nf + k)]);
         let independent = if problem.m == 0 {
             problem.free.clone()
         } else {
-            let phi_r = problem.route.constraint_jacobian(q);
             crate::linearize::choose_independent(&phi_r, &problem.free, None).ok()?
         };
-        let lin = problem
-            .route
-            .linearize(q, lambda, &independent, None)
-            .ok()?;
+        let stiffness = jac.view((0, 0), (nf, nf)).into_owned();
+        let [m_full, c_full, k_full] = match rates {
+            Some(r) => [r.mass.clone(), r.damping.clone(), stiffness],
+            None => {
+                let lin = (problem.route)
+                    .linearize(q, lambda, &independent, Some(&stiffness))
+                    .ok()?;
+                [lin.m_full, lin.c_full, lin.k_full]
+            }
+        };
+        let basis = null_basis(&problem.free, &independent, &phi_r).ok()?;
         let finite = |a: &DMatrix<f64>| a.iter().all(|v| v.is_finite());
-        if ![&lin.k_full, &lin.c_full, &lin.m_full, &lin.basis]
-            .into_iter()
-            .all(finite)
-        {
+        if ![&k_full, &c_full, &m_full, &basis].into_iter().all(finite) {
             return None;
         }
+        let directions = probe_directions(nf);
+        let products = [&k_full, &c_full, &m_full]
+            .into_iter()
+            .zip(&directions)
+            .map(|(a, x)| (a * DVector::from_column_slice(x)).as_slice().to_vec());
+        let products: [Vec<f64>; 3] = products.collect::<Vec<_>>().try_into().ok()?;
         let k = balance.alpha * balance.amax(jac).max(1.0);
-        let m = lin.m_full.amax();
+        let m = m_full.amax();
         let scale = SteadyScale {
             k,
             m,
-            c: lin.c_full.amax().max((k * m).sqrt()),
-            basis: lin.basis.amax().max(1.0),
+            c: c_full.amax().max((k * m).sqrt()),
+            basis: basis.amax().max(1.0),
         };
         Some(Steady {
             independent,
-            lin,
+            products,
+            basis,
             scale,
         })
     }

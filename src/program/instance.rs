@@ -4,6 +4,7 @@
 use super::Program;
 use super::linear::Linear;
 use super::workspace::Work;
+use crate::equations::{Probed, probe_directions};
 use crate::real::Real;
 use crate::tape::Rows;
 use nalgebra::DMatrix;
@@ -166,6 +167,38 @@ impl Instance<'_> {
         self.full_pass(q, lambda, |f, d| {
             Linear::from_forward(f, d, self.program.free.len(), self.program.m, false)
         })
+    }
+
+    /// [`Equations::probe_linearisation`](crate::equations::Equations::probe_linearisation):
+    /// one forward pass of `full` with three lanes, the free coordinates moving along `v` in
+    /// the first, their rates along `w` in the second, their accelerations along `u` in the
+    /// third ([`probe_directions`]), where the linearisation carries three lanes per free
+    /// coordinate. `F` and `Φ_R` are among `full`'s values.
+    pub(super) fn probe(&self, q: &[f64], lambda: &[f64]) -> Probed {
+        self.set(q, lambda);
+        let pr = self.program;
+        let (nf, m) = (pr.free.len(), pr.m);
+        let seeding = pr.probe.get_or_init(|| {
+            let [v, w, u] = probe_directions(nf);
+            let (oq, orate) = (pr.np + 1, pr.np + 1 + pr.n);
+            let directions: Vec<(usize, usize, f64)> = (pr.free.iter().enumerate())
+                .flat_map(|(k, &c)| {
+                    [
+                        (oq + c, 0, v[k]),
+                        (orate + k, 1, w[k]),
+                        (orate + nf + k, 2, u[k]),
+                    ]
+                })
+                .collect();
+            pr.full.seeding_along(&directions, 3, nf)
+        });
+        let mut work = self.work.borrow_mut();
+        let (f, d) = (pr.full).forward_rows(&self.full, &self.x.borrow(), seeding, &mut work.probe);
+        Probed {
+            products: [0, 1, 2].map(|l| (0..nf).map(|r| d.row(r)[l]).collect()),
+            phi: DMatrix::from_fn(m, nf, |k, j| f[nf + m + k * nf + j]),
+            residual: f[..nf + m].iter().map(|v| v + 0.0).collect(),
+        }
     }
 
     /// `full`'s forward pass with [`Program::linear`]'s lanes at `(q, λ)`, read by `read`.

@@ -68,6 +68,9 @@ pub struct Program {
     /// For each driven coordinate, what depends on it in `residual` (the steady-state check),
     /// made when first needed (a drive proved steady by symmetry never needs it).
     driven: OnceLock<Vec<Seeding>>,
+    /// Three lanes along fixed directions on `full` (`F` and the linearisation's products
+    /// that the steady-state check compares), made when first needed.
+    probe: OnceLock<Seeding>,
     /// For each set of parameters the sensitivities were asked along (a few per run):
     /// `residual` with the other parameters and the speed static, and its lanes along those
     /// (`∂F/∂p`), made when first needed.
@@ -233,6 +236,7 @@ impl Program {
         let linear = full.seeding_in_groups(&seeds, (3 * nf, 3), differentiated);
         let program = Program {
             driven: OnceLock::new(),
+            probe: OnceLock::new(),
             parametric: Parametric::default(),
             np,
             n,

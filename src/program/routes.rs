@@ -3,7 +3,7 @@
 
 use super::linear::Linear;
 use super::{Instance, Program, Workspace};
-use crate::equations::{Equations, Evaluation, Fit};
+use crate::equations::{Equations, Evaluation, Fit, Probed};
 use crate::linearize::{Linearization, LinearizeError};
 use crate::real::Real;
 use nalgebra::{DMatrix, DVector};
@@ -159,5 +159,14 @@ impl Equations<f64> for Instance<'_> {
     ) -> Result<Linearization<f64>, LinearizeError> {
         self.linear_plain(q, lambda)
             .reduce(&self.program.free, independent)
+    }
+
+    fn probe_linearisation(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        _independent: &[usize],
+    ) -> Result<Probed, LinearizeError> {
+        Ok(self.probe(q, lambda))
     }
 }

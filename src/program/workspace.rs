@@ -23,13 +23,15 @@ pub struct Workspace {
 }
 
 /// Scratch space of an [`super::Instance`]: values, one forward buffer per seeding (kept, as
-/// switching a buffer's seeding clears it), and values at three points.
+/// switching a buffer's seeding clears it), values at three points, and values along
+/// three directions.
 #[derive(Debug, Default)]
 pub(super) struct Work {
     pub(super) values: Vec<f64>,
     pub(super) jacobian: Forward<f64>,
     pub(super) linear: Forward<f64>,
     pub(super) varied: Vec<[f64; 3]>,
+    pub(super) probe: Forward<f64>,
 }
 
 impl Workspace {

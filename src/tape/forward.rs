@@ -304,8 +304,10 @@ fn step<S: Real, const REUSE: bool>(
         Op::Input(k) => {
             lanes.map(tan, [], |[]| zero);
             if lanes.width > 0 {
-                for &l in &seeding.input_lanes[k as usize] {
-                    tan[lanes.at * stride + l as usize] = S::from(1.0);
+                let weights = seeding.input_weights.get(k as usize);
+                for (j, &l) in seeding.input_lanes[k as usize].iter().enumerate() {
+                    let w = weights.map_or(1.0, |w| w[j]);
+                    tan[lanes.at * stride + l as usize] = S::from(w);
                 }
             }
             x[k as usize]

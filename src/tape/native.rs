@@ -124,11 +124,15 @@ fn written((lo, w): (u32, u32)) -> std::ops::Range<usize> {
 
 impl Tape {
     /// [`Tape::forward`] over `f64` with `seeding` compiled, or `None` where it is not
-    /// compiled: shared rows or blocks of lanes, too large a program, or a host Cranelift does
-    /// not generate code for.
+    /// compiled: shared rows or blocks of lanes, seeds at rates other than one, too large a
+    /// program, or a host Cranelift does not generate code for.
     pub fn compile_forward(&self, seeding: &Seeding) -> Option<NativePass> {
         let lane_work: usize = seeding.range.iter().map(|&r| written(r).len()).sum();
-        if seeding.slots.reuse || !seeding.blocks.is_empty() || lane_work > MOST_LANE_WORK {
+        if seeding.slots.reuse
+            || !seeding.blocks.is_empty()
+            || !seeding.input_weights.is_empty()
+            || lane_work > MOST_LANE_WORK
+        {
             return None;
         }
         self.compile(Some(seeding))

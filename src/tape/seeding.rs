@@ -71,6 +71,27 @@ impl Tape {
         whole
     }
 
+    /// A seeding of `lanes` directions, each a combination of inputs: input `k` moves along
+    /// lane `l` at rate `w` for each `(k, l, w)` in `directions` (a directional derivative in
+    /// each lane, where [`Tape::seeding`] seeds each input at rate one). For a few lanes: no
+    /// packing, no blocks, and no compiled pass ([`Tape::compile_forward`] declines it).
+    pub fn seeding_along(
+        &self,
+        directions: &[(usize, usize, f64)],
+        lanes: usize,
+        differentiated: usize,
+    ) -> Seeding {
+        assert!(lanes <= BLOCK, "a seeding along directions has few lanes");
+        let seeds: Vec<(usize, usize)> = directions.iter().map(|&(k, l, _)| (k, l)).collect();
+        let mut seeding = self.seeding_of(&seeds, lanes, differentiated, true);
+        let mut weights: Vec<Vec<f64>> = vec![Vec::new(); seeding.input_lanes.len()];
+        for &(k, _, w) in directions {
+            weights[k].push(w);
+        }
+        seeding.input_weights = weights;
+        seeding
+    }
+
     /// The lanes of each input (by input index) of the seeds `(input, lane)`.
     pub(super) fn input_lanes(&self, seeds: &[(usize, usize)], lanes: usize) -> Vec<Vec<u32>> {
         let inputs = seeds.iter().map(|s| s.0 + 1).max().unwrap_or(0);
@@ -146,6 +167,7 @@ impl Tape {
             id: Identity::default(),
             seeds: seeds.to_vec(),
             input_lanes,
+            input_weights: Vec::new(),
             lanes,
             range,
             differentiated,
@@ -244,6 +266,8 @@ pub struct Seeding {
     pub(super) seeds: Vec<(usize, usize)>,
     /// The lanes of each input (by input index; the seeds regrouped).
     pub(super) input_lanes: Vec<Vec<u32>>,
+    /// The rate of each of those lanes ([`Tape::seeding_along`]; empty: all one).
+    pub(super) input_weights: Vec<Vec<f64>>,
     pub(super) lanes: usize,
     /// First lane and number of lanes of each operation.
     pub(super) range: Vec<(u32, u32)>,
