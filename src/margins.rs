@@ -104,7 +104,7 @@ pub fn margin(req: &Requirement, st: &State) -> f64 {
             };
             match req.mode {
                 Some(m) => of(m),
-                // The worst mode where the quantity has a value (a rigid-body mode has no ζ).
+                // The worst mode where the quantity has a value (a rigid-body mode has none).
                 None => (0..c.modes())
                     .map(of)
                     .filter(|v| !v.is_nan())
@@ -127,8 +127,14 @@ fn growth(s: f64, p: f64) -> f64 {
     top - GROWTH_TOL * p.abs().sqrt()
 }
 
-/// The margin of a per-mode requirement from the mode's invariants `s, p` at `speed`.
+/// The margin of a per-mode requirement from the mode's invariants `s, p` at `speed`: NaN for a
+/// rigid-body mode (both roots exactly zero, [`crate::modal::ModeClass::Rigid`]), which has no
+/// frequency and no damping ratio. Read as `ω_d = 0` it would enter a frequency, band or
+/// separation requirement as a mode far below every excitation.
 pub fn mode_margin(req: &Requirement, speed: f64, s: f64, p: f64) -> f64 {
+    if s == 0.0 && p == 0.0 {
+        return f64::NAN;
+    }
     let reading = Reading::Mode {
         wd: pair::damped_frequency(s, p),
         zeta: pair::damping_ratio(s, p),

@@ -234,3 +234,46 @@ fn a_node_without_a_transfer_value_keeps_its_modes() {
         }
     }
 }
+
+/// A rigid-body mode has no frequency, so it does not enter a frequency requirement: on the
+/// flywheel (its wheel free on its bearing, an arm on a spring hinge beside it) a separation
+/// requirement over every mode is decided by the arm's mode alone, whose margin is the
+/// separation of its ω_d from the engine order by hand; read as ω_d = 0, the rigid mode
+/// would have given `0.85 Ω`. A `frequency` requirement likewise, and one asked of the rigid
+/// mode by number fails: it has no frequency to meet it with.
+#[test]
+fn a_rigid_body_mode_enters_no_frequency_requirement() {
+    use modaltol::margins::{State, carriers, margin};
+    use modaltol::pair::Carriers;
+    let requirements = "[[requirements]]\nname = \"clear\"\nkind = \"separation\"\n\
+        orders = [1]\nmargin = \"15%\"\n\
+        [[requirements]]\nname = \"floor\"\nkind = \"frequency\"\nmin = 1.0\n\
+        [[requirements]]\nname = \"wheel\"\nkind = \"frequency\"\nmin = 1.0\nmode = 1\n";
+    let text = format!("{}{requirements}", flywheel(1.0, 1e4, 0.0));
+    let model = Compiled::from_str(&text, "rigid.toml").unwrap();
+    let p = model.model().nominal();
+    for speed in [2.0, 10.0, 400.0] {
+        let q0 = initial_guess(model.model(), &p, speed).unwrap();
+        let pt = point(&model, &p, speed, &q0, &Options::default()).unwrap();
+        check(&pt, 1, "flywheel");
+        assert_eq!(pt.modes[0].class, ModeClass::Rigid);
+        let arm = pt.modes[1].damped_frequency;
+        let c = carriers(&pt, None);
+        let st = State {
+            speed,
+            carriers: Carriers::new(&c),
+            same_branch: true,
+        };
+        let [clear, floor, wheel] = [0, 1, 2].map(|r| margin(&model.model().requirements[r], &st));
+        let by_hand = (0.85 * speed - arm).max(arm - 1.15 * speed);
+        assert!(
+            (clear - by_hand).abs() <= 1e-12 * speed,
+            "{speed}: {clear} vs {by_hand}"
+        );
+        assert!(
+            (floor - (arm - 1.0)).abs() <= 1e-12 * arm,
+            "{speed}: {floor}"
+        );
+        assert_eq!(wheel, f64::NEG_INFINITY, "{speed}");
+    }
+}

@@ -147,7 +147,9 @@ pub(crate) enum Derivatives {
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Validate a model and summarise its bodies, joints, coordinates, constraints, degrees of
-    /// freedom and parameters.
+    /// freedom, parameters and requirements; warn of mistakes that load without an error (no
+    /// joint driven by the speed, a tolerance through zero, a requirement beyond the analysed
+    /// speeds, a case reaching a physical limit), each with its fix.
     Check(CheckArgs),
     /// Equilibrium, drive force, M̂, Ĉ, K̂ and damped modes at one speed.
     Modal(ModalArgs),

@@ -12,6 +12,7 @@ pub mod schema;
 mod symmetry;
 pub mod table;
 mod validate;
+mod warnings;
 
 mod analysis;
 mod requirements;

@@ -52,6 +52,16 @@ pub fn check_summary(model: &Model) -> String {
             .collect();
         let _ = writeln!(s, "  tolerance cases: {}", names.join(", "));
     }
+    if !model.requirements.is_empty() {
+        let _ = writeln!(s, "  requirements ({}):", model.requirements.len());
+        let w = wide(model.requirements.iter().map(|r| r.name.as_str()), 12);
+        for r in &model.requirements {
+            let _ = writeln!(s, "    {:<w$} {}", r.name, super::yields::describe(r));
+        }
+    }
+    for warning in model.warnings() {
+        let _ = writeln!(s, "  warning: {warning}");
+    }
     for (case, at, defect) in model.tolerance_limits() {
         let _ = writeln!(
             s,
