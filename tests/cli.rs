@@ -589,9 +589,21 @@ fn merged_shards_equal_one_run_exactly() {
     // Only the chosen cases were run.
     let text = std::fs::read_to_string(dir.path().join("whole/tolerance.csv")).unwrap();
     assert!(text.contains(",L3,") && text.contains(",L12,") && !text.contains(",L6,"));
-    // Merging them as if all cases had been run is refused.
+    // The shards name their cases: merged without `--case`, the same files. Merging them as
+    // if other cases had been run is refused.
     let o = run(&[
-        &["merge", "--model", m, "-o", &d("bad0")][..],
+        &["merge", "--model", m, "-o", &d("named")][..],
+        &shard_args[..],
+    ]
+    .concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["tolerance.csv", "probabilities.csv"] {
+        let a = std::fs::read(dir.path().join("merged").join(name)).unwrap();
+        let b = std::fs::read(dir.path().join("named").join(name)).unwrap();
+        assert!(a == b, "{name} merged without --case differs");
+    }
+    let o = run(&[
+        &["merge", "--model", m, "-o", &d("bad0"), "--case", "L6"][..],
         &shard_args[..],
     ]
     .concat());
@@ -641,7 +653,13 @@ fn merged_shards_equal_one_run_exactly() {
         &shards[1],
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("shards 1..=3"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "needs shards 1 to 3 of 3, each once; got shards 1, 3; missing shard-2-of-3.json"
+        ),
+        "{}",
+        stderr(&o)
+    );
     let o = run(&[
         "merge",
         "-o",

@@ -500,7 +500,8 @@ pub(crate) struct MergeArgs {
     /// The shard files (shard-K-of-N.json), all N of them, in any order.
     #[arg(required = true)]
     pub(crate) shards: Vec<PathBuf>,
-    /// The tolerance cases the shards were run with (as given to `analyze --case`).
+    /// The tolerance cases the shards were run with (as given to `analyze --case`); default:
+    /// the cases the shards name.
     #[arg(long = "case", value_name = "NAME")]
     pub(crate) cases: Vec<String>,
     /// The target yield the merged result is judged against, as `analyze --target-yield`;

@@ -47,6 +47,10 @@ pub struct ShardFile {
     pub outputs: usize,
     /// Per tolerance case, the blocks of this shard's chunks, in chunk order.
     pub cases: Vec<Vec<Block>>,
+    /// The names of the tolerance cases run, in order (as `analyze --case` chose them), so that
+    /// `merge` needs no `--case`; absent from shards written before it was kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub case_names: Vec<String>,
     /// Per tolerance case, its samples' values for the quantiles ([`Kept`]), where the run
     /// keeps them ([`crate::montecarlo::MonteCarlo::keeps`]; empty otherwise): so the merge's quantiles are
     /// one run's.
@@ -151,6 +155,7 @@ impl ShardFile {
             of: run.of,
             outputs: output_count(model),
             cases: a.shard_states.iter().map(|c| c.blocks.clone()).collect(),
+            case_names: cases.iter().map(|c| c.name.clone()).collect(),
             kept: (a.shard_states.iter())
                 .filter_map(|c| c.kept.as_ref().map(KeptFile::of))
                 .collect(),

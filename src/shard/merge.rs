@@ -75,9 +75,24 @@ pub fn gather(
     }
     let got: Vec<usize> = files.iter().map(|(_, f)| f.shard).collect();
     if got != (1..=run.of).collect::<Vec<_>>() {
+        let listed: Vec<String> = got.iter().map(|k| k.to_string()).collect();
+        let missing: Vec<String> = (1..=run.of)
+            .filter(|k| !got.contains(k))
+            .map(|k| ShardFile::name(k - 1, run.of))
+            .collect();
+        let missing = match missing.is_empty() {
+            true => String::new(),
+            false => format!("; missing {}", missing.join(", ")),
+        };
         return Err(ShardError {
             file: "merge".into(),
-            message: format!("needs shards 1..={} once each, got {got:?}", run.of),
+            message: format!(
+                "needs shards 1 to {} of {}, each once; got shard{} {}{missing}",
+                run.of,
+                run.of,
+                if got.len() == 1 { "" } else { "s" },
+                listed.join(", ")
+            ),
         });
     }
     let cases = first.cases.len();
@@ -132,6 +147,21 @@ pub fn read_all(
         texts.push((name, text));
     }
     verify(model, cases, texts)
+}
+
+/// The names of the tolerance cases the shard at `path` was run with (empty for a shard
+/// written before they were kept): what `merge` runs without `--case`.
+pub fn cases_run(path: &std::path::Path) -> Result<Vec<String>, ShardError> {
+    let name = path.display().to_string();
+    let refuse = |message: String| ShardError {
+        file: name.clone(),
+        message,
+    };
+    let bytes = crate::files::read_bounded(path, MAX_BYTES)
+        .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
+    Ok(ShardFile::parse(&text, &name)?.case_names)
 }
 
 /// Parses and verifies shards given as `(name, text)` (the name says which in messages) of one

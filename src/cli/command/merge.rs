@@ -29,7 +29,20 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         Some(y) => m.with_target_yield(y),
         None => m,
     };
-    let cases = tolerance_cases(m.model(), &only)?;
+    // The shards know their cases (a shard written before they were kept: the default).
+    let cases = match (only.is_empty(), shards.first()) {
+        (true, Some(first)) => {
+            let named = modaltol::shard::cases_run(first).map_err(|e| InputError(e.to_string()))?;
+            m.model().tolerance_cases(&named).map_err(|e| {
+                InputError(format!(
+                    "{}: made from another model than the merge's ({e}); give the shards' \
+                     model with --model, and the --set options they were run with",
+                    first.display()
+                ))
+            })?
+        }
+        _ => tolerance_cases(m.model(), &only)?,
+    };
     let (first, states) = modaltol::shard::read_all(m.model(), &cases, &shards)
         .map_err(|e| InputError(e.to_string()))?;
     let base = AnalyzeOptions {
