@@ -651,6 +651,51 @@ fn an_unbalanced_inertia_on_a_spinning_shaft_is_refused_as_periodic() {
     }
 }
 
+/// An undamped rotor's modes are `undamped` (both roots exactly imaginary, ζ = 0) at rest and
+/// spinning, gyroscopic coupling and all. With dampers in its bearings the modes they reach
+/// are `underdamped` (ζ of order 10⁻³ to 10⁻² for the bending modes, 10⁻⁶ for a stiff one
+/// they barely move); the torsion and the axial modes, which no damper reaches, keep a ζ at
+/// rounding level; no mode is unstable or overdamped.
+#[test]
+fn an_undamped_rotor_has_undamped_modes_and_dampers_make_them_underdamped() {
+    let round = example("friswell_5_9_1.toml");
+    let text = example_text("friswell_5_9_1.toml");
+    let bearing = "stiffness = [\"k_thrust\", \"k_bearing\", \"k_bearing\", 0, 0, 0]\n";
+    assert_eq!(text.matches(bearing).count(), 2);
+    let damped = text.replace(
+        bearing,
+        &format!("{bearing}damping = [0, 200, 200, 0, 0, 0]\n"),
+    );
+    let damped = Compiled::from_str(&damped, "damped.toml").unwrap();
+    let p = round.model().nominal();
+    for speed in [0.0, 100.0, 400.0] {
+        let q0 = initial_guess(round.model(), &p, speed).unwrap();
+        let pt = point(&round, &p, speed, &q0, &Options::default()).unwrap();
+        for m in &pt.modes {
+            assert_eq!(m.class, ModeClass::Undamped, "{speed}: {m:?}");
+            assert_eq!(m.class.as_str(), "undamped");
+            assert_eq!(m.root.lambda.re, 0.0);
+            assert_eq!(m.damping_ratio.to_bits(), 0f64.to_bits());
+        }
+        let pt = point(&damped, &p, speed, &q0, &Options::default()).unwrap();
+        let reached = (pt.modes.iter()).filter(|m| m.damping_ratio > 1e-4);
+        assert!(reached.clone().count() >= 6, "{speed}");
+        assert!(reached.clone().all(|m| m.class == ModeClass::Underdamped));
+        for m in &pt.modes {
+            assert!(
+                m.damping_ratio > 1e-8 || m.damping_ratio.abs() < 1e-20,
+                "{speed}: ζ {} at {} rad/s",
+                m.damping_ratio,
+                m.damped_frequency
+            );
+            assert!(matches!(
+                m.class,
+                ModeClass::Underdamped | ModeClass::Undamped
+            ));
+        }
+    }
+}
+
 #[test]
 fn massless_coordinate_is_reported_as_singular_mass() {
     let text = example_text("rotating_pendulum.toml");

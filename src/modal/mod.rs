@@ -77,7 +77,11 @@ pub type C64 = Complex<f64>;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ModeClass {
+    /// Complex roots with a negative real part: a decaying oscillation.
     Underdamped,
+    /// Imaginary roots, their real parts exactly zero: an oscillation no dissipation reaches
+    /// (ζ = 0; an undamped or purely gyroscopic system's modes).
+    Undamped,
     Overdamped,
     Unstable,
     /// A zero root (see the module documentation): no frequency, no damping ratio, neither
@@ -89,6 +93,7 @@ impl ModeClass {
     pub fn as_str(self) -> &'static str {
         match self {
             ModeClass::Underdamped => "underdamped",
+            ModeClass::Undamped => "undamped",
             ModeClass::Overdamped => "overdamped",
             ModeClass::Unstable => "unstable",
             ModeClass::Rigid => "rigid",
@@ -363,7 +368,11 @@ fn make_mode(root: Root, partner: Root, scale: f64) -> Mode {
     let class = if unstable {
         ModeClass::Unstable
     } else if l1.im != 0.0 {
-        ModeClass::Underdamped
+        if l1.re == 0.0 && l2.re == 0.0 {
+            ModeClass::Undamped
+        } else {
+            ModeClass::Underdamped
+        }
     } else {
         ModeClass::Overdamped
     };
@@ -545,7 +554,7 @@ mod tests {
             }
             assert_eq!(fast.len(), n);
             assert!(fast.iter().any(|x| x.class == ModeClass::Unstable));
-            assert!(fast.iter().any(|x| x.class == ModeClass::Underdamped));
+            assert!(fast.iter().any(|x| x.class == ModeClass::Undamped));
             let scale = k.amax() + m.amax();
             for (a, b) in fast.iter().zip(&general) {
                 let w = a.natural_frequency;

@@ -133,25 +133,22 @@ pub fn read_all(
     cases: &[Case],
     paths: &[PathBuf],
 ) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
-    let mut texts = Vec::with_capacity(paths.len());
-    for path in paths {
-        let name = path.display().to_string();
-        let refuse = |message: String| ShardError {
-            file: name.clone(),
-            message,
-        };
-        let bytes = crate::files::read_bounded(path, MAX_BYTES)
-            .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
-        let text = String::from_utf8(bytes)
-            .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
-        texts.push((name, text));
-    }
+    let texts = paths
+        .iter()
+        .map(|p| read_text(p))
+        .collect::<Result<_, _>>()?;
     verify(model, cases, texts)
 }
 
 /// The names of the tolerance cases the shard at `path` was run with (empty for a shard
 /// written before they were kept): what `merge` runs without `--case`.
 pub fn cases_run(path: &std::path::Path) -> Result<Vec<String>, ShardError> {
+    let (name, text) = read_text(path)?;
+    Ok(ShardFile::parse(&text, &name)?.case_names)
+}
+
+/// A shard file's name (as messages give it) and text, within [`MAX_BYTES`].
+fn read_text(path: &std::path::Path) -> Result<(String, String), ShardError> {
     let name = path.display().to_string();
     let refuse = |message: String| ShardError {
         file: name.clone(),
@@ -161,7 +158,7 @@ pub fn cases_run(path: &std::path::Path) -> Result<Vec<String>, ShardError> {
         .map_err(|e| refuse(format!("cannot read: {}", e.source)))?;
     let text = String::from_utf8(bytes)
         .map_err(|_| refuse("not a modaltol shard file (not UTF-8)".into()))?;
-    Ok(ShardFile::parse(&text, &name)?.case_names)
+    Ok((name, text))
 }
 
 /// Parses and verifies shards given as `(name, text)` (the name says which in messages) of one

@@ -33,13 +33,21 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
     let cases = match (only.is_empty(), shards.first()) {
         (true, Some(first)) => {
             let named = modaltol::shard::cases_run(first).map_err(|e| InputError(e.to_string()))?;
-            m.model().tolerance_cases(&named).map_err(|e| {
-                InputError(format!(
-                    "{}: made from another model than the merge's ({e}); give the shards' \
-                     model with --model, and the --set options they were run with",
-                    first.display()
-                ))
-            })?
+            // The default (the model's cases, or its parameters' own tolerances as one case)
+            // where the shards ran it.
+            let default = tolerance_cases(m.model(), &[])?;
+            let names: Vec<&str> = default.iter().map(|c| c.name.as_str()).collect();
+            if named.is_empty() || named == names {
+                default
+            } else {
+                m.model().tolerance_cases(&named).map_err(|e| {
+                    InputError(format!(
+                        "{}: made from another model than the merge's ({e}); give the shards' \
+                         model with --model, and the --set options they were run with",
+                        first.display()
+                    ))
+                })?
+            }
         }
         _ => tolerance_cases(m.model(), &only)?,
     };
