@@ -655,7 +655,7 @@ fn merged_shards_equal_one_run_exactly() {
     assert_eq!(o.status.code(), Some(2));
     assert!(
         stderr(&o).contains(
-            "needs shards 1 to 3 of 3, each once; got shards 1, 3; missing shard-2-of-3.json"
+            "needs shards 1 to 3 of 3, once each; got shards 1, 3; missing shard-2-of-3.json"
         ),
         "{}",
         stderr(&o)

@@ -87,7 +87,7 @@ pub fn gather(
         return Err(ShardError {
             file: "merge".into(),
             message: format!(
-                "needs shards 1 to {} of {}, each once; got shard{} {}{missing}",
+                "needs shards 1 to {} of {}, once each; got shard{} {}{missing}",
                 run.of,
                 run.of,
                 if got.len() == 1 { "" } else { "s" },
