@@ -295,7 +295,10 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     check_all(&plots);
     let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
     assert!(c.svg.contains("speed Ω (rpm)"), "speed axis not in rpm");
-    assert!(c.svg.contains("ω_d (Hz)"), "frequency axis not in Hz");
+    assert!(
+        c.svg.contains("damped natural frequency (Hz)") && !c.svg.contains("ω_d (Hz)"),
+        "frequency axis not named in Hz"
+    );
     for o in ["1×Ω", "2×Ω", "3×Ω"] {
         assert!(c.svg.contains(o), "{o} missing");
     }
@@ -349,6 +352,8 @@ fn tick_labels_keep_the_digits_their_spacing_needs() {
         (0.0, 6.0),
         (1e6, 1.2e6),
         (-1.0, 1.0),
+        (0.0, 4010.7),
+        (0.0, 99.0),
     ] {
         let f = modaltol::plots::tick_label(lo, hi);
         let labels: Vec<String> = (0..=10)
@@ -357,4 +362,94 @@ fn tick_labels_keep_the_digits_their_spacing_needs() {
         let unique: std::collections::HashSet<&String> = labels.iter().collect();
         assert_eq!(unique.len(), labels.len(), "{lo}..{hi}: {labels:?}");
     }
+    // No decimals a spacing of 10 or more does not need.
+    assert_eq!(modaltol::plots::tick_label(0.0, 4010.7)(&500.0), "500");
+    assert_eq!(modaltol::plots::tick_label(0.0, 6.0)(&0.6), "0.60");
+}
+
+/// The texts inside a plot's axes (not the legend, the tick labels or the axis names).
+fn texts_in_axes(svg: &str) -> Vec<String> {
+    texts(svg)
+        .into_iter()
+        .filter(|t| !t.rotated && t.x > 110.0 && t.x < modaltol::plots::AXES_WIDTH as f64)
+        .filter(|t| t.content.ends_with('×'))
+        .map(|t| t.content)
+        .collect()
+}
+
+/// The Friswell rotor's 42 modes reach 8 kHz; its Campbell diagram shows the ones an engine
+/// order reaches within the speeds (by hand from the nominal sweep), says how many it leaves
+/// out, labels each order on the axes, names the frequency axis in words, and passes the
+/// reader's checks (no label over data).
+#[test]
+fn campbell_shows_the_modes_an_order_reaches_and_labels_the_orders() {
+    let m = common::example("friswell_5_9_1.toml");
+    let cases = m.model().tolerance_cases(&[]).unwrap();
+    let opt = AnalyzeOptions {
+        speeds: range(0.0, 420.0, 30.0),
+        cases,
+        quadrature: None,
+        ..Default::default()
+    };
+    let a = analyze(&m, &opt, &|_: &str, _: usize, _: usize| {});
+    let (plots, _) = plots(m.model(), &a, Display::default());
+    let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
+    check_all(std::slice::from_ref(c));
+    let modes = a.nominal[0].as_ref().unwrap().modes.len();
+    let reached: Vec<usize> = (0..modes)
+        .filter(|&k| {
+            a.nominal
+                .iter()
+                .flatten()
+                .any(|p| p.modes[k].damped_frequency <= 3.0 * 420.0)
+        })
+        .collect();
+    assert!(reached.len() >= 8 && reached.len() < modes, "{reached:?}");
+    let legend: Vec<String> = texts(&c.svg)
+        .into_iter()
+        .filter(|t| t.x > modaltol::plots::AXES_WIDTH as f64 && t.content.starts_with("mode "))
+        .map(|t| t.content)
+        .collect();
+    assert_eq!(legend.len(), reached.len(), "{legend:?}");
+    for k in &reached {
+        let name = format!("mode {} ", k + 1);
+        assert!(
+            legend.iter().any(|l| l.starts_with(&name)),
+            "{name} not in {legend:?}"
+        );
+    }
+    assert!(
+        c.caption
+            .contains(&format!("{} higher mode(s)", modes - reached.len())),
+        "{}",
+        c.caption
+    );
+    let mut labels = texts_in_axes(&c.svg);
+    labels.sort();
+    assert_eq!(labels, ["1×", "2×", "3×"]);
+    assert!(c.svg.contains("damped natural frequency ω_d (rad/s)"));
+}
+
+/// The Campbell diagram's bands and its critical speeds' σ are those of the case with the most
+/// toleranced variables (the governor's `all3`), not the first case's, and the report says so.
+#[test]
+fn campbell_shows_the_case_with_the_most_variables() {
+    let m = common::example("governor.toml");
+    let cases = m.model().tolerance_cases(&[]).unwrap();
+    assert_eq!(cases[0].name, "k3");
+    let opt = AnalyzeOptions {
+        speeds: range(1.0, 3.0, 0.1),
+        cases,
+        quadrature: None,
+        ..Default::default()
+    };
+    let a = analyze(&m, &opt, &|_: &str, _: usize, _: usize| {});
+    assert_eq!(a.cases[modaltol::plots::campbell_case(&a)].name, "all3");
+    let (plots, critical) = plots(m.model(), &a, Display::default());
+    let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
+    assert!(c.title.contains("(case all3)"), "{}", c.title);
+    let refs: Vec<&Plot> = plots.iter().collect();
+    let html = report::report_html(m.model(), &a, &refs, &critical, Default::default());
+    assert!(!critical.is_empty(), "the governor's mode crosses no order");
+    assert!(html.contains("under case all3"));
 }

@@ -277,3 +277,27 @@ fn a_rigid_body_mode_enters_no_frequency_requirement() {
         assert_eq!(wheel, f64::NEG_INFINITY, "{speed}");
     }
 }
+
+/// A rigid-body mode has no frequency: the Campbell diagram draws no line for it (it was a
+/// line along ω = 0 crossing every engine order at the origin), and marks no critical speed of
+/// it.
+#[test]
+fn the_campbell_diagram_draws_no_rigid_body_mode() {
+    use modaltol::plots::{Display, plots};
+    let model = Compiled::from_str(&flywheel(1.0, 1e4, 0.0), "rigid.toml").unwrap();
+    let opt = AnalyzeOptions {
+        speeds: vec![0.0, 2.0, 5.0, 10.0, 20.0, 40.0, 80.0, 160.0],
+        cases: model.model().tolerance_cases(&[]).unwrap(),
+        quadrature: None,
+        ..Default::default()
+    };
+    let a = analyze(&model, &opt, &|_: &str, _: usize, _: usize| {});
+    for p in a.nominal.iter().flatten() {
+        assert_eq!(p.modes[0].class, ModeClass::Rigid);
+    }
+    let (plots, critical) = plots(model.model(), &a, Display::default());
+    let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
+    assert!(!c.svg.contains("\nmode 1"), "the rigid mode is drawn");
+    assert!(c.svg.contains("\nmode 2"), "the arm's mode is not drawn");
+    assert!(critical.iter().all(|cs| cs.mode != 0), "{critical:?}");
+}

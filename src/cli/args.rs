@@ -236,8 +236,9 @@ pub(crate) enum Command {
     /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
     /// rows without a value grouped with their reasons under "unfilled"),
     /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
-    /// probabilities, variance shares, a Campbell diagram with engine orders 1–3 and the
-    /// critical speeds marked) and DIR/report.html (a summary of σ by method at the largest σ,
+    /// probabilities, variance shares, a Campbell diagram of the modes the engine orders 1–3
+    /// reach, with the ±3σ bands of the case with the most toleranced variables and the
+    /// critical speeds and near-tangencies marked) and DIR/report.html (a summary of σ by method at the largest σ,
     /// the critical speeds, the |H| peak and the response peaks, then the plots). --speed-unit and
     /// --frequency-unit show the plots and report in rpm or Hz. Without MODEL, runs the
     /// governor example built into the binary.

@@ -1,25 +1,57 @@
-//! The Campbell diagram: ω_d of every mode against speed with ±3σ bands of the first case, the
-//! engine-order lines, and the critical speeds where a mode crosses one ([`CriticalSpeed`],
-//! which the report tabulates).
+//! The Campbell diagram: ω_d of the modes an engine order can reach against speed, with the ±3σ
+//! bands of the case with the most toleranced variables, the engine-order lines (each drawn and
+//! labelled apart), and where a mode meets one ([`CriticalSpeed`], which the report tabulates):
+//! crossing it, or running alongside it without crossing (a near-tangency, which a tolerance
+//! can turn into a crossing).
 
-use super::draw::{Band, Line, Style, draw, palette};
-use super::{Display, Plot, series};
+use super::draw::{Band, Line, Style, draw_up_to, palette};
+use super::{Display, FrequencyUnit, Plot, series};
 use crate::analyze::Analysis;
+use crate::modal::ModeClass;
 use crate::model::Model;
 use crate::output::Quantity;
 use crate::table::Method;
 use crate::table::Row;
 use plotters::prelude::*;
 
-/// A mode crossing an engine-order line: `ω_d(Ω) = order·Ω`.
+/// A mode meeting an engine-order line.
 #[derive(Debug, Clone, Copy)]
 pub struct CriticalSpeed {
     pub mode: usize,
     pub order: f64,
-    /// rad/s.
+    /// rad/s: where `ω_d(Ω) = order·Ω` (a crossing), or where the mode comes closest to the line
+    /// (a near-tangency).
     pub speed: f64,
-    /// σ of the critical speed under the first case (first order): σ_ωd / |order − dω_d/dΩ|.
+    /// σ of the crossing speed under the Campbell diagram's case ([`campbell_case`]; first
+    /// order: σ_ωd / |order − dω_d/dΩ|); NaN for a near-tangency, which has no crossing speed.
     pub std: f64,
+    pub meeting: Meeting,
+}
+
+/// How a mode meets an engine-order line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Meeting {
+    /// `ω_d − order·Ω` changes sign between two speeds.
+    Crossing,
+    /// No crossing, but the mode comes within [`NEAR`] of the line (`gap`: the smallest
+    /// `(ω_d − order·Ω)/ω_d`, signed), or within 3σ of its ω_d (`within_3_sigma`): a
+    /// tolerance, or a speed step finer than the sweep's, can make it a crossing.
+    Tangency { gap: f64, within_3_sigma: bool },
+}
+
+/// The relative distance from an engine-order line below which a mode that does not cross it
+/// counts as meeting it: 1 %, a tenth of the separation margins API 684 asks of a critical
+/// speed, so closer than any design would mean to run.
+pub const NEAR: f64 = 0.01;
+
+/// The tolerance case whose bands the Campbell diagram shows and whose σ its critical speeds
+/// carry: the one with the most toleranced variables (the whole design's spread), the first
+/// of those where several tie.
+pub fn campbell_case(a: &Analysis) -> usize {
+    (0..a.cases.len())
+        .rev()
+        .max_by_key(|&c| a.cases[c].tolerances.len())
+        .unwrap_or(0)
 }
 
 /// The engine orders drawn on the Campbell diagram: 1, 2, 3 and the model's transfer order.
@@ -35,15 +67,15 @@ fn orders(model: &Model) -> Vec<f64> {
     o
 }
 
-/// Where `ω_d` of one mode (rows of the `analytic` method) crosses `order × Ω`, with σ of the
-/// crossing speed (first order in σ of ω_d: σ_ωd / |order − dω_d/dΩ|).
-fn crossings(rows: &[&Row], mode: usize, order: f64) -> Vec<CriticalSpeed> {
+/// Where `ω_d` of one mode (rows of the `analytic` method, NaN where the mode is rigid) crosses
+/// `order × Ω`, with σ of the crossing speed (first order in σ of ω_d: σ_ωd / |order −
+/// dω_d/dΩ|); and where it comes near the line without crossing (a local least distance,
+/// interior or at an end of the speeds, within [`NEAR`] or 3σ).
+fn meetings(rows: &[&Row], mode: usize, order: f64) -> Vec<CriticalSpeed> {
     let mut out = Vec::new();
+    let gap = |r: &Row| r.mean - order * r.speed;
     for w in rows.windows(2) {
-        let (f0, f1) = (
-            w[0].mean - order * w[0].speed,
-            w[1].mean - order * w[1].speed,
-        );
+        let (f0, f1) = (gap(w[0]), gap(w[1]));
         if f0.is_finite() && f1.is_finite() && f0 * f1 < 0.0 && w[0].mean > 0.0 && w[1].mean > 0.0 {
             let t = f0 / (f0 - f1);
             let speed = w[0].speed + t * (w[1].speed - w[0].speed);
@@ -54,15 +86,77 @@ fn crossings(rows: &[&Row], mode: usize, order: f64) -> Vec<CriticalSpeed> {
                 order,
                 speed,
                 std: sd / (order - slope).abs(),
+                meeting: Meeting::Crossing,
+            });
+        }
+    }
+    // Near-tangencies: local least |gap| on a stretch the mode does not cross (its neighbours
+    // on the same side of the line).
+    let n = rows.len();
+    for i in 0..n {
+        let r = rows[i];
+        let g = gap(r);
+        if !(g.is_finite() && r.mean > 0.0) {
+            continue;
+        }
+        let beside = |j: Option<usize>| {
+            j.and_then(|j| rows.get(j))
+                .map(|o| gap(o))
+                .filter(|v| v.is_finite())
+        };
+        let (before, after) = (beside(i.checked_sub(1)), beside(Some(i + 1)));
+        let least = before.is_none_or(|b| b * g > 0.0 && b.abs() > g.abs())
+            && after.is_none_or(|a| a * g > 0.0 && a.abs() >= g.abs());
+        if !least || (before.is_none() && after.is_none()) {
+            continue;
+        }
+        let within_3_sigma = g.abs() <= 3.0 * r.std;
+        if g.abs() <= NEAR * r.mean || within_3_sigma {
+            out.push(CriticalSpeed {
+                mode,
+                order,
+                speed: r.speed,
+                std: f64::NAN,
+                meeting: Meeting::Tangency {
+                    gap: g / r.mean,
+                    within_3_sigma,
+                },
             });
         }
     }
     out
 }
 
-/// Campbell diagram: nominal ω_d of every mode with ±3σ (first case, the automatic `analytic`
-/// choice, so the bands stay right through changes of class), the engine-order lines (cut at
-/// the top of the modes) and the critical speeds where a mode crosses one, marked.
+/// The modes a Campbell diagram shows: those an engine order reaches within the speeds
+/// analysed (nominal ω_d at or below `reach` at some speed) or that meet an order line, and the
+/// lowest mode that is not rigid where none is (so that the diagram shows how far the modes
+/// lie above the orders).
+fn shown(a: &Analysis, modes: usize, reach: f64, meeting: &[CriticalSpeed]) -> Vec<usize> {
+    let points: Vec<_> = a.nominal.iter().flatten().collect();
+    let oscillates = |m: usize| {
+        points
+            .iter()
+            .filter_map(move |p| p.modes.get(m))
+            .filter(|md| md.class != ModeClass::Rigid && md.damped_frequency > 0.0)
+    };
+    let mut out: Vec<usize> = (0..modes)
+        .filter(|&m| {
+            oscillates(m).any(|md| md.damped_frequency <= reach)
+                || meeting.iter().any(|c| c.mode == m)
+        })
+        .collect();
+    if out.is_empty()
+        && let Some(m) = (0..modes).find(|&m| oscillates(m).next().is_some())
+    {
+        out.push(m);
+    }
+    out
+}
+
+/// Campbell diagram: nominal ω_d of the modes an engine order reaches ([`shown`]) with ±3σ
+/// (the [`campbell_case`], the automatic `analytic` choice, so the bands stay right through
+/// changes of class; no line where a mode is rigid), the engine-order lines (each its own
+/// dash, labelled at its end on the frame) and the speeds where a mode meets one, marked.
 pub(super) fn campbell(
     model: &Model,
     a: &Analysis,
@@ -73,30 +167,71 @@ pub(super) fn campbell(
         d.speed.per_rad_per_second(),
         d.frequency.per_rad_per_second(),
     );
-    let mut lines = Vec::new();
-    let mut bands = Vec::new();
-    let mut critical = Vec::new();
+    let case = campbell_case(a);
     let orders = orders(model);
-    let mut top = 0.0f64;
-    // Each line named by its mode's shape at the middle of the speeds (its dominant
-    // coordinate, and its whirl where a spin turns it).
-    let middle = a.middle_point();
-    let what = middle.map_or_else(Vec::new, |pt| {
-        crate::scene::descriptions(model, &model.nominal(), pt)
-    });
-    for m in 0..modes {
-        let rows = series(a, 0, Quantity::DampedFrequency, Some(m), Method::Analytic);
-        let color = palette(m);
+    let speeds: Vec<f64> = a.nominal.iter().flatten().map(|p| p.speed).collect();
+    let (lo, hi) = match (speeds.first(), speeds.last()) {
+        (Some(&lo), Some(&hi)) => (lo, hi),
+        _ => return (None, Vec::new()),
+    };
+    let highest = orders.last().copied().unwrap_or(1.0);
+    let reach = highest * hi.max(lo.abs());
+    // A mode's ω_d against speed, NaN where the nominal design has it rigid (no frequency).
+    let rigid: std::collections::HashSet<(usize, u64)> = (a.nominal.iter().flatten())
+        .flat_map(|p| {
+            (p.modes.iter().enumerate())
+                .filter(|(_, md)| md.class == ModeClass::Rigid)
+                .map(|(m, _)| (m, p.speed.to_bits()))
+        })
+        .collect();
+    let rows_of = |m: usize| -> Vec<Row> {
+        series(
+            a,
+            case,
+            Quantity::DampedFrequency,
+            Some(m),
+            Method::Analytic,
+        )
+        .into_iter()
+        .map(|r| {
+            let mut r = r.clone();
+            if rigid.contains(&(m, r.speed.to_bits())) {
+                (r.mean, r.std) = (f64::NAN, f64::NAN);
+            }
+            r
+        })
+        .collect()
+    };
+    let all: Vec<Vec<Row>> = (0..modes).map(rows_of).collect();
+    let mut critical: Vec<CriticalSpeed> = Vec::new();
+    for (m, rows) in all.iter().enumerate() {
+        let refs: Vec<&Row> = rows.iter().collect();
         for &o in &orders {
-            critical.extend(crossings(&rows, m, o));
+            critical.extend(meetings(&refs, m, o));
         }
-        top = rows
-            .iter()
+    }
+    let drawn = shown(a, modes, reach, &critical);
+    // The frequency axis: up to the highest order at the top speed, or the shown modes' bands.
+    let mut top = reach;
+    for &m in &drawn {
+        top = (all[m].iter())
             .map(|r| r.mean + 3.0 * r.std)
             .filter(|v| v.is_finite())
             .fold(top, f64::max);
+    }
+    let top = 1.05 * top;
+    // Each line named by its mode's shape at the middle of the speeds (its dominant
+    // coordinate, and its whirl where a spin turns it).
+    let what = a.middle_point().map_or_else(Vec::new, |pt| {
+        crate::scene::descriptions(model, &model.nominal(), pt)
+    });
+    let mut lines = Vec::new();
+    let mut bands = Vec::new();
+    for &m in &drawn {
+        let rows = &all[m];
+        let color = palette(m);
         bands.push(Band {
-            name: format!("mode {} ± 3σ", m + 1),
+            name: String::new(),
             lower: rows
                 .iter()
                 .map(|r| (r.speed * xs, (r.mean - 3.0 * r.std).max(0.0) * ys))
@@ -123,40 +258,61 @@ pub(super) fn campbell(
             color,
         ));
     }
-    lines.extend(order_lines(a, &orders, top, d));
-    if !critical.is_empty() {
+    lines.extend(order_lines(&orders, (lo, hi), top, d));
+    let marks = |kind: bool| -> Vec<(f64, f64)> {
+        (critical.iter())
+            .filter(|c| drawn.contains(&c.mode) && (c.meeting == Meeting::Crossing) == kind)
+            .map(|c| (c.speed * xs, c.order * c.speed * ys))
+            .collect()
+    };
+    let (crossings, tangencies) = (marks(true), marks(false));
+    if !crossings.is_empty() {
+        lines.push(Line::new("critical speeds (crossings)", crossings, RED).styled(Style::Marks));
+    }
+    if !tangencies.is_empty() {
+        let amber = RGBColor(230, 150, 0);
         lines.push(
-            Line::new(
-                "critical speeds (crossings)",
-                critical
-                    .iter()
-                    .map(|c| (c.speed * xs, c.order * c.speed * ys))
-                    .collect(),
-                RED,
-            )
-            .styled(Style::Marks),
+            Line::new("near-tangencies (within 1 % or 3σ)", tangencies, amber).styled(Style::Marks),
         );
     }
     critical.sort_by(|a, b| a.speed.total_cmp(&b.speed));
-    let case = a.cases.first().map_or("", |c| c.name.as_str());
-    let title = format!("{}: Campbell diagram (case {case})", model.name);
+    let above = (0..modes)
+        .filter(|m| !drawn.contains(m) && all[*m].iter().any(|r| r.mean.is_finite()))
+        .count();
+    let case_name = a.cases.get(case).map_or("", |c| c.name.as_str());
+    let title = format!("{}: Campbell diagram (case {case_name})", model.name);
     let xlabel = format!("speed Ω ({})", d.speed.symbol());
-    let ylabel = format!("ω_d ({})", d.frequency.symbol());
-    let plot = draw(&title, &xlabel, &ylabel, &lines, &bands)
+    let ylabel = match d.frequency {
+        FrequencyUnit::RadPerSecond => "damped natural frequency ω_d (rad/s)".to_string(),
+        u => format!("damped natural frequency ({})", u.symbol()),
+    };
+    let plot = draw_up_to(&title, &xlabel, &ylabel, &lines, &bands, Some(top * ys))
         .ok()
         .map(|svg| Plot {
             stem: "campbell".into(),
             caption: format!(
-                "Damped natural frequency of every mode against speed with its ±3σ band (case \
-                 {case}, analytic), the engine orders 1×, 2×, 3×Ω{} and, in red, the critical \
-                 speeds where a mode crosses one (listed with their σ above). Each mode is named \
-                 by its shape at the middle speed: its dominant coordinate, and FW or BW where \
-                 it whirls forward or backward about a spinning joint's axis.",
-                model
-                    .analysis
-                    .transfer
-                    .filter(|t| ![1.0, 2.0, 3.0].contains(&t.order))
-                    .map_or(String::new(), |t| format!(" and the model's {}×Ω", t.order))
+                "Damped natural frequency of the modes against speed, each with its ±3σ band \
+                 (shaded; case {case_name}, the one with the most toleranced variables; \
+                 analytic), the engine orders {} (each its own dash, labelled where it leaves \
+                 the axes), in red the critical speeds where a mode crosses one and in amber \
+                 where a mode comes within 1 % (or within its 3σ) of one without crossing: a \
+                 tolerance can make those crossings. The critical speeds are listed with their \
+                 σ in the report. Each mode is named by its shape at the middle speed: its \
+                 dominant coordinate, and FW or BW where it whirls forward or backward about a \
+                 spinning joint's axis. No line is drawn where a mode is rigid.{}",
+                orders
+                    .iter()
+                    .map(|o| format!("{o}×Ω"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if above > 0 {
+                    format!(
+                        " {above} higher mode(s), above what {highest}×Ω reaches at the top \
+                         speed, are left out (their rows are in tolerance.csv)."
+                    )
+                } else {
+                    String::new()
+                }
             ),
             title,
             svg,
@@ -164,35 +320,108 @@ pub(super) fn campbell(
     (plot, critical)
 }
 
-/// The engine-order lines `order × Ω` of the Campbell diagram across the speeds of the analysis
-/// (1× solid, the others dashed), each cut where it rises above the modes' range (`top`, rad/s;
-/// not cut where `top` is 0).
-fn order_lines(a: &Analysis, orders: &[f64], top: f64, d: Display) -> Vec<Line> {
+/// The line dash of the `i`-th engine order: solid, dashed, dotted, long dashes.
+fn order_style(i: usize) -> Style {
+    [
+        Style::Solid,
+        Style::Dashed,
+        Style::Dotted,
+        Style::LongDashed,
+    ][i % 4]
+}
+
+/// The engine-order lines `order × Ω` of the Campbell diagram across the speeds `lo..hi` (rad/s),
+/// each ending where it leaves the axes (at the top speed or at `top`, rad/s, the top of the
+/// frequency axis) and labelled there.
+fn order_lines(orders: &[f64], (lo, hi): (f64, f64), top: f64, d: Display) -> Vec<Line> {
     let (xs, ys) = (
         d.speed.per_rad_per_second(),
         d.frequency.per_rad_per_second(),
     );
     let mut lines = Vec::new();
-    let speeds: Vec<f64> = a.nominal.iter().flatten().map(|p| p.speed).collect();
-    if let (Some(&lo), Some(&hi)) = (speeds.first(), speeds.last()) {
-        for &o in orders {
-            // Cut where the line leaves the modes' range, so that it does not squash them.
-            let end = if top > 0.0 { hi.min(top / o) } else { hi };
-            if end > lo {
-                lines.push(
-                    Line::new(
-                        format!("{o}×Ω"),
-                        vec![(lo * xs, o * lo * ys), (end * xs, o * end * ys)],
-                        BLACK,
-                    )
-                    .styled(if o.to_bits() == 1f64.to_bits() {
-                        Style::Solid
-                    } else {
-                        Style::Dashed
-                    }),
-                );
-            }
+    for (i, &o) in orders.iter().enumerate() {
+        let end = if top > 0.0 { hi.min(top / o) } else { hi };
+        if end > lo {
+            lines.push(
+                Line::new(
+                    format!("{o}×Ω"),
+                    vec![(lo * xs, o * lo * ys), (end * xs, o * end * ys)],
+                    BLACK,
+                )
+                .styled(order_style(i))
+                .labelled(format!("{o}×")),
+            );
         }
     }
     lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::Detail;
+
+    /// Rows of ω_d = `f(Ω)` with σ `std` at the speeds 90, 91, …, 110 rad/s.
+    fn rows(f: impl Fn(f64) -> f64, std: f64) -> Vec<Row> {
+        (90..=110)
+            .map(|s| Row {
+                speed: s as f64,
+                quantity: Quantity::DampedFrequency,
+                mode: Some(0),
+                case: 0,
+                mean: f(s as f64),
+                std,
+                missing: None,
+                detail: Detail::Analytic {
+                    basis: None,
+                    quadrature: None,
+                },
+            })
+            .collect()
+    }
+
+    fn meet(rows: &[Row]) -> Vec<CriticalSpeed> {
+        meetings(&rows.iter().collect::<Vec<_>>(), 0, 1.0)
+    }
+
+    #[test]
+    fn a_mode_running_alongside_an_order_is_a_near_tangency_and_one_crossing_it_a_crossing() {
+        // ω_d = Ω (1.004 + 1e-4 (Ω − 100)²): 0.4 % above 1×Ω at 100 rad/s, never on it.
+        let alongside = rows(|s| s * (1.004 + 1e-4 * (s - 100.0).powi(2)), 0.01);
+        let m = meet(&alongside);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert_eq!(m[0].speed.to_bits(), 100f64.to_bits());
+        let Meeting::Tangency {
+            gap,
+            within_3_sigma,
+        } = m[0].meeting
+        else {
+            panic!("{m:?}")
+        };
+        assert!((gap - 0.004 / 1.004).abs() < 1e-12, "{gap}");
+        assert!(!within_3_sigma);
+        assert!(m[0].std.is_nan());
+        // 3 % away: not near, unless its σ reaches the line.
+        let apart = rows(|s| s * (1.03 + 1e-4 * (s - 100.0).powi(2)), 0.01);
+        assert!(meet(&apart).is_empty());
+        let m = meet(&rows(|s| s * (1.03 + 1e-4 * (s - 100.0).powi(2)), 1.1));
+        assert!(
+            matches!(
+                m[..],
+                [CriticalSpeed {
+                    meeting: Meeting::Tangency {
+                        within_3_sigma: true,
+                        ..
+                    },
+                    ..
+                }]
+            ),
+            "{m:?}"
+        );
+        // A mode at 100.5 rad/s crosses 1×Ω at 100.5, with σ_ωd / |1 − 0|.
+        let m = meet(&rows(|_| 100.5, 0.2));
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert_eq!(m[0].meeting, Meeting::Crossing);
+        assert!((m[0].speed - 100.5).abs() < 1e-12 && (m[0].std - 0.2).abs() < 1e-12);
+    }
 }

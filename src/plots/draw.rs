@@ -20,6 +20,10 @@ pub(super) const COLORS: [RGBColor; 6] = [
 pub(super) enum Style {
     Solid,
     Dashed,
+    /// Short dashes close together (told from [`Style::Dashed`] at a glance).
+    Dotted,
+    /// Long dashes.
+    LongDashed,
     /// Small dots at the points (Monte Carlo), under the lines.
     Dots,
     /// Large marks at the points (speeds flagged, crossings), over everything.
@@ -42,6 +46,8 @@ pub(super) struct Line {
     pts: Vec<(f64, f64)>,
     color: RGBColor,
     style: Style,
+    /// Text written in the axes at the line's last point (an engine order's `2×`).
+    label: Option<String>,
 }
 
 impl Line {
@@ -51,11 +57,18 @@ impl Line {
             pts,
             color,
             style: Style::Solid,
+            label: None,
         }
     }
 
     pub(super) fn styled(mut self, style: Style) -> Line {
         self.style = style;
+        self
+    }
+
+    /// The line with `label` written at its last point, inside the axes.
+    pub(super) fn labelled(mut self, label: impl Into<String>) -> Line {
+        self.label = Some(label.into());
         self
     }
 }
@@ -88,7 +101,9 @@ pub fn tick_label(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
             let digits = ((big / step).log10().ceil().max(0.0) as usize).min(14);
             format!("{v:.digits$e}")
         } else {
-            let decimals = ((-step.log10()).ceil().max(0.0) as usize + 1).min(14);
+            // One decimal more than the spacing's first digit needs, none from a spacing of
+            // 10 on (a speed axis to 4000 rpm reads 500, not 500.0).
+            let decimals = ((-step.log10()).ceil() + 1.0).clamp(0.0, 14.0) as usize;
             format!("{v:.decimals$}")
         }
     }
@@ -120,10 +135,27 @@ pub(super) fn draw(
     lines: &[Line],
     bands: &[Band],
 ) -> Result<String, String> {
-    let Some((x0, x1, y0, y1)) = extent(lines, bands) else {
+    draw_up_to(title, xlabel, ylabel, lines, bands, None)
+}
+
+/// [`draw`] with the vertical axis ending at `top` where given (the lines and bands all below
+/// it: a line that should end on the frame is cut there by its maker).
+pub(super) fn draw_up_to(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    lines: &[Line],
+    bands: &[Band],
+    top: Option<f64>,
+) -> Result<String, String> {
+    let Some((x0, x1, y0, mut y1)) = extent(lines, bands) else {
         return Err("nothing to plot".into());
     };
-    let entries = lines.iter().filter(|l| !l.name.is_empty()).count() + bands.len();
+    if let Some(t) = top.filter(|&t| t > y0) {
+        y1 = t;
+    }
+    let entries = lines.iter().filter(|l| !l.name.is_empty()).count()
+        + bands.iter().filter(|b| !b.name.is_empty()).count();
     let height = 540.max(90 + 22 * entries as u32);
     panels(title, height, |axes, legend| {
         let mut chart = ChartBuilder::on(axes)
@@ -224,6 +256,8 @@ fn draw_lines(chart: &mut Chart, lines: &[Line]) -> Result<(), String> {
             match l.style {
                 Style::Solid => chart.draw_series(LineSeries::new(seg, style)),
                 Style::Dashed => chart.draw_series(DashedLineSeries::new(seg, 7, 5, style)),
+                Style::Dotted => chart.draw_series(DashedLineSeries::new(seg, 2, 4, style)),
+                Style::LongDashed => chart.draw_series(DashedLineSeries::new(seg, 16, 5, style)),
                 Style::Dots => chart.draw_series(
                     seg.into_iter()
                         .step_by(every)
@@ -235,7 +269,38 @@ fn draw_lines(chart: &mut Chart, lines: &[Line]) -> Result<(), String> {
             }
             .map_err(|e| e.to_string())?;
         }
+        if let Some(text) = &l.label {
+            draw_label(chart, l, text)?;
+        }
     }
+    Ok(())
+}
+
+/// Writes `text` beside the end of a rising line `l`, up and left of its last point where the
+/// axes have room above it, else below and far enough left that the line, rising to the end,
+/// passes right of the text.
+fn draw_label(chart: &mut Chart, l: &Line, text: &str) -> Result<(), String> {
+    let [.., a, b] = l.pts.as_slice() else {
+        return Ok(());
+    };
+    let (pa, pb) = (chart.backend_coord(a), chart.backend_coord(b));
+    // The line's slope on the page (pixels up per pixel across).
+    let slope = f64::from(pa.1 - pb.1) / f64::from((pb.0 - pa.0).max(1));
+    const SIZE: i32 = 15;
+    let width = (0.62 * f64::from(SIZE) * text.chars().count() as f64).ceil() as i32;
+    let top = chart.plotting_area().get_pixel_range().1.start;
+    let offset = if pb.1 - SIZE - 4 >= top {
+        (-4 - width, -SIZE - 3)
+    } else {
+        let clear = (f64::from(SIZE + 3) / slope.max(0.25)).ceil() as i32;
+        (-clear - 4 - width, 2)
+    };
+    let font = ("sans-serif", SIZE).into_font().color(&l.color);
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at(*b) + Text::new(text.to_string(), offset, font),
+        ))
+        .map_err(|e| e.to_string())?;
     Ok(())
 }
 
@@ -245,7 +310,7 @@ fn stacking(lines: &[Line]) -> Vec<&Line> {
     let mut order: Vec<&Line> = lines.iter().collect();
     order.sort_by_key(|l| match l.style {
         Style::Dots => 0,
-        Style::Dashed => 1,
+        Style::Dashed | Style::Dotted | Style::LongDashed => 1,
         Style::Solid => 2,
         Style::Marks => 4,
     });
@@ -257,7 +322,8 @@ fn stacking(lines: &[Line]) -> Vec<&Line> {
     order
 }
 
-/// The legend panel: a swatch and a name per entry, bands first.
+/// The legend panel: a swatch and a name per named entry, bands first (a band without a name
+/// goes with the line of its colour).
 fn draw_legend(
     legend: &DrawingArea<SVGBackend, Shift>,
     lines: &[Line],
@@ -265,7 +331,7 @@ fn draw_legend(
 ) -> Result<(), String> {
     let font = ("sans-serif", 14).into_font();
     let mut y = 40;
-    for b in bands {
+    for b in bands.iter().filter(|b| !b.name.is_empty()) {
         legend
             .draw(&Rectangle::new(
                 [(10, y - 7), (40, y + 7)],
@@ -278,12 +344,30 @@ fn draw_legend(
         y += 22;
     }
     for l in lines.iter().filter(|l| !l.name.is_empty()) {
+        if let Some(b) = bands
+            .iter()
+            .find(|b| b.name.is_empty() && b.color == l.color)
+        {
+            legend
+                .draw(&Rectangle::new(
+                    [(10, y - 7), (40, y + 7)],
+                    b.color.mix(0.22).filled(),
+                ))
+                .map_err(|e| e.to_string())?;
+        }
         let style = l.color.stroke_width(2);
         match l.style {
             Style::Solid => legend.draw(&PathElement::new(vec![(10, y), (40, y)], style)),
             Style::Dashed => legend
                 .draw(&PathElement::new(vec![(10, y), (20, y)], style))
                 .and_then(|_| legend.draw(&PathElement::new(vec![(28, y), (40, y)], style))),
+            Style::Dotted => (0..5).try_for_each(|k| {
+                let x = 10 + 6 * k;
+                legend.draw(&PathElement::new(vec![(x, y), (x + 2, y)], style))
+            }),
+            Style::LongDashed => legend
+                .draw(&PathElement::new(vec![(10, y), (32, y)], style))
+                .and_then(|_| legend.draw(&PathElement::new(vec![(37, y), (40, y)], style))),
             Style::Dots => legend.draw(&Circle::new((25, y), 2, l.color.filled())),
             Style::Marks => legend.draw(&Circle::new((25, y), 3, l.color.filled())),
         }

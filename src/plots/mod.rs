@@ -5,8 +5,9 @@
 //! the answer to read (`analytic`: mean and ±σ band) with every method's mean (the paper's
 //! Figs. 2, 5, 8, 10), σ against speed by every method (Figs. 3, 4, 6, 9, 11), each variable's
 //! share of the first-order variance (Fig. 12) when a case has several; and one Campbell
-//! diagram (ω_d of every mode against speed with ±3σ bands of the first case, engine-order lines
-//! and their crossings marked).
+//! diagram (ω_d of the modes an engine order reaches against speed, with ±3σ bands of the case
+//! with the most toleranced variables, labelled engine-order lines, and the crossings and
+//! near-tangencies marked).
 //!
 //! Every legend sits in a panel of its own right of the axes, so it never covers data; tick
 //! labels carry as many digits as their spacing needs, so they never repeat; speeds and
@@ -29,7 +30,7 @@ mod sobol;
 mod yields;
 
 pub use bands::first_order_off;
-pub use campbell::CriticalSpeed;
+pub use campbell::{CriticalSpeed, Meeting, NEAR, campbell_case};
 pub use draw::{AXES_WIDTH, LEGEND_WIDTH, tick_label};
 pub use png::{fonts, png};
 pub use sobol::sobol_shown;

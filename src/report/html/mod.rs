@@ -16,7 +16,7 @@ use crate::analyze::Analysis;
 use crate::drawing::Drawing;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
-use crate::plots::{CriticalSpeed, Display, Plot};
+use crate::plots::{CriticalSpeed, Display, Meeting, NEAR, Plot, campbell_case};
 use allocation::allocation_section;
 use first_order::first_order_table;
 pub use mechanism::MODES_DRAWN;
@@ -192,24 +192,50 @@ fn timing_table(h: &mut String, model: &Model, a: &Analysis, mc: Option<&McOptio
     );
 }
 
-/// The critical speeds of the Campbell diagram with their σ (none: no section).
+/// The critical speeds of the Campbell diagram with their σ, and the near-tangencies (none: no
+/// section).
 fn critical_table(h: &mut String, a: &Analysis, critical: &[CriticalSpeed], d: Display) {
     if !critical.is_empty() {
         let u = d.speed.symbol();
+        let case = &a.cases[campbell_case(a)].name;
         let _ = writeln!(
             h,
-            "<h2>Critical speeds</h2><table><tr><th>mode</th><th>engine order</th><th>speed ({u})</th><th>σ ({u}), case {}</th></tr>",
-            esc(&a.cases[0].name)
+            "<h2>Critical speeds</h2><p>Where a mode's damped natural frequency meets an engine \
+             order: a crossing, with σ of its speed under case {} (first order), or a \
+             near-tangency, where the mode comes within {:.0} % of the line (or within 3σ of its \
+             frequency) without crossing it, at the speed of its closest approach: a tolerance \
+             or a speed between those analysed can make it a crossing.</p>\
+             <table><tr><th>mode</th><th>engine order</th><th>meets it</th><th>speed ({u})</th><th>σ ({u})</th></tr>",
+            esc(case),
+            100.0 * NEAR
         );
         let f = d.speed.per_rad_per_second();
         for c in critical {
+            let (meets, sd) = match c.meeting {
+                Meeting::Crossing => ("crosses".to_string(), format!("{:.4}", c.std * f)),
+                Meeting::Tangency {
+                    gap,
+                    within_3_sigma,
+                } => (
+                    format!(
+                        "comes within {:.2} % ({}){}",
+                        100.0 * gap.abs(),
+                        if gap > 0.0 { "above" } else { "below" },
+                        if within_3_sigma {
+                            ", inside its ±3σ"
+                        } else {
+                            ""
+                        }
+                    ),
+                    "–".to_string(),
+                ),
+            };
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}×</td><td>{:.4}</td><td>{:.4}</td></tr>",
+                "<tr><td>{}</td><td>{}×</td><td>{meets}</td><td>{:.4}</td><td>{sd}</td></tr>",
                 c.mode + 1,
                 c.order,
                 c.speed * f,
-                c.std * f
             );
         }
         let _ = writeln!(h, "</table>");
@@ -297,7 +323,7 @@ fn reading_guide(h: &mut String) {
 <li><b>analytic</b> is the answer to read: the quadrature where it ran (its <code>basis</code> says so), else the automatic Taylor choice (invariant near a change of class, else second order). Red marks in the band plots show the speeds where first order's σ is more than 10 % off.</li>\
 <li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample, with 95 % confidence intervals in <code>tolerance.csv</code> and counts of failed samples and of samples whose mode changed class. Where the distribution is a mixture (most samples overdamped, a few far out), a few thousand samples are far from converged; the quadrature is not.</li>\
 <li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
-<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the first case, the engine orders and the critical speeds where a mode crosses one.</li></ul>"
+<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the case with the most toleranced variables, the engine orders and where a mode crosses or comes near one.</li></ul>"
     );
 }
 

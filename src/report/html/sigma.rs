@@ -5,7 +5,7 @@ use super::{esc, sig};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::{Output, Quantity};
-use crate::plots::{CriticalSpeed, Display};
+use crate::plots::{CriticalSpeed, Display, Meeting};
 use crate::table::McStat;
 use crate::table::Method;
 use crate::table::Row;
@@ -141,10 +141,9 @@ impl<'a> Case<'a> {
                 places.push((q, mode, "largest σ".into(), r.speed));
             }
         }
-        for cs in critical
-            .iter()
-            .filter(|c| c.order.to_bits() == 1f64.to_bits() && c.mode < MODES)
-        {
+        for cs in critical.iter().filter(|c| {
+            c.order.to_bits() == 1f64.to_bits() && c.mode < MODES && c.meeting == Meeting::Crossing
+        }) {
             let rows = self.answers(Quantity::DampedFrequency, Some(cs.mode));
             if let Some(r) = rows.iter().min_by(|x, y| {
                 (x.speed - cs.speed)
