@@ -122,6 +122,16 @@ impl Analysis {
             .and_then(|i| self.nominal[i].as_ref())
     }
 
+    /// Does some row of an output carry a mean or σ above what the evaluation resolves
+    /// ([`Quantity::resolution`](crate::output::Quantity::resolution))? An undamped system's ζ
+    /// does not: it is 0 with σ 0, up to rounding (10⁻²¹), at every speed and by every method.
+    pub fn resolved(&self, q: crate::output::Quantity, mode: Option<usize>) -> bool {
+        let floor = q.resolution(0.0, 0.0);
+        (self.rows.iter())
+            .filter(|r| r.quantity == q && r.mode == mode)
+            .any(|r| r.mean.abs() > floor || r.std > floor)
+    }
+
     /// Did a stage stop early (a speed of the sweep, a case of the quadrature, Monte Carlo
     /// samples left out)?
     pub fn cancelled(&self) -> bool {

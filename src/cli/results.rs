@@ -29,7 +29,7 @@ pub(crate) fn write_outputs(
         a.quadrature_seconds
             .map_or(String::new(), |t| format!(", quadrature {t:.3} s")),
         a.monte_carlo_seconds.map_or(String::new(), |t| format!(
-            ", Monte Carlo {t:.3} s (ratio {:.0})",
+            ", Monte Carlo {t:.3} s ({:.0}× the analytic time)",
             t / a.analytic_seconds
         )),
         written.place.display()

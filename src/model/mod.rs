@@ -602,6 +602,21 @@ impl Model {
             .collect()
     }
 
+    /// Which of the paper's two examples (Kim & Yoo 2007) this model is, if one: the rotating
+    /// pendulum (parameters `m`, `L`, `c`, one degree of freedom, no loop) or the governor
+    /// (`ball_mass`, `spring_k`, `attach`, two loops). Its comparisons with the paper (timings,
+    /// "the paper's method") appear for those only.
+    pub fn paper_example(&self) -> Option<&'static str> {
+        let has = |names: &[&str]| names.iter().all(|n| self.parameter(n).is_some());
+        if has(&["m", "L", "c"]) && self.dof() == 1 && self.constraints.is_empty() {
+            Some("pendulum")
+        } else if has(&["ball_mass", "spring_k", "attach"]) && self.n_constraints() == 2 {
+            Some("governor")
+        } else {
+            None
+        }
+    }
+
     /// Number of scalar constraint equations imposed (the redundant ones dropped).
     pub fn n_constraints(&self) -> usize {
         self.constraints

@@ -49,10 +49,14 @@ pub(super) fn band(o: &Output, xlabel: &str) -> Option<Plot> {
             stem: format!("band_{}_{}{tag}", case.name, q.as_str()),
             caption: format!(
                 "Mean ± σ of {label} against speed for case {}. The shaded band is the \
-                 answer to read (analytic); dashed lines are the paper's first-order \
-                 band; red dots mark the speeds where first order's σ is more than 10 % \
-                 off.",
-                case.name
+                 answer to read (analytic); dashed lines are first order's band{}; red dots \
+                 mark the speeds where first order's σ is more than 10 % off.",
+                case.name,
+                if model.paper_example().is_some() {
+                    " (the paper's method)"
+                } else {
+                    ""
+                }
             ),
             title,
             svg,

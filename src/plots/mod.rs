@@ -123,6 +123,22 @@ fn scale(q: Quantity, d: Display) -> f64 {
     }
 }
 
+/// A probability `p` in per cent as a person writes it: 0.9973 → `99.73` (not
+/// `99.72999999999999`), to twelve significant digits.
+pub fn percent(p: f64) -> String {
+    let v = 100.0 * p;
+    if !v.is_finite() || v == 0.0 {
+        return format!("{v}");
+    }
+    let digits = (11 - v.abs().log10().floor() as i32).clamp(0, 17) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// Colours of the methods, the same in every plot.
 fn method_color(m: Method) -> RGBColor {
     match m {
@@ -184,13 +200,9 @@ fn outputs(a: &Analysis, modes: usize) -> Vec<(Quantity, Option<usize>)> {
     let mut quantities: Vec<(Quantity, Option<usize>)> = Vec::new();
     for m in 0..modes {
         quantities.push((Quantity::DampedFrequency, Some(m)));
-        // ζ where some design is damped (an undamped system's ζ is 0 with σ 0 everywhere).
-        let damped = a.rows.iter().any(|r| {
-            r.quantity == Quantity::DampingRatio
-                && r.mode == Some(m)
-                && (r.mean != 0.0 || r.std > 0.0)
-        });
-        if damped {
+        // ζ where some design is damped (an undamped system's ζ is 0 with σ 0 everywhere, up
+        // to rounding).
+        if a.resolved(Quantity::DampingRatio, Some(m)) {
             quantities.push((Quantity::DampingRatio, Some(m)));
         }
     }

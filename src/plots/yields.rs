@@ -51,7 +51,7 @@ pub(super) fn yield_curves(model: &Model, a: &Analysis, case: usize, d: Display)
                  The yield over the range, every speed at once, is in the specification table \
                  and yield.csv.",
                 a.cases[case].name,
-                100.0 * model.allocation.target_yield
+                super::percent(model.allocation.target_yield)
             ),
             title,
             svg,

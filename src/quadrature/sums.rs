@@ -5,15 +5,13 @@ use super::control::Control;
 use super::line::{Context, Sums};
 use super::rules::{Rule, Stage, Transverse};
 use super::{NodeData, Probability, QuadStat, Reference};
-use crate::output::{Output, Quantity};
+use crate::output::Output;
 use crate::table::Event;
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
-/// Relative precision of one node's outputs (Newton's certified step and the eigensolver are
-/// near 10⁻¹², a little amplified near a bifurcation): a floor of the error estimates, times
-/// the size of the output.
-const EVAL_PRECISION: f64 = 1e-9;
+// A floor of the error estimates, times the size of the output.
+use crate::output::EVAL_PRECISION;
 
 /// What one refinement stage gives: per speed and output the statistics and their error
 /// estimates' two parts (along the lines, across them: [`ErrorParts`]), and per speed the
@@ -385,17 +383,10 @@ pub(super) fn next_stage(
     }
 }
 
-/// What the evaluation resolves of a row of `output`: ten times its precision
-/// ([`EVAL_PRECISION`]) in the output's own scale, its size (`|mean| + σ`) and, for a damping
-/// ratio, 1 besides (ζ is a ratio of the root's parts, known to the root's relative precision
-/// whatever its value).
+/// What the evaluation resolves of a row of `output`
+/// ([`Quantity::resolution`](crate::output::Quantity::resolution)).
 fn resolution(output: &Output, stat: &QuadStat) -> f64 {
-    let unit = if output.quantity == Quantity::DampingRatio {
-        1.0
-    } else {
-        0.0
-    };
-    10.0 * EVAL_PRECISION * (stat.mean.abs() + stat.std + unit)
+    output.quantity.resolution(stat.mean, stat.std)
 }
 
 /// Per speed and output (`stats[speed][output]`, the outputs `outs`), the error the request

@@ -120,9 +120,31 @@ pub fn outside_request_lines(a: &Analysis) -> Vec<String> {
             } else {
                 String::new()
             };
+            // How far off: the largest error estimate (of the mean or σ) as a share of σ.
+            let worst = (a.rows.iter())
+                .filter(|r| r.case == case && r.method() == Method::Quadrature)
+                .filter(|r| r.within_request() == Some(false) && r.std > 0.0)
+                .filter_map(|r| {
+                    let q = r.detail.quadrature()?;
+                    Some((q.errors.0.max(q.errors.1) / r.std, r))
+                })
+                .filter(|(e, _)| e.is_finite())
+                .max_by(|x, y| x.0.total_cmp(&y.0));
+            let far = worst.map_or(String::new(), |(e, r)| {
+                format!(
+                    ". The largest error estimate is {:.2} σ ({} at {} rad/s)",
+                    e,
+                    output_name(r.quantity, r.mode),
+                    r.speed
+                )
+            });
+            let swept = a.quadrature_rules.get(case).map_or(0, |r| r.1);
             Some(format!(
                 "case '{}': the quadrature's error estimate exceeds the requested accuracy at \
-                 {rows} row(s) (within_request = false in tolerance.csv): {}{more}",
+                 {rows} row(s) (within_request = false in tolerance.csv): {}{more}{far}. Those \
+                 values are the finest rule's within the node budget ({swept} nodes swept); to \
+                 tighten them allow more nodes (--quadrature-nodes), or read the Monte Carlo's \
+                 95 % intervals beside them (--samples)",
                 a.cases[case].name,
                 outputs.join("; ")
             ))

@@ -45,16 +45,11 @@ fn probability_summary(a: &Analysis) -> Vec<Value> {
 }
 
 /// The paper's timings (Kim & Yoo 2007, Tables 1–2: analytic s, Monte Carlo s, ratio) when the
-/// model is one of its two examples: the rotating pendulum (parameters `m`, `L`, `c`, one
-/// degree of freedom, no loop) or the governor (`ball_mass`, `spring_k`, `attach`, two loops).
+/// model is one of its two examples ([`Model::paper_example`]).
 pub fn paper_timings(model: &Model) -> Option<(&'static str, f64, f64, f64)> {
-    let has = |names: &[&str]| names.iter().all(|n| model.parameter(n).is_some());
-    if has(&["m", "L", "c"]) && model.dof() == 1 && model.constraints.is_empty() {
-        Some(("pendulum", 0.703, 448.281, 638.0))
-    } else if has(&["ball_mass", "spring_k", "attach"]) && model.n_constraints() == 2 {
-        Some(("governor", 2.188, 2525.375, 1154.0))
-    } else {
-        None
+    match model.paper_example()? {
+        "pendulum" => Some(("pendulum", 0.703, 448.281, 638.0)),
+        _ => Some(("governor", 2.188, 2525.375, 1154.0)),
     }
 }
 
@@ -78,7 +73,7 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
         s
     };
     let mc_failed: usize = a.rows.iter().filter_map(|r| r.mc().map(|m| m.failed)).sum();
-    json!({
+    let mut summary = json!({
         "model": model.name,
         "file": model.file,
         "units": {"speed": "rad/s", "damped_frequency": "rad/s", "damping_ratio": "1", "time": "s"},
@@ -119,7 +114,12 @@ pub fn summary_json(model: &Model, a: &Analysis, mc: Option<&McOptions>, threads
             "case": a.cases[u.case].name, "method": u.method.as_str(), "quantity": u.quantity.as_str(),
             "mode": u.mode.map(|m| m + 1), "reason": u.reason, "rows": u.speeds.len(),
             "speeds": u.speeds})).collect::<Vec<_>>(),
-    })
+    });
+    // The paper's timings for its own examples only: no `paper` key in another model's summary.
+    if let Some(o) = summary.as_object_mut().filter(|o| o["paper"].is_null()) {
+        o.remove("paper");
+    }
+    summary
 }
 
 /// Per case, the Monte Carlo samples that are not physically admissible, by reason.

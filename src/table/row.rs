@@ -67,7 +67,7 @@ impl Detail {
     }
 
     /// The quadrature's fields, of a quadrature row or an analytic row taken from it.
-    fn quadrature(&self) -> Option<&QuadDetail> {
+    pub fn quadrature(&self) -> Option<&QuadDetail> {
         match self {
             Detail::Quadrature(q) | Detail::Analytic { quadrature: q, .. } => q.as_ref(),
             _ => None,

@@ -1,12 +1,17 @@
-//! `report.html`: one page per analysis, built from named sections (the tolerance allocation
-//! that made the design where there is one, the specification: yield, what the design meets
-//! at the target and the Sobol indices; the numeric summary, the tolerance cases, the timings,
-//! where first order is off, the critical speeds, the failures, the rows without a value, a
-//! reading guide and the plots). Sections big enough to be read on their own are submodules.
+//! `report.html`: one page per analysis, built from named sections in the order a reader needs
+//! them: a table of contents; the tolerance cases (what was toleranced); the answer in short
+//! (mean ± 3σ of the outputs that matter, what drives them, whether the requirements hold); the
+//! tolerance allocation that made the design where there is one; the specification (yield,
+//! what the design meets at the target, the Sobol indices); the numeric summary; the critical
+//! speeds and near-tangencies; the response peaks; where first order is off; the failures, the
+//! rows without a value and the notes; the mechanism; the timings; a reading guide and the
+//! plots. The paper's comparisons (its timings, "the paper's method") appear for its two
+//! models only. Sections big enough to be read on their own are submodules.
 
 mod allocation;
 mod first_order;
 mod mechanism;
+mod short;
 mod sigma;
 mod specification;
 
@@ -21,15 +26,15 @@ use allocation::allocation_section;
 use first_order::first_order_table;
 pub use mechanism::MODES_DRAWN;
 use mechanism::mechanism_section;
+use short::in_short;
 use sigma::summary_table;
 use specification::{limits_table, sobol_table, specification};
 use std::fmt::Write;
 
-/// `report.html`: the allocation that made the design (`extra.allocation`, where there is one), the
-/// specification sections, the numeric summary per case, the timing table (beside the paper's Tables 1–2
-/// for its two examples), the critical speeds, the mechanism and its modes (`extra.drawing`,
-/// where there is one), a short reading guide and the plots (each an `<stem>.svg` in the same
-/// directory), in the display units `extra.display`.
+/// `report.html` of an analysis (the sections of the module documentation), with the plots
+/// (each an `<stem>.svg` in the same directory), the allocation that made the design
+/// (`extra.allocation`) and the mechanism (`extra.drawing`) where there are, in the display
+/// units `extra.display`.
 pub fn report_html(
     model: &Model,
     a: &Analysis,
@@ -54,30 +59,84 @@ pub fn report_html(
         d.speed.symbol(),
         d.frequency.symbol()
     );
+    // The sections, in the order a reader needs them: what was toleranced, the answer in
+    // short, the specification, the numbers, where the modes meet the orders, the checks of
+    // the methods, then the machinery (timings) and the plots.
+    let mut b = String::new();
+    cases_table(&mut b, model, a);
+    in_short(&mut b, model, a, d);
     if let Some(al) = allocation {
-        allocation_section(&mut h, model, al);
+        allocation_section(&mut b, model, al);
     }
-    specification(&mut h, model, a);
-    limits_table(&mut h, model, a);
-    sobol_table(&mut h, model, a);
-    let _ = writeln!(h, "{}", summary_table(model, a, critical, d));
-    cases_table(&mut h, model, a);
-    timing_table(&mut h, model, a, mc);
-    let _ = writeln!(h, "{}", first_order_table(a));
-    critical_table(&mut h, a, critical, d);
-    peaks_table(&mut h, model, a, d);
-    failures(&mut h, a);
-    h.push_str(&unfilled_table(a));
+    specification(&mut b, model, a);
+    limits_table(&mut b, model, a);
+    sobol_table(&mut b, model, a);
+    let _ = writeln!(b, "{}", summary_table(model, a, critical, d));
+    critical_table(&mut b, a, critical, d);
+    peaks_table(&mut b, model, a, d);
+    let _ = writeln!(b, "{}", first_order_table(model, a, d));
+    failures(&mut b, a);
+    b.push_str(&unfilled_table(a));
     for line in outside_request_lines(a) {
-        let _ = writeln!(h, "<p><b>Note:</b> {}</p>", esc(&line));
+        let _ = writeln!(b, "<p><b>Note:</b> {}</p>", esc(&line));
     }
     if let Some(dr) = drawing {
-        mechanism_section(&mut h, a, dr);
+        mechanism_section(&mut b, a, dr);
     }
-    reading_guide(&mut h);
-    figures(&mut h, plots);
+    timing_table(&mut b, model, a, mc);
+    reading_guide(&mut b);
+    figures(&mut b, plots);
+    h.push_str(&contents(&mut b));
+    h.push_str(&b);
     let _ = writeln!(h, "</body></html>");
     h
+}
+
+/// The table of contents of the sections in `body` (its `<h2>` headings), each heading given
+/// an `id` to link to where it has none.
+fn contents(body: &mut String) -> String {
+    let mut out = String::from("<nav><b>Contents:</b> ");
+    let mut entries: Vec<String> = Vec::new();
+    let mut rest = body.as_str();
+    let mut rebuilt = String::with_capacity(body.len() + 256);
+    while let Some(at) = rest.find("<h2") {
+        rebuilt.push_str(&rest[..at]);
+        rest = &rest[at..];
+        let open_end = rest.find('>').map_or(rest.len(), |e| e + 1);
+        let close = rest.find("</h2>").unwrap_or(rest.len());
+        let open = &rest[..open_end];
+        let title = rest.get(open_end..close).unwrap_or("");
+        let id = match open.find("id=\"") {
+            Some(i) => open[i + 4..].split('"').next().unwrap_or("").to_string(),
+            None => format!("section-{}", entries.len() + 1),
+        };
+        if open.contains("id=\"") {
+            rebuilt.push_str(open);
+        } else {
+            let _ = write!(rebuilt, "<h2 id=\"{id}\">");
+        }
+        // The title without its markup, for the list.
+        let plain: String = {
+            let mut t = String::new();
+            let mut tag = false;
+            for c in title.chars() {
+                match c {
+                    '<' => tag = true,
+                    '>' => tag = false,
+                    c if !tag => t.push(c),
+                    _ => {}
+                }
+            }
+            t
+        };
+        entries.push(format!("<a href=\"#{id}\">{plain}</a>"));
+        rest = &rest[open_end..];
+    }
+    rebuilt.push_str(rest);
+    *body = rebuilt;
+    out.push_str(&entries.join(" · "));
+    out.push_str("</nav>\n");
+    out
 }
 
 /// What a report shows besides the analysis, and in which units.
@@ -124,18 +183,33 @@ fn notices(h: &mut String, a: &Analysis, mc: Option<&McOptions>) {
 fn cases_table(h: &mut String, model: &Model, a: &Analysis) {
     let _ = writeln!(
         h,
-        "<h2>Tolerance cases</h2><table><tr><th>case</th><th>variable</th><th>nominal</th><th>tolerance (±, = 3σ for normal)</th></tr>"
+        "<h2>Tolerance cases</h2><p>What was toleranced: each case is one scenario of \
+         tolerances on the model's parameters, analysed on its own (a variable outside a case \
+         keeps its nominal value there). A tolerance is ±3σ of a normal distribution unless \
+         the parameter says uniform (then its half-width).</p><table><tr><th>case</th>\
+         <th>variable</th><th>nominal</th><th>tolerance (±)</th><th>% of nominal</th>\
+         <th>distribution</th></tr>"
     );
     for c in &a.cases {
         for (b, t) in &c.tolerances {
             let p = &model.parameters[*b];
+            let abs = t.absolute(p.value);
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.6}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
                 esc(&c.name),
                 esc(&p.name),
                 p.value,
-                t.absolute(p.value)
+                sig(abs),
+                if p.value != 0.0 {
+                    format!("{} %", crate::plots::percent(abs / p.value.abs()))
+                } else {
+                    "–".into()
+                },
+                match p.distribution {
+                    crate::model::Distribution::Normal => "normal (±3σ)",
+                    crate::model::Distribution::Uniform => "uniform",
+                }
             );
         }
     }
@@ -180,9 +254,14 @@ fn timing_table(h: &mut String, model: &Model, a: &Analysis, mc: Option<&McOptio
     );
     let _ = writeln!(
         h,
-        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and the Taylor methods for all cases (the sweep and gradients {:.3} s, the Hessians {:.3} s); the paper's covers first order only. The quadrature sweeps its nodes across all speeds like Monte Carlo samples ({}).</p>",
+        "<p>The analytic time covers the nominal sweep, exact gradients and Hessians at every speed and the Taylor methods for all cases (the sweep and gradients {:.3} s, the Hessians {:.3} s){}. The quadrature sweeps its nodes across all speeds like Monte Carlo samples ({}). The ratios say how many times longer the Monte Carlo took.</p>",
         a.first_order_seconds,
         a.second_order_seconds,
+        if paper_timings(model).is_some() {
+            "; the paper's covers first order only"
+        } else {
+            ""
+        },
         a.cases
             .iter()
             .zip(&a.quadrature_rules)
@@ -316,7 +395,7 @@ fn reading_guide(h: &mut String) {
     let _ = writeln!(
         h,
         "<h2>Reading guide</h2><ul>\
-<li><b>first_order</b> is the paper's method: mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
+<li><b>first_order</b> is the classical method (Kim &amp; Yoo 2007's): mean = nominal value, σ² = Σ (∂f/∂b)² σ_b² with exact derivatives. It is right where the output is smooth and the tolerances small.</li>\
 <li><b>second_order</b> adds the curvature (Hessians): a mean shift and variance terms. It repairs points where first order gives σ = 0 but the output does vary (|H| at the undamped resonance).</li>\
 <li><b>invariant</b> (ω_d only) propagates the pair discriminant D = λ₁λ₂ − (λ₁+λ₂)²/4, which stays smooth where a mode turns overdamped, and maps it through ω_d = √max(0, D). Use it near class changes, where first and second order fail.</li>\
 <li><b>quadrature</b> integrates the whole nonlinear analysis (equilibrium, modes, |H|) over the distribution of the design variables, deterministically: every node is swept from the lowest speed like a Monte Carlo sample, the integral is split where a mode turns overdamped or a design passes its own bifurcation, and every mean and σ comes with an error estimate (<code>mean_error</code>, <code>std_error</code>) and the 5/50/95 % quantiles. It is right at every speed, class changes and branch switches included.</li>\
@@ -377,6 +456,21 @@ fn unfilled_table(a: &Analysis) -> String {
 }
 
 /// A number to five significant digits, in fixed notation where that stays short.
+/// `x` to three significant digits, without trailing zeros (a spread in per cent: `0.762`,
+/// `2.2`, `1010`).
+fn short(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let exp = x.abs().log10().floor() as i32;
+    let s = format!("{x:.*}", (2 - exp).max(0) as usize);
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 fn sig(x: f64) -> String {
     if x == 0.0 {
         return "0".into();

@@ -1,7 +1,7 @@
 //! The report's numeric summary, "σ where it matters": per case, σ of the first modes' outputs
 //! and of |H| by every method at the speeds that matter, and how the methods agree there.
 
-use super::{esc, sig};
+use super::{esc, short, sig};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::{Output, Quantity};
@@ -32,9 +32,11 @@ pub(super) fn summary_table(
     let mut h = format!(
         "<h2>Summary: σ where it matters</h2><p>Per case, σ of each output by every method at \
          the speed of its largest σ, at the critical speeds (1×Ω) and at the |H| peak. \
-         “first order vs answer” is first order's σ against the answer's (analytic); \
-         “Monte Carlo agrees” says whether the answer lies inside Monte Carlo's 95 % interval \
-         of σ. Speeds in {}.</p>",
+         “±3σ, % of mean” is the answer's spread (three standard deviations, the band that \
+         holds 99.73 % of a normal output) relative to its mean. “first order vs answer” is \
+         first order's σ against the answer's (analytic); “Monte Carlo agrees” says whether \
+         the answer lies inside Monte Carlo's 95 % interval of σ; neither is given where σ is \
+         below what the evaluation resolves (–). Speeds in {}.</p>",
         d.speed.symbol()
     );
     for (ci, c) in a.cases.iter().enumerate() {
@@ -46,7 +48,7 @@ pub(super) fn summary_table(
         let _ = write!(
             h,
             "<h3>case {}</h3><table><tr><th>output</th><th>where</th><th>speed</th><th>mean</th>\
-             <th>σ analytic (the answer)</th><th>σ first order</th><th>σ second order</th>\
+             <th>σ analytic (the answer)</th><th>±3σ, % of mean</th><th>σ first order</th><th>σ second order</th>\
              <th>σ Monte Carlo [95 %]</th><th>first order vs answer</th><th>Monte Carlo agrees</th></tr>",
             esc(&c.name)
         );
@@ -59,15 +61,14 @@ pub(super) fn summary_table(
 }
 
 /// The outputs the summary shows, modes first: the answer's (analytic) outputs of the first
-/// [`MODES`] modes and |H|, ζ only where its mean or σ is not zero somewhere (an undamped
-/// system's ζ is 0 with σ 0 everywhere).
+/// [`MODES`] modes and |H|, ζ only where its mean or σ is resolved somewhere
+/// ([`Analysis::resolved`]: an undamped system's ζ is 0 with σ 0, up to rounding, everywhere).
 fn outputs(a: &Analysis) -> Vec<Output> {
     let mut outputs: Vec<Output> = a
         .rows
         .iter()
         .filter(|r| r.method() == Method::Analytic)
         .filter(|r| r.mode.is_none_or(|m| m < MODES))
-        .filter(|r| r.quantity != Quantity::DampingRatio || r.mean != 0.0 || r.std > 0.0)
         .map(|r| Output {
             quantity: r.quantity,
             mode: r.mode,
@@ -75,6 +76,7 @@ fn outputs(a: &Analysis) -> Vec<Output> {
         .collect();
     outputs.sort_by_key(|o| (o.mode, o.quantity as u8));
     outputs.dedup();
+    outputs.retain(|o| o.quantity != Quantity::DampingRatio || a.resolved(o.quantity, o.mode));
     outputs
 }
 
@@ -188,8 +190,19 @@ impl<'a> Case<'a> {
         let sa = answer.map(|r| r.std);
         let sf = get(Method::FirstOrder).map(|r| r.std);
         let mc = get(Method::MonteCarlo).and_then(|r| r.mc());
-        let vs = first_order_vs(sa, sf);
-        let agrees = monte_carlo_agrees(sa, mc);
+        // Where the answer's σ is below what the evaluation resolves, the methods' σ are
+        // rounding: no comparison.
+        let resolved = answer.is_some_and(|r| r.std > q.resolution(r.mean, r.std));
+        let (vs, agrees) = if resolved {
+            (first_order_vs(sa, sf), monte_carlo_agrees(sa, mc))
+        } else {
+            ("–".to_string(), "–")
+        };
+        let spread = answer
+            .filter(|r| r.mean != 0.0 && r.std.is_finite())
+            .map_or("–".to_string(), |r| {
+                format!("±{} %", short(300.0 * r.std / r.mean.abs()))
+            });
         let mc_text = mc.map_or("–".to_string(), |m| {
             format!(
                 "{} [{}, {}]",
@@ -200,7 +213,7 @@ impl<'a> Case<'a> {
         });
         let _ = write!(
             h,
-            "<tr><td style=\"text-align:left\">{}</td><td style=\"text-align:left\">{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{vs}</td><td>{agrees}</td></tr>",
+            "<tr><td style=\"text-align:left\">{}</td><td style=\"text-align:left\">{}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{spread}</td><td>{}</td><td>{}</td><td>{}</td><td>{vs}</td><td>{agrees}</td></tr>",
             esc(&label(model, d, q, mode)),
             esc(&place),
             w * fs,
