@@ -240,6 +240,38 @@ fn sweep_with_transfer_and_sensitivity_columns() {
     }
 }
 
+/// `sweep` reads the model's `[analysis] transfer` where `--transfer` is not given, as
+/// `sensitivity` does: the same |H| by both at a speed; `--transfer none` leaves it out.
+#[test]
+fn sweep_takes_the_model_s_transfer_as_sensitivity_does() {
+    let model = example("rotating_pendulum.toml");
+    let model = model.to_str().unwrap();
+    let o = run(&["sweep", model, "--speed", "3.2:3.2:1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let col = header
+        .iter()
+        .position(|h| h == "transfer_magnitude")
+        .unwrap();
+    let swept: f64 = r.records().next().unwrap().unwrap()[col].parse().unwrap();
+    let o = run(&["sensitivity", model, "--speed", "3.2", "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let at = json["transfer_magnitude"].as_f64().unwrap();
+    assert!((swept - at).abs() <= 1e-12 * at, "{swept} vs {at}");
+    let o = run(&["sweep", model, "--speed", "3.2:3.2:1", "--transfer", "none"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !stdout(&o)
+            .lines()
+            .next()
+            .unwrap()
+            .contains("transfer_magnitude")
+    );
+}
+
 #[test]
 fn sensitivity_json_ad_and_fd_agree() {
     let get = |how: &str| {

@@ -103,7 +103,8 @@ class Model:
         """Sweep the operating speed: one row per (speed, mode), the CLI's ``sweep`` columns.
 
         ``speeds``: ``"FROM:TO:STEP"`` (rad/s) or values; default the model's ``[analysis]``.
-        ``transfer``: ``"input=NAME,output=NAME[,order=K]"`` adds |H| and its phase.
+        ``transfer``: ``"input=NAME,output=NAME[,order=K]"`` adds |H| and its phase; default
+        the model's ``[analysis] transfer`` where it has one, ``"none"`` leaves it out.
         ``sensitivity``: add d(…)/d(P) for the design variables ``wrt`` (default: those with a
         tolerance), computed ``"ad"`` (exact) or ``"fd"``. A failed speed has status
         ``failed`` and its reason in ``message``. ``branch``: ``"stable"`` switches to a stable
@@ -247,7 +248,7 @@ class Model:
         executor: Any = None,
         shards: int | None = None,
         target_yield: float | None = None,
-    ) -> Any:
+    ) -> Analysis | Shard:
         """The tolerance analysis of the CLI's ``analyze``: every mode's ω_d and ζ and |H|
         per tolerance case, by first and second order, the quadrature (``analytic``: the
         answer to read) and Monte Carlo (``samples``, ``seed``, ``sampling`` = ``"random"``,

@@ -72,6 +72,16 @@ class Analysis:
         """The rows to read: method ``analytic`` (the quadrature where it ran)."""
         return self.tolerance[self.tolerance["method"] == "analytic"].reset_index(drop=True)
 
+    def __repr__(self) -> str:
+        # What it holds, not its tables (a notebook prints the repr of the last expression).
+        cases = [c["name"] for c in self.summary.get("cases", [])]
+        speeds = self.summary.get("speeds", {})
+        return (
+            f"Analysis({self.summary.get('model', '')!r}: cases {cases}, "
+            f"{speeds.get('count', 0)} speeds, {len(self.tolerance)} tolerance rows, "
+            f"{len(self.yield_)} yield rows)"
+        )
+
 
 @dataclass(frozen=True)
 class Shard:
@@ -85,6 +95,11 @@ class Shard:
     name: str
     text: str
     source: str = ""
+
+    def __repr__(self) -> str:
+        # Its name and size, not its text (megabytes of JSON in a notebook).
+        where = f", from {self.source!r}" if self.source else ""
+        return f"Shard({self.name!r}, {len(self.text.encode('utf-8'))} bytes{where})"
 
     def write(self, directory: str | PathLike[str]) -> Path:
         """Writes the shard as ``directory/name`` (the command line's file); its path."""

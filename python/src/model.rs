@@ -27,13 +27,17 @@ impl NativeModel {
         self.model.model()
     }
 
+    /// The transfer function `spec` spells, none for `"none"`, the model's `[analysis]
+    /// transfer` (if any) where it is not given: as the command line's `sweep` and
+    /// `sensitivity`.
     pub(crate) fn transfer(&self, spec: Option<&str>) -> PyResult<Option<Transfer>> {
-        spec.map(|s| {
-            self.m()
-                .parse_transfer(s)
-                .map_err(|e| bad(format!("transfer {s:?}: {e}")))
-        })
-        .transpose()
+        match spec {
+            Some("none") => Ok(None),
+            Some(s) => (self.m().parse_transfer(s))
+                .map(Some)
+                .map_err(|e| bad(format!("transfer {s:?}: {e}"))),
+            None => Ok(self.m().analysis.transfer),
+        }
     }
 
     pub(crate) fn wrt(&self, names: Option<Vec<String>>) -> PyResult<Vec<usize>> {

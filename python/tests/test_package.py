@@ -338,3 +338,29 @@ def test_a_flexible_rotor_whirls_at_rosss_frequencies() -> None:
             assert np.min(np.abs(roots - lam)) < 1e-8 * abs(lam)
         # Undamped and gyroscopic: every mode neutrally stable, none read as flutter.
         assert set(pt.modes["status"]) == {"undamped"}
+
+
+def test_sweep_takes_the_model_s_transfer_unless_told_none(pendulum: modaltol.Model) -> None:
+    # As the command line's sweep and sensitivity: the model's [analysis] transfer by default.
+    swept = pendulum.sweep("3.2:3.2:1")
+    assert "transfer_magnitude" in swept.columns
+    at = pendulum.sensitivity(3.2)
+    none = pendulum.sweep("3.2:3.2:1", transfer="none")
+    assert "transfer_magnitude" not in none.columns
+    assert "transfer_magnitude" in at.columns
+    assert swept["transfer_magnitude"].iloc[0] == pytest.approx(
+        at["transfer_magnitude"].iloc[0], rel=1e-12
+    )
+
+
+def test_shards_and_analyses_print_what_they_hold_not_their_text(
+    pendulum: modaltol.Model,
+) -> None:
+    shard = pendulum.analyze("3:3.4:0.2", samples=20, seed=1, shard=(1, 2))
+    assert isinstance(shard, modaltol.Shard)
+    text = repr(shard)
+    assert text.startswith("Shard('shard-1-of-2.json', ") and "bytes" in text
+    assert len(text) < 120 < len(shard.text)
+    a = pendulum.analyze("3:3.4:0.2", samples=20, seed=1, quadrature=False)
+    text = repr(a)
+    assert text.startswith("Analysis('rotating pendulum': cases [") and len(text) < 300

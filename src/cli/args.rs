@@ -179,11 +179,12 @@ pub(crate) enum Command {
     /// partner root), tuning_order (ω_d/Ω: the engine order the mode sits at, as an absorber
     /// is tuned; empty at Ω = 0), whirl (forward|backward|mixed, from the orbits of the
     /// spinning parts' centres; empty where nothing spins or nothing whirls, as at rest or in
-    /// an axial or torsional mode); with --transfer: transfer_magnitude (output unit per
+    /// an axial or torsional mode); with a transfer function (--transfer, or the model's
+    /// [analysis] transfer): transfer_magnitude (output unit per
     /// input unit, e.g. rad/(N·m) or m/N; an unbalance's response amplitude in m),
     /// transfer_phase (rad); with --sensitivity, for every design variable P:
-    /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with
-    /// --transfer d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
+    /// d(damped_frequency)/d(P), d(natural_frequency)/d(P), d(damping_ratio)/d(P) and with a
+    /// transfer function d(transfer_magnitude)/d(P) (per unit of P), then sensitivity_status
     /// (ok|not_differentiable; the derivative cells are empty where it does not exist);
     /// q:<joint> (equilibrium coordinates, rad or m), drive:<joint> (drive force, N·m or N),
     /// iterations (Newton), branch (stable|switched|unstable: whether the equilibrium continued
@@ -347,7 +348,8 @@ pub(crate) struct SweepArgs {
     /// [[ports]] entry): generalised force (or port force/torque) on `input`,
     /// response of `output`, excitation at K × speed (K = 1 by default). An
     /// [[unbalances]] entry as `input` gives the unbalance response (m, at its body's spin
-    /// rate; no order). `--transfer model` uses the model's [analysis] transfer.
+    /// rate; no order). Default: the model's [analysis] transfer, where it has one (as
+    /// `sensitivity` and `analyze`); `--transfer none` leaves it out.
     #[arg(long)]
     pub(crate) transfer: Option<String>,
     /// Add the derivatives of every mode (and of |H|) with respect to the design variables.
@@ -378,7 +380,7 @@ pub(crate) struct SensitivityArgs {
     #[arg(long, value_enum, default_value = "ad")]
     pub(crate) derivatives: Derivatives,
     /// Transfer function `input=NAME,output=NAME[,order=K]` (free coordinates or ports);
-    /// default: the model's.
+    /// default: the model's [analysis] transfer; `none` leaves it out.
     #[arg(long)]
     pub(crate) transfer: Option<String>,
     /// Output format.

@@ -56,6 +56,16 @@ pub(crate) fn parse_transfer(model: &Model, spec: &str) -> Result<Transfer> {
         .map_err(|e| InputError(format!("--transfer {spec}: {e}")).into())
 }
 
+/// The transfer function of a command's `--transfer`: the one it spells, none for `none`, and
+/// the model's `[analysis] transfer` (if any) where it is not given.
+pub(crate) fn transfer_or_model(model: &Model, spec: Option<&str>) -> Result<Option<Transfer>> {
+    match spec {
+        Some("none") => Ok(None),
+        Some(s) => parse_transfer(model, s).map(Some),
+        None => Ok(model.analysis.transfer),
+    }
+}
+
 /// The library's choice for the command line's.
 pub(crate) fn how(d: Derivatives) -> sensitivity::Derivatives {
     match d {

@@ -19,10 +19,7 @@ pub(crate) fn sensitivity<'py>(
     derivatives: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let wrt = model.wrt(wrt)?;
-    let tf = match transfer {
-        Some(_) => model.transfer(transfer)?,
-        None => model.m().analysis.transfer,
-    };
+    let tf = model.transfer(transfer)?;
     let how = convert::derivatives(derivatives)?;
     let rows = py.detach(|| -> PyResult<Vec<Vec<String>>> {
         let pt = model.point(speed, &Options::single())?;

@@ -27,10 +27,7 @@ pub(crate) fn sensitivity_command(
     let m = load(&model, set)?;
     let request = point_request(&m, speed)?;
     let wrt = design_variables(m.model(), &wrt)?;
-    let tf = match tspec.as_deref() {
-        Some(s) => Some(parse_transfer(m.model(), s)?),
-        None => m.model().analysis.transfer,
-    };
+    let tf = transfer_or_model(m.model(), tspec.as_deref())?;
     let mut w = Sink::to(&output, &Inputs::new(&[&model]))?;
     let p = &request.parameters;
     let pt = request

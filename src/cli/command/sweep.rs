@@ -30,10 +30,7 @@ pub(crate) fn sweep_command(args: SweepArgs, set: &[(String, f64)], cancel: &Can
             InputError("no --speed given and the model has no [analysis] speed".into())
         })?,
     };
-    let tf = tspec
-        .as_deref()
-        .map(|s| parse_transfer(m.model(), s))
-        .transpose()?;
+    let tf = transfer_or_model(m.model(), tspec.as_deref())?;
     let cols = SweepColumns {
         transfer: tf.is_some(),
         wrt: if sens {

@@ -34,7 +34,7 @@ pub(super) fn specification(h: &mut String, model: &Model, a: &Analysis) {
                 (
                     r.name.clone(),
                     crate::report::describe(r),
-                    crate::margins::unit(r, &tu),
+                    unit_in_words(r, &tu),
                 )
             }
             None => (
@@ -185,7 +185,7 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
             }
         };
         let mut margin = l.margin.map_or("–".into(), |m| {
-            let u = crate::margins::unit(r, &tu);
+            let u = unit_in_words(r, &tu);
             if y.method == crate::table::Method::FirstOrder {
                 format!("{} {}", num(m[0]), esc(&u))
             } else {
@@ -213,6 +213,13 @@ pub(super) fn limits_table(h: &mut String, model: &Model, a: &Analysis) {
 
 /// The target yield as written in a heading: to six figures, in full where that would read 0
 /// or 1 (a target of 1 − 10⁻¹² is not 1.00000).
+/// A requirement's margin unit as a reader writes it after a number: none for a dimensionless
+/// margin (the CSV files keep the SI `1`).
+fn unit_in_words(r: &crate::model::Requirement, transfer: &str) -> String {
+    let u = crate::margins::unit(r, transfer);
+    if u == "1" { String::new() } else { u }
+}
+
 fn target_text(target: f64) -> String {
     let short = sig(target);
     if short == "1" || short == "0" || short.parse::<f64>().is_ok_and(|x| x <= 0.0 || x >= 1.0) {
