@@ -125,3 +125,26 @@ fn a_requirement_beyond_the_analysed_speeds_is_warned_of_and_requirements_are_li
         "{warnings:?}"
     );
 }
+
+/// `check` says which frame each joint's modes are seen from: the governor's arms and sleeve
+/// turn with its driven spindle; the Friswell rotor's nodes are measured from ground (their
+/// spin comes after their translations and tilts), so its whirl is seen from the fixed frame.
+#[test]
+fn check_names_the_frame_of_each_joint_s_modes() {
+    let governor = common::example("governor.toml");
+    let text = check_summary(governor.model());
+    assert!(
+        text.contains("    rotating with 'spin': arm1, arm2, slide\n"),
+        "{text}"
+    );
+    assert!(!text.contains("fixed (ground)"), "{text}");
+    let rotor = common::example("friswell_5_9_1.toml");
+    let text = check_summary(rotor.model());
+    assert!(
+        text.contains(
+            "    fixed (ground): shaft_0, shaft_1, shaft_2, shaft_3, shaft_4, shaft_5, shaft_6\n"
+        ),
+        "{text}"
+    );
+    assert!(!text.contains("rotating with"), "{text}");
+}

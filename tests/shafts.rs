@@ -142,13 +142,10 @@ fn friswell_example_5_9_2_anisotropic_bearings_at_the_book_frequencies() {
     }
 }
 
-#[test]
-fn a_rotor_seen_from_the_ground_and_from_its_turning_frame_has_the_same_roots() {
-    // In the frame turning at Ω an axisymmetric rotor's whirl at ω is seen at |ω ∓ Ω| (forward
-    // and backward), its axial and torsional modes at ω. Built both ways from the same file:
-    // the example's spinning nodes, and its nodes on a carrier driven at the speed (the spin
-    // then a drive of the frame, the twist held to the carrier by the same coupling).
-    let fixed = common::example("friswell_5_9_1.toml");
+/// Friswell's rotor with its nodes on a carrier driven at the speed: the spin a drive of the
+/// frame the nodes' translations and tilts are measured in, the twist held to the carrier by
+/// the same coupling.
+fn turning_friswell() -> String {
     let text = common::example_text("friswell_5_9_1.toml")
         .replace(
             "spin = \"speed\"\ncoupling = \"k_coupling\"\n",
@@ -165,7 +162,18 @@ fn a_rotor_seen_from_the_ground_and_from_its_turning_frame_has_the_same_roots() 
             1,
         );
     assert!(text.contains("parent = \"carrier\""), "test setup");
-    let turning = model(&text);
+    text
+}
+
+#[test]
+fn a_rotor_seen_from_the_ground_and_from_its_turning_frame_has_the_same_roots() {
+    // In the frame turning at Ω an axisymmetric rotor's whirl at ω is seen at |ω ∓ Ω| (forward
+    // and backward), its axial and torsional modes at ω. Built both ways from the same file:
+    // the example's spinning nodes, and its nodes on a carrier driven at the speed (the spin
+    // then a drive of the frame, the twist held to the carrier by the same coupling:
+    // [`turning_friswell`]).
+    let fixed = common::example("friswell_5_9_1.toml");
+    let turning = model(&turning_friswell());
     for speed in [100.0, 4000.0 * PI / 30.0] {
         for direct in [false, true] {
             let a: Vec<f64> = roots(&fixed, speed, direct).iter().map(|r| r.1).collect();
@@ -182,6 +190,31 @@ fn a_rotor_seen_from_the_ground_and_from_its_turning_frame_has_the_same_roots() 
                      root seen from the ground shifted by the speed"
                 );
             }
+        }
+    }
+}
+
+/// The frame each mode's frequency is said to be seen from is the one its roots are in (the
+/// test above: the carrier's roots are the ground's shifted by the speed): every mode of the
+/// example is `fixed`, every mode on the carrier `rotating` with its drive, in `modal`'s JSON.
+#[test]
+fn the_frame_a_mode_is_said_to_be_seen_from_is_the_frame_its_roots_are_in() {
+    let fixed = common::example("friswell_5_9_1.toml");
+    let turning = model(&turning_friswell());
+    for (m, expected) in [(&fixed, "fixed"), (&turning, "rotating")] {
+        let p = m.model().nominal();
+        let pt = solve(m, 300.0, false);
+        let json = modaltol::report::modal_json(m.model(), &p, 300.0, &Ok(pt));
+        let modes = json["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 42);
+        for md in modes {
+            assert_eq!(md["frame"], expected, "{}", md["mode"]);
+            let by = if expected == "fixed" {
+                serde_json::Value::Null
+            } else {
+                "spin".into()
+            };
+            assert_eq!(md["frame_turned_by"], by);
         }
     }
 }

@@ -15,6 +15,7 @@ mod validate;
 mod warnings;
 
 mod analysis;
+mod frames;
 mod requirements;
 mod site;
 

@@ -42,6 +42,7 @@ pub fn check_summary(model: &Model) -> String {
     loads(&mut s, model);
     constraints(&mut s, model);
     let _ = writeln!(s, "  degrees of freedom: {}", model.dof());
+    frames(&mut s, model);
     parameters(&mut s, model, pw);
     if !model.analysis.cases.is_empty() {
         let names: Vec<&str> = model
@@ -69,6 +70,58 @@ pub fn check_summary(model: &Model) -> String {
         );
     }
     s
+}
+
+/// Which free coordinates a driven rotation turns (their modes' frequencies are seen from the
+/// rotating frame) and which are measured from ground (the fixed frame), by joint.
+fn frames(s: &mut String, model: &Model) {
+    let turned = model.turned_by();
+    let free = model.free();
+    let mut rotating: Vec<(String, &str)> = Vec::new();
+    let mut fixed: Vec<&str> = Vec::new();
+    for (j, joint) in model.joints.iter().enumerate() {
+        let Some(&c) = free.iter().find(|&&c| model.coordinates[c].joint == j) else {
+            continue;
+        };
+        match turned[c] {
+            Some(d) => rotating.push((model.joints[d].name.clone(), joint.name.as_str())),
+            None => fixed.push(joint.name.as_str()),
+        }
+    }
+    let _ = writeln!(
+        s,
+        "  frames (a mode's frequency is seen from the frame of its coordinates):"
+    );
+    let mut by: Vec<&str> = Vec::new();
+    for (d, _) in &rotating {
+        if !by.contains(&d.as_str()) {
+            by.push(d);
+        }
+    }
+    for d in by {
+        let names: Vec<&str> = (rotating.iter())
+            .filter(|(x, _)| *x == d)
+            .map(|(_, n)| *n)
+            .collect();
+        let _ = writeln!(s, "    rotating with '{d}': {}", abbreviated(&names));
+    }
+    if !fixed.is_empty() {
+        let _ = writeln!(s, "    fixed (ground): {}", abbreviated(&fixed));
+    }
+}
+
+/// Names joined by commas, the middle of a long list left out (a meshed shaft has hundreds).
+fn abbreviated(names: &[&str]) -> String {
+    if names.len() <= 8 {
+        names.join(", ")
+    } else {
+        format!(
+            "{}, … ({} more), {}",
+            names[..3].join(", "),
+            names.len() - 5,
+            names[names.len() - 2..].join(", ")
+        )
+    }
 }
 
 /// Columns as wide as the longest name (at least `least`), so that long names do not push

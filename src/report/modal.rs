@@ -178,6 +178,8 @@ pub fn modal_json(
         .collect();
     let bodies = body_shapes(model, params, p).ok();
     let whirls = whirl::of_point(model, params, p).unwrap_or_default();
+    let turned = model.turned_by();
+    let frame = |i: usize| crate::scene::frame_of(&turned, &p.linear.free, p.shapes[i].as_slice());
     let pair = |z: &C64| json!({"re": z.re, "im": z.im});
     let motion = |i: usize| -> Value {
         let Some(b) = bodies.as_ref().and_then(|b| b.get(i)) else {
@@ -204,6 +206,8 @@ pub fn modal_json(
                    "damped_frequency": m.damped_frequency, "natural_frequency": m.natural_frequency,
                    "damping_ratio": m.damping_ratio,
                    "whirl": whirls.get(i).copied().flatten().map(Whirl::as_str),
+                   "frame": if frame(i).is_some() { "rotating" } else { "fixed" },
+                   "frame_turned_by": frame(i).map(|j| model.joints[j].name.clone()),
                    "eigenvalue": {"re": m.root.lambda.re, "im": m.root.lambda.im},
                    "partner_eigenvalue": {"re": m.partner.lambda.re, "im": m.partner.lambda.im},
                    "shape": model.free().iter().zip(display_shape(p.shapes[i].as_slice())).map(|(&c, z)| json!({"coordinate": model.coordinates[c].name, "re": z.re, "im": z.im, "unit": model.coordinates[c].unit.symbol()})).collect::<Vec<_>>(),
@@ -278,17 +282,23 @@ pub fn modal_table(
     write_matrix(&mut s, "M̂", &p.linear.m);
     write_matrix(&mut s, "Ĉ", &p.linear.c);
     write_matrix(&mut s, "K̂", &p.linear.k);
-    let _ = writeln!(s, "\nmodes (rad/s):");
     let _ = writeln!(
         s,
-        "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}  whirl",
-        "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue"
+        "\nmodes (rad/s; each frequency as seen from the mode's frame: fixed = ground, \
+         rotating = turning with the driven joint named):"
+    );
+    let _ = writeln!(
+        s,
+        "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}  {:<8}  frame",
+        "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue", "whirl"
     );
     let whirls = whirl::of_point(model, params, p).unwrap_or_default();
+    let turned = model.turned_by();
     for (i, m) in p.modes.iter().enumerate() {
+        let frame = crate::scene::frame_of(&turned, &p.linear.free, p.shapes[i].as_slice());
         let _ = writeln!(
             s,
-            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i  {}",
+            "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i  {:<8}  {}",
             i + 1,
             m.class.as_str(),
             m.damped_frequency,
@@ -296,7 +306,8 @@ pub fn modal_table(
             fixed(m.damping_ratio, 6),
             m.root.lambda.re,
             m.root.lambda.im,
-            whirls.get(i).copied().flatten().map_or("", Whirl::as_str)
+            whirls.get(i).copied().flatten().map_or("", Whirl::as_str),
+            crate::scene::frame_words(model, frame)
         );
     }
     write_shapes(&mut s, model, p);

@@ -23,7 +23,8 @@
 mod modes;
 
 pub use modes::{
-    PhysicalShape, Posed, describe, descriptions, mac, mode_frames, physical_shape, physical_shapes,
+    PhysicalShape, Posed, describe, descriptions, frame_of, frame_words, mac, mode_frames,
+    physical_shape, physical_shapes,
 };
 
 use crate::mechanics::System;

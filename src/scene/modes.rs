@@ -149,6 +149,21 @@ pub fn describe(model: &Model, free: &[usize], v: &[C64], whirl: Option<Whirl>) 
     }
 }
 
+/// The frame the mode `v` (over the free coordinates `free`) is seen from: the driven rotation
+/// that turns its dominant coordinate's frame (`turned`, [`Model::turned_by`]), `None` for the
+/// fixed (ground) frame.
+pub fn frame_of(turned: &[Option<usize>], free: &[usize], v: &[C64]) -> Option<usize> {
+    let (k, _) = (v.iter().enumerate()).max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))?;
+    turned[free[k]]
+}
+
+/// A mode's frame in words: `rotating (with JOINT)` or `fixed`.
+pub fn frame_words(model: &Model, frame: Option<usize>) -> String {
+    frame.map_or("fixed".to_string(), |j| {
+        format!("rotating (with {})", model.joints[j].name)
+    })
+}
+
 /// [`describe`] for every mode of the point `pt` of `model` solved with parameters `p` (empty
 /// where the model does not evaluate there).
 pub fn descriptions(model: &Model, p: &[f64], pt: &crate::sweep::Point) -> Vec<String> {
