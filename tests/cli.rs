@@ -272,6 +272,30 @@ fn sweep_takes_the_model_s_transfer_as_sensitivity_does() {
     );
 }
 
+/// `draw` without `--speed` draws the middle of the model's [analysis] speeds (as the report
+/// does), where the governor spins; it drew the first, 0 rad/s, the mechanism at rest.
+#[test]
+fn draw_defaults_to_the_middle_of_the_analysed_speeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.svg");
+    let o = run(&[
+        "draw",
+        example("governor.toml").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = modaltol::compiled::Compiled::from_file(&example("governor.toml")).unwrap();
+    let speeds: Vec<f64> = m.model().analysis.speed.unwrap().speeds().collect();
+    let middle = speeds[speeds.len() / 2];
+    assert!(middle > 0.0);
+    let svg = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        svg.contains(&format!("governor at {middle} rad/s")),
+        "not at {middle}"
+    );
+}
+
 #[test]
 fn sensitivity_json_ad_and_fd_agree() {
     let get = |how: &str| {

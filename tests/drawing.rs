@@ -589,3 +589,34 @@ fn the_report_draws_the_mechanism_its_modes_and_their_mac() {
         "{campbell}"
     );
 }
+
+/// The page opens animating the first mode that oscillates (it opened still on the
+/// equilibrium), `--mode K` still chooses; a rigid first mode (the flywheel's free spin about
+/// its bearing) is passed over for the arm's.
+#[test]
+fn the_page_opens_animating_the_first_mode_that_oscillates() {
+    let start = |page: &str| -> i64 {
+        let i = page.find("data-start=\"").unwrap() + "data-start=\"".len();
+        page[i..].split('"').next().unwrap().parse().unwrap()
+    };
+    let m = example("governor.toml");
+    let (p, pt) = solved(&m, 1.6);
+    let d = Drawing::new(m.model(), &p, &pt).unwrap();
+    assert_eq!(start(&html(&d, None)), 0);
+    let flywheel = "gravity = [0, -9.81, 0]\n\
+        [[bodies]]\nname = \"shaft\"\nmass = 1\ninertia = [0.01, 0.01, 0.01]\ncm = [0, 0.1, 0]\n\
+        [[joints]]\nname = \"spin\"\ntype = \"revolute\"\nparent = \"ground\"\nchild = \"shaft\"\n\
+        at = [0, 0, 0]\naxis = [0, 1, 0]\ndrive = \"speed\"\n\
+        [[bodies]]\nname = \"wheel\"\nmass = 1\ninertia = [0.1, 0.2, 0.1]\ncm = [0, 0.3, 0]\n\
+        [[joints]]\nname = \"bearing\"\ntype = \"revolute\"\nparent = \"shaft\"\nchild = \"wheel\"\n\
+        at = [0, 0.3, 0]\naxis = [0, 1, 0]\n\
+        [[bodies]]\nname = \"arm\"\nmass = 0.5\ninertia = [0.001, 0.001, 0.001]\ncm = [0.2, 0, 0]\n\
+        [[joints]]\nname = \"hinge\"\ntype = \"revolute\"\nparent = \"shaft\"\nchild = \"arm\"\n\
+        at = [0, 0, 0]\naxis = [0, 0, 1]\nstiffness = 1e4\ndamping = 0.01\n";
+    let m = Compiled::from_str(flywheel, "flywheel.toml").unwrap();
+    let (p, pt) = solved(&m, 5.0);
+    assert_eq!(pt.modes[0].class, modaltol::modal::ModeClass::Rigid);
+    let d = Drawing::new(m.model(), &p, &pt).unwrap();
+    assert_eq!(start(&html(&d, None)), 1);
+    assert_eq!(start(&html(&d, Some(0))), 0);
+}

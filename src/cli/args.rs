@@ -314,7 +314,8 @@ pub(crate) struct ModalArgs {
 pub(crate) struct DrawArgs {
     /// Model file (TOML).
     pub(crate) model: PathBuf,
-    /// Operating speed, rad/s (default: the first speed of the model's [analysis] speed, or 0).
+    /// Operating speed, rad/s (default: the middle of the model's [analysis] speeds, as the
+    /// report draws it, so that what spins is drawn spinning; 0 without them).
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) speed: Option<f64>,
     /// The mode to draw (1-based, as `modal` numbers them): overlaid in the SVG; shown first,

@@ -97,8 +97,10 @@ pub fn html(d: &Drawing, mode: Option<usize>) -> String {
                 format!("<option value=\"{i}\">{}</option>", esc(&d.modes[k].label))
             }))
             .collect();
+    // The mode asked for, else the first that oscillates: the page opens moving.
     let start = mode
         .and_then(|k| shown.iter().position(|&s| s == k))
+        .or_else(|| shown.iter().position(|&k| d.modes[k].oscillates))
         .map_or(-1, |i| i as i64);
     let lowest = animated(d.scene.bodies.len(), d.modes.len(), None).len();
     let which = if lowest < d.modes.len() {

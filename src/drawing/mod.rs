@@ -51,6 +51,8 @@ pub struct Drawing {
 pub struct ModeMotion {
     /// `mode k: ω_d = … rad/s, ζ = …` (or its status where it has no frequency).
     pub label: String,
+    /// The mode oscillates (a damped frequency above zero): what the page animates first.
+    pub oscillates: bool,
     /// The shape's scale `a`: the motion is that of the pose at `q + a Re(v e^{iφ})`.
     pub amplitude: f64,
     /// Per body: the displacement of its centre of mass (m) and its small rotation (rad,
@@ -181,7 +183,8 @@ impl Drawing {
         let modes = (pt.modes.iter().zip(&shapes).zip(&physical).enumerate())
             .map(|(k, ((m, v), shape))| {
                 let what = describe(model, free, v, whirls[k]);
-                let label = if m.damped_frequency.is_finite() && m.damped_frequency > 0.0 {
+                let oscillates = m.damped_frequency.is_finite() && m.damped_frequency > 0.0;
+                let label = if oscillates {
                     format!(
                         "mode {} ({what}): ω_d = {:.4} rad/s, ζ = {:.4}",
                         k + 1,
@@ -200,6 +203,7 @@ impl Drawing {
                 let a = amplitude(&scene, &anchors, &unit, size, 0.1 * size);
                 ModeMotion {
                     label,
+                    oscillates,
                     amplitude: a,
                     motion: body_motion(shape, a),
                 }

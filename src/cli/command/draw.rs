@@ -30,13 +30,13 @@ pub(crate) fn draw_command(args: DrawArgs, set: &[(String, f64)], cancel: &Cance
         }
     };
     let m = load(&model, set)?;
+    // By default the middle of the analysed speeds, as the report draws it: where things spin
+    // (the first speed is often 0, the mechanism at rest).
     let speed = speed.unwrap_or_else(|| {
-        m.model()
-            .analysis
-            .speed
-            .as_ref()
-            .and_then(|r| r.speeds().next())
-            .unwrap_or(0.0)
+        m.model().analysis.speed.as_ref().map_or(0.0, |r| {
+            let speeds: Vec<f64> = r.speeds().collect();
+            speeds.get(speeds.len() / 2).copied().unwrap_or(0.0)
+        })
     });
     let request = point_request(&m, speed)?;
     let opt = Options {
