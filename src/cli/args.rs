@@ -196,53 +196,68 @@ pub(crate) enum Command {
     /// Derivatives of ω_d, ω_n, ζ of every mode and of the transfer magnitude with respect to
     /// the design variables at one speed, through the move of the equilibrium.
     Sensitivity(SensitivityArgs),
-    /// Tolerance analysis across the speed range: every mode's ω_d and ζ and the transfer
-    /// magnitude, per tolerance case of the model's [analysis] table, by first order (the
-    /// paper's method), second order, the invariant-based method for ω_d, the quadrature (the
-    /// whole nonlinear analysis integrated over the distribution of the design variables,
-    /// deterministically, with error estimates: right at class changes and branch switches),
-    /// "analytic" (the answer to read: the quadrature), and Monte Carlo.
+    /// Tolerance analysis across the speed range: how the tolerances spread every mode's damped
+    /// natural frequency ω_d and damping ratio ζ, and the transfer magnitude |H|, per tolerance
+    /// case.
     ///
-    /// Writes DIR/tolerance.csv (columns speed, quantity, mode, case, method, mean, std,
-    /// mean_ci_low, mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed,
-    /// basis (the method an "analytic" row took), q05, q50, q95 (quantiles: quadrature and
-    /// Monte Carlo), mean_error, std_error (the quadrature's error estimates), within_request
-    /// (whether they meet --quadrature-tolerance; rows that do not are also named on stderr, in
-    /// the report and in summary.json's quadrature_outside_request), partial, reason
-    /// (why a row has no mean and σ), share:<parameter>; SI units, rad/s for speeds and
-    /// frequencies), DIR/probabilities.csv
-    /// (speed, case, method, event = overdamped|unstable|other_branch, mode, probability,
-    /// ci_low, ci_high); for a model with [[requirements]], DIR/yield.csv (case, method =
+    /// Example: `modaltol analyze examples/tutorial/pendulum_tolerances.toml -o out`, then open
+    /// out/report.html (docs/tutorial.md reads one). Without MODEL, runs the governor example
+    /// built into the binary. --speed-unit and --frequency-unit show the plots and report in
+    /// rpm or Hz; the CSV and JSON files stay in SI units (rad/s).
+    ///
+    /// Methods (the `method` column): first_order (the classical Taylor method), second_order,
+    /// invariant (ω_d), quadrature (the whole nonlinear analysis integrated over the
+    /// distribution of the design variables, deterministically, with error estimates: right at
+    /// class changes and branch switches), analytic (the answer to read: the quadrature), and
+    /// monte_carlo.
+    ///
+    /// DIR/report.html: the cases, the answer in short (mean ± 3σ, what drives it, whether the
+    /// requirements hold), a specification section for a model with [[requirements]], σ by
+    /// method where it matters (the largest σ, the critical speeds, the |H| peak), the critical
+    /// speeds and near-tangencies, the response peaks, then the plots (SVG and PNG: mean ± σ
+    /// and σ by method of every mode's ω_d and ζ and of |H|, probabilities, variance shares, a
+    /// Campbell diagram of the modes the engine orders 1–3 reach, with the ±3σ bands of the case
+    /// with the most toleranced variables and the critical speeds and near-tangencies marked).
+    ///
+    /// DIR/tolerance.csv: speed, quantity, mode, case, method, mean, std, mean_ci_low,
+    /// mean_ci_high, std_ci_low, std_ci_high, samples, failed, class_changed, basis (the method
+    /// an "analytic" row took), q05, q50, q95 (quantiles: quadrature and Monte Carlo),
+    /// mean_error, std_error (the quadrature's error estimates), within_request (whether they
+    /// meet --quadrature-tolerance; rows that do not are also named on stderr, in the report and
+    /// in summary.json's quadrature_outside_request), partial, reason (why a row has no mean
+    /// and σ), share:<parameter>; SI units, rad/s for speeds and frequencies.
+    ///
+    /// DIR/probabilities.csv: speed, case, method, event = overdamped|unstable|other_branch,
+    /// mode, probability, ci_low, ci_high.
+    ///
+    /// DIR/yield.csv (a model with [[requirements]]): case, method =
     /// quadrature|monte_carlo|first_order, requirement (all: every one together), kind, mode,
     /// speed_from, speed_to, speed (empty: over the range, every speed at once), probability,
     /// ci_low, ci_high, target, meets_target = yes|no|undecided, margin_unit, margin_mean,
     /// margin_std (the worst margin over the range), cpk, evaluations, within_request (the
     /// quadrature's: whether its error estimate meets --quadrature-tolerance as an absolute
-    /// error of the probability)), DIR/limits.csv (what the design meets at the target yield
+    /// error of the probability). Each requirement is judged over its whole range: its ends are
+    /// added to the speeds analysed, and a range beyond --speed is refused.
+    ///
+    /// DIR/limits.csv (with requirements): what the design meets at the target yield
     /// (--target-yield), per case, method and requirement: reach, reach_low, reach_high = the
     /// highest speed up to which, from the range's start, it holds at the target yield;
     /// margin_at_target, margin_low, margin_high = the worst margin's 1 − target quantile and
     /// its interval; tightest = the tightest requirement of its kind met, in words; reason =
-    /// why a value is blank). Each requirement is judged over its whole range: its ends are
-    /// added to the speeds analysed, and a range beyond --speed is refused. And
-    /// a specification section at the top of the report; with --sobol, DIR/sobol.csv (case, target, speed,
-    /// quantity, mode, variable, first, first_ci_low, first_ci_high, total, total_ci_low,
-    /// total_ci_high, derivative_bound, rows); for a model with a transfer function ([analysis]
-    /// transfer), DIR/peaks.csv (case, kind = maximum|resonance, speed, speed_std, magnitude,
-    /// magnitude_std, unit, amplification_factor, amplification_factor_std (API 684's
-    /// half-power method), mode, message: where |H| peaks along the speed, located between the
-    /// swept speeds, with σ by first order; a resonance is an undamped mode at the excitation
-    /// frequency, its |H| unbounded and left empty); DIR/summary.json (cases, wall times of the
-    /// Taylor methods, the
-    /// quadrature and the Monte Carlo, beside the paper's for its two examples, failures, the
-    /// rows without a value grouped with their reasons under "unfilled"),
-    /// the plots (SVG and PNG: mean ± σ and σ by method of every mode's ω_d and ζ and of |H|,
-    /// probabilities, variance shares, a Campbell diagram of the modes the engine orders 1–3
-    /// reach, with the ±3σ bands of the case with the most toleranced variables and the
-    /// critical speeds and near-tangencies marked) and DIR/report.html (a summary of σ by method at the largest σ,
-    /// the critical speeds, the |H| peak and the response peaks, then the plots). --speed-unit and
-    /// --frequency-unit show the plots and report in rpm or Hz. Without MODEL, runs the
-    /// governor example built into the binary.
+    /// why a value is blank.
+    ///
+    /// DIR/sobol.csv (with --sobol): case, target, speed, quantity, mode, variable, first,
+    /// first_ci_low, first_ci_high, total, total_ci_low, total_ci_high, derivative_bound, rows.
+    ///
+    /// DIR/peaks.csv (a model with [analysis] transfer): case, kind = maximum|resonance, speed,
+    /// speed_std, magnitude, magnitude_std, unit, amplification_factor,
+    /// amplification_factor_std (API 684's half-power method), mode, message: where |H| peaks
+    /// along the speed, located between the swept speeds, with σ by first order; a resonance is
+    /// an undamped mode at the excitation frequency, its |H| unbounded and left empty.
+    ///
+    /// DIR/summary.json: the cases, wall times of the Taylor methods, the quadrature and the
+    /// Monte Carlo (beside the paper's for its two examples), failures, the rows without a
+    /// value grouped with their reasons under "unfilled".
     Analyze(AnalyzeArgs),
     /// Combine the shard files of `analyze --shard K/N` runs into exactly the result of one run
     /// (same seed, same numbers): writes the same files as `analyze`, bit for bit, the Monte
