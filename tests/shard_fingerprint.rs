@@ -415,9 +415,25 @@ fn a_model_failing_at_every_speed_shards_and_merges_as_one_run() {
             (format!("shard {}", k + 1), file.to_json())
         })
         .collect();
-    let (_, shards) = modaltol::shard::verify(model.model(), &cases, texts)
+    let texts_again = texts.clone();
+    let gathered = modaltol::shard::verify(model.model(), &cases, texts)
         .unwrap_or_else(|e| panic!("the shards are refused: {e}"));
-    let merged = analyze(&model, &opt(Split::Merged(shards)), &|_: &str, _, _| {});
+    // The merge reports the shards' Monte Carlo time, summed, each shard's own.
+    let (first, second) = (
+        ShardFile::parse(&texts_again[0].1, "1").unwrap(),
+        ShardFile::parse(&texts_again[1].1, "2").unwrap(),
+    );
+    let each = [first.monte_carlo_seconds, second.monte_carlo_seconds];
+    assert!(each.iter().all(|s| s.is_some_and(|s| s > 0.0)), "{each:?}");
+    assert_eq!(
+        gathered.monte_carlo_seconds,
+        Some(each[0].unwrap() + each[1].unwrap())
+    );
+    let merged = analyze(
+        &model,
+        &opt(Split::Merged(gathered.states)),
+        &|_: &str, _, _| {},
+    );
     let whole = analyze(&model, &opt(Split::Whole), &|_: &str, _, _| {});
     assert_eq!(merged.outputs.len(), 3, "ω_d, ζ and |H|");
     assert_eq!(merged.rows.len(), whole.rows.len());

@@ -56,6 +56,10 @@ pub struct ShardFile {
     /// one run's.
     #[serde(default)]
     pub kept: Vec<KeptFile>,
+    /// The wall time this shard's Monte Carlo took (s): `merge` reports the shards' total, not
+    /// its own fold (absent from shards written before it was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub monte_carlo_seconds: Option<f64>,
     /// SHA-256 (hex) of the file's JSON with this field empty.
     #[serde(default)]
     pub digest: String,
@@ -159,6 +163,7 @@ impl ShardFile {
             kept: (a.shard_states.iter())
                 .filter_map(|c| c.kept.as_ref().map(KeptFile::of))
                 .collect(),
+            monte_carlo_seconds: a.monte_carlo_seconds,
             digest: String::new(),
         })
     }

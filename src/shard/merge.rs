@@ -37,12 +37,24 @@ pub fn merged_options(
     Ok((opt, mc))
 }
 
+/// The shards of one run, gathered: what a merge folds.
+#[derive(Debug)]
+pub struct Gathered {
+    /// The run's settings.
+    pub run: RunSettings,
+    /// Per case, all blocks in chunk order.
+    pub states: Vec<CaseShard>,
+    /// The wall time of the shards' Monte Carlos, summed (s): what one process would have
+    /// taken; `None` where a shard does not say (written before it was kept).
+    pub monte_carlo_seconds: Option<f64>,
+}
+
 /// Checks that `files` (path, parsed shard) are shards `1..=N` of one run, each once, made from
-/// `fingerprint`, and returns the run's settings and, per case, all blocks in chunk order.
+/// `fingerprint`, and gathers them.
 pub fn gather(
     files: Vec<(String, ShardFile)>,
     fingerprint: &Fingerprint,
-) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+) -> Result<Gathered, ShardError> {
     let mut files = files;
     files.sort_by_key(|(_, f)| f.shard);
     let Some((first_path, first)) = files.first() else {
@@ -103,6 +115,9 @@ pub fn gather(
             kept: keeps.then(Kept::default),
         })
         .collect();
+    let seconds = (files.iter())
+        .map(|(_, f)| f.monte_carlo_seconds)
+        .sum::<Option<f64>>();
     for (path, f) in files {
         if f.kept.is_empty() == keeps {
             return Err(ShardError {
@@ -123,16 +138,16 @@ pub fn gather(
             out[ci].blocks.extend(b);
         }
     }
-    Ok((run, out))
+    Ok(Gathered {
+        run,
+        states: out,
+        monte_carlo_seconds: seconds,
+    })
 }
 
 /// Reads and verifies the shard files `paths` of one run of `model` with `cases` and gathers
 /// them ([`verify`]).
-pub fn read_all(
-    model: &Model,
-    cases: &[Case],
-    paths: &[PathBuf],
-) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+pub fn read_all(model: &Model, cases: &[Case], paths: &[PathBuf]) -> Result<Gathered, ShardError> {
     let texts = paths
         .iter()
         .map(|p| read_text(p))
@@ -170,7 +185,7 @@ pub fn verify(
     model: &Model,
     cases: &[Case],
     texts: Vec<(String, String)>,
-) -> Result<(RunSettings, Vec<CaseShard>), ShardError> {
+) -> Result<Gathered, ShardError> {
     let mut files = Vec::with_capacity(texts.len());
     for (name, text) in texts {
         let f = ShardFile::parse(&text, &name)?;

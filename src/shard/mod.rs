@@ -26,4 +26,4 @@ mod merge;
 pub use check::Layout;
 pub use file::{FORMAT, KeptFile, MAX_BYTES, ShardError, ShardFile, output_count};
 pub use fingerprint::{Fingerprint, RunSettings};
-pub use merge::{cases_run, gather, merged_options, read_all, verify};
+pub use merge::{Gathered, cases_run, gather, merged_options, read_all, verify};

@@ -69,13 +69,18 @@ pub(crate) fn merge<'py>(
         .check()
         .and_then(|r| r.resolve(m, Cancel::new()))
         .map_err(refused)?;
-    let (first, states) =
+    let gathered =
         modaltol::shard::verify(m, &base.cases, shards).map_err(|e| bad(e.to_string()))?;
-    let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(bad)?;
+    let (opt, mc) =
+        modaltol::shard::merged_options(&gathered.run, gathered.states, base).map_err(bad)?;
     let dir = model.result_dir(&output)?;
     let targeted = model.targeted(target_yield);
     let model = &*targeted;
-    let a = run_analysis(py, model, &opt)?;
+    let mut a = run_analysis(py, model, &opt)?;
+    // The Monte Carlo's time is the shards', not the fold's.
+    if gathered.monte_carlo_seconds.is_some() {
+        a.monte_carlo_seconds = gathered.monte_carlo_seconds;
+    }
     let used = opt
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));

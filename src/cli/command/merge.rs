@@ -51,7 +51,7 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         }
         _ => tolerance_cases(m.model(), &only)?,
     };
-    let (first, states) = modaltol::shard::read_all(m.model(), &cases, &shards)
+    let gathered = modaltol::shard::read_all(m.model(), &cases, &shards)
         .map_err(|e| InputError(e.to_string()))?;
     let base = AnalyzeOptions {
         cases,
@@ -59,14 +59,19 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         cancel: cancel.clone(),
         ..Default::default()
     };
-    let (opt, mc) = modaltol::shard::merged_options(&first, states, base).map_err(InputError)?;
+    let (opt, mc) = modaltol::shard::merged_options(&gathered.run, gathered.states, base)
+        .map_err(InputError)?;
     note_unresolved_target(&m, Some(&mc));
     let mut inputs: Vec<&PathBuf> = model.iter().collect();
     inputs.extend(&shards);
     let inputs = Inputs::new(&inputs);
     refuse_input(&inputs, &output)?;
     let dir = protect(ResultDir::create(&output)?, inputs)?;
-    let a = analyze(&m, &opt, &progress_printer());
+    let mut a = analyze(&m, &opt, &progress_printer());
+    // The Monte Carlo's time is the shards', not the fold's.
+    if gathered.monte_carlo_seconds.is_some() {
+        a.monte_carlo_seconds = gathered.monte_carlo_seconds;
+    }
     let o = WriteOptions {
         mc: Some(&mc),
         threads: rayon::current_num_threads(),
