@@ -620,3 +620,72 @@ fn the_page_opens_animating_the_first_mode_that_oscillates() {
     assert_eq!(start(&html(&d, None)), 1);
     assert_eq!(start(&html(&d, Some(0))), 0);
 }
+
+/// The names in the front view never print over each other and stay in their panel (boxes
+/// from the font size, a glyph 0.6 em wide: the placement's own estimate, so this checks the
+/// placement, not the font), on every shipped example and the tutorial's pendulum; and the
+/// views are drawn with up against gravity: the front view of a z-up model is an elevation.
+#[test]
+fn names_do_not_collide_and_views_stand_up_against_gravity() {
+    let mut names: Vec<String> = std::fs::read_dir(common::example_path(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    names.sort();
+    names.push("tutorial/pendulum.toml".into());
+    for name in &names {
+        let m = example(name);
+        let speed = m
+            .model()
+            .analysis
+            .speed
+            .map_or(1.0, |r| r.speeds().nth(r.len() / 2).unwrap());
+        let (p, pt) = solved(&m, speed);
+        let d = Drawing::new(m.model(), &p, &pt).unwrap();
+        let page = svg(&d, None);
+        let mut boxes: Vec<[f64; 4]> = Vec::new();
+        for t in page.split("<text class=\"label\" ").skip(1) {
+            let num = |k: &str| -> f64 {
+                let i = t.find(&format!("{k}=\"")).unwrap() + k.len() + 2;
+                t[i..].split('"').next().unwrap().parse().unwrap()
+            };
+            let text = t.split('>').nth(1).unwrap().split('<').next().unwrap();
+            let w = 0.6 * 10.0 * text.chars().count() as f64;
+            let (x, y) = (num("x"), num("y"));
+            let b = [x, y - 8.0, x + w, y + 2.0];
+            assert!(
+                b[0] >= 0.0 && b[2] <= 360.0 && b[1] >= 44.0 && b[3] <= 404.0,
+                "{name}: '{text}' leaves the front view"
+            );
+            for o in &boxes {
+                let apart = b[2] <= o[0] || o[2] <= b[0] || b[3] <= o[1] || o[3] <= b[1];
+                assert!(apart, "{name}: '{text}' {b:?} prints over a name at {o:?}");
+            }
+            boxes.push(b);
+        }
+        assert!(!boxes.is_empty(), "{name}: no names");
+        let g = m.model().nominal();
+        let gravity = modaltol::mechanics::System::new(m.model(), &g, speed)
+            .unwrap()
+            .gravity;
+        let front = page.split("data-view=\"0\"").nth(1).unwrap();
+        let v = front
+            .split("data-v=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        let v: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
+        let up = v[0] * gravity.x + v[1] * gravity.y + v[2] * gravity.z;
+        if gravity.norm() > 0.0 {
+            assert!(
+                (up + gravity.norm()).abs() <= 1e-12 * gravity.norm(),
+                "{name}: the front view's up {v:?} is not against gravity {gravity:?}"
+            );
+        } else {
+            assert_eq!(v, [0.0, 1.0, 0.0], "{name}");
+        }
+    }
+}

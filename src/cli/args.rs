@@ -155,11 +155,13 @@ pub(crate) enum Command {
     Modal(ModalArgs),
     /// Draw the mechanism at its equilibrium, and its modes.
     ///
-    /// SVG (`-o FILE.svg`): three orthographic views (front: x right, y up; top: x right, −z up;
-    /// side: −z right, y up), one scale, in metres: each body's centre of mass (dot) linked to
-    /// the points it is joined at, joints with their axes (red; a driven joint ringed), cut
-    /// joints (crossed circles), force elements (green, dashed) and ports (orange arrows),
-    /// labelled by name in the front view. With `--mode K`, mode K drawn over the equilibrium
+    /// SVG (`-o FILE.svg`): three orthographic views standing up against gravity (in a y-up
+    /// model front: x right, y up; top: x right, −z up; side: −z right, y up; in a z-up model
+    /// front: x right, z up; each view names its axes), one scale, in metres: each body's
+    /// centre of mass (dot) linked to the points it is joined at, joints with their axes (red;
+    /// a driven joint ringed), cut joints (crossed circles), force elements (green, dashed) and
+    /// ports (orange arrows), named in the front view (one label per point, none over
+    /// another). With `--mode K`, mode K drawn over the equilibrium
     /// (grey): its two extremes (φ = 0 blue, φ = π red) and quarter periods (dashed), the
     /// amplitude a tenth of the mechanism's size.
     ///
@@ -168,7 +170,8 @@ pub(crate) enum Command {
     /// turned by the mode's amplitude and phase, so whirl looks like whirl); it opens offline.
     /// The page carries six complex numbers a body per mode: every mode where 300,000 numbers
     /// hold them (about 150 bodies with all their modes), else the lowest modes that fit,
-    /// which the page names. `--mode K` chooses the mode shown first, and animates it in any case.
+    /// which the page names. It opens animating the first mode that oscillates; `--mode K`
+    /// chooses the mode shown first, and animates it in any case.
     Draw(DrawArgs),
     /// Sweep the operating speed: one CSV row per (speed, mode).
     ///

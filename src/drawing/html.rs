@@ -3,7 +3,8 @@
 //! [`super`]). The script is this file's own, a few dozen lines; nothing is fetched.
 //!
 //! The page's data (`#data`, JSON) is the equilibrium once and, per mode animated, the bodies'
-//! motion: `size` (m); `scene`, the [`Scene`] with each vector replaced by its index `i`;
+//! motion: `size` (m); `axes` (`across`, `up`, `toward`: the ground axes the 3-D view turns
+//! from, up against gravity); `scene`, the [`Scene`] with each vector replaced by its index `i`;
 //! `x`, the vectors at the equilibrium (`x[3i..3i+3]`); `anchor`, per vector `b + 1` for a point
 //! placed by body `b`, `−(b + 1)` for a direction turned by it, 0 for the ground's; `modes`, each
 //! with its `number` (1-based), `label`, and `re`, `im`: per body its displacement (m) and
@@ -70,6 +71,8 @@ struct PageMode<'a> {
 #[derive(serde::Serialize)]
 struct Page<'a> {
     size: f64,
+    /// The ground axes the view is turned from: `up` drawn up ([`super::Axes`]).
+    axes: super::Axes,
     scene: Scene<usize>,
     x: Rounded<'a>,
     anchor: Vec<i64>,
@@ -186,6 +189,7 @@ fn page<'a>(
     let length = decimals(d.size);
     Page {
         size: d.size,
+        axes: d.axes,
         scene,
         x: Rounded {
             values: x,

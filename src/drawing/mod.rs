@@ -44,6 +44,48 @@ pub struct Drawing {
     /// The diagonal of the box around the mechanism (m).
     pub size: f64,
     pub modes: Vec<ModeMotion>,
+    /// The ground axes the views are drawn in ([`Axes::of_gravity`]): up against gravity.
+    pub axes: Axes,
+}
+
+/// The ground axes a drawing is seen along: `up` the axis (±x, ±y or ±z) nearest against
+/// gravity (+y where there is none), `across` the first other axis of x, y, z drawn to the right
+/// in the front view, and `toward` = `across × up` pointing at its viewer. The front view looks
+/// along −`toward`, the top view down along −`up`, the side view along −`across` (third-angle
+/// projection); in a y-up model they are the ground's x, y, z. A z-up model's front view is an
+/// elevation too, not a plan.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Axes {
+    pub across: P3,
+    pub up: P3,
+    pub toward: P3,
+}
+
+impl Axes {
+    /// The axes of a model whose gravity is `g` (m/s², ground axes).
+    pub fn of_gravity(g: P3) -> Axes {
+        let unit = |k: usize, sign: f64| {
+            let mut e = [0.0; 3];
+            e[k] = sign;
+            e
+        };
+        let k = (0..3)
+            .max_by(|&a, &b| g[a].abs().total_cmp(&g[b].abs()))
+            .unwrap_or(1);
+        let up = if g[k] == 0.0 || !g[k].is_finite() {
+            unit(1, 1.0)
+        } else {
+            unit(k, -g[k].signum())
+        };
+        let axis = up.iter().position(|&x| x != 0.0).unwrap_or(1);
+        let across = unit(if axis == 0 { 1 } else { 0 }, 1.0);
+        let toward = [
+            across[1] * up[2] - across[2] * up[1],
+            across[2] * up[0] - across[0] * up[2],
+            across[0] * up[1] - across[1] * up[0],
+        ];
+        Axes { across, up, toward }
+    }
 }
 
 /// One mode's motion, to first order in its amplitude.
@@ -209,7 +251,9 @@ impl Drawing {
                 }
             })
             .collect();
+        let g = [sys.gravity.x, sys.gravity.y, sys.gravity.z];
         Ok(Drawing {
+            axes: Axes::of_gravity(g),
             model: model.name.clone(),
             speed: pt.speed,
             scene,

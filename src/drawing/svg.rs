@@ -1,35 +1,118 @@
 //! The three orthographic views as SVG (see the module documentation of [`super`]).
 
-use super::{Drawing, ModeMotion, esc};
+use super::{Axes, Drawing, ModeMotion, esc};
 use crate::scene::{P3, Scene};
 use std::fmt::Write;
 
-/// A view: its name, and the ground directions drawn rightwards and upwards (third-angle
-/// projection: the front looking along −z, the top looking down along −y, the side looking
-/// along −x).
+/// A view: its name, and the ground directions drawn rightwards and upwards.
 struct View {
-    name: &'static str,
+    name: String,
     h: P3,
     v: P3,
 }
 
-const VIEWS: [View; 3] = [
-    View {
-        name: "front (x →, y ↑)",
-        h: [1.0, 0.0, 0.0],
-        v: [0.0, 1.0, 0.0],
-    },
-    View {
-        name: "top (x →, −z ↑)",
-        h: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, -1.0],
-    },
-    View {
-        name: "side (−z →, y ↑)",
-        h: [0.0, 0.0, -1.0],
-        v: [0.0, 1.0, 0.0],
-    },
-];
+/// The three views of a drawing seen along `axes` (third-angle projection): the front looking
+/// along −`toward`, the top looking down along −`up`, the side looking along −`across`; in a
+/// y-up model the front looks along −z, the top along −y, the side along −x.
+fn views(axes: &Axes) -> [View; 3] {
+    let neg = |a: P3| a.map(|x| -x);
+    let name = |a: P3| {
+        let k = a.iter().position(|&x| x != 0.0).unwrap_or(0);
+        format!(
+            "{}{}",
+            if a[k] < 0.0 { "−" } else { "" },
+            ["x", "y", "z"][k]
+        )
+    };
+    let view = |what: &str, h: P3, v: P3| View {
+        name: format!("{what} ({} →, {} ↑)", name(h), name(v)),
+        h,
+        v,
+    };
+    [
+        view("front", axes.across, axes.up),
+        view("top", axes.across, neg(axes.toward)),
+        view("side", neg(axes.toward), axes.up),
+    ]
+}
+
+/// The front view's names: gathered while the marks are drawn, one label per point (the names
+/// of marks drawn at one point, as a node's joint, body and port, joined: the first two and how
+/// many more), then written ([`Labels::write`]) each beside its point at the first of a few
+/// places around it that lies inside the panel and overlaps no label written before, moving
+/// outwards a line at a time; a name with no such place is left out (the marks carry every
+/// name as `data-name`). Boxes from the font size: a glyph about 0.6 em wide.
+struct Labels {
+    /// Per point: where (px), the names, the first name's colour.
+    points: Vec<((f64, f64), Vec<String>, &'static str)>,
+    /// The box the labels must stay in: `[x0, y0, x1, y1]` (px).
+    within: [f64; 4],
+}
+
+/// The names' font size (px), the SVG's.
+const FONT: f64 = 10.0;
+
+impl Labels {
+    fn new(within: [f64; 4]) -> Labels {
+        Labels {
+            points: Vec::new(),
+            within,
+        }
+    }
+
+    /// Adds `name` (in `colour`, where it is the first at its point) to the mark at `at`.
+    fn add(&mut self, at: (f64, f64), name: &str, colour: &'static str) {
+        let same = |p: &(f64, f64)| (p.0 - at.0).abs() < 1.0 && (p.1 - at.1).abs() < 1.0;
+        match self.points.iter_mut().find(|(p, _, _)| same(p)) {
+            Some((_, names, _)) => names.push(name.to_string()),
+            None => self.points.push((at, vec![name.to_string()], colour)),
+        }
+    }
+
+    /// Writes the labels.
+    fn write(self, s: &mut String) {
+        let mut taken: Vec<[f64; 4]> = Vec::new();
+        let [x0, y0, x1, y1] = self.within;
+        for ((x, y), names, colour) in self.points {
+            let text = match &names[..] {
+                [a] => a.clone(),
+                [a, b] => format!("{a}, {b}"),
+                [a, b, rest @ ..] => format!("{a}, {b} +{}", rest.len()),
+                [] => continue,
+            };
+            let w = 0.6 * FONT * text.chars().count() as f64;
+            let fits = |b: &[f64; 4]| {
+                b[0] >= x0
+                    && b[2] <= x1
+                    && b[1] >= y0
+                    && b[3] <= y1
+                    && (taken.iter())
+                        .all(|o| b[2] <= o[0] || o[2] <= b[0] || b[3] <= o[1] || o[3] <= b[1])
+            };
+            // Baselines: right above, right below, left above, left below; then further out.
+            let place = (0..8)
+                .flat_map(|k| {
+                    let step = k as f64 * (FONT + 2.0);
+                    [
+                        (x + 7.0, y - 7.0 - step),
+                        (x + 7.0, y + 12.0 + step),
+                        (x - 7.0 - w, y - 7.0 - step),
+                        (x - 7.0 - w, y + 12.0 + step),
+                    ]
+                })
+                .map(|(bx, by)| (bx, by, [bx, by - 0.8 * FONT, bx + w, by + 0.2 * FONT]))
+                .find(|(_, _, b)| fits(b));
+            if let Some((bx, by, b)) = place {
+                taken.push(b);
+                let _ = writeln!(
+                    s,
+                    r##"<text class="label" x="{bx}" y="{by}" fill="{colour}">{}</text>"##,
+                    esc(&text)
+                );
+            }
+        }
+    }
+}
 
 /// Width and height of a view's panel (px).
 const PANEL: f64 = 360.0;
@@ -49,6 +132,8 @@ struct Projection {
     oy: f64,
     h: P3,
     v: P3,
+    /// Where names may go: the panel less its title line and its axes mark, `[x0, y0, x1, y1]`.
+    panel: [f64; 4],
 }
 
 impl Projection {
@@ -88,7 +173,8 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
     });
     // One scale for the three views: the largest extent of any view fits its panel.
     let scenes: Vec<&Scene> = std::iter::once(&d.scene).chain(&quarters).collect();
-    let extent = VIEWS
+    let views = views(&d.axes);
+    let extent = views
         .iter()
         .flat_map(|view| {
             let span = |axis: &P3| {
@@ -99,7 +185,7 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
         })
         .fold(0.0f64, f64::max);
     let scale = (PANEL - 2.0 * MARGIN) / if extent > 0.0 { extent } else { d.size };
-    for (k, view) in VIEWS.iter().enumerate() {
+    for (k, view) in views.iter().enumerate() {
         let centre = |axis: &P3| {
             let (lo, hi) = range(&scenes, axis);
             if lo.is_finite() { (lo + hi) / 2.0 } else { 0.0 }
@@ -111,6 +197,12 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
             oy: TITLE + PANEL / 2.0 + scale * centre(&view.v),
             h: view.h,
             v: view.v,
+            panel: [
+                x0 + 6.0,
+                TITLE + 20.0,
+                x0 + PANEL - 6.0,
+                TITLE + PANEL - 40.0,
+            ],
         };
         let _ = writeln!(
             s,
@@ -128,7 +220,7 @@ pub fn svg(d: &Drawing, mode: Option<usize>) -> String {
             r##"<text x="{}" y="{}" fill="#555">{}</text>"##,
             x0 + 8.0,
             TITLE + 14.0,
-            esc(view.name)
+            esc(&view.name)
         );
         axes_mark(&mut s, &pr, x0);
         match &quarters[..] {
@@ -209,11 +301,19 @@ fn axes_mark(s: &mut String, pr: &Projection, x0: f64) {
         e[k] = 1.0;
         let (dx, dy) = (dot(&pr.h, &e), -dot(&pr.v, &e));
         if dx.abs() + dy.abs() < 0.5 {
+            // Along the line of sight: out of the page (⊙) where it points at the viewer,
+            // `h × v`, else into it (⊗).
+            let out = [
+                pr.h[1] * pr.v[2] - pr.h[2] * pr.v[1],
+                pr.h[2] * pr.v[0] - pr.h[0] * pr.v[2],
+                pr.h[0] * pr.v[1] - pr.h[1] * pr.v[0],
+            ];
+            let mark = if dot(&out, &e) > 0.0 { "⊙" } else { "⊗" };
             let _ = writeln!(
                 s,
-                r##"<text x="{}" y="{}" fill="#888">{name} ⊙</text>"##,
-                cx + 16.0,
-                cy - 2.0
+                r##"<text x="{}" y="{}" fill="#888">{name} {mark}</text>"##,
+                cx - 34.0,
+                cy + 12.0
             );
             continue;
         }
@@ -287,9 +387,13 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
     let axis_len = 0.06 * size * pr.s;
     elements(s, pr, sc);
     cuts(s, pr, sc);
-    joints(s, pr, sc, axis_len, labels);
-    bodies(s, pr, sc, labels);
-    ports(s, pr, sc, axis_len, labels);
+    let mut names = labels.then(|| Labels::new(pr.panel));
+    joints(s, pr, sc, axis_len, names.as_mut());
+    bodies(s, pr, sc, names.as_mut());
+    ports(s, pr, sc, axis_len, names.as_mut());
+    if let Some(n) = names {
+        n.write(s);
+    }
 }
 
 /// The force elements: dashed green lines between their ends.
@@ -332,7 +436,13 @@ fn cuts(s: &mut String, pr: &Projection, sc: &Scene) {
 
 /// The joints: circles with their axes (red), a ring around a driven one, named where
 /// `labels`.
-fn joints(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: bool) {
+fn joints(
+    s: &mut String,
+    pr: &Projection,
+    sc: &Scene,
+    axis_len: f64,
+    mut labels: Option<&mut Labels>,
+) {
     for j in &sc.joints {
         let p = pr.at(&j.at);
         for a in &j.axes {
@@ -360,20 +470,14 @@ fn joints(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: bo
             p.0,
             p.1
         );
-        if labels {
-            let _ = writeln!(
-                s,
-                r##"<text x="{}" y="{}" fill="#a00">{}</text>"##,
-                p.0 + 7.0,
-                p.1 - 7.0,
-                esc(&j.name)
-            );
+        if let Some(l) = labels.as_deref_mut() {
+            l.add(p, &j.name, "#a00");
         }
     }
 }
 
 /// The bodies' centres of mass, named where `labels`.
-fn bodies(s: &mut String, pr: &Projection, sc: &Scene, labels: bool) {
+fn bodies(s: &mut String, pr: &Projection, sc: &Scene, mut labels: Option<&mut Labels>) {
     for b in &sc.bodies {
         let (x, y) = pr.at(&b.cm);
         let _ = writeln!(
@@ -381,20 +485,20 @@ fn bodies(s: &mut String, pr: &Projection, sc: &Scene, labels: bool) {
             r##"<circle class="cm" data-name="{}" cx="{x}" cy="{y}" r="4" fill="#1f3b73"/>"##,
             esc(&b.name)
         );
-        if labels {
-            let _ = writeln!(
-                s,
-                r##"<text x="{}" y="{}" fill="#1f3b73">{}</text>"##,
-                x + 6.0,
-                y + 12.0,
-                esc(&b.name)
-            );
+        if let Some(l) = labels.as_deref_mut() {
+            l.add((x, y), &b.name, "#1f3b73");
         }
     }
 }
 
 /// The ports: orange arrows along their directions, named where `labels`.
-fn ports(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: bool) {
+fn ports(
+    s: &mut String,
+    pr: &Projection,
+    sc: &Scene,
+    axis_len: f64,
+    mut labels: Option<&mut Labels>,
+) {
     for p in &sc.ports {
         let a = pr.at(&p.at);
         let (dx, dy) = (
@@ -412,14 +516,8 @@ fn ports(s: &mut String, pr: &Projection, sc: &Scene, axis_len: f64, labels: boo
             a.0,
             a.1
         );
-        if labels {
-            let _ = writeln!(
-                s,
-                r##"<text x="{}" y="{}" fill="#c60">{}</text>"##,
-                a.0 + 6.0,
-                a.1 + 12.0,
-                esc(&p.name)
-            );
+        if let Some(l) = labels.as_deref_mut() {
+            l.add(a, &p.name, "#c60");
         }
     }
 }

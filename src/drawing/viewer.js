@@ -69,8 +69,13 @@ const centre = [0, 1, 2].map(k => {
   const v = pointIndices().map(i => X[3 * i + k]);
   return v.length ? (Math.min(...v) + Math.max(...v)) / 2 : 0;
 });
+// Ground vectors in the view's axes: across, up (against gravity), toward the viewer.
+function viewAxes(v) {
+  const a = D.axes, d = u => u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  return [d(a.across), d(a.up), d(a.toward)];
+}
 function project(p) {
-  const x0 = p[0] - centre[0], y0 = p[1] - centre[1], z0 = p[2] - centre[2];
+  const [x0, y0, z0] = viewAxes([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
   const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
   const x = cy * x0 + sy * z0, z = -sy * x0 + cy * z0;
   const y = cp * y0 - sp * z;
@@ -89,9 +94,33 @@ function dot(a, r, fill, stroke) {
   ctx.fillStyle = fill; ctx.fill();
   if (stroke) { ctx.strokeStyle = stroke; ctx.lineWidth = 1.5; ctx.stroke(); }
 }
+// Names: gathered per point while a scene is drawn (the names of marks at one point joined:
+// the first two and how many more), then written each at the first place beside its point
+// that overlaps no name written before; a name with no such place is left out.
+let names = [];
 function label(a, text, colour) {
   const p = project(a);
-  ctx.fillStyle = colour; ctx.font = "11px sans-serif"; ctx.fillText(text, p[0] + 7, p[1] - 7);
+  const same = names.find(n => Math.abs(n.p[0] - p[0]) < 1 && Math.abs(n.p[1] - p[1]) < 1);
+  if (same) same.texts.push(text); else names.push({ p, texts: [text], colour });
+}
+function writeNames() {
+  ctx.font = "11px sans-serif";
+  const taken = [];
+  for (const n of names) {
+    const t = n.texts.length <= 2 ? n.texts.join(", ") : n.texts.slice(0, 2).join(", ") + " +" + (n.texts.length - 2);
+    const w = ctx.measureText(t).width, [x, y] = n.p;
+    for (let k = 0; k < 6; k++) {
+      const step = 13 * k;
+      const at = [[x + 7, y - 7 - step], [x + 7, y + 14 + step], [x - 7 - w, y - 7 - step], [x - 7 - w, y + 14 + step]]
+        .find(([bx, by]) => taken.every(o => bx + w <= o[0] || o[2] <= bx || by + 3 <= o[1] || o[3] <= by - 11));
+      if (at) {
+        taken.push([at[0], at[1] - 11, at[0] + w, at[1] + 3]);
+        ctx.fillStyle = n.colour; ctx.fillText(t, at[0], at[1]);
+        break;
+      }
+    }
+  }
+  names = [];
 }
 function drawScene(P, faint) {
   const v = i => [P[3 * i], P[3 * i + 1], P[3 * i + 2]];
@@ -124,12 +153,14 @@ function drawScene(P, faint) {
     seg(at, along(at, v(p.direction), L), "#ff7f0e", 2.5);
     label(at, p.name, "#c60");
   }
+  writeNames();
 }
 function triad() {
   const o = [40, canvas.height - 40], names = ["x", "y", "z"], colours = ["#d62728", "#2ca02c", "#1f77b4"];
   const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
   for (let k = 0; k < 3; k++) {
-    const e = [0, 0, 0]; e[k] = 1;
+    const u = [0, 0, 0]; u[k] = 1;
+    const e = viewAxes(u);
     const x = cy * e[0] + sy * e[2], z = -sy * e[0] + cy * e[2], y = cp * e[1] - sp * z;
     ctx.strokeStyle = colours[k]; ctx.lineWidth = 2; ctx.beginPath();
     ctx.moveTo(o[0], o[1]); ctx.lineTo(o[0] + 25 * x, o[1] - 25 * y); ctx.stroke();

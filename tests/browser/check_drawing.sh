@@ -22,9 +22,10 @@ browse() {
 }
 flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking
        --disable-component-update --disable-sync --user-data-dir="$dir/profile")
-# The probe selects every mode in turn (the canvas must say it shows it and differ from the
+# The probe checks the page opened animating a mode (the canvas names it), shows the
+# equilibrium, selects every mode in turn (the canvas must say it shows it and differ from the
 # equilibrium's), then takes the canvas twice 700 ms apart on the first mode.
-probe='<script>window.addEventListener("load",()=>{const s=document.getElementById("mode"),c=document.getElementById("view");const still=c.toDataURL();let ok=0;const n=s.options.length-1;for(let k=0;k<n;k++){s.value=String(k);s.dispatchEvent(new Event("change"));if(c.dataset.mode===String(k+1)\&\&c.toDataURL()!==still)ok++;}s.value=n>0?"0":"-1";s.dispatchEvent(new Event("change"));const a=c.toDataURL();setTimeout(()=>{const b=c.toDataURL();document.title="modes "+ok+"/"+n+(a!==b?" animates":" still");},700);});</script></body>'
+probe='<script>window.addEventListener("load",()=>{const s=document.getElementById("mode"),c=document.getElementById("view");const opened=(s.options.length<2)+(c.dataset.mode!=="0")>0;s.value="-1";s.dispatchEvent(new Event("change"));const still=c.toDataURL();let ok=opened?0:-1000;const n=s.options.length-1;for(let k=0;k<n;k++){s.value=String(k);s.dispatchEvent(new Event("change"));if(c.dataset.mode===String(k+1)\&\&c.toDataURL()!==still)ok++;}s.value=n>0?"0":"-1";s.dispatchEvent(new Event("change"));const a=c.toDataURL();setTimeout(()=>{const b=c.toDataURL();document.title="modes "+ok+"/"+n+(a!==b?" animates":" still");},700);});</script></body>'
 failed=0
 for model in "$root"/examples/*.toml; do
   name=$(basename "$model" .toml)
