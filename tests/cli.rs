@@ -296,6 +296,48 @@ fn draw_defaults_to_the_middle_of_the_analysed_speeds() {
     );
 }
 
+/// `modal --frequency-unit hz` (or rpm) gives the table's frequencies as f = ω/2π (per minute
+/// for rpm), named f_d, f_n; the default stays rad/s.
+#[test]
+fn modal_table_in_hz_and_rpm() {
+    let model = example("governor.toml");
+    let row = |unit: &str| -> (String, f64) {
+        let o = run(&[
+            "modal",
+            model.to_str().unwrap(),
+            "--speed",
+            "1.6",
+            "--frequency-unit",
+            unit,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = stdout(&o);
+        let header = text
+            .lines()
+            .find(|l| l.contains("status"))
+            .unwrap()
+            .to_string();
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("1  "))
+            .unwrap();
+        (
+            header,
+            line.split_whitespace().nth(2).unwrap().parse().unwrap(),
+        )
+    };
+    let (h, w) = row("rad/s");
+    assert!(h.contains("ω_d"), "{h}");
+    let (h, f) = row("hz");
+    assert!(h.contains("f_d") && !h.contains("ω_d"), "{h}");
+    assert!((f - w / std::f64::consts::TAU).abs() < 1e-7, "{f} vs {w}");
+    let (_, n) = row("rpm");
+    assert!(
+        (n - w * 60.0 / std::f64::consts::TAU).abs() < 1e-6,
+        "{n} vs {w}"
+    );
+}
+
 #[test]
 fn sensitivity_json_ad_and_fd_agree() {
     let get = |how: &str| {

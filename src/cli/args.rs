@@ -323,6 +323,10 @@ pub(crate) struct ModalArgs {
     /// `branch` and `message` columns).
     #[arg(long, value_enum, default_value = "stable")]
     pub(crate) branch: BranchArg,
+    /// Unit of the modes' frequencies in the text table (rad/s, hz, rpm); JSON and CSV stay in
+    /// rad/s.
+    #[arg(long, value_enum, default_value = "rad/s")]
+    pub(crate) frequency_unit: UnitArg,
     /// Write to this file instead of stdout.
     #[arg(short, long)]
     pub(crate) output: Option<PathBuf>,

@@ -251,12 +251,14 @@ fn write_matrix(out: &mut String, name: &str, m: &DMatrix<f64>) {
     }
 }
 
-/// The `modal` result as a text table.
+/// The `modal` result as a text table, the modes' frequencies in `unit` (the eigenvalues stay
+/// in 1/s).
 pub fn modal_table(
     model: &Model,
     params: &[f64],
     speed: f64,
     result: &Result<Point, PointError>,
+    unit: crate::plots::FrequencyUnit,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "model: {}    speed: {speed:?} rad/s", model.name);
@@ -284,13 +286,21 @@ pub fn modal_table(
     write_matrix(&mut s, "K̂", &p.linear.k);
     let _ = writeln!(
         s,
-        "\nmodes (rad/s; each frequency as seen from the mode's frame: fixed = ground, \
-         rotating = turning with the driven joint named):"
+        "\nmodes (frequencies in {}, eigenvalues in 1/s; each frequency as seen from the \
+         mode's frame: fixed = ground, rotating = turning with the driven joint named):",
+        unit.symbol()
     );
+    let f = unit.per_rad_per_second();
+    // Angular frequencies in rad/s, cyclic ones (f = ω/2π) in Hz or rpm.
+    let (wd, wn) = if unit == crate::plots::FrequencyUnit::RadPerSecond {
+        ("ω_d", "ω_n")
+    } else {
+        ("f_d", "f_n")
+    };
     let _ = writeln!(
         s,
         "  {:>4}  {:<12} {:>14} {:>14} {:>12} {:>26}  {:<8}  frame",
-        "mode", "status", "ω_d", "ω_n", "ζ", "eigenvalue", "whirl"
+        "mode", "status", wd, wn, "ζ", "eigenvalue", "whirl"
     );
     let whirls = whirl::of_point(model, params, p).unwrap_or_default();
     let turned = model.turned_by();
@@ -301,8 +311,8 @@ pub fn modal_table(
             "  {:>4}  {:<12} {:>14.8} {:>14.8} {:>12} {:>12.6} {:+12.6}i  {:<8}  {}",
             i + 1,
             m.class.as_str(),
-            m.damped_frequency,
-            m.natural_frequency,
+            m.damped_frequency * f,
+            m.natural_frequency * f,
             fixed(m.damping_ratio, 6),
             m.root.lambda.re,
             m.root.lambda.im,

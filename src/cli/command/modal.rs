@@ -17,6 +17,7 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
         format,
         independent: ind,
         branch,
+        frequency_unit,
         output,
     } = args;
     let m = load(&model, set)?;
@@ -37,7 +38,11 @@ pub(crate) fn modal_command(args: ModalArgs, set: &[(String, f64)], cancel: &Can
             "{}",
             serde_json::to_string_pretty(&report::modal_json(m.model(), p, speed, &result))?
         )?,
-        Format::Table => write!(w, "{}", report::modal_table(m.model(), p, speed, &result))?,
+        Format::Table => write!(
+            w,
+            "{}",
+            report::modal_table(m.model(), p, speed, &result, frequency_unit.into())
+        )?,
         Format::Csv => {
             let rows = match &result {
                 Ok(pt) => {
