@@ -689,3 +689,178 @@ fn names_do_not_collide_and_views_stand_up_against_gravity() {
         }
     }
 }
+
+/// A solid drawn in one view: its body's name, its centre and the matrix `E⁻¹` of its
+/// ellipse in the view's h, v coordinates (m), and the view's h and v.
+type Ellipse = (String, [f64; 2], [[f64; 2]; 2], [[f64; 3]; 2]);
+
+/// Every solid ellipse of every view of `svg`: (name, centre and the 2×2 matrix `E⁻¹` of the
+/// ellipse `uᵀE⁻¹u ≤ 1` in the view's h, v coordinates (m), the view's h and v).
+fn solid_ellipses(svg: &str) -> Vec<Ellipse> {
+    let mut out = Vec::new();
+    let mut view = None;
+    for tag in svg.split('<').map(|t| t.split('>').next().unwrap_or("")) {
+        if tag.starts_with("g class=\"view\"") {
+            let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
+            view = Some((
+                f("data-scale"),
+                f("data-ox"),
+                f("data-oy"),
+                triple(attr(tag, "data-h").unwrap()),
+                triple(attr(tag, "data-v").unwrap()),
+            ));
+        } else if tag.starts_with("ellipse class=\"solid\"") {
+            let (s, ox, oy, h, v) = view.unwrap();
+            let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
+            let (cx, cy, rx, ry) = (f("cx"), f("cy"), f("rx"), f("ry"));
+            let turn = attr(tag, "transform").unwrap();
+            let angle: f64 = turn["rotate(".len()..]
+                .split(' ')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            // The ellipse's axes on the screen (y down), then in h, v (v up), in metres.
+            let (c, sn) = (angle.to_radians().cos(), angle.to_radians().sin());
+            let axes = [[c, -sn], [-sn, -c]];
+            let mut inv = [[0.0; 2]; 2];
+            for (a, r) in axes.iter().zip([rx / s, ry / s]) {
+                for i in 0..2 {
+                    for j in 0..2 {
+                        inv[i][j] += a[i] * a[j] / (r * r);
+                    }
+                }
+            }
+            out.push((
+                attr(tag, "data-name").unwrap().to_string(),
+                [(cx - ox) / s, (oy - cy) / s],
+                inv,
+                [h, v],
+            ));
+        }
+    }
+    out
+}
+
+/// The solids drawn are the bodies' equivalent ellipsoids of inertia: on the Friswell rotor
+/// (two thick disks) and the rubber-mounted rotor, each body's ellipsoid built a second way
+/// (principal moments from the inertia's eigendecomposition, semi-axes
+/// `a_i² = 5/(2m)(I_j + I_k − I_i)` along the principal axes), its surface sampled and
+/// projected, lies inside the drawn ellipse and touches it (the largest `uᵀE⁻¹u` is 1 to
+/// 1e-6); the shaft is drawn at its 50 mm diameter.
+#[test]
+fn bodies_are_drawn_as_their_equivalent_ellipsoids_and_shafts_at_their_diameter() {
+    use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+    for name in ["friswell_5_9_1.toml", "rotor_on_rubber_mounts.toml"] {
+        let m = example(name);
+        let (p, pt) = solved(&m, 100.0);
+        let d = Drawing::new(m.model(), &p, &pt).unwrap();
+        let page = svg(&d, None);
+        let sys = System::new(m.model(), &p, 100.0).unwrap();
+        let pose = poses(&sys, &pt.equilibrium.q);
+        let drawn = solid_ellipses(&page);
+        let mut seen = 0;
+        for (b, body) in sys.bodies.iter().enumerate() {
+            let bname = &m.model().bodies[b].name;
+            let views: Vec<_> = drawn.iter().filter(|e| &e.0 == bname).collect();
+            if body.mass == 0.0 {
+                assert!(
+                    views.is_empty(),
+                    "{name}: massless {bname} drawn as a solid"
+                );
+                continue;
+            }
+            assert_eq!(views.len(), 3, "{name}: {bname} in each view");
+            seen += 1;
+            let eig = SymmetricEigen::new(body.inertia);
+            let i = eig.eigenvalues;
+            let semi = Vector3::from_fn(|k, _| {
+                let (j, l) = ((k + 1) % 3, (k + 2) % 3);
+                (2.5 / body.mass * (i[j] + i[l] - i[k])).max(0.0).sqrt()
+            });
+            let rot = pose[b].rot * eig.eigenvectors;
+            let cm = pose[b].apply(&body.cm);
+            for (_, centre, inv, [h, v]) in views {
+                let (h, v) = (Vector3::from(*h), Vector3::from(*v));
+                assert!(
+                    (centre[0] - cm.dot(&h)).abs() < 1e-9 && (centre[1] - cm.dot(&v)).abs() < 1e-9
+                );
+                let mut largest = 0.0f64;
+                for a in 0..48 {
+                    for e in 0..25 {
+                        let (th, ph) = (
+                            a as f64 * std::f64::consts::PI / 24.0,
+                            e as f64 * std::f64::consts::PI / 24.0,
+                        );
+                        let s = Vector3::new(ph.sin() * th.cos(), ph.sin() * th.sin(), ph.cos());
+                        let y = rot * Matrix3::from_diagonal(&semi) * s;
+                        let u = [y.dot(&h), y.dot(&v)];
+                        let q = u[0] * (inv[0][0] * u[0] + inv[0][1] * u[1])
+                            + u[1] * (inv[1][0] * u[0] + inv[1][1] * u[1]);
+                        largest = largest.max(q);
+                    }
+                }
+                // A disk seen edge-on is kept a pixel thick: the sampled surface is inside.
+                assert!(
+                    largest <= 1.0 + 1e-6,
+                    "{name}: {bname} reaches beyond its ellipse ({largest})"
+                );
+                assert!(
+                    largest >= 1.0 - 1e-2,
+                    "{name}: {bname}'s ellipse is larger than it ({largest})"
+                );
+            }
+        }
+        assert!(seen >= 2, "{name}: {seen} solids");
+        if name == "friswell_5_9_1.toml" {
+            for tag in page.split("<polyline class=\"beam-solid\"").skip(1) {
+                let width: f64 = attr(tag, "stroke-width").unwrap().parse().unwrap();
+                let scale: f64 = page
+                    .split("data-scale=\"")
+                    .nth(1)
+                    .unwrap()
+                    .split('"')
+                    .next()
+                    .unwrap()
+                    .parse()
+                    .unwrap();
+                assert!(
+                    (width / scale - 0.05).abs() < 1e-12,
+                    "{name}: the shaft drawn {} m wide",
+                    width / scale
+                );
+            }
+        }
+    }
+}
+
+/// The equivalent ellipsoid of a uniform solid ellipsoid is itself, turned or not; a thin
+/// uniform disk's is flat with radius `r √5/2`; a point mass has none.
+#[test]
+fn a_uniform_ellipsoid_is_its_own_equivalent_ellipsoid() {
+    use modaltol::scene::equivalent_ellipsoid;
+    use nalgebra::{Matrix3, Rotation3, Vector3};
+    let (m, a) = (3.5, Vector3::new(0.4, 0.15, 0.07));
+    let j = Matrix3::from_diagonal(&Vector3::new(
+        a.y * a.y + a.z * a.z,
+        a.x * a.x + a.z * a.z,
+        a.x * a.x + a.y * a.y,
+    )) * (m / 5.0);
+    let r = Rotation3::from_euler_angles(0.3, -1.1, 2.0).into_inner();
+    let s = equivalent_ellipsoid(m, &(r * j * r.transpose()));
+    let want = r * Matrix3::from_diagonal(&a.component_mul(&a)) * r.transpose();
+    for i in 0..3 {
+        for k in 0..3 {
+            assert!(
+                (s[i][k] - want[(i, k)]).abs() < 1e-15,
+                "{s:?} against {want}"
+            );
+        }
+    }
+    let (m, radius) = (2.0, 0.3);
+    let disk = Matrix3::from_diagonal(&Vector3::new(0.5, 0.25, 0.25)) * (m * radius * radius);
+    let s = equivalent_ellipsoid(m, &disk);
+    assert_eq!(s[0][0], 0.0);
+    assert!((s[1][1].sqrt() - radius * 5f64.sqrt() / 2.0).abs() < 1e-15);
+    assert_eq!(equivalent_ellipsoid(0.0, &disk), [[0.0; 3]; 3]);
+}

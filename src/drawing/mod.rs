@@ -88,6 +88,18 @@ impl Axes {
     }
 }
 
+/// The largest semi-axis of a body's solid that is drawn, as a share of the mechanism's size
+/// ([`Scene::size`]).
+pub const SOLID_SHARE: f64 = 0.5;
+
+/// The largest semi-axis of the ellipsoid with shape matrix `s` (m): the square root of its
+/// largest eigenvalue.
+pub fn largest_semi_axis(s: &[[f64; 3]; 3]) -> f64 {
+    let m = nalgebra::Matrix3::from_fn(|i, j| s[i][j]);
+    let largest = m.symmetric_eigenvalues().max();
+    if largest > 0.0 { largest.sqrt() } else { 0.0 }
+}
+
 /// One mode's motion, to first order in its amplitude.
 #[derive(Debug, Clone)]
 pub struct ModeMotion {
@@ -213,8 +225,16 @@ impl Drawing {
     pub fn new(model: &Model, p: &[f64], pt: &Point) -> Result<Drawing, FieldError> {
         let sys = System::new(model, p, pt.speed)?;
         let q = &pt.equilibrium.q;
-        let (scene, anchors) = Scene::anchored(model, &sys, q);
+        let (mut scene, anchors) = Scene::anchored(model, &sys, q);
         let size = scene.size();
+        // A solid larger than the mechanism would hide it: textbook inertias need not fit
+        // the links drawn (Haug's governor's 1 kg collar has 0.15 kg·m², an ellipsoid of
+        // 0.6 m radius on a 0.3 m mechanism). Those are drawn as their links alone.
+        for b in &mut scene.bodies {
+            if largest_semi_axis(&b.solid) > SOLID_SHARE * size {
+                b.solid = [[0.0; 3]; 3];
+            }
+        }
         let free = &pt.linear.free;
         let shapes: Vec<Vec<C64>> = (pt.shapes.iter())
             .map(|s| s.iter().copied().collect())

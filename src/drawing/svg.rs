@@ -43,11 +43,14 @@ fn views(axes: &Axes) -> [View; 3] {
 /// outwards a line at a time; a name with no such place is left out (the marks carry every
 /// name as `data-name`). Boxes from the font size: a glyph about 0.6 em wide.
 struct Labels {
-    /// Per point: where (px), the names, the first name's colour.
-    points: Vec<((f64, f64), Vec<String>, &'static str)>,
+    /// Per point: where (px), and its names with their ranks and colours.
+    points: Vec<((f64, f64), Vec<Named>)>,
     /// The box the labels must stay in: `[x0, y0, x1, y1]` (px).
     within: [f64; 4],
 }
+
+/// A name at a point, with its rank and colour.
+type Named = (Rank, String, &'static str);
 
 /// The names' font size (px), the SVG's.
 const FONT: f64 = 10.0;
@@ -61,11 +64,12 @@ impl Labels {
     }
 
     /// Adds `name` (in `colour`, where it is the first at its point) to the mark at `at`.
-    fn add(&mut self, at: (f64, f64), name: &str, colour: &'static str) {
+    fn add(&mut self, at: (f64, f64), name: &str, rank: Rank, colour: &'static str) {
         let same = |p: &(f64, f64)| (p.0 - at.0).abs() < 1.0 && (p.1 - at.1).abs() < 1.0;
-        match self.points.iter_mut().find(|(p, _, _)| same(p)) {
-            Some((_, names, _)) => names.push(name.to_string()),
-            None => self.points.push((at, vec![name.to_string()], colour)),
+        let entry = (rank, name.to_string(), colour);
+        match self.points.iter_mut().find(|(p, _)| same(p)) {
+            Some((_, names)) => names.push(entry),
+            None => self.points.push((at, vec![entry])),
         }
     }
 
@@ -73,7 +77,17 @@ impl Labels {
     fn write(self, s: &mut String) {
         let mut taken: Vec<[f64; 4]> = Vec::new();
         let [x0, y0, x1, y1] = self.within;
-        for ((x, y), names, colour) in self.points {
+        for ((x, y), mut named) in self.points {
+            // The names that say most first (a disk before the frames of its shaft's node),
+            // each once.
+            named.sort_by_key(|(rank, _, _)| *rank);
+            let colour = named.first().map_or(INK, |n| n.2);
+            let mut names: Vec<String> = Vec::new();
+            for (_, name, _) in named {
+                if !names.contains(&name) {
+                    names.push(name);
+                }
+            }
             let text = match &names[..] {
                 [a] => a.clone(),
                 [a, b] => format!("{a}, {b}"),
@@ -112,6 +126,16 @@ impl Labels {
             }
         }
     }
+}
+
+/// Which of the names at one point a label gives first: a body with mass (a disk, a link),
+/// a port, a joint, then a body without (a beam's node, a frame).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Rank {
+    Solid,
+    Port,
+    Joint,
+    Frame,
 }
 
 /// Width and height of a view's panel (px).
@@ -259,7 +283,7 @@ fn heading(s: &mut String, d: &Drawing, mode: Option<&ModeMotion>) {
             "{}: equilibrium grey, extremes blue (φ = 0) and red (φ = π), quarter periods dashed",
             m.label
         ),
-        None => "bodies: centre of mass (dot) and links; joints: circles with their axes (red); cut joints: crossed; force elements: green; beams: brown curves; ports: orange arrows. Units: m".into(),
+        None => "bodies: centre of mass (dot), links, equivalent ellipsoid of inertia (shaded); joints: circles, axes red; cut joints: crossed; force elements: green; beams: brown; ports: orange; m".into(),
     };
     let _ = writeln!(
         s,
@@ -271,12 +295,17 @@ fn heading(s: &mut String, d: &Drawing, mode: Option<&ModeMotion>) {
 /// The smallest and largest coordinate along `axis` of any point of `scenes` (`+∞, −∞` where
 /// they have none).
 fn range(scenes: &[&Scene], axis: &P3) -> (f64, f64) {
-    scenes
-        .iter()
-        .flat_map(|sc| sc.points())
-        .map(|x| dot(axis, &x))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
+    let points = (scenes.iter().flat_map(|sc| sc.points())).map(|x| (dot(axis, &x), 0.0));
+    // The solids reach beyond their centres (a beam's radius is drawn at its points too).
+    let solids =
+        (scenes.iter().flat_map(|sc| &sc.bodies)).map(|b| (dot(axis, &b.cm), b.reach(axis)));
+    let beams = (scenes.iter().flat_map(|sc| &sc.beams))
+        .flat_map(|c| c.points.iter().map(|x| (dot(axis, x), c.radius)));
+    points
+        .chain(solids)
+        .chain(beams)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (v, r)| {
+            (lo.min(v - r), hi.max(v + r))
         })
 }
 
@@ -343,6 +372,7 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
         Layer::Extreme(k) => (EXTREMES[k], 2.0, ""),
         Layer::Quarter => (QUARTERS, 1.2, r#" stroke-dasharray="4 3""#),
     };
+    solids(s, pr, sc, layer);
     for b in &sc.bodies {
         let c = pr.at(&b.cm);
         for x in &b.links {
@@ -394,6 +424,78 @@ fn scene(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer, size: f64) {
     if let Some(n) = names {
         n.write(s);
     }
+}
+
+/// The bodies and beams as solids, under everything else: each body's equivalent ellipsoid of
+/// inertia projected (an ellipse; a disk seen edge-on is a flat one), each beam its curve at its
+/// drawn diameter. Filled faintly in the mechanism's layers, outlined in a mode's extremes,
+/// left out of its quarter periods.
+fn solids(s: &mut String, pr: &Projection, sc: &Scene, layer: Layer) {
+    let (fill, stroke) = match layer {
+        Layer::Main { .. } => ("#1f3b73", "#1f3b73"),
+        Layer::Background => ("#bbb", "#bbb"),
+        Layer::Extreme(k) => ("none", EXTREMES[k]),
+        Layer::Quarter => return,
+    };
+    let fill_opacity = if fill == "none" { 0.0 } else { 0.15 };
+    for c in sc.beams.iter().filter(|c| c.radius > 0.0) {
+        let points: Vec<String> = (c.points.iter())
+            .map(|x| {
+                let (a, b) = pr.at(x);
+                format!("{a},{b}")
+            })
+            .collect();
+        let (colour, opacity) = match layer {
+            Layer::Main { .. } => (BEAM, 0.3),
+            Layer::Background => ("#bbb", 0.3),
+            _ => (stroke, 0.15),
+        };
+        let _ = writeln!(
+            s,
+            r#"<polyline class="beam-solid" data-name="{}" points="{}" fill="none" stroke="{colour}" stroke-opacity="{opacity}" stroke-width="{}" stroke-linejoin="round"/>"#,
+            esc(&c.name),
+            points.join(" "),
+            2.0 * c.radius * pr.s
+        );
+    }
+    for b in &sc.bodies {
+        let Some([rx, ry, angle]) = projected_ellipse(pr, b) else {
+            continue;
+        };
+        let (x, y) = pr.at(&b.cm);
+        let _ = writeln!(
+            s,
+            r#"<ellipse class="solid" data-name="{}" cx="{x}" cy="{y}" rx="{rx}" ry="{ry}" transform="rotate({angle} {x} {y})" fill="{fill}" fill-opacity="{fill_opacity}" stroke="{stroke}" stroke-opacity="0.5"/>"#,
+            esc(&b.name),
+        );
+    }
+}
+
+/// Body `b`'s solid seen in `pr`: the semi-axes (px) and the turn of the first from the
+/// drawing's x axis (degrees, clockwise as SVG turns), `None` where it has none. The ellipsoid
+/// `yᵀS⁻¹y ≤ 1` projects onto the ellipse `uᵀE⁻¹u ≤ 1` with `E = P S Pᵀ` (`P` the view's
+/// 2×3 projection): its semi-axes are the square roots of `E`'s eigenvalues. A flat one (a disk
+/// edge-on) is kept a pixel thick so that it shows.
+fn projected_ellipse(pr: &Projection, b: &crate::scene::BodyMark) -> Option<[f64; 3]> {
+    // The body's turned axes on the screen (y down).
+    let u: Vec<[f64; 2]> = (b.axes.iter())
+        .map(|a| [pr.s * dot(&pr.h, a), -pr.s * dot(&pr.v, a)])
+        .collect();
+    let mut e = [[0.0; 2]; 2];
+    for k in 0..3 {
+        for l in 0..3 {
+            for (i, row) in e.iter_mut().enumerate() {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x += b.solid[k][l] * u[k][i] * u[l][j];
+                }
+            }
+        }
+    }
+    let mean = 0.5 * (e[0][0] + e[1][1]);
+    let d = (0.25 * (e[0][0] - e[1][1]).powi(2) + e[0][1].powi(2)).sqrt();
+    let (major, minor) = ((mean + d).max(0.0).sqrt(), (mean - d).max(0.0).sqrt());
+    let angle = 0.5 * (2.0 * e[0][1]).atan2(e[0][0] - e[1][1]);
+    (major >= 1.0 && major.is_finite()).then(|| [major, minor.max(1.0), angle.to_degrees()])
 }
 
 /// The force elements: dashed green lines between their ends.
@@ -471,7 +573,7 @@ fn joints(
             p.1
         );
         if let Some(l) = labels.as_deref_mut() {
-            l.add(p, &j.name, "#a00");
+            l.add(p, &j.name, Rank::Joint, "#a00");
         }
     }
 }
@@ -486,7 +588,12 @@ fn bodies(s: &mut String, pr: &Projection, sc: &Scene, mut labels: Option<&mut L
             esc(&b.name)
         );
         if let Some(l) = labels.as_deref_mut() {
-            l.add((x, y), &b.name, "#1f3b73");
+            let rank = if b.solid == [[0.0; 3]; 3] {
+                Rank::Frame
+            } else {
+                Rank::Solid
+            };
+            l.add((x, y), &b.name, rank, "#1f3b73");
         }
     }
 }
@@ -517,7 +624,7 @@ fn ports(
             a.1
         );
         if let Some(l) = labels.as_deref_mut() {
-            l.add(a, &p.name, "#c60");
+            l.add(a, &p.name, Rank::Port, "#c60");
         }
     }
 }

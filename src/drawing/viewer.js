@@ -74,13 +74,35 @@ function viewAxes(v) {
   const a = D.axes, d = u => u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
   return [d(a.across), d(a.up), d(a.toward)];
 }
-function project(p) {
-  const [x0, y0, z0] = viewAxes([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
+// A vector on the screen (px, y down), before the view's offset.
+function turned(u) {
+  const [x0, y0, z0] = viewAxes(u);
   const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
   const x = cy * x0 + sy * z0, z = -sy * x0 + cy * z0;
   const y = cp * y0 - sp * z;
-  const s = 0.75 * Math.min(canvas.width, canvas.height) / D.size * zoom;
-  return [canvas.width / 2 + s * x, canvas.height / 2 - s * y];
+  return [scale() * x, -scale() * y];
+}
+function scale() { return 0.75 * Math.min(canvas.width, canvas.height) / D.size * zoom; }
+function project(p) {
+  const [x, y] = turned([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
+  return [canvas.width / 2 + x, canvas.height / 2 + y];
+}
+// A body's equivalent ellipsoid of inertia projected (as solids() in src/drawing/svg.rs):
+// E = Σ S_kl u_k u_lᵀ over its turned axes u_k on the screen, semi-axes √eig(E).
+function solid(b, v, faint) {
+  const u = b.axes.map(i => turned(v(i)));
+  let e00 = 0, e01 = 0, e11 = 0;
+  for (let k = 0; k < 3; k++) for (let l = 0; l < 3; l++) {
+    const w = b.solid[k][l];
+    e00 += w * u[k][0] * u[l][0]; e01 += w * u[k][0] * u[l][1]; e11 += w * u[k][1] * u[l][1];
+  }
+  const mean = (e00 + e11) / 2, d = Math.hypot((e00 - e11) / 2, e01);
+  const major = Math.sqrt(Math.max(mean + d, 0)), minor = Math.max(Math.sqrt(Math.max(mean - d, 0)), 1);
+  if (!(major >= 1) || !isFinite(major)) return;
+  const p = project(v(b.cm));
+  ctx.beginPath(); ctx.ellipse(p[0], p[1], major, minor, Math.atan2(2 * e01, e00 - e11) / 2, 0, 2 * Math.PI);
+  ctx.fillStyle = faint ? "rgba(187,187,187,0.15)" : "rgba(31,59,115,0.15)"; ctx.fill();
+  ctx.strokeStyle = faint ? "rgba(187,187,187,0.5)" : "rgba(31,59,115,0.5)"; ctx.lineWidth = 1; ctx.stroke();
 }
 function seg(a, b, colour, width, dash) {
   const p = project(a), q = project(b);
@@ -94,20 +116,25 @@ function dot(a, r, fill, stroke) {
   ctx.fillStyle = fill; ctx.fill();
   if (stroke) { ctx.strokeStyle = stroke; ctx.lineWidth = 1.5; ctx.stroke(); }
 }
-// Names: gathered per point while a scene is drawn (the names of marks at one point joined:
-// the first two and how many more), then written each at the first place beside its point
-// that overlaps no name written before; a name with no such place is left out.
+// Names: gathered per point while a scene is drawn (the names of marks at one point joined,
+// those that say most first, as Rank in src/drawing/svg.rs: a body with mass, a port, a joint,
+// a body without; each once; the first two and how many more), then written each at the first
+// place beside its point that overlaps no name written before; a name with no such place is
+// left out.
 let names = [];
-function label(a, text, colour) {
+function label(a, text, colour, rank) {
   const p = project(a);
   const same = names.find(n => Math.abs(n.p[0] - p[0]) < 1 && Math.abs(n.p[1] - p[1]) < 1);
-  if (same) same.texts.push(text); else names.push({ p, texts: [text], colour });
+  if (same) same.marks.push({ text, colour, rank }); else names.push({ p, marks: [{ text, colour, rank }] });
 }
 function writeNames() {
   ctx.font = "11px sans-serif";
   const taken = [];
   for (const n of names) {
-    const t = n.texts.length <= 2 ? n.texts.join(", ") : n.texts.slice(0, 2).join(", ") + " +" + (n.texts.length - 2);
+    n.marks.sort((a, b) => a.rank - b.rank);
+    const texts = [...new Set(n.marks.map(m => m.text))];
+    n.colour = n.marks[0].colour;
+    const t = texts.length <= 2 ? texts.join(", ") : texts.slice(0, 2).join(", ") + " +" + (texts.length - 2);
     const w = ctx.measureText(t).width, [x, y] = n.p;
     for (let k = 0; k < 6; k++) {
       const step = 13 * k;
@@ -125,6 +152,16 @@ function writeNames() {
 function drawScene(P, faint) {
   const v = i => [P[3 * i], P[3 * i + 1], P[3 * i + 2]];
   const ink = faint ? "#c8c8c8" : "#333";
+  // The solids first: each beam at its diameter, each body its ellipsoid.
+  for (const c of S.beams) {
+    if (!(c.radius > 0)) continue;
+    ctx.strokeStyle = faint ? "rgba(187,187,187,0.3)" : "rgba(140,86,75,0.3)";
+    ctx.lineWidth = 2 * c.radius * scale(); ctx.lineJoin = "round";
+    ctx.beginPath();
+    c.points.forEach((i, k) => { const p = project(v(i)); if (k) ctx.lineTo(p[0], p[1]); else ctx.moveTo(p[0], p[1]); });
+    ctx.stroke();
+  }
+  for (const b of S.bodies) solid(b, v, faint);
   for (const b of S.bodies) for (const l of b.links) seg(v(b.cm), v(l), ink, faint ? 2 : 3);
   for (const c of S.beams) {
     for (let k = 1; k < c.points.length; k++) {
@@ -140,18 +177,19 @@ function drawScene(P, faint) {
     const at = v(j.at);
     for (const a of j.axes) seg(along(at, v(a), -L), along(at, v(a), L), "#d62728", 1.5);
     dot(at, j.driven ? 7 : 5, "white", "#333");
-    label(at, j.name, "#a00");
+    label(at, j.name, "#a00", 2);
   }
   const T = 0.05 * D.size, tints = ["#e377c2", "#17becf", "#bcbd22"];
   for (const b of S.bodies) {
     const cm = v(b.cm);
     for (let k = 0; k < 3; k++) seg(cm, along(cm, v(b.axes[k]), T), tints[k], 1);
-    dot(cm, 4, "#1f3b73"); label(cm, b.name, "#1f3b73");
+    const massive = b.solid.some(row => row.some(x => x !== 0));
+    dot(cm, 4, "#1f3b73"); label(cm, b.name, "#1f3b73", massive ? 0 : 3);
   }
   for (const p of S.ports) {
     const at = v(p.at);
     seg(at, along(at, v(p.direction), L), "#ff7f0e", 2.5);
-    label(at, p.name, "#c60");
+    label(at, p.name, "#c60", 1);
   }
   writeNames();
 }

@@ -51,6 +51,29 @@ pub struct BodyMark<P = P3> {
     pub axes: [P; 3],
     /// Where the body is joined (joints, cut joints, force elements, ports), each once.
     pub links: Vec<P>,
+    /// The body as a solid: its equivalent ellipsoid of inertia, the uniform solid ellipsoid
+    /// with the body's mass and inertia about its centre of mass ([`equivalent_ellipsoid`]),
+    /// as its shape matrix `S` (m²) in the reference configuration's axes (the columns of
+    /// `axes` are those axes turned with the body: `Σ_kl S_kl a_k a_lᵀ` in ground axes). The
+    /// ellipsoid is the points `c + y` with `yᵀS⁻¹y ≤ 1`. Zero for a point mass.
+    pub solid: [[f64; 3]; 3],
+}
+
+impl BodyMark {
+    /// How far the body's solid reaches from its centre of mass along the unit direction `d`
+    /// (m): `√(dᵀ S_g d)`, `S_g` its shape matrix in ground axes.
+    pub fn reach(&self, d: &P3) -> f64 {
+        let along: Vec<f64> = (self.axes.iter())
+            .map(|a| a[0] * d[0] + a[1] * d[1] + a[2] * d[2])
+            .collect();
+        let mut q = 0.0;
+        for k in 0..3 {
+            for l in 0..3 {
+                q += self.solid[k][l] * along[k] * along[l];
+            }
+        }
+        q.max(0.0).sqrt()
+    }
 }
 
 /// A tree joint at its point, with its axes (unit vectors, ground axes) where its type has them.
@@ -99,6 +122,10 @@ pub struct CurveMark<P = P3> {
     pub tangents: [P; 2],
     /// The curve's points, the first and the last at the nodes.
     pub points: Vec<P>,
+    /// The radius the element is drawn with (m): `√(2ρJ/ρA)` from its section's mass (the
+    /// outer radius of a solid round section), `2√(EI/EA)` where it has none (likewise), zero
+    /// where it has neither.
+    pub radius: f64,
 }
 
 /// The number of points a beam element is drawn through.
@@ -168,6 +195,7 @@ impl<P> Scene<P> {
                 cm: f(&b.cm),
                 axes: [f(&b.axes[0]), f(&b.axes[1]), f(&b.axes[2])],
                 links: b.links.iter().map(&mut *f).collect(),
+                solid: b.solid,
             })
             .collect();
         let joints = (self.joints.iter())
@@ -198,6 +226,7 @@ impl<P> Scene<P> {
                 length: c.length,
                 tangents: [f(&c.tangents[0]), f(&c.tangents[1])],
                 points: c.points.iter().map(&mut *f).collect(),
+                radius: c.radius,
             })
             .collect();
         Scene {
@@ -209,6 +238,40 @@ impl<P> Scene<P> {
             beams,
         }
     }
+}
+
+/// The equivalent ellipsoid of inertia of a body of mass `m` and inertia `j` about its centre
+/// of mass: the uniform solid ellipsoid with the same mass and the same inertia, as its shape
+/// matrix `S = Σ a_k² p_k p_kᵀ` (semi-axes `a_k` along the principal axes `p_k`). Its second
+/// moment of mass `∫ y yᵀ dm` is `(m/5) S`, and a body's is `(tr J / 2) I − J`, so
+/// `S = (5/m)(tr J / 2 I − J)` with no eigendecomposition. A thin uniform disk of radius `r` is
+/// drawn as a flat ellipsoid of radius `r √5/2`; a point mass (or a massless body) as nothing
+/// (zero).
+pub fn equivalent_ellipsoid(m: f64, j: &crate::real::M3<f64>) -> [[f64; 3]; 3] {
+    if !(m > 0.0 && m.is_finite() && j.iter().all(|x| x.is_finite())) {
+        return [[0.0; 3]; 3];
+    }
+    let half_trace = 0.5 * j.trace();
+    let mut s = [[0.0; 3]; 3];
+    for (r, row) in s.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            let second = if r == c { half_trace } else { 0.0 } - 0.5 * (j[(r, c)] + j[(c, r)]);
+            *x = 5.0 / m * second;
+        }
+    }
+    s
+}
+
+/// The radius a beam element is drawn with (see [`CurveMark::radius`]).
+fn drawn_radius(section: &crate::beams::Section<f64>) -> f64 {
+    let r = if section.rho_a > 0.0 {
+        (2.0 * section.rho_i[0] / section.rho_a).sqrt()
+    } else if section.ea > 0.0 {
+        2.0 * (section.ei[0].max(section.ei[1]) / section.ea).sqrt()
+    } else {
+        0.0
+    };
+    if r.is_finite() { r } else { 0.0 }
 }
 
 /// The name of body `b` (`None`: the ground).
@@ -308,6 +371,7 @@ fn placed(model: &Model, sys: &System<f64>, q: &[f64]) -> Scene<Placed> {
             cm: point(Some(b), &pose[b].apply(&body.cm)),
             axes: [0, 1, 2].map(|k| direction(Some(b), &pose[b].rot.column(k).into_owned())),
             links: std::mem::take(&mut at.links[b]),
+            solid: equivalent_ellipsoid(body.mass, &body.inertia),
         })
         .collect();
     Scene {
@@ -500,6 +564,7 @@ impl Placer<'_> {
                 length: e.length,
                 tangents: [0, 1].map(|k| direction(nodes[k], &tangents[k])),
                 points,
+                radius: drawn_radius(&e.section),
             });
         }
         beams
