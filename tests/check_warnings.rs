@@ -7,7 +7,7 @@ mod common;
 
 use common::{example, example_text};
 use modaltol::compiled::Compiled;
-use modaltol::report::check_summary;
+use modaltol::report::{check_report, check_summary, solved_warnings};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 fn model(text: &str) -> Compiled {
@@ -33,6 +33,18 @@ fn the_shipped_examples_warn_of_nothing() {
                 "{name}: {:?}",
                 m.model().warnings()
             );
+            let solved = solved_warnings(&m);
+            if name == "conical_pendulum.toml" {
+                // Its rod's spin about its own axis is meant free: the warning names it.
+                assert!(
+                    solved.len() == 1
+                        && solved[0].contains("mode 1 is a rigid-body mode")
+                        && solved[0].contains("ball.ry"),
+                    "{name}: {solved:?}"
+                );
+            } else {
+                assert!(solved.is_empty(), "{name}: {solved:?}");
+            }
         }
     }
 }
@@ -147,4 +159,41 @@ fn check_names_the_frame_of_each_joint_s_modes() {
         "{text}"
     );
     assert!(!text.contains("rotating with"), "{text}");
+}
+
+/// The tutorial's pendulum with a collar on its shaft. Free to turn about the shaft (an
+/// axisymmetric body nothing holds), the collar is a rigid-body mode that `check` names by its
+/// joint, with the fix; free to slide along it under gravity, the model has no equilibrium,
+/// and `check` says so with where to look. The pendulum alone warns of neither.
+#[test]
+fn check_solves_the_model_and_names_a_rigid_body_mode_or_a_missing_equilibrium() {
+    let pendulum = example_text("tutorial/pendulum.toml");
+    assert!(solved_warnings(&model(&pendulum)).is_empty());
+    let collar = |kind: &str| {
+        format!(
+            "{pendulum}\n[[bodies]]\nname = \"collar\"\nmass = 0.2\ninertia = [0.001, 0.002, 0.001]\n\
+             cm = [0, 0.1, 0]\n\n[[joints]]\nname = \"collar_joint\"\ntype = \"{kind}\"\n\
+             parent = \"shaft\"\nchild = \"collar\"\nat = [0, 0.1, 0]\naxis = [0, 1, 0]\n"
+        )
+    };
+    let turning = model(&collar("revolute"));
+    let w = solved_warnings(&turning);
+    assert!(
+        w.len() == 1
+            && w[0].contains("is a rigid-body mode (a zero root)")
+            && w[0].contains("collar_joint")
+            && w[0].contains("restrain it"),
+        "{w:?}"
+    );
+    let report = check_report(&turning);
+    assert!(
+        report.contains("  warning: at rest (the model gives no [analysis] speed) mode "),
+        "{report}"
+    );
+    let sliding = model(&collar("prismatic"));
+    let w = solved_warnings(&sliding);
+    assert!(
+        w.len() == 1 && w[0].contains("the model has no result") && w[0].contains("modaltol modal"),
+        "{w:?}"
+    );
 }

@@ -99,7 +99,7 @@ impl NativeModel {
 
     /// What `modaltol check` prints.
     fn check(&self) -> String {
-        report::check_summary(self.m())
+        report::check_report(&self.model)
     }
 
     /// The speed sweep's table (the CLI's `sweep` columns).

@@ -2,8 +2,65 @@
 //! and their nodes, constraints, parameters, tolerance cases) and the physical limits its
 //! tolerances reach. A file of its own because it formats the model, not a result.
 
+use crate::compiled::Compiled;
+use crate::modal::{C64, ModeClass};
 use crate::model::Model;
+use crate::scene::describe;
+use crate::sweep::{Options, initial_guess, point};
 use std::fmt::Write;
+
+/// What `check` prints: [`check_summary`], then what solving the model at its first analysed
+/// speed shows ([`solved_warnings`]).
+pub fn check_report(model: &Compiled) -> String {
+    let mut s = check_summary(model.model());
+    for warning in solved_warnings(model) {
+        let _ = writeln!(s, "  warning: {warning}");
+    }
+    s
+}
+
+/// The warnings that need a solve: the model at its nominal parameters and its first analysed
+/// speed (0 where it gives none) has no equilibrium or no modes (why, and where to look), or
+/// has a rigid-body mode: a zero root, a coordinate nothing restores (a rotor with no
+/// bearing in one direction, a joint with neither spring nor drive). Such a mode loads without
+/// an error and drops out of every frequency requirement, so where it is not meant only this
+/// says so.
+pub fn solved_warnings(model: &Compiled) -> Vec<String> {
+    let m = model.model();
+    let first = (m.analysis.speed).and_then(|g| g.speeds().next());
+    let speed = first.unwrap_or(0.0);
+    let p = m.nominal();
+    let solved = initial_guess(m, &p, speed)
+        .map_err(crate::sweep::PointError::from)
+        .and_then(|q0| point(model, &p, speed, &q0, &Options::default()));
+    let at = match first {
+        Some(_) => format!("at {speed} rad/s (the first speed analysed)"),
+        None => "at rest (the model gives no [analysis] speed)".to_string(),
+    };
+    let pt = match solved {
+        Ok(pt) => pt,
+        Err(e) => {
+            return vec![format!(
+                "{at} the model has no result: {e}; `modaltol modal MODEL --speed {speed}` \
+                 says the same, and `draw` shows the configuration the solve starts from"
+            )];
+        }
+    };
+    (pt.modes.iter().zip(&pt.shapes).enumerate())
+        .filter(|(_, (mode, _))| mode.class == ModeClass::Rigid)
+        .map(|(k, (_, shape))| {
+            let v: Vec<C64> = shape.iter().copied().collect();
+            format!(
+                "{at} mode {} is a rigid-body mode (a zero root): nothing restores its \
+                 largest coordinate, {}, so the mechanism may drift along it, and the mode is \
+                 left out of every frequency requirement; where that is not meant, restrain it \
+                 (a spring, bushing or bearing on that joint, or drive it)",
+                k + 1,
+                describe(m, &pt.linear.free, &v, None)
+            )
+        })
+        .collect()
+}
 
 /// Summary printed by `check`.
 pub fn check_summary(model: &Model) -> String {

@@ -29,7 +29,7 @@ pub use accuracy::{
     Outside, YieldOutside, outside_request, outside_request_lines, yield_outside_request,
 };
 pub use allocation::{ALLOCATION_HEADER, allocation_json, allocation_rows, allocation_table};
-pub use check::check_summary;
+pub use check::{check_report, check_summary, solved_warnings};
 pub use frf::{frf_header, frf_rows};
 pub use html::{Extra, MODES_DRAWN, report_html};
 pub use modal::{

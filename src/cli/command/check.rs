@@ -11,7 +11,7 @@ pub(crate) fn check_command(args: CheckArgs, set: &[(String, f64)]) -> Result<()
     let CheckArgs { model } = args;
     let m = load(&model, set)?;
     let mut w = Sink::to(&None, &Inputs::default())?;
-    write!(w, "{}", report::check_summary(m.model()))?;
+    write!(w, "{}", report::check_report(&m))?;
     w.finish()?;
 
     Ok(())
