@@ -576,6 +576,55 @@ fn analyze_without_a_model_runs_the_built_in_governor() {
     assert!(stderr(&o).contains("k3, k6, k12"), "{}", stderr(&o));
 }
 
+/// `--campbell-case` chooses the case the Campbell diagram's bands and "In short" are about
+/// (default: the one with the most toleranced variables, the governor's `all3`); a case not
+/// analysed is an input error naming those that are.
+#[test]
+fn analyze_campbell_case_chooses_the_case_the_report_is_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = |case: Option<&str>| {
+        let out = dir.path().join(case.unwrap_or("default"));
+        let mut args = vec![
+            "analyze",
+            "-o",
+            out.to_str().unwrap(),
+            "--no-monte-carlo",
+            "--speed",
+            "1:2:0.5",
+        ];
+        if let Some(c) = case {
+            args.extend(["--campbell-case", c]);
+        }
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(out.join("report.html")).unwrap()
+    };
+    assert!(report(None).contains("In short</h2><p>Case <b>all3</b>"));
+    assert!(report(Some("k6")).contains("In short</h2><p>Case <b>k6</b> (1 toleranced"));
+    let out = dir.path().join("bad");
+    let o = run(&[
+        "analyze",
+        "-o",
+        out.to_str().unwrap(),
+        "--no-monte-carlo",
+        "--case",
+        "k3",
+        "--case",
+        "k6",
+        "--campbell-case",
+        "all3",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains(
+            "--campbell-case: no tolerance case 'all3' among the cases analysed (k3, k6)"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists(), "nothing written for a refused run");
+}
+
 #[test]
 fn interrupted_monte_carlo_leaves_a_flagged_partial_result() {
     let dir = tempfile::tempdir().unwrap();

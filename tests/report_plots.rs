@@ -290,6 +290,7 @@ fn campbell_marks_engine_order_crossings_in_the_units_asked() {
     let d = Display {
         speed: FrequencyUnit::Rpm,
         frequency: FrequencyUnit::Hertz,
+        campbell_case: None,
     };
     let (plots, critical) = plots(m.model(), &a, d);
     check_all(&plots);
@@ -444,7 +445,10 @@ fn campbell_shows_the_case_with_the_most_variables() {
         ..Default::default()
     };
     let a = analyze(&m, &opt, &|_: &str, _: usize, _: usize| {});
-    assert_eq!(a.cases[modaltol::plots::campbell_case(&a)].name, "all3");
+    assert_eq!(
+        a.cases[modaltol::plots::campbell_case(&a, Display::default())].name,
+        "all3"
+    );
     let (plots, critical) = plots(m.model(), &a, Display::default());
     let c = plots.iter().find(|p| p.stem == "campbell").unwrap();
     assert!(c.title.contains("(case all3)"), "{}", c.title);
@@ -452,4 +456,94 @@ fn campbell_shows_the_case_with_the_most_variables() {
     let html = report::report_html(m.model(), &a, &refs, &critical, Default::default());
     assert!(!critical.is_empty(), "the governor's mode crosses no order");
     assert!(html.contains("under case all3"));
+    // A case chosen (`--campbell-case`): its bands, its σ, its "In short".
+    let names: Vec<&str> = a.cases.iter().map(|c| c.name.as_str()).collect();
+    let k3 = Display::case_named("k3", &names).unwrap();
+    assert_eq!(names[k3], "k3");
+    let d = Display {
+        campbell_case: Some(k3),
+        ..Display::default()
+    };
+    assert_eq!(modaltol::plots::campbell_case(&a, d), k3);
+    let (chosen, critical) = modaltol::plots::plots(m.model(), &a, d);
+    let c = chosen.iter().find(|p| p.stem == "campbell").unwrap();
+    assert!(c.title.contains("(case k3)"), "{}", c.title);
+    let refs: Vec<&Plot> = chosen.iter().collect();
+    let extra = report::Extra {
+        display: d,
+        ..Default::default()
+    };
+    let html = report::report_html(m.model(), &a, &refs, &critical, extra);
+    assert!(html.contains("under case k3") && html.contains("<p>Case <b>k3</b>"));
+    assert!(
+        Display::case_named("k4", &names)
+            .unwrap_err()
+            .contains("(k3, k6, k12")
+    );
+}
+
+/// A 42-mode rotor plots the bands and σ of its lowest six modes and of every mode an engine
+/// order reaches (ω_d within 1 % of 3× the top speed somewhere, read here from the nominal
+/// sweep), not of the axial and high bending modes far above every excitation, and the report
+/// says which; the tables keep every mode.
+#[test]
+fn a_many_mode_rotor_plots_the_modes_the_excitation_reaches() {
+    let m = common::example("friswell_5_9_1.toml");
+    let cases = m.model().tolerance_cases(&[]).unwrap()[..1].to_vec();
+    let opt = AnalyzeOptions {
+        speeds: vec![100.0, 400.0],
+        cases,
+        quadrature: None,
+        ..Default::default()
+    };
+    let a = analyze(&m, &opt, &|_: &str, _: usize, _: usize| {});
+    let modes = a.nominal[0].as_ref().unwrap().modes.len();
+    assert_eq!(modes, 42);
+    let want: Vec<usize> = (0..modes)
+        .filter(|&k| {
+            k < 6
+                || a.nominal.iter().flatten().any(|p| {
+                    p.modes[k].damped_frequency <= 1.01 * 3.0 * 400.0
+                        && p.modes[k].class != modaltol::modal::ModeClass::Rigid
+                })
+        })
+        .collect();
+    assert!(want.len() > 6 && want.len() < modes / 2, "{want:?}");
+    assert_eq!(modaltol::plots::plotted_modes(m.model(), &a), want);
+    let (all, critical) = plots(m.model(), &a, Display::default());
+    let case = &a.cases[0].name;
+    for k in 0..modes {
+        let stem = format!("band_{case}_damped_frequency_mode{}", k + 1);
+        assert_eq!(
+            all.iter().any(|p| p.stem == stem),
+            want.contains(&k),
+            "mode {}",
+            k + 1
+        );
+    }
+    assert!(
+        a.rows.iter().any(|r| r.mode == Some(modes - 1)),
+        "every mode in the table"
+    );
+    let refs: Vec<&Plot> = all.iter().collect();
+    let html = report::report_html(m.model(), &a, &refs, &critical, Default::default());
+    // The modes named as runs of consecutive numbers.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for &k in &want {
+        match runs.last_mut() {
+            Some(r) if r.1 + 1 == k + 1 => r.1 = k + 1,
+            _ => runs.push((k + 1, k + 1)),
+        }
+    }
+    let named: Vec<String> = (runs.iter())
+        .map(|&(a, b)| {
+            if a == b {
+                format!("{a}")
+            } else {
+                format!("{a}–{b}")
+            }
+        })
+        .collect();
+    let line = format!("Band and σ plots of modes {} of 42", named.join(", "));
+    assert!(html.contains(&line), "{line}");
 }

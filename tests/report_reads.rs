@@ -82,7 +82,7 @@ fn the_report_opens_with_the_cases_and_the_answer_in_short() {
         assert!(h.contains(&format!("<h2 id=\"{id}\">")), "{id}");
     }
     // "In short", mode 1: the case with the most variables, at the largest 3σ/mean.
-    let ci = campbell_case(&a);
+    let ci = campbell_case(&a, Display::default());
     assert_eq!(a.cases[ci].name, "all3");
     let rows: Vec<_> = (a.rows.iter())
         .filter(|r| r.case == ci && r.method() == Method::Analytic)

@@ -24,6 +24,7 @@ def merge(
     output: str | PathLike[str] | None = None,
     speed_unit: str = "rad/s",
     frequency_unit: str = "rad/s",
+    campbell_case: str | None = None,
     target_yield: float | None = None,
 ) -> Analysis:
     """Combines shards ``1..N`` of one Monte Carlo run of ``model`` (:class:`Shard` objects, or
@@ -42,6 +43,7 @@ def merge(
             "output": None if output is None else str(output),
             "speed_unit": speed_unit,
             "frequency_unit": frequency_unit,
+            "campbell_case": campbell_case,
         },
     )
     return _analysis(d)

@@ -35,6 +35,7 @@ class AnalyzeOptions(TypedDict):
     output: str | None
     speed_unit: str
     frequency_unit: str
+    campbell_case: str | None
     sobol: int | None
     shard: tuple[int, int] | None
     target_yield: float | None
@@ -46,6 +47,7 @@ class MergeOptions(TypedDict):
     output: str | None
     speed_unit: str
     frequency_unit: str
+    campbell_case: str | None
 
 class NativeModel:
     @property

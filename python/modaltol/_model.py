@@ -243,6 +243,7 @@ class Model:
         output: str | PathLike[str] | None = None,
         speed_unit: str = "rad/s",
         frequency_unit: str = "rad/s",
+        campbell_case: str | None = None,
         sobol: int | None = None,
         shard: tuple[int, int] | None = None,
         executor: Any = None,
@@ -255,7 +256,9 @@ class Model:
         ``"lhs"`` or ``"sobol"``; default the model's). With ``output``, also writes the CLI's
         result directory (CSV, plots, report.html, summary.json), its plots and report with
         speeds in ``speed_unit`` and frequencies in ``frequency_unit`` (``"rad/s"``, ``"hz"``,
-        ``"rpm"``; the tables stay in rad/s). At most 10⁵ speeds; ``threads`` from 1 to 1024
+        ``"rpm"``; the tables stay in rad/s), the Campbell diagram's bands and the report's "In
+        short" of the case ``campbell_case`` (default: the one with the most toleranced
+        variables). At most 10⁵ speeds; ``threads`` from 1 to 1024
         (``None``: one per core), the command line's rules. Ctrl-C stops it. The yield of the
         model's ``[[requirements]]`` is in ``yield_``; ``sobol=N`` adds the Sobol indices
         (``N`` base samples, ``N·(d+2)`` sweeps) in ``sobol``; ``target_yield`` replaces the
@@ -339,6 +342,7 @@ class Model:
                 output=output,
                 speed_unit=speed_unit,
                 frequency_unit=frequency_unit,
+                campbell_case=campbell_case,
             )
         if shards is not None:
             raise ValueError("shards= is the split of executor=; give executor= too")
@@ -357,6 +361,7 @@ class Model:
                 "output": None if output is None else str(output),
                 "speed_unit": speed_unit,
                 "frequency_unit": frequency_unit,
+                "campbell_case": campbell_case,
                 "sobol": sobol,
                 "shard": None if shard is None else _shard_pair(shard),
                 "target_yield": None if target_yield is None else float(target_yield),

@@ -199,6 +199,19 @@ def test_analyze_is_the_cli_analysis(cli: Path, tmp_path: Path, pendulum: modalt
     assert set(answer["case"]) == {"L3", "L6"}
 
 
+def test_campbell_case_is_the_cli_one(cli: Path, tmp_path: Path) -> None:
+    gov = modaltol.load(EXAMPLES / "governor.toml")
+    gov.analyze(speeds="1:2:0.5", monte_carlo=False, campbell_case="k6", output=tmp_path / "py")
+    run(cli, "analyze", EXAMPLES / "governor.toml", "-o", tmp_path / "cli", "--speed", "1:2:0.5",
+        "--no-monte-carlo", "--campbell-case", "k6")
+    for name in ("campbell.svg", "tolerance.csv"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    assert "In short</h2><p>Case <b>k6</b>" in (tmp_path / "py" / "report.html").read_text()
+    with pytest.raises(ValueError, match="campbell_case: no tolerance case 'all3' among the "
+                       r"cases analysed \(k3\)"):
+        gov.analyze(speeds="1:2:0.5", monte_carlo=False, cases=["k3"], campbell_case="all3")
+
+
 def test_yield_is_the_cli_yield(cli: Path, tmp_path: Path) -> None:
     spec = EXAMPLES / "governor_specification.toml"
     gov = modaltol.load(spec)

@@ -1,5 +1,6 @@
 //! The command line's arguments: what `--help` teaches, parsed by clap.
 
+use super::InputError;
 use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -103,8 +104,9 @@ impl From<UnitArg> for modaltol::plots::FrequencyUnit {
     }
 }
 
-/// The plots' and report's units (the CSV and JSON files stay in rad/s).
-#[derive(clap::Args, Clone, Copy)]
+/// The plots' and report's units (the CSV and JSON files stay in rad/s) and the case they
+/// are about.
+#[derive(clap::Args, Clone)]
 pub(crate) struct DisplayArgs {
     /// Unit of the operating speed in the plots and report.html (rad/s, hz, rpm); the CSV and
     /// JSON files stay in rad/s.
@@ -113,14 +115,30 @@ pub(crate) struct DisplayArgs {
     /// Unit of the damped natural frequencies in the plots and report.html (rad/s, hz, rpm).
     #[arg(long, value_enum, default_value = "rad/s")]
     pub(crate) frequency_unit: UnitArg,
+    /// The tolerance case whose ±3σ bands the Campbell diagram draws, whose σ its critical
+    /// speeds carry and which the report's "In short" is about; default: the case with the
+    /// most toleranced variables.
+    #[arg(long, value_name = "NAME")]
+    pub(crate) campbell_case: Option<String>,
 }
 
-impl From<DisplayArgs> for modaltol::plots::Display {
-    fn from(d: DisplayArgs) -> Self {
-        Self {
-            speed: d.speed_unit.into(),
-            frequency: d.frequency_unit.into(),
-        }
+impl DisplayArgs {
+    /// The display these flags ask for, of an analysis of `cases` (the Campbell case must be
+    /// one of them).
+    pub(crate) fn of(
+        &self,
+        cases: &[modaltol::model::Case],
+    ) -> Result<modaltol::plots::Display, InputError> {
+        let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+        let campbell_case = (self.campbell_case.as_deref())
+            .map(|name| modaltol::plots::Display::case_named(name, &names))
+            .transpose()
+            .map_err(|e| InputError(format!("--campbell-case: {e}")))?;
+        Ok(modaltol::plots::Display {
+            speed: self.speed_unit.into(),
+            frequency: self.frequency_unit.into(),
+            campbell_case,
+        })
     }
 }
 

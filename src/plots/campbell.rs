@@ -45,13 +45,16 @@ pub enum Meeting {
 pub const NEAR: f64 = 0.01;
 
 /// The tolerance case whose bands the Campbell diagram shows and whose σ its critical speeds
-/// carry: the one with the most toleranced variables (the whole design's spread), the first
-/// of those where several tie.
-pub fn campbell_case(a: &Analysis) -> usize {
-    (0..a.cases.len())
-        .rev()
-        .max_by_key(|&c| a.cases[c].tolerances.len())
-        .unwrap_or(0)
+/// carry: the one `d` chooses ([`Display::campbell_case`]), else the one with the most
+/// toleranced variables (the whole design's spread), the first of those where several tie.
+pub fn campbell_case(a: &Analysis, d: Display) -> usize {
+    match d.campbell_case {
+        Some(c) if c < a.cases.len() => c,
+        _ => (0..a.cases.len())
+            .rev()
+            .max_by_key(|&c| a.cases[c].tolerances.len())
+            .unwrap_or(0),
+    }
 }
 
 /// The engine orders drawn on the Campbell diagram: 1, 2, 3 and the model's transfer order.
@@ -153,6 +156,34 @@ fn shown(a: &Analysis, modes: usize, reach: f64, meeting: &[CriticalSpeed]) -> V
     out
 }
 
+/// The lowest modes that get their own band and σ plots whatever their frequency.
+pub const LOWEST_PLOTTED: usize = 6;
+
+/// The modes whose outputs get their own plots: the [`LOWEST_PLOTTED`] lowest, and every
+/// mode an engine order reaches within the speeds analysed (nominal ω_d within [`NEAR`] of the
+/// highest order at the top speed somewhere: the modes the Campbell diagram is about). A
+/// 42-mode rotor's axial and high bending modes, far above every excitation, are in the tables
+/// only (each plotted they were some 340 files).
+pub fn plotted_modes(model: &Model, a: &Analysis) -> Vec<usize> {
+    let modes = (a.nominal.iter().flatten())
+        .map(|p| p.modes.len())
+        .next()
+        .unwrap_or(0);
+    let top = (a.nominal.iter().flatten()).fold(0.0f64, |t, p| t.max(p.speed.abs()));
+    let highest = orders(model).last().copied().unwrap_or(1.0);
+    let reach = (1.0 + NEAR) * highest * top;
+    (0..modes)
+        .filter(|&m| {
+            m < LOWEST_PLOTTED
+                || (a.nominal.iter().flatten()).any(|p| {
+                    p.modes.get(m).is_some_and(|md| {
+                        md.class != ModeClass::Rigid && md.damped_frequency <= reach
+                    })
+                })
+        })
+        .collect()
+}
+
 /// Campbell diagram: nominal ω_d of the modes an engine order reaches ([`shown`]) with ±3σ
 /// (the [`campbell_case`], the automatic `analytic` choice, so the bands stay right through
 /// changes of class; no line where a mode is rigid), the engine-order lines (each its own
@@ -167,7 +198,7 @@ pub(super) fn campbell(
         d.speed.per_rad_per_second(),
         d.frequency.per_rad_per_second(),
     );
-    let case = campbell_case(a);
+    let case = campbell_case(a, d);
     let orders = orders(model);
     let speeds: Vec<f64> = a.nominal.iter().flatten().map(|p| p.speed).collect();
     let (lo, hi) = match (speeds.first(), speeds.last()) {

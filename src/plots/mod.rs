@@ -30,7 +30,7 @@ mod sobol;
 mod yields;
 
 pub use bands::first_order_off;
-pub use campbell::{CriticalSpeed, Meeting, NEAR, campbell_case};
+pub use campbell::{CriticalSpeed, LOWEST_PLOTTED, Meeting, NEAR, campbell_case, plotted_modes};
 pub use draw::{AXES_WIDTH, LEGEND_WIDTH, tick_label};
 pub use png::{fonts, png};
 pub use sobol::sobol_shown;
@@ -88,11 +88,29 @@ impl FrequencyUnit {
     }
 }
 
-/// Units of the plots and the report: operating speeds and the system's frequencies.
+/// How the plots and the report show an analysis: the units of operating speeds and of the
+/// system's frequencies, and the tolerance case the Campbell diagram and "In short" are about.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Display {
     pub speed: FrequencyUnit,
     pub frequency: FrequencyUnit,
+    /// The case the Campbell diagram's bands, its critical speeds' σ and the report's "In
+    /// short" are of, as an index into the analysis's cases ([`Display::case_named`]); `None`:
+    /// the one with the most toleranced variables ([`campbell_case`]).
+    pub campbell_case: Option<usize>,
+}
+
+impl Display {
+    /// The index of the case `name` among `cases` (the cases an analysis runs, in its order),
+    /// for [`Display::campbell_case`]; an error naming the cases where none is called so.
+    pub fn case_named(name: &str, cases: &[&str]) -> Result<usize, String> {
+        cases.iter().position(|c| *c == name).ok_or_else(|| {
+            format!(
+                "no tolerance case '{name}' among the cases analysed ({})",
+                cases.join(", ")
+            )
+        })
+    }
 }
 
 fn series(a: &Analysis, case: usize, q: Quantity, mode: Option<usize>, m: Method) -> Vec<&Row> {
@@ -161,7 +179,7 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
         .next()
         .unwrap_or(0);
     let xlabel = format!("speed Ω ({})", d.speed.symbol());
-    let quantities = outputs(a, modes);
+    let quantities = outputs(a, &plotted_modes(model, a));
     for (ci, case) in a.cases.iter().enumerate() {
         for &(q, mode) in &quantities {
             let o = Output {
@@ -194,11 +212,11 @@ pub fn plots(model: &Model, a: &Analysis, d: Display) -> (Vec<Plot>, Vec<Critica
     (out, critical)
 }
 
-/// The outputs plotted per case: every mode's ω_d, its ζ where the system is damped, and |H|
-/// where the analysis has it.
-fn outputs(a: &Analysis, modes: usize) -> Vec<(Quantity, Option<usize>)> {
+/// The outputs plotted per case: the ω_d of each of `modes` ([`plotted_modes`]), its ζ where
+/// the system is damped, and |H| where the analysis has it.
+fn outputs(a: &Analysis, modes: &[usize]) -> Vec<(Quantity, Option<usize>)> {
     let mut quantities: Vec<(Quantity, Option<usize>)> = Vec::new();
-    for m in 0..modes {
+    for &m in modes {
         quantities.push((Quantity::DampedFrequency, Some(m)));
         // ζ where some design is damped (an undamped system's ζ is 0 with σ 0 everywhere, up
         // to rounding).

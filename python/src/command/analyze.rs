@@ -37,6 +37,7 @@ pub(crate) struct AnalyzeKeywords {
     output: Option<PathBuf>,
     speed_unit: String,
     frequency_unit: String,
+    campbell_case: Option<String>,
     sobol: Option<i64>,
     /// `(K, N)`: run shard K (1-based) of N of the Monte Carlo and return the shard's text.
     shard: Option<(i64, i64)>,
@@ -143,6 +144,7 @@ pub(crate) fn analyze<'py>(
         output,
         speed_unit,
         frequency_unit,
+        campbell_case,
         sobol,
         shard,
         target_yield,
@@ -153,9 +155,10 @@ pub(crate) fn analyze<'py>(
     let (sampling, speed_unit, frequency_unit) =
         (sampling.as_deref(), &*speed_unit, &*frequency_unit);
     let m = model.m();
-    let display = Display {
+    let mut display = Display {
         speed: unit(speed_unit, "speed_unit")?,
         frequency: unit(frequency_unit, "frequency_unit")?,
+        campbell_case: None,
     };
     let sampling = match sampling {
         None => None,
@@ -221,6 +224,7 @@ pub(crate) fn analyze<'py>(
         .check()
         .and_then(|r| r.resolve(m, Cancel::new()))
         .map_err(refused)?;
+    display.campbell_case = campbell(campbell_case.as_deref(), &opt.cases)?;
     let (mc, threads) = (opt.monte_carlo, opt.threads);
     // Fail early where the results cannot be written.
     let dir = model.result_dir(&output)?;
@@ -242,4 +246,14 @@ pub(crate) fn analyze<'py>(
     let used =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     analysis_dict(py, model, &a, mc.as_ref(), used, dir, display)
+}
+
+/// The index of the case `name` (the keyword `campbell_case`) among the cases analysed.
+pub(crate) fn campbell(
+    name: Option<&str>,
+    cases: &[modaltol::model::Case],
+) -> PyResult<Option<usize>> {
+    let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+    name.map(|n| Display::case_named(n, &names).map_err(|e| bad(format!("campbell_case: {e}"))))
+        .transpose()
 }

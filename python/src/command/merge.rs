@@ -22,6 +22,7 @@ pub(crate) struct MergeKeywords {
     output: Option<PathBuf>,
     speed_unit: String,
     frequency_unit: String,
+    campbell_case: Option<String>,
 }
 
 /// Merges shards `(name, text)` of one run of this model exactly as the CLI's `merge` does
@@ -40,11 +41,13 @@ pub(crate) fn merge<'py>(
         output,
         speed_unit,
         frequency_unit,
+        campbell_case,
     } = options;
     let m = model.m();
-    let display = Display {
+    let mut display = Display {
         speed: unit(&speed_unit, "speed_unit")?,
         frequency: unit(&frequency_unit, "frequency_unit")?,
+        campbell_case: None,
     };
     let request = Request {
         speeds: Speeds::Model,
@@ -69,6 +72,7 @@ pub(crate) fn merge<'py>(
         .check()
         .and_then(|r| r.resolve(m, Cancel::new()))
         .map_err(refused)?;
+    display.campbell_case = super::analyze::campbell(campbell_case.as_deref(), &base.cases)?;
     let gathered =
         modaltol::shard::verify(m, &base.cases, shards).map_err(|e| bad(e.to_string()))?;
     let (opt, mc) =

@@ -48,6 +48,7 @@ pub(crate) fn analyze_command(
         Some(y) => m.with_target_yield(y),
         None => m,
     };
+    let display = display.of(&opt.cases)?;
     note_unresolved_target(&m, opt.monte_carlo.as_ref());
     let (mc, split) = (opt.monte_carlo, opt.split.clone());
     // Fail early where the results cannot be written.
@@ -85,7 +86,7 @@ pub(crate) fn analyze_command(
     let o = WriteOptions {
         mc: mc.as_ref(),
         threads: opt.threads.unwrap_or_else(rayon::current_num_threads),
-        display: display.into(),
+        display,
         allocation: None,
     };
     write_outputs(&m, &a, o, dir, &output)?;

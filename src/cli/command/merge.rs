@@ -51,6 +51,7 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
         }
         _ => tolerance_cases(m.model(), &only)?,
     };
+    let display = display.of(&cases)?;
     let gathered = modaltol::shard::read_all(m.model(), &cases, &shards)
         .map_err(|e| InputError(e.to_string()))?;
     let base = AnalyzeOptions {
@@ -75,7 +76,7 @@ pub(crate) fn merge_command(args: MergeArgs, set: &[(String, f64)], cancel: &Can
     let o = WriteOptions {
         mc: Some(&mc),
         threads: rayon::current_num_threads(),
-        display: display.into(),
+        display,
         allocation: None,
     };
     write_outputs(&m, &a, o, dir, &output)?;

@@ -21,7 +21,9 @@ use crate::analyze::Analysis;
 use crate::drawing::Drawing;
 use crate::model::Model;
 use crate::montecarlo::McOptions;
-use crate::plots::{CriticalSpeed, Display, Meeting, NEAR, Plot, campbell_case};
+use crate::plots::{
+    CriticalSpeed, Display, LOWEST_PLOTTED, Meeting, NEAR, Plot, campbell_case, plotted_modes,
+};
 use allocation::allocation_section;
 use first_order::first_order_table;
 pub use mechanism::MODES_DRAWN;
@@ -85,7 +87,7 @@ pub fn report_html(
     }
     timing_table(&mut b, model, a, mc);
     reading_guide(&mut b);
-    figures(&mut b, plots);
+    figures(&mut b, model, a, plots);
     h.push_str(&contents(&mut b));
     h.push_str(&b);
     let _ = writeln!(h, "</body></html>");
@@ -276,7 +278,7 @@ fn timing_table(h: &mut String, model: &Model, a: &Analysis, mc: Option<&McOptio
 fn critical_table(h: &mut String, a: &Analysis, critical: &[CriticalSpeed], d: Display) {
     if !critical.is_empty() {
         let u = d.speed.symbol();
-        let case = &a.cases[campbell_case(a)].name;
+        let case = &a.cases[campbell_case(a, d)].name;
         let _ = writeln!(
             h,
             "<h2>Critical speeds</h2><p>Where a mode's damped natural frequency meets an engine \
@@ -402,13 +404,28 @@ fn reading_guide(h: &mut String) {
 <li><b>analytic</b> is the answer to read: the quadrature where it ran (its <code>basis</code> says so), else the automatic Taylor choice (invariant near a change of class, else second order). Red marks in the band plots show the speeds where first order's σ is more than 10 % off.</li>\
 <li><b>monte_carlo</b> re-runs the whole nonlinear analysis per sample, with 95 % confidence intervals in <code>tolerance.csv</code> and counts of failed samples and of samples whose mode changed class. Where the distribution is a mixture (most samples overdamped, a few far out), a few thousand samples are far from converged; the quadrature is not.</li>\
 <li><b>Probabilities</b> (<code>probabilities.csv</code>): per speed, the probability that a mode is overdamped, that the equilibrium is unstable, and that a design is on another equilibrium branch than the nominal one, by quadrature (± its error estimate) and Monte Carlo (95 % Wilson interval).</li>\
-<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of the case with the most toleranced variables, the engine orders and where a mode crosses or comes near one.</li></ul>"
+<li>Band plots shade the analytic mean ± σ; the Campbell diagram shows ±3σ (analytic) of one case (<code>--campbell-case</code>; by default the one with the most toleranced variables), the engine orders and where a mode crosses or comes near one.</li></ul>"
     );
 }
 
-/// The plots, each an `<stem>.svg` beside the page, with its caption.
-fn figures(h: &mut String, plots: &[&Plot]) {
+/// The plots, each an `<stem>.svg` beside the page, with its caption; which modes have their
+/// own plots where not all do ([`plotted_modes`]).
+fn figures(h: &mut String, model: &Model, a: &Analysis, plots: &[&Plot]) {
     let _ = writeln!(h, "<h2>Plots</h2>");
+    let modes = (a.nominal.iter().flatten())
+        .map(|p| p.modes.len())
+        .next()
+        .unwrap_or(0);
+    let plotted = plotted_modes(model, a);
+    if plotted.len() < modes {
+        let _ = writeln!(
+            h,
+            "<p>Band and σ plots of modes {} of {modes}: the lowest {LOWEST_PLOTTED} and those an \
+             engine order reaches within the speeds analysed. The other modes lie above every \
+             excitation drawn; their rows are in <code>tolerance.csv</code>.</p>",
+            ranges(&plotted)
+        );
+    }
     for p in plots {
         let _ = writeln!(
             h,
@@ -455,7 +472,6 @@ fn unfilled_table(a: &Analysis) -> String {
     h
 }
 
-/// A number to five significant digits, in fixed notation where that stays short.
 /// `x` to three significant digits, without trailing zeros (a spread in per cent: `0.762`,
 /// `2.2`, `1010`).
 fn short(x: f64) -> String {
@@ -471,6 +487,7 @@ fn short(x: f64) -> String {
     }
 }
 
+/// A number to five significant digits, in fixed notation where that stays short.
 fn sig(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
@@ -481,6 +498,36 @@ fn sig(x: f64) -> String {
     } else {
         format!("{x:.4e}")
     }
+}
+
+/// [`sig`] without trailing zeros: a value read off a grid as it was given (a speed of
+/// `3` rad/s, not `3.0000`).
+fn plain(x: f64) -> String {
+    let s = sig(x);
+    if s.contains('.') && !s.contains('e') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// 0-based indices as 1-based numbers with runs joined: `1–6, 9, 11–12`.
+fn ranges(modes: &[usize]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut k = 0;
+    while k < modes.len() {
+        let mut end = k;
+        while end + 1 < modes.len() && modes[end + 1] == modes[end] + 1 {
+            end += 1;
+        }
+        parts.push(if end == k {
+            format!("{}", modes[k] + 1)
+        } else {
+            format!("{}–{}", modes[k] + 1, modes[end] + 1)
+        });
+        k = end + 1;
+    }
+    parts.join(", ")
 }
 
 /// Escapes text for HTML.

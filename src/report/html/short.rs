@@ -3,7 +3,7 @@
 //! natural frequencies and |H| at the speed of their largest relative spread, as mean ± 3σ and
 //! per cent of the mean, the tolerances that drive them, and whether the requirements hold.
 
-use super::{esc, short, sig};
+use super::{esc, plain, short, sig};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::Quantity;
@@ -19,7 +19,7 @@ const DRIVER_SHARE: f64 = 0.05;
 
 /// The "In short" section (none where the analysis has no answer rows).
 pub(super) fn in_short(h: &mut String, model: &Model, a: &Analysis, d: Display) {
-    let ci = campbell_case(a);
+    let ci = campbell_case(a, d);
     let Some(case) = a.cases.get(ci) else {
         return;
     };
@@ -99,7 +99,7 @@ fn sentence(
         sig(3.0 * r.std * ys),
         esc(&unit),
         short(300.0 * r.std / r.mean.abs()),
-        sig(r.speed * d.speed.per_rad_per_second()),
+        plain(r.speed * d.speed.per_rad_per_second()),
         d.speed.symbol(),
         drivers(model, a, r)
     ))
