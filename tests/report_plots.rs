@@ -546,4 +546,36 @@ fn a_many_mode_rotor_plots_the_modes_the_excitation_reaches() {
         .collect();
     let line = format!("Band and σ plots of modes {} of 42", named.join(", "));
     assert!(html.contains(&line), "{line}");
+    // "In short" opens with the modes that cross an engine order (its lateral modes, not the
+    // 0.94 rad/s torsional coupling to the drive that is mode 1), each with its lowest
+    // crossing.
+    let mut crossing: Vec<usize> = (critical.iter())
+        .filter(|c| c.meeting == modaltol::plots::Meeting::Crossing)
+        .map(|c| c.mode)
+        .collect();
+    crossing.sort();
+    crossing.dedup();
+    assert!(crossing.len() >= 3 && crossing[0] > 0, "{crossing:?}");
+    let short = html
+        .split("In short</h2>")
+        .nth(1)
+        .unwrap()
+        .split("</ul>")
+        .next()
+        .unwrap();
+    let items: Vec<&str> = short.split("<li>").skip(1).collect();
+    for (item, &k) in items.iter().zip(&crossing[..3]) {
+        assert!(
+            item.starts_with(&format!("Mode {}'s damped natural frequency", k + 1)),
+            "{item}"
+        );
+        let lowest = (critical.iter())
+            .filter(|c| c.mode == k && c.meeting == modaltol::plots::Meeting::Crossing)
+            .min_by(|a, b| a.speed.total_cmp(&b.speed))
+            .unwrap();
+        assert!(
+            item.contains(&format!(" It crosses {}× at Ω = ", lowest.order)),
+            "{item}"
+        );
+    }
 }

@@ -66,7 +66,7 @@ pub fn report_html(
     // the methods, then the machinery (timings) and the plots.
     let mut b = String::new();
     cases_table(&mut b, model, a);
-    in_short(&mut b, model, a, d);
+    in_short(&mut b, model, a, critical, d);
     if let Some(al) = allocation {
         allocation_section(&mut b, model, al);
     }

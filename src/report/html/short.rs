@@ -1,36 +1,72 @@
-//! The report's opening answer, "In short": one sentence per output that matters of the case
-//! with the most toleranced variables (the whole design's spread): the first modes' damped
-//! natural frequencies and |H| at the speed of their largest relative spread, as mean ± 3σ and
-//! per cent of the mean, the tolerances that drive them, and whether the requirements hold.
+//! The report's opening answer, "In short": one sentence per output that matters of the
+//! Campbell diagram's case (by default the one with the most toleranced variables: the whole
+//! design's spread): three modes' damped natural frequencies and |H| at the speed of their
+//! largest relative spread, as mean ± 3σ and per cent of the mean, the tolerances that drive
+//! them, and whether the requirements hold. The modes are those that cross an engine order
+//! first (their critical speeds, with ±3σ: what a tolerance moves onto a running speed; a
+//! rotor's lateral modes before its soft torsional coupling to the drive), then the lowest.
 
 use super::{esc, plain, short, sig};
 use crate::analyze::Analysis;
 use crate::model::Model;
 use crate::output::Quantity;
-use crate::plots::{Display, campbell_case};
+use crate::plots::{CriticalSpeed, Display, Meeting, campbell_case};
 use crate::table::{Method, Row};
 use std::fmt::Write;
 
-/// The modes the sentences cover: the first three that are not rigid.
+/// The number of modes the sentences cover.
 const MODES: usize = 3;
 
 /// A variable's share of the first-order variance below which it is not named as a driver.
 const DRIVER_SHARE: f64 = 0.05;
 
 /// The "In short" section (none where the analysis has no answer rows).
-pub(super) fn in_short(h: &mut String, model: &Model, a: &Analysis, d: Display) {
+pub(super) fn in_short(
+    h: &mut String,
+    model: &Model,
+    a: &Analysis,
+    critical: &[CriticalSpeed],
+    d: Display,
+) {
     let ci = campbell_case(a, d);
     let Some(case) = a.cases.get(ci) else {
         return;
     };
     let mut lines: Vec<String> = Vec::new();
     let modes = a.nominal.iter().flatten().map(|p| p.modes.len()).next();
+    // Each crossing mode's lowest crossing, by mode, then the modes without one.
+    let mut crossings: Vec<&CriticalSpeed> = Vec::new();
+    for c in critical.iter().filter(|c| c.meeting == Meeting::Crossing) {
+        match crossings.iter_mut().find(|o| o.mode == c.mode) {
+            Some(o) if o.speed <= c.speed => {}
+            Some(o) => *o = c,
+            None => crossings.push(c),
+        }
+    }
+    crossings.sort_by_key(|c| c.mode);
+    let order = (crossings.iter().map(|c| c.mode))
+        .chain((0..modes.unwrap_or(0)).filter(|m| !crossings.iter().any(|c| c.mode == *m)));
     let mut shown = 0;
-    for m in 0..modes.unwrap_or(0) {
+    for m in order {
         if shown == MODES {
             break;
         }
-        if let Some(line) = sentence(model, a, ci, Quantity::DampedFrequency, Some(m), d) {
+        if let Some(mut line) = sentence(model, a, ci, Quantity::DampedFrequency, Some(m), d) {
+            if let Some(c) = crossings.iter().find(|c| c.mode == m) {
+                let xs = d.speed.per_rad_per_second();
+                let _ = write!(
+                    line,
+                    " It crosses {}× at Ω = {}{} {}.",
+                    plain(c.order),
+                    plain(c.speed * xs),
+                    if c.std.is_finite() {
+                        format!(" ± {}", sig(3.0 * c.std * xs))
+                    } else {
+                        String::new()
+                    },
+                    d.speed.symbol()
+                );
+            }
             lines.push(line);
             shown += 1;
         }
