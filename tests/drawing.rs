@@ -40,6 +40,19 @@ fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// A view group's projection, from its tag: scale, origin `ox`, `oy`, and its h and v
+/// directions (a point `x` is drawn at `(ox + scale·h·x, oy − scale·v·x)`).
+fn projection(tag: &str) -> (f64, f64, f64, [f64; 3], [f64; 3]) {
+    let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
+    (
+        f("data-scale"),
+        f("data-ox"),
+        f("data-oy"),
+        triple(attr(tag, "data-h").unwrap()),
+        triple(attr(tag, "data-v").unwrap()),
+    )
+}
+
 /// Every mark of class `class` in every view of `svg`: (view, name, the point's components
 /// along the view's h and v directions read back from cx, cy, and those directions).
 fn marks(svg: &str, class: &str) -> Vec<(String, [f64; 2], [[f64; 3]; 2])> {
@@ -47,14 +60,7 @@ fn marks(svg: &str, class: &str) -> Vec<(String, [f64; 2], [[f64; 3]; 2])> {
     let mut view = None;
     for tag in svg.split('<').map(|t| t.split('>').next().unwrap_or("")) {
         if tag.starts_with("g class=\"view\"") {
-            let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
-            view = Some((
-                f("data-scale"),
-                f("data-ox"),
-                f("data-oy"),
-                triple(attr(tag, "data-h").unwrap()),
-                triple(attr(tag, "data-v").unwrap()),
-            ));
+            view = Some(projection(tag));
         } else if tag.starts_with(&format!("circle class=\"{class}\"")) {
             let (s, ox, oy, h, v) = view.unwrap();
             let cx: f64 = attr(tag, "cx").unwrap().parse().unwrap();
@@ -701,14 +707,7 @@ fn solid_ellipses(svg: &str) -> Vec<Ellipse> {
     let mut view = None;
     for tag in svg.split('<').map(|t| t.split('>').next().unwrap_or("")) {
         if tag.starts_with("g class=\"view\"") {
-            let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
-            view = Some((
-                f("data-scale"),
-                f("data-ox"),
-                f("data-oy"),
-                triple(attr(tag, "data-h").unwrap()),
-                triple(attr(tag, "data-v").unwrap()),
-            ));
+            view = Some(projection(tag));
         } else if tag.starts_with("ellipse class=\"solid\"") {
             let (s, ox, oy, h, v) = view.unwrap();
             let f = |n| attr(tag, n).unwrap().parse::<f64>().unwrap();
