@@ -165,7 +165,7 @@ pub fn eigen_dense(a: &DMatrix<f64>) -> Option<DenseEigen> {
 
 /// Relative asymmetry (of the largest entry) below which a matrix counts as symmetric: rounding
 /// in the assembly of `M̂`, `K̂` leaves a few ε (measured: 3e-16 on the blade's `M̂`).
-const SYMMETRY: f64 = 1e-13;
+pub(super) const SYMMETRY: f64 = 1e-13;
 
 /// The undamped pencil `K x = μ M x` with `M` and `K` symmetric and `M` positive definite.
 #[derive(Debug, Clone)]

@@ -6,8 +6,9 @@
 //! few solves that must carry derivatives (the independent-coordinate basis) use this
 //! elimination, pivoting on real parts.
 //!
-//! **Every iterative factorisation goes through this module** ([`svd`], [`schur`], [`eigen_dense`],
-//! [`symmetric_eigen`]). nalgebra's plain calls iterate without bound and panic on a NaN they
+//! **Every iterative factorisation goes through this module** ([`svd`], [`schur`],
+//! [`eigen_dense`], [`symmetric_eigen`], [`symmetric_definite`], [`gyroscopic`]). nalgebra's
+//! plain calls iterate without bound and panic on a NaN they
 //! produce themselves: entries near `f64::MAX` overflow inside the QR sweeps, after which the
 //! iteration never converges (a hang) or a singular value is NaN (a panic). Here the input must be
 //! finite, is scaled by a power of two (exact) so that its largest entry lies in `[½, 1)`, and the
@@ -16,6 +17,7 @@
 //! finite and the caller reports it as a failure.
 
 mod bounded;
+mod gyroscopic;
 mod rank;
 mod solve;
 
@@ -23,6 +25,7 @@ pub use bounded::{
     Definite, DenseEigen, SWEEPS_PER_ROW, WELL_CONDITIONED, eigen_dense, schur, svd, svd_real,
     symmetric_definite, symmetric_eigen,
 };
+pub use gyroscopic::{Gyroscopic, gyroscopic};
 pub use rank::{dependent_rows, dependent_rows_after, pivot_columns};
 pub use solve::{Lu, jacobian, least_squares, solve};
 
