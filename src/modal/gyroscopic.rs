@@ -216,6 +216,38 @@ mod tests {
         }
     }
 
+    /// Scaling the whole pencil (a change of units of force) leaves the frequencies: down to
+    /// 1e-200 and up to 1e200 the route gives them to rounding, or declines and the general
+    /// route answers or refuses with its reason; no NaN, no panic.
+    #[test]
+    fn a_pencil_of_any_scale_keeps_its_frequencies_or_is_refused() {
+        let p = pencil(8, 5);
+        let want: Vec<f64> = {
+            let [m, c, k] = &p;
+            let out = super::super::modes(m, c, k, 0.0).unwrap();
+            out.iter().map(|x| x.natural_frequency).collect()
+        };
+        for s in [1e-200, 1e-100, 1e100, 1e200, 1e300] {
+            let [m, c, k] = p.clone().map(|a| a * s);
+            if let Some(out) = gyroscopic_modes(&m, &c, &k) {
+                let mut got: Vec<f64> = out.iter().map(|x| x.natural_frequency).collect();
+                got.sort_by(f64::total_cmp);
+                for (g, w) in got.iter().zip(&want) {
+                    assert!((g - w).abs() <= 1e-12 * w, "scale {s:e}: {g} against {w}");
+                }
+            }
+            match super::super::modes(&m, &c, &k, 0.0) {
+                Ok(out) => {
+                    for (g, w) in out.iter().zip(&want) {
+                        let g = g.natural_frequency;
+                        assert!((g - w).abs() <= 1e-10 * w, "scale {s:e}: {g} against {w}");
+                    }
+                }
+                Err(e) => assert!(!e.to_string().is_empty()),
+            }
+        }
+    }
+
     /// Only a conservative gyroscopic pencil with positive definite `M̂` and `K̂` takes the
     /// route, and only where the general route would divide by `M̂`.
     #[test]
