@@ -165,7 +165,30 @@ pub fn eigen_dense(a: &DMatrix<f64>) -> Option<DenseEigen> {
 
 /// Relative asymmetry (of the largest entry) below which a matrix counts as symmetric: rounding
 /// in the assembly of `M̂`, `K̂` leaves a few ε (measured: 3e-16 on the blade's `M̂`).
-pub(super) const SYMMETRY: f64 = 1e-13;
+const SYMMETRY: f64 = 1e-13;
+
+/// Does `a` equal `sign` times its transpose (1: symmetric, −1: skew-symmetric) to
+/// [`SYMMETRY`] of its largest entry?
+pub(super) fn structured(a: &DMatrix<f64>, sign: f64) -> bool {
+    let s = a.amax();
+    let n = a.nrows();
+    (0..n).all(|j| (0..=j).all(|i| (a[(i, j)] - sign * a[(j, i)]).abs() <= SYMMETRY * s))
+}
+
+/// The part of `a` with that symmetry, `(a + sign·aᵀ)/2`, for faer.
+pub(super) fn part(a: &DMatrix<f64>, sign: f64) -> faer::Mat<f64> {
+    faer::Mat::from_fn(a.nrows(), a.ncols(), |i, j| {
+        0.5 * (a[(i, j)] + sign * a[(j, i)])
+    })
+}
+
+/// The spectral condition number of the symmetric `a`; `None` where `a` is not positive
+/// definite or the decomposition fails.
+pub(super) fn spectral_condition(a: &faer::Mat<f64>) -> Option<f64> {
+    let s = a.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
+    let n = s.len();
+    (n > 0 && s[0] > 0.0 && s[n - 1].is_finite()).then(|| s[n - 1] / s[0])
+}
 
 /// The undamped pencil `K x = μ M x` with `M` and `K` symmetric and `M` positive definite.
 #[derive(Debug, Clone)]
@@ -210,22 +233,13 @@ pub fn symmetric_definite(m: &DMatrix<f64>, k: &DMatrix<f64>) -> Option<Definite
     if n == 0 || k.nrows() != n || m.iter().chain(k.iter()).any(|v| !v.is_finite()) {
         return None;
     }
-    let symmetric = |a: &DMatrix<f64>| {
-        let s = a.amax();
-        (0..n).all(|j| (0..j).all(|i| (a[(i, j)] - a[(j, i)]).abs() <= SYMMETRY * s))
-    };
-    if !symmetric(m) || !symmetric(k) {
+    if !structured(m, 1.0) || !structured(k, 1.0) {
         return None;
     }
-    let mean = |a: &DMatrix<f64>| Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let (fm, fk) = (mean(m), mean(k));
-    let condition = |a: &Mat<f64>| {
-        let s = a.self_adjoint_eigenvalues(Side::Lower).ok()?;
-        (s[0] > 0.0 && s[n - 1].is_finite()).then(|| s[n - 1] / s[0])
-    };
-    let mass_condition = condition(&fm)?;
-    let by_stiffness =
-        mass_condition > WELL_CONDITIONED && condition(&fk).is_some_and(|c| c < mass_condition);
+    let (fm, fk) = (part(m, 1.0), part(k, 1.0));
+    let mass_condition = spectral_condition(&fm)?;
+    let by_stiffness = mass_condition > WELL_CONDITIONED
+        && spectral_condition(&fk).is_some_and(|c| c < mass_condition);
     // `a z = θ b z` by the Cholesky factor of `b`: θ = μ by M, θ = 1/μ by K.
     let (a, b) = if by_stiffness { (fm, fk) } else { (fk, fm) };
     let llt = b.llt(Side::Lower).ok()?;

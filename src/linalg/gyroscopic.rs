@@ -25,7 +25,7 @@
 //! vector. The right vector is read from `v`'s lower half, `x ∝ L_M⁻ᵀ v₂` (`v₂ = λ L_Mᵀ x`; a
 //! mode's energy is shared between the halves, so neither is small).
 
-use super::bounded::SYMMETRY;
+use super::bounded::{part, spectral_condition, structured};
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
@@ -58,24 +58,12 @@ pub fn gyroscopic(m: &DMatrix<f64>, g: &DMatrix<f64>, k: &DMatrix<f64>) -> Optio
     if n == 0 || g.nrows() != n || k.nrows() != n || all().any(|v| !v.is_finite()) {
         return None;
     }
-    let largest = |a: &DMatrix<f64>| super::amax(a);
-    // `a` equals `sign` times its transpose to `SYMMETRY` of its largest entry.
-    let structured = |a: &DMatrix<f64>, sign: f64| {
-        let s = largest(a);
-        (0..n).all(|j| (0..=j).all(|i| (a[(i, j)] - sign * a[(j, i)]).abs() <= SYMMETRY * s))
-    };
-    if largest(g) == 0.0 || !structured(m, 1.0) || !structured(k, 1.0) || !structured(g, -1.0) {
+    if super::amax(g) == 0.0 || !structured(m, 1.0) || !structured(k, 1.0) || !structured(g, -1.0) {
         return None;
     }
-    let part = |a: &DMatrix<f64>, sign: f64| {
-        Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + sign * a[(j, i)]))
-    };
     let (fm, fg, fk) = (part(m, 1.0), part(g, -1.0), part(k, 1.0));
-    let condition = |a: &Mat<f64>| {
-        let s = a.self_adjoint_eigenvalues(Side::Lower).ok()?;
-        (s[0] > 0.0 && s[n - 1].is_finite()).then(|| s[n - 1] / s[0])
-    };
-    let (mass_condition, stiffness_condition) = (condition(&fm)?, condition(&fk)?);
+    let (mass_condition, stiffness_condition) =
+        (spectral_condition(&fm)?, spectral_condition(&fk)?);
     let (lm, lk) = (fm.llt(Side::Lower).ok()?, fk.llt(Side::Lower).ok()?);
     let lm = lm.L();
     // P = L_M⁻¹ L_K.
