@@ -33,7 +33,7 @@
 //! the spin; such a body is left out.
 
 use crate::mechanics::System;
-use crate::mechanics::dynamics::partials_for;
+use crate::mechanics::dynamics::body_partials_for;
 use crate::mechanics::ports::{least_aligned, rides_spin, steady_twist};
 use crate::modal::C64;
 use crate::real::{V3, lift1};
@@ -108,7 +108,7 @@ pub fn whirls<V: AsRef<[C64]>>(
         return none;
     }
     let coords: Vec<usize> = free.iter().chain(&driven).copied().collect();
-    let j = partials_for(&sys.map(lift1), q, &coords);
+    let j = body_partials_for(&sys.map(lift1), q, &coords);
     let nb = sys.bodies.len();
     let rate = |c: usize| sys.drive[c].unwrap_or(0.0);
     // The model's size, at which rotations count as motions.

@@ -149,8 +149,8 @@ fn kane(sys: &System<f64>, q: &[f64], qd: &[f64], qdd: &[f64]) -> Vec<f64> {
                     let alpha = axial(&mul3_t(&pt[b].rot.map(|c| c.v2), &a));
                     let iw = mul3_t(&mul3(&a, &body.inertia), &a);
                     let moment: V3<f64> = mulv(&iw, &alpha) + omega.cross(&mulv(&iw, &omega));
-                    j.jv(sys, i, b).dot(&((acc - sys.gravity) * body.mass))
-                        + j.jw(sys, i, b).dot(&moment)
+                    j.body.jv(sys, i, b).dot(&((acc - sys.gravity) * body.mass))
+                        + j.body.jw(sys, i, b).dot(&moment)
                 })
                 .sum()
         })

@@ -24,7 +24,7 @@
 //! body whose translations are not coordinates of a frame the spin turns).
 
 use super::System;
-use super::dynamics::{Partials, partials_for};
+use super::dynamics::{BodyPartials, body_partials_for};
 use super::kinematics::poses;
 use crate::model::{FieldError, Model};
 use crate::real::{Real, V3, cst, lift1, re};
@@ -34,7 +34,7 @@ pub fn port_vectors<T: Real>(sys: &System<T>, q: &[T], coords: &[usize]) -> Vec<
     if sys.ports.is_empty() {
         return Vec::new();
     }
-    let j = partials_for(&sys.map(lift1), q, coords);
+    let j = body_partials_for(&sys.map(lift1), q, coords);
     let pose = poses(sys, q);
     sys.ports
         .iter()
@@ -104,7 +104,7 @@ pub enum PortError {
 /// the partials `j` over the `driven` coordinates (among others).
 pub fn steady_twist<T: Real, U: Real>(
     sys: &System<U>,
-    j: &Partials<T>,
+    j: &BodyPartials<T>,
     driven: &[usize],
     rate: impl Fn(usize) -> T,
     b: usize,
@@ -119,7 +119,7 @@ pub fn steady_twist<T: Real, U: Real>(
 /// (a rotor written in rotating coordinates, whose orbits are seen from the turning frame)?
 pub fn rides_spin<T: Real, U: Real>(
     sys: &System<U>,
-    j: &Partials<T>,
+    j: &BodyPartials<T>,
     (free, driven): (&[usize], &[usize]),
     spinning: impl Fn(usize) -> bool,
     b: usize,
@@ -148,7 +148,7 @@ fn unbalance_loads<T: Real>(
     }
     let driven: Vec<usize> = (0..sys.n).filter(|&c| sys.drive[c].is_some()).collect();
     let all: Vec<usize> = coords.iter().chain(&driven).copied().collect();
-    let j = partials_for(&sys.map(lift1), q, &all);
+    let j = body_partials_for(&sys.map(lift1), q, &all);
     let rate = |c: usize| sys.drive[c].unwrap_or(cst(0.0));
     let zero = cst::<T>(0.0);
     let mut out = Vec::with_capacity(sys.unbalances.len());

@@ -4,7 +4,7 @@
 
 use super::Scene;
 use crate::mechanics::System;
-use crate::mechanics::dynamics::partials_for;
+use crate::mechanics::dynamics::body_partials_for;
 use crate::modal::C64;
 use crate::model::Model;
 use crate::real::{V3, lift1};
@@ -35,7 +35,7 @@ pub fn physical_shapes<V: AsRef<[C64]>>(
     free: &[usize],
     shapes: &[V],
 ) -> Vec<PhysicalShape> {
-    let j = partials_for(&sys.map(lift1), q, free);
+    let j = body_partials_for(&sys.map(lift1), q, free);
     let jv: Vec<Vec<V3<f64>>> = (0..sys.bodies.len())
         .map(|b| free.iter().map(|&i| j.jv(sys, i, b)).collect())
         .collect();

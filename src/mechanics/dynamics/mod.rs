@@ -18,7 +18,8 @@
 mod partials;
 
 pub use partials::{
-    BeamPartials, EndPartials, Partials, Screw, SlicePartials, mass_matrix, partials, partials_for,
+    BeamPartials, BodyPartials, EndPartials, Partials, Screw, SlicePartials, body_partials_for,
+    mass_matrix, partials, partials_for,
 };
 
 use super::kinematics::{Pose, poses};
@@ -295,13 +296,13 @@ pub fn evaluate_with<T: Real>(
 ) -> Dynamics<T> {
     let sys = &l.base;
     let n = sys.n;
-    let motion = motions(l, &j.pose, q, qd, qdd);
+    let motion = motions(l, &j.body.pose, q, qd, qdd);
     let mut wrench = inertia_wrenches(sys, j, &motion);
     subtract_loads(sys, j, &mut wrench);
     let (element_force, mut direct) = element_forces(l, j, &motion, &mut wrench);
     let rates = beam_inertia(l, j, &motion, &mut wrench);
     let beam_force = beam_forces(sys, j, &rates, &mut wrench);
-    let phi = constraint_values(sys, &j.pose, q);
+    let phi = constraint_values(sys, &j.body.pose, q);
     // The wrench on each body and those below it (children before parents).
     for jt in sys.joints.iter().rev() {
         if let Some(p) = jt.parent {
@@ -311,20 +312,20 @@ pub fn evaluate_with<T: Real>(
     }
     // Project onto the coordinates.
     let mut r: Vec<T> = (0..n)
-        .map(|i| match &j.twist[i] {
+        .map(|i| match &j.body.twist[i] {
             Some(s) => s.pair(&wrench[sys.joints[sys.coord_joint[i]].child]),
             None => cst::<T>(f64::NAN),
         })
         .collect();
     for (first, partials) in direct.drain(..) {
-        partials.add_columns(sys, &j.twist, |k, i, d| {
+        partials.add_columns(sys, &j.body.twist, |k, i, d| {
             r[i] += element_force[first + k] * d;
         });
     }
     for (b, f) in j.beams.iter().zip(&beam_force) {
         if let EndPartials::Coordinates(_) = &b.elastic {
             b.elastic
-                .add_columns(sys, &j.twist, |k, i, d| r[i] += f[k] * d);
+                .add_columns(sys, &j.body.twist, |k, i, d| r[i] += f[k] * d);
         }
     }
     for e in &sys.joint_elements {
@@ -352,7 +353,7 @@ fn inertia_wrenches<T: Real>(
 ) -> Vec<Screw<T>> {
     let mut wrench = Vec::with_capacity(sys.bodies.len());
     for (b, body) in sys.bodies.iter().enumerate() {
-        let (m, pose, x) = (&motion[b], &j.pose[b], j.cm[b]);
+        let (m, pose, x) = (&motion[b], &j.body.pose[b], j.body.cm[b]);
         let x0 = body.cm;
         let acc = mulv(&pose.rot, &(m.a.cross(&x0) + m.w.cross(&m.w.cross(&x0)))) + m.dd;
         let force = (acc - sys.gravity) * body.mass;
@@ -382,7 +383,7 @@ fn beam_inertia<T: Real>(
         let Some(b) = b else {
             return Pose::identity();
         };
-        let (p, m) = (&j.pose[b], &motion[b]);
+        let (p, m) = (&j.body.pose[b], &motion[b]);
         let wx = skew(&m.w);
         let rd = mul3(&p.rot, &wx);
         let rdd = mul3(&p.rot, &(skew(&m.a) + mul3(&wx, &wx)));
@@ -440,7 +441,7 @@ fn beam_forces<T: Real>(
 ) -> Vec<[T; crate::beams::COMPONENTS]> {
     let id = |x: T| x;
     let ground = Pose::identity();
-    let pose = |b: Option<usize>| b.map_or(&ground, |b| &j.pose[b]);
+    let pose = |b: Option<usize>| b.map_or(&ground, |b| &j.body.pose[b]);
     let mut out = Vec::with_capacity(sys.beams.len());
     let mut e = Vec::with_capacity(crate::beams::COMPONENTS);
     for ((beam, bp), rate) in sys.beams.iter().zip(&j.beams).zip(rates) {
@@ -475,7 +476,7 @@ fn subtract_loads<T: Real>(sys: &System<T>, j: &Partials<T>, wrench: &mut [Screw
                 force,
                 follower,
             } => {
-                let pose = &j.pose[*body];
+                let pose = &j.body.pose[*body];
                 let x = pose.apply(point);
                 let f = if *follower {
                     mulv(&pose.rot, force)
@@ -490,7 +491,7 @@ fn subtract_loads<T: Real>(sys: &System<T>, j: &Partials<T>, wrench: &mut [Screw
                 follower,
             } => {
                 let t = if *follower {
-                    mulv(&j.pose[*body].rot, torque)
+                    mulv(&j.body.pose[*body].rot, torque)
                 } else {
                     *torque
                 };
@@ -520,7 +521,7 @@ fn element_forces<'j, T: Real>(
 ) -> (Vec<T>, Vec<(usize, &'j EndPartials<T>)>) {
     let sys = &l.base;
     let mut element_force = Vec::new();
-    let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.pose, motion));
+    let deformation = element_deformations(&l.partial, &moving_poses(sys, &j.body.pose, motion));
     // Derivatives per coordinate, paired with the forces after the projection.
     let mut direct = Vec::new();
     for (el, partials) in sys.forces.iter().zip(&j.de) {
@@ -547,7 +548,7 @@ fn element_forces<'j, T: Real>(
             };
         }
         if damps == Damps::RelativeAngularVelocity {
-            let torque = relative_damping_torque(el, &j.pose, motion);
+            let torque = relative_damping_torque(el, &j.body.pose, motion);
             let g = &el.geometry;
             for (body, sign) in [(g.body2, 1.0), (g.body1, -1.0)] {
                 if let Some(b) = body {

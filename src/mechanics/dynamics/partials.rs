@@ -53,17 +53,26 @@ impl<T: Real> Screw<T> {
 /// computes it once.
 #[derive(Debug, Clone)]
 pub struct Partials<T: Real> {
-    /// `twist[i]`: `s_i`, for the coordinates asked for (`None` for the others).
-    pub twist: Vec<Option<Screw<T>>>,
+    /// The bodies' poses and partial velocities.
+    pub body: BodyPartials<T>,
     /// The derivatives of every force element's components (see [`EndPartials`]).
     pub de: Vec<EndPartials<T>>,
     pub phi_q: DMatrix<T>,
+    /// Every beam's deformation derivatives and slices (see [`BeamPartials`]).
+    pub beams: Vec<BeamPartials<T>>,
+}
+
+/// The bodies' part of [`Partials`]: their poses, centres of mass and the twists of the
+/// coordinates asked for, all that the partial velocities `J_v`, `J_ω` of a body need (mode
+/// shapes' motions, whirl, ports), without the elements' and beams' derivatives.
+#[derive(Debug, Clone)]
+pub struct BodyPartials<T: Real> {
+    /// `twist[i]`: `s_i`, for the coordinates asked for (`None` for the others).
+    pub twist: Vec<Option<Screw<T>>>,
     /// Pose of every body at `q`.
     pub pose: Vec<Pose<T>>,
     /// Centre of mass of every body at `q`.
     pub cm: Vec<V3<T>>,
-    /// Every beam's deformation derivatives and slices (see [`BeamPartials`]).
-    pub beams: Vec<BeamPartials<T>>,
 }
 
 /// A beam's first-order kinematics at `q`: the derivatives of its deformation components
@@ -135,12 +144,21 @@ impl<T: Real> Partials<T> {
     /// The same partials over another scalar.
     pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> Partials<U> {
         Partials {
-            twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
+            body: self.body.map(f),
             de: self.de.iter().map(|e| e.map(f)).collect(),
             phi_q: self.phi_q.map(f),
+            beams: self.beams.iter().map(|b| b.map(f)).collect(),
+        }
+    }
+}
+
+impl<T: Real> BodyPartials<T> {
+    /// The same over another scalar.
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U + Copy) -> BodyPartials<U> {
+        BodyPartials {
+            twist: self.twist.iter().map(|s| s.map(|s| s.map(f))).collect(),
             pose: self.pose.iter().map(|p| p.map(f)).collect(),
             cm: self.cm.iter().map(|x| x.map(f)).collect(),
-            beams: self.beams.iter().map(|b| b.map(f)).collect(),
         }
     }
 
@@ -174,7 +192,7 @@ pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usiz
     let mut first = vec![V3::from_element(cst::<T>(0.0)); nb];
     let mut second = vec![M3::from_element(cst::<T>(0.0)); nb];
     for (b, body) in sys.bodies.iter().enumerate() {
-        let (m, x, a) = (body.mass.re, j.cm[b], &j.pose[b].rot);
+        let (m, x, a) = (body.mass.re, j.body.cm[b], &j.body.pose[b].rot);
         mass[b] = m;
         first[b] = x * m;
         second[b] = mul3_t(&mul3(a, &body.inertia.map(|x| x.re)), a)
@@ -201,7 +219,7 @@ pub fn mass_matrix<T: Real>(sys: &System<D1<T>>, j: &Partials<T>, coords: &[usiz
         } else {
             return cst::<T>(0.0);
         };
-        let (Some(si), Some(sk)) = (&j.twist[i], &j.twist[k]) else {
+        let (Some(si), Some(sk)) = (&j.body.twist[i], &j.body.twist[k]) else {
             return cst::<T>(f64::NAN);
         };
         let h = first[b];
@@ -233,7 +251,7 @@ fn add_slices<T: Real>(
             // The slice's twist from each coordinate that moves one of its ends.
             let twists: Vec<(usize, Screw<T>)> = (coords.iter().enumerate())
                 .filter_map(|(r, &i)| {
-                    let s = j.twist[i].as_ref()?;
+                    let s = j.body.twist[i].as_ref()?;
                     let moved = |b: usize| sys.moves(i, b);
                     slice
                         .ends
@@ -444,9 +462,13 @@ fn end_partials<T: Real>(
     EndPartials::Bodies(out)
 }
 
-/// Partial velocities for the coordinates `coords` only (one dual pass of its joint each).
-/// Rows of `r` evaluated with them exist for those coordinates only; the others come out NaN.
-pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize]) -> Partials<T> {
+/// The bodies' poses (dual parts zero: what the elements' partials are evaluated at) and their
+/// [`BodyPartials`] for the coordinates `coords` (one dual pass of each one's joint).
+fn moving_bodies<T: Real>(
+    partial: &System<D1<T>>,
+    q: &[T],
+    coords: &[usize],
+) -> (Vec<Pose<D1<T>>>, BodyPartials<T>) {
     let n = q.len();
     let mut qi: Vec<D1<T>> = q.iter().map(|&x| lift1(x)).collect();
     let p0 = poses(partial, &qi);
@@ -475,10 +497,38 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
             v: t_d - w.cross(&d),
         });
     }
+    let body = BodyPartials {
+        twist,
+        pose: p0.iter().map(|p| p.map(|c| c.re)).collect(),
+        cm: p0
+            .iter()
+            .zip(&partial.bodies)
+            .map(|(p, b)| p.apply(&b.cm).map(|c| c.re))
+            .collect(),
+    };
+    (p0, body)
+}
+
+/// The bodies' partial velocities for the coordinates `coords` ([`BodyPartials`]): what a
+/// mode's motions need, without the force elements, constraints and beams of
+/// [`partials_for`].
+pub fn body_partials_for<T: Real>(
+    partial: &System<D1<T>>,
+    q: &[T],
+    coords: &[usize],
+) -> BodyPartials<T> {
+    moving_bodies(partial, q, coords).1
+}
+
+/// Partial velocities for the coordinates `coords` only (one dual pass of its joint each).
+/// Rows of `r` evaluated with them exist for those coordinates only; the others come out NaN.
+pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize]) -> Partials<T> {
+    let n = q.len();
+    let (p0, body) = moving_bodies(partial, q, coords);
     let at = Moving {
         sys: partial,
         poses: &p0,
-        twist: &twist,
+        twist: &body.twist,
     };
     let de = partial
         .forces
@@ -505,28 +555,22 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
         end_partials(&at, [g.body1, g.body2], rows, false, |x1, x2, out| {
             c.values(g, x1, x2, out)
         })
-        .add_columns(partial, &twist, |k, i, d| phi_q[(row + k, i)] += d);
+        .add_columns(partial, &body.twist, |k, i, d| phi_q[(row + k, i)] += d);
         row += rows;
     }
     // A coupler's row: its coefficients, at the coordinates whose partials are asked.
     for c in &partial.couplers {
         for (&i, a) in c.coordinates.iter().zip(&c.coefficients) {
-            if twist[i].is_some() {
+            if body.twist[i].is_some() {
                 phi_q[(row, i)] += a.re;
             }
         }
         row += 1;
     }
     Partials {
-        twist,
+        body,
         de,
         phi_q,
-        pose: p0.iter().map(|p| p.map(|c| c.re)).collect(),
-        cm: p0
-            .iter()
-            .zip(&partial.bodies)
-            .map(|(p, b)| p.apply(&b.cm).map(|c| c.re))
-            .collect(),
         beams,
     }
 }
