@@ -368,9 +368,18 @@ fn inertia_wrenches<T: Real>(
 }
 
 /// The beams' slices' inertia and weight ([`crate::beams`]), each slice's wrench carried to
-/// its elements' end bodies ([`SlicePartials::transmit`]). A slice's pose is evaluated over
+/// its elements' end bodies ([`SlicePartials::transmit`]). The element is evaluated over
 /// second-order dual numbers in time from its end bodies' poses and their rates
-/// (`Ȧ = A ω̃`, `Ä = A (α̃ + ω̃²)`), which gives its `ω`, `α` and the acceleration of its centre.
+/// (`Ȧ = A ω̃`, `Ä = A (α̃ + ω̃²)`). Its frame's angular velocity and acceleration in its own
+/// axes, `Ω_e = axial(R_eᵀ Ṙ_e)` and `Ω̇_e = axial(R_eᵀ R̈_e)`, are taken once; a slice turned
+/// by `Q` from the frame then has, in its section's axes (where its inertia is diagonal),
+///
+/// ```text
+/// Ω = Qᵀ Ω_e + Ω_Q,   Ω̇ = Qᵀ Ω̇_e − Ω_Q × Qᵀ Ω_e + Ω̇_Q,   Ω_Q = axial(Qᵀ Q̇), Ω̇_Q = axial(Qᵀ Q̈)
+/// ```
+///
+/// (from `(R_e Q)ᵀ (R_e Q)˙ = Qᵀ Ω̃_e Q + Ω̃_Q` and `Q̇ᵀ = −Ω̃_Q Qᵀ`), and the moment about its
+/// centre is `R_e Q (D Ω̇ + Ω × D Ω)`: no product of two rotations over the duals per slice.
 /// Returns the deformation rates `ė` of each damped beam (from the same pass).
 fn beam_inertia<T: Real>(
     l: &Lifted<T>,
@@ -401,18 +410,27 @@ fn beam_inertia<T: Real>(
             time.deformations(id, &here, &mut e);
             e.iter().map(|c| c.v1).collect()
         }));
+        let frame = here.frame.map(|c| c.re);
+        let (frame_w, frame_a) = (
+            axial_tn(&frame, &here.frame.map(|c| c.v1)),
+            axial_tn(&frame, &here.frame.map(|c| c.v2)),
+        );
+        let (mass, principal) = beam.section_inertia();
         for (slice, &(xi, w)) in bp.slices.iter().zip(&crate::beams::SLICES) {
-            let pose = time.slice(id, &here, xi);
-            let r = pose.rot.map(|c| c.re);
-            let (omega, alpha) = (
-                axial_tn(&r, &pose.rot.map(|c| c.v1)),
-                axial_tn(&r, &pose.rot.map(|c| c.v2)),
-            );
-            let (m, inertia) = beam.slice_inertia(w);
-            let x = pose.trans.map(|c| c.re);
-            let force = (pose.trans.map(|c| c.v2) - sys.gravity) * m;
-            let h = mulv(&inertia, &omega);
-            let moment = mulv(&r, &(mulv(&inertia, &alpha) + omega.cross(&h)));
+            let (centre, q) = time.section(id, &here, xi);
+            let qr = q.map(|c| c.re);
+            let carried = mulv_t(&qr, &frame_w);
+            let own = axial_tn(&qr, &q.map(|c| c.v1));
+            let omega = carried + own;
+            let alpha =
+                mulv_t(&qr, &frame_a) - own.cross(&carried) + axial_tn(&qr, &q.map(|c| c.v2));
+            let w = cst::<T>(w);
+            let (m, d) = (mass * w, principal * w);
+            let h = V3::new(d.x * omega.x, d.y * omega.y, d.z * omega.z);
+            let local = V3::new(d.x * alpha.x, d.y * alpha.y, d.z * alpha.z) + omega.cross(&h);
+            let moment = mulv(&frame, &mulv(&qr, &local));
+            let x = centre.map(|c| c.re);
+            let force = (centre.map(|c| c.v2) - sys.gravity) * m;
             let w = Screw {
                 w: moment + x.cross(&force),
                 v: force,

@@ -575,48 +575,39 @@ pub fn partials_for<T: Real>(partial: &System<D1<T>>, q: &[T], coords: &[usize])
     }
 }
 
-/// The twist of a pose whose dual part is its rate: `ω = axial(Ṙ Rᵀ)`, `v = ṫ − ω × t`.
-fn twist_of<T: Real>(p: &Pose<D1<T>>) -> Screw<T> {
-    let r = p.rot.map(|c| c.re);
-    let w = axial(&mul3_t(&p.rot.map(|c| c.eps), &r));
-    let t = p.trans.map(|c| c.re);
-    Screw {
-        w,
-        v: p.trans.map(|c| c.eps) - w.cross(&t),
-    }
-}
-
-/// A beam's [`BeamPartials`] at the poses of `at`.
+/// A beam's [`BeamPartials`] at the poses of `at`. The element at six unit twists of an end
+/// body ([`crate::beams::Local`] over dual numbers) gives both the deformations' gradient and,
+/// through [`crate::beams::SliceMap`], every slice's twist: a common rigid motion of both ends
+/// moves every value rigidly with it (the element frame is objective), so with two moving ends
+/// only the second is evaluated, the first end's gradient being the opposite and a slice's
+/// twist from its unit twist `u` being `u` less its twist from `u` of the second.
 fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) -> BeamPartials<T> {
     let id = |x: D1<T>| x;
-    // The deformations are objective ([`crate::beams`]).
-    let elastic = end_partials(
-        at,
-        [b.body1, b.body2],
-        crate::beams::COMPONENTS,
-        true,
-        |x1, x2, out| b.deformations(id, &b.local(id, x1, x2), out),
-    );
+    let re = |x: D1<T>| x.re;
     let ground = Pose::identity();
     let pose = |e: Option<usize>| e.map_or(ground, |e| at.poses[e]);
     let (x1, x2) = (pose(b.body1), pose(b.body2));
-    let here = b.local(id, &x1, &x2);
+    let here = b.local(id, &x1, &x2).map(re);
+    let maps: Vec<_> = (crate::beams::SLICES.iter())
+        .map(|&(xi, _)| b.slice_map(re, &here, xi))
+        .collect();
     let mut slices: Vec<SlicePartials<T>> = (crate::beams::SLICES.iter())
         .map(|&(xi, _)| SlicePartials {
-            pose: b.slice(id, &here, xi).map(|c| c.re),
+            pose: b.slice(re, &here, xi),
             ends: Vec::with_capacity(2),
         })
         .collect();
-    // A common rigid motion of both ends moves every slice rigidly with it (the element frame
-    // is objective): a slice's twist from a unit twist `u` of the first end is `u` less its
-    // twist from `u` of the second, so with two moving ends only the second is evaluated.
+    let values = crate::beams::COMPONENTS;
+    let mut elastic: Vec<Vec<_>> = (0..values).map(|_| Vec::with_capacity(2)).collect();
     let both = b.body1.is_some() && b.body2.is_some();
+    let mut buf = Vec::with_capacity(values);
     for (end, body) in [b.body1, b.body2].into_iter().enumerate() {
         let Some(body) = body else { continue };
         if both && end == 0 {
             continue;
         }
-        let mut maps = vec![[Screw::zero(); 6]; slices.len()];
+        let mut gradient = vec![Screw::zero(); values];
+        let mut twists = vec![[Screw::zero(); 6]; slices.len()];
         for k in 0..6 {
             let u = unit_twist(k);
             let local = if end == 0 {
@@ -624,21 +615,42 @@ fn beam_partials<T: Real>(at: &Moving<'_, T>, b: &crate::beams::Element<D1<T>>) 
             } else {
                 b.local(id, &x1, &nudged(&x2, &u))
             };
-            for (m, &(xi, _)) in maps.iter_mut().zip(&crate::beams::SLICES) {
-                m[k] = twist_of(&b.slice(id, &local, xi));
+            buf.clear();
+            b.deformations(id, &local, &mut buf);
+            for (g, v) in gradient.iter_mut().zip(&buf) {
+                g.add_scaled(&u, v.eps);
+            }
+            let rate = crate::beams::LocalRate::of(&local);
+            for (t, m) in twists.iter_mut().zip(&maps) {
+                let (w, x) = m.motion(&rate);
+                t[k] = Screw {
+                    w,
+                    v: x - w.cross(&m.centre),
+                };
             }
         }
-        for (s, m) in slices.iter_mut().zip(maps) {
-            if both {
-                let first: [Screw<T>; 6] = std::array::from_fn(|k| {
-                    let mut t = unit_twist(k);
-                    t.add_scaled(&m[k], cst(-1.0));
-                    t
-                });
-                s.ends.push((b.body1.expect("both ends are bodies"), first));
+        for (o, g) in elastic.iter_mut().zip(gradient) {
+            if let (true, Some(first)) = (both, b.body1) {
+                let mut opposite = Screw::zero();
+                opposite.add_scaled(&g, cst(-1.0));
+                o.push((first, opposite));
             }
-            s.ends.push((body, m));
+            o.push((body, g));
+        }
+        for (s, t) in slices.iter_mut().zip(twists) {
+            if let (true, Some(first)) = (both, b.body1) {
+                let of_first: [Screw<T>; 6] = std::array::from_fn(|k| {
+                    let mut f = unit_twist(k);
+                    f.add_scaled(&t[k], cst(-1.0));
+                    f
+                });
+                s.ends.push((first, of_first));
+            }
+            s.ends.push((body, t));
         }
     }
-    BeamPartials { elastic, slices }
+    BeamPartials {
+        elastic: EndPartials::Bodies(elastic),
+        slices,
+    }
 }
